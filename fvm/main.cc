@@ -1,0 +1,55 @@
+// fvm: the command line that joins imaging, stage and artefacts. One file per subcommand.
+
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <exception>
+
+#include "fvm/commands.h"
+
+namespace fvm::cli {
+
+void AddNotBuilt(CLI::App& app, const std::string& name, const std::string& summary, int issue) {
+  CLI::App* sub = app.add_subcommand(name, summary + "  [not built yet]");
+  sub->allow_extras();
+  sub->callback([name, issue] {
+    fmt::print(stderr, "fvm {}: not built yet (tracked in issue {}); nothing was done.\n", name, issue);
+    throw CLI::RuntimeError(2);
+  });
+}
+
+}  // namespace fvm::cli
+
+int main(int argc, char** argv) {
+  using fvm::cli::AddNotBuilt;
+  CLI::App app{
+      "fvm: calibrate the motion stage of focus-variation microscopes (and machine tools measured with laser\n"
+      "trackers) from measurements of an uncalibrated artefact. Units: mm and rad in files, um and urad in reports."};
+  app.set_version_flag("--version", std::string("fvm ") + FVM_VERSION);
+  app.require_subcommand(1);
+  app.footer("Run 'fvm <command> --help' for the options of a command.");
+
+  AddNotBuilt(app, "calibrate", "identify the YXFZ stage model (9/15/27/42 parameters) from a batch", 3);
+  AddNotBuilt(app, "correct", "compensate a stitching-free export with a calibration", 3);
+  AddNotBuilt(app, "compare", "every model order side by side on a batch", 3);
+  AddNotBuilt(app, "diff", "per-calotte and distance differences between two exports", 3);
+  AddNotBuilt(app, "diagnose", "find, name and model the effect that simulation and measurement miss", 6);
+  AddNotBuilt(app, "simulate", "synthetic batches, surfaces, tiles and tracker data with a recorded truth", 3);
+  AddNotBuilt(app, "info", "what a surface or point-cloud file holds", 4);
+  AddNotBuilt(app, "fit", "find calottes and fit spheres; writes a centre export", 4);
+  AddNotBuilt(app, "focus", "height map from a focus stack", 4);
+  AddNotBuilt(app, "tiles", "plan tile layouts with and without stitching", 5);
+  AddNotBuilt(app, "stitch", "register overlapping tiles", 5);
+  AddNotBuilt(app, "verify", "machine-tool volumetric verification with a laser tracker", 0);
+  AddNotBuilt(app, "uncertainty", "Monte Carlo uncertainty of a verification or calibration", 0);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "fvm: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,28 @@
+#pragma once
+// A height map on a regular grid, as focus-variation instruments export it: z in mm, NaN where invalid.
+
+#include <cstddef>
+#include <vector>
+
+namespace fvm::imaging {
+
+struct HeightMap {
+  int size_x = 0;
+  int size_y = 0;
+  double dx_mm = 0.0;
+  double dy_mm = 0.0;
+  std::vector<float> z_mm;  // row-major, size_x * size_y; NaN marks an invalid point
+
+  float& at(int ix, int iy) { return z_mm[static_cast<size_t>(iy) * static_cast<size_t>(size_x) + static_cast<size_t>(ix)]; }
+  float at(int ix, int iy) const { return z_mm[static_cast<size_t>(iy) * static_cast<size_t>(size_x) + static_cast<size_t>(ix)]; }
+};
+
+struct HeightMapStats {
+  std::size_t valid_points = 0;
+  double z_min_mm = 0.0;  // over valid points; 0 when there are none
+  double z_max_mm = 0.0;
+};
+
+HeightMapStats ComputeStats(const HeightMap& map);
+
+}  // namespace fvm::imaging

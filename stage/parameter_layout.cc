@@ -1,0 +1,244 @@
+#include "stage/parameter_layout.h"
+
+#include <ceres/jet.h>
+
+#include <Eigen/QR>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace fvm::stage {
+namespace {
+
+int RequireTerm(std::string_view name) {
+  const std::optional<int> term = FindErrorTerm(name);
+  if (!term) throw std::invalid_argument("unknown error term '" + std::string(name) + "' (use VDI 2617-3 names such as xTx, yRz, xWy)");
+  return *term;
+}
+
+std::string CoefficientName(int term, int power, int order) {
+  const ErrorTerm& info = GetErrorTerm(term);
+  std::string name(info.vdi);
+  if (info.kind == ErrorKind::kSquareness && order == 0) return name;
+  return name + std::to_string(power);
+}
+
+}  // namespace
+
+std::string ParameterLayout::Alias::Describe() const {
+  std::ostringstream out;
+  out << dependent << " =";
+  for (size_t i = 0; i < on.size(); ++i) out << (i ? " + " : " ") << on[i].second << " * " << on[i].first;
+  return out.str();
+}
+
+ParameterLayout::ParameterLayout(AxisChain chain, std::array<Travel, 3> travel)
+    : chain_(std::move(chain)), travel_(travel) {
+  for (const Travel& t : travel_) t.Check();
+}
+
+void ParameterLayout::SetTerm(std::string_view term_name, Basis basis, int order) {
+  const int term = RequireTerm(term_name);
+  if (order < 0 || order > kMaxOrder) {
+    throw std::invalid_argument("term " + std::string(term_name) + ": order " + std::to_string(order) + " outside 0.." +
+                                std::to_string(kMaxOrder));
+  }
+  RemoveTerm(term_name);
+  terms_[static_cast<size_t>(term)] = TermSpec{true, basis, order};
+  // Keep coefficients sorted by term, then power, so TermValues evaluates each basis once.
+  auto at = coefficients_.begin();
+  while (at != coefficients_.end() && at->term < term) ++at;
+  std::vector<Coefficient> added;
+  for (int p = 0; p <= order; ++p) {
+    Coefficient c;
+    c.name = CoefficientName(term, p, order);
+    c.term = term;
+    c.power = p;
+    added.push_back(c);
+  }
+  coefficients_.insert(at, added.begin(), added.end());
+  Reindex();
+}
+
+void ParameterLayout::RemoveTerm(std::string_view term_name) {
+  const int term = RequireTerm(term_name);
+  for (const Coefficient& c : coefficients_) {
+    if (c.state == State::kTied && GetErrorTerm(c.term).index != term &&
+        coefficients_[static_cast<size_t>(FindCoefficient(c.tied_to))].term == term) {
+      throw std::invalid_argument("cannot remove " + std::string(term_name) + ": " + c.name + " is tied to " + c.tied_to);
+    }
+  }
+  std::erase_if(coefficients_, [term](const Coefficient& c) { return c.term == term; });
+  terms_[static_cast<size_t>(term)] = TermSpec{};
+  Reindex();
+}
+
+int ParameterLayout::FindCoefficient(std::string_view name) const {
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    if (coefficients_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+int ParameterLayout::RequireCoefficient(std::string_view name) const {
+  const int index = FindCoefficient(name);
+  if (index < 0) {
+    std::string known;
+    for (const Coefficient& c : coefficients_) known += (known.empty() ? "" : " ") + c.name;
+    throw std::invalid_argument("no coefficient '" + std::string(name) + "' in this layout (it has: " + known + ")");
+  }
+  return index;
+}
+
+int ParameterLayout::FreeIndexOf(std::string_view name) const {
+  const int index = FindCoefficient(name);
+  return index < 0 ? -1 : free_slot_[static_cast<size_t>(index)];
+}
+
+void ParameterLayout::Fix(std::string_view coefficient, double value) {
+  Coefficient& c = coefficients_[static_cast<size_t>(RequireCoefficient(coefficient))];
+  for (const Coefficient& other : coefficients_) {
+    if (other.state == State::kTied && other.tied_to == c.name) {
+      throw std::invalid_argument("cannot fix " + c.name + ": " + other.name + " is tied to it");
+    }
+  }
+  c.state = State::kFixed;
+  c.value = value;
+  c.tied_to.clear();
+  Reindex();
+}
+
+void ParameterLayout::Tie(std::string_view coefficient, std::string_view free_coefficient, double factor) {
+  const int target = RequireCoefficient(free_coefficient);
+  if (coefficients_[static_cast<size_t>(target)].state != State::kFree || coefficient == free_coefficient) {
+    throw std::invalid_argument("cannot tie " + std::string(coefficient) + " to " + std::string(free_coefficient) +
+                                ": the target must be another free coefficient");
+  }
+  Coefficient& c = coefficients_[static_cast<size_t>(RequireCoefficient(coefficient))];
+  c.state = State::kTied;
+  c.value = factor;
+  c.tied_to = std::string(free_coefficient);
+  Reindex();
+}
+
+void ParameterLayout::Free(std::string_view coefficient) {
+  Coefficient& c = coefficients_[static_cast<size_t>(RequireCoefficient(coefficient))];
+  c.state = State::kFree;
+  c.value = 0.0;
+  c.tied_to.clear();
+  Reindex();
+}
+
+void ParameterLayout::Drop(std::string_view coefficient) {
+  const int index = RequireCoefficient(coefficient);
+  Fix(coefficient, 0.0);  // refuses when something is tied to it
+  coefficients_.erase(coefficients_.begin() + index);
+  Reindex();
+}
+
+void ParameterLayout::Reindex() {
+  free_index_.clear();
+  free_slot_.assign(coefficients_.size(), -1);
+  tied_slot_.assign(coefficients_.size(), -1);
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    if (coefficients_[i].state != State::kFree) continue;
+    free_slot_[i] = static_cast<int>(free_index_.size());
+    free_index_.push_back(static_cast<int>(i));
+  }
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    if (coefficients_[i].state == State::kTied) {
+      tied_slot_[i] = free_slot_[static_cast<size_t>(RequireCoefficient(coefficients_[i].tied_to))];
+    }
+  }
+}
+
+std::vector<std::string> ParameterLayout::FreeNames() const {
+  std::vector<std::string> names;
+  for (int i : free_index_) names.push_back(coefficients_[static_cast<size_t>(i)].name);
+  return names;
+}
+
+Eigen::MatrixXd ParameterLayout::TermDerivative(const Eigen::Vector3d& q) const {
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(kNumErrorTerms, NumFree());
+  double basis[kMaxOrder + 1];
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    const Coefficient& c = coefficients_[i];
+    if (c.state == State::kFixed) continue;
+    const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
+    const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
+    EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]),
+                  basis);
+    const int slot = c.state == State::kFree ? free_slot_[i] : tied_slot_[i];
+    const double factor = c.state == State::kFree ? 1.0 : c.value;
+    d(c.term, slot) += factor * basis[c.power];
+  }
+  return d;
+}
+
+std::vector<ParameterLayout::Alias> ParameterLayout::FindAliases(const std::vector<Eigen::Vector3d>& commands,
+                                                                 const double* free_values, double tolerance) const {
+  const int n = NumFree();
+  std::vector<double> zeros(static_cast<size_t>(n), 0.0);
+  const double* values = free_values ? free_values : zeros.data();
+  Eigen::MatrixXd j(3 * static_cast<Eigen::Index>(commands.size()), n);
+  for (size_t k = 0; k < commands.size(); ++k) j.middleRows(3 * static_cast<Eigen::Index>(k), 3) = ForwardJacobian(*this, values, commands[k]);
+
+  // Walk the columns in layout order; a column that the kept ones already span (relative residual below
+  // tolerance) is an alias of them, and its factors come from a least-squares solve on the kept columns.
+  std::vector<Alias> aliases;
+  std::vector<int> kept;
+  const std::vector<std::string> names = FreeNames();
+  for (int c = 0; c < n; ++c) {
+    const double norm = j.col(c).norm();
+    if (norm == 0.0) {
+      aliases.push_back(Alias{names[static_cast<size_t>(c)], {}});  // no effect at all at these commands
+      continue;
+    }
+    if (!kept.empty()) {
+      Eigen::MatrixXd basis(j.rows(), static_cast<Eigen::Index>(kept.size()));
+      for (size_t k = 0; k < kept.size(); ++k) basis.col(static_cast<Eigen::Index>(k)) = j.col(kept[k]);
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(basis);
+      const Eigen::VectorXd factors = qr.solve(j.col(c));
+      if ((basis * factors - j.col(c)).norm() <= tolerance * norm) {
+        Alias alias{names[static_cast<size_t>(c)], {}};
+        for (size_t k = 0; k < kept.size(); ++k) {
+          const double f = factors[static_cast<Eigen::Index>(k)];
+          if (std::abs(f) * basis.col(static_cast<Eigen::Index>(k)).norm() > 1e-6 * norm) alias.on.emplace_back(names[static_cast<size_t>(kept[k])], f);
+        }
+        aliases.push_back(alias);
+        continue;
+      }
+    }
+    kept.push_back(c);
+  }
+  return aliases;
+}
+
+Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>& free, const Eigen::Vector3d& q) {
+  if (static_cast<int>(free.size()) != layout.NumFree()) throw std::invalid_argument("wrong number of free coefficients");
+  return Forward(layout, free.data(), q);
+}
+
+Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
+                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value) {
+  using Jet = ceres::Jet<double, kNumErrorTerms>;
+  Jet ej[kNumErrorTerms];
+  for (int t = 0; t < kNumErrorTerms; ++t) ej[t] = Jet(e[t], t);
+  const Eigen::Matrix<Jet, 3, 1> qj = q.cast<Jet>();
+  const Eigen::Matrix<Jet, 3, 1> p = ChainForward(chain, ej, qj);
+  Eigen::Matrix<double, 3, kNumErrorTerms> j;
+  for (int r = 0; r < 3; ++r) j.row(r) = p[r].v.transpose();
+  if (value) *value = Eigen::Vector3d(p[0].a, p[1].a, p[2].a);
+  return j;
+}
+
+Eigen::MatrixXd ForwardJacobian(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& q,
+                                Eigen::Vector3d* value) {
+  std::vector<double> all(layout.coefficients().size());
+  layout.Expand(free, all.data());
+  double e[kNumErrorTerms];
+  layout.TermValues(all.data(), q, e);
+  return TermJacobian(layout.chain(), e, q, value) * layout.TermDerivative(q);
+}
+
+}  // namespace fvm::stage

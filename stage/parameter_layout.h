@@ -1,0 +1,149 @@
+#pragma once
+// Which coefficients describe the 21 error terms of a chain, and which of them a solver may move.
+//
+// Each term is absent or a polynomial of order 0..3 in its argument axis' normalised coordinate (see
+// polynomial_basis.h). A coefficient is named after its term and power: xTx1, yRz0; a squareness term of
+// order 0 is named plainly: xWy (higher orders: xWy0, xWy1, ...). Every coefficient is free, fixed at a value,
+// or tied to a free one (value = factor * that one); dropping removes it from the model.
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stage/axis_chain.h"
+#include "stage/polynomial_basis.h"
+
+namespace fvm::stage {
+
+inline constexpr int kMaxOrder = 3;
+
+struct TermSpec {
+  bool present = false;
+  Basis basis = Basis::kPower;
+  int order = 0;
+};
+
+class ParameterLayout {
+ public:
+  enum class State { kFree, kFixed, kTied };
+  struct Coefficient {
+    std::string name;
+    int term = 0;
+    int power = 0;
+    State state = State::kFree;
+    double value = 0.0;   // kFixed: the value; kTied: the factor
+    std::string tied_to;  // kTied: the free coefficient it follows
+  };
+  // Two or more coefficients with one effect on the forward model: `dependent` equals the sum of
+  // factor * coefficient over `on` (e.g. xWy = -1 * xTy1 in the power basis).
+  struct Alias {
+    std::string dependent;
+    std::vector<std::pair<std::string, double>> on;
+    std::string Describe() const;
+  };
+
+  ParameterLayout(AxisChain chain, std::array<Travel, 3> travel);
+
+  // Sets term `name` (VDI or ISO name) to a polynomial; its coefficients become free. Throws on a bad name/order.
+  void SetTerm(std::string_view term_name, Basis basis, int order);
+  void RemoveTerm(std::string_view term_name);
+  void Fix(std::string_view coefficient, double value);
+  void Tie(std::string_view coefficient, std::string_view free_coefficient, double factor);
+  void Free(std::string_view coefficient);
+  void Drop(std::string_view coefficient);
+
+  const AxisChain& chain() const { return chain_; }
+  const std::array<Travel, 3>& travel() const { return travel_; }
+  const TermSpec& term(int index) const { return terms_[static_cast<size_t>(index)]; }
+  const std::vector<Coefficient>& coefficients() const { return coefficients_; }
+  int NumFree() const { return static_cast<int>(free_index_.size()); }
+  std::vector<std::string> FreeNames() const;
+  int FindCoefficient(std::string_view name) const;  // -1 when absent
+  int FreeIndexOf(std::string_view name) const;      // -1 when not free
+
+  // All coefficient values from the free ones.
+  template <typename T>
+  void Expand(const T* free, T* all) const;
+  // Values of the 21 terms at command q (zeros for absent terms) from all coefficient values.
+  template <typename T>
+  void TermValues(const T* all, const Eigen::Matrix<T, 3, 1>& q, T* e) const;
+  // d(term values) / d(free coefficients) at q: 21 x NumFree. Constant in the coefficients, because every
+  // term is linear in them; fixed coefficients contribute nothing.
+  Eigen::MatrixXd TermDerivative(const Eigen::Vector3d& q) const;
+
+  // Exact linear dependencies between the free coefficients seen through the forward model at `commands`
+  // (relative tolerance on column residuals), in layout order: the earlier coefficient is kept.
+  std::vector<Alias> FindAliases(const std::vector<Eigen::Vector3d>& commands, const double* free_values = nullptr,
+                                 double tolerance = 1e-9) const;
+
+ private:
+  int RequireCoefficient(std::string_view name) const;
+  void Reindex();
+
+  AxisChain chain_;
+  std::array<Travel, 3> travel_;
+  std::array<TermSpec, kNumErrorTerms> terms_{};
+  std::vector<Coefficient> coefficients_;  // term order, then power
+  std::vector<int> free_index_;            // coefficient index of each free coefficient
+  std::vector<int> free_slot_;             // free slot of each coefficient, -1 if not free
+  std::vector<int> tied_slot_;             // free slot a tied coefficient follows, -1 otherwise
+};
+
+// Part coordinates of the commanded point q under the layout's error model with the given free values.
+template <typename T>
+Eigen::Matrix<T, 3, 1> Forward(const ParameterLayout& layout, const T* free, const Eigen::Matrix<T, 3, 1>& q,
+                               const T* instrument_pose6 = nullptr);
+Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>& free, const Eigen::Vector3d& q);
+
+// d(part coordinates) / d(21 term values) at q, by automatic differentiation (ceres::Jet); optionally the value.
+Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
+                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value = nullptr);
+// d(part coordinates) / d(free coefficients) at q: TermJacobian * TermDerivative.
+Eigen::MatrixXd ForwardJacobian(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& q,
+                                Eigen::Vector3d* value = nullptr);
+
+// ---- template definitions ----
+
+template <typename T>
+void ParameterLayout::Expand(const T* free, T* all) const {
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    const Coefficient& c = coefficients_[i];
+    switch (c.state) {
+      case State::kFree: all[i] = free[free_slot_[i]]; break;
+      case State::kFixed: all[i] = T(c.value); break;
+      case State::kTied: all[i] = c.value * free[tied_slot_[i]]; break;
+    }
+  }
+}
+
+template <typename T>
+void ParameterLayout::TermValues(const T* all, const Eigen::Matrix<T, 3, 1>& q, T* e) const {
+  for (int t = 0; t < kNumErrorTerms; ++t) e[t] = T(0.0);
+  T basis[kMaxOrder + 1];
+  int previous_term = -1;
+  for (size_t i = 0; i < coefficients_.size(); ++i) {
+    const Coefficient& c = coefficients_[i];
+    if (c.term != previous_term) {
+      const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
+      const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
+      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]),
+                    basis);
+      previous_term = c.term;
+    }
+    e[c.term] += all[i] * basis[c.power];
+  }
+}
+
+template <typename T>
+Eigen::Matrix<T, 3, 1> Forward(const ParameterLayout& layout, const T* free, const Eigen::Matrix<T, 3, 1>& q,
+                               const T* instrument_pose6) {
+  std::vector<T> all(layout.coefficients().size());
+  layout.Expand(free, all.data());
+  T e[kNumErrorTerms];
+  layout.TermValues(all.data(), q, e);
+  return ChainForward(layout.chain(), e, q, instrument_pose6);
+}
+
+}  // namespace fvm::stage
