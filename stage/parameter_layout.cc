@@ -1,8 +1,9 @@
 #include "stage/parameter_layout.h"
 
+#include "stage/linear_dependence.h"
+
 #include <ceres/jet.h>
 
-#include <Eigen/QR>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -183,35 +184,21 @@ std::vector<ParameterLayout::Alias> ParameterLayout::FindAliases(const std::vect
   Eigen::MatrixXd j(3 * static_cast<Eigen::Index>(commands.size()), n);
   for (size_t k = 0; k < commands.size(); ++k) j.middleRows(3 * static_cast<Eigen::Index>(k), 3) = ForwardJacobian(*this, values, commands[k]);
 
-  // Walk the columns in layout order; a column that the kept ones already span (relative residual below
-  // tolerance) is an alias of them, and its factors come from a least-squares solve on the kept columns.
-  std::vector<Alias> aliases;
-  std::vector<int> kept;
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int c = 0; c < n; ++c) order[static_cast<size_t>(c)] = c;
   const std::vector<std::string> names = FreeNames();
-  for (int c = 0; c < n; ++c) {
-    const double norm = j.col(c).norm();
-    if (norm == 0.0) {
-      aliases.push_back(Alias{names[static_cast<size_t>(c)], {}});  // no effect at all at these commands
-      continue;
-    }
-    if (!kept.empty()) {
-      Eigen::MatrixXd basis(j.rows(), static_cast<Eigen::Index>(kept.size()));
-      for (size_t k = 0; k < kept.size(); ++k) basis.col(static_cast<Eigen::Index>(k)) = j.col(kept[k]);
-      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(basis);
-      const Eigen::VectorXd factors = qr.solve(j.col(c));
-      if ((basis * factors - j.col(c)).norm() <= tolerance * norm) {
-        Alias alias{names[static_cast<size_t>(c)], {}};
-        for (size_t k = 0; k < kept.size(); ++k) {
-          const double f = factors[static_cast<Eigen::Index>(k)];
-          if (std::abs(f) * basis.col(static_cast<Eigen::Index>(k)).norm() > 1e-6 * norm) alias.on.emplace_back(names[static_cast<size_t>(kept[k])], f);
-        }
-        aliases.push_back(alias);
-        continue;
-      }
-    }
-    kept.push_back(c);
+  std::vector<Alias> aliases;
+  for (const ColumnDependence& d : FindDependentColumns(j, order, tolerance)) {
+    Alias alias{names[static_cast<size_t>(d.column)], {}};
+    for (const auto& [column, factor] : d.on) alias.on.emplace_back(names[static_cast<size_t>(column)], factor);
+    aliases.push_back(std::move(alias));
   }
   return aliases;
+}
+
+DisplayUnit UnitOf(const ParameterLayout::Coefficient& coefficient) {
+  if (GetErrorTerm(coefficient.term).kind == ErrorKind::kTranslation) return {"um", 1e3};
+  return {"urad", 1e6};
 }
 
 Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>& free, const Eigen::Vector3d& q) {

@@ -18,6 +18,7 @@
 namespace fvm::stage {
 
 inline constexpr int kMaxOrder = 3;
+inline constexpr int kMaxCoefficients = kNumErrorTerms * (kMaxOrder + 1);
 
 struct TermSpec {
   bool present = false;
@@ -90,6 +91,13 @@ class ParameterLayout {
   std::vector<int> free_slot_;             // free slot of each coefficient, -1 if not free
   std::vector<int> tied_slot_;             // free slot a tied coefficient follows, -1 otherwise
 };
+
+// How people read a coefficient: translations in um, rotations and squareness in urad.
+struct DisplayUnit {
+  const char* name;
+  double per_si;  // display value = SI value (mm or rad) * per_si
+};
+DisplayUnit UnitOf(const ParameterLayout::Coefficient& coefficient);
 
 // Part coordinates of the commanded point q under the layout's error model with the given free values.
 template <typename T>

@@ -1,0 +1,13 @@
+#pragma once
+// An error in what the user gave us: it names the file (and line, calotte id) and says what to do.
+
+#include <stdexcept>
+#include <string>
+
+namespace fvm {
+
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace fvm

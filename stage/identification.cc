@@ -1,0 +1,410 @@
+#include "stage/identification.h"
+
+#include <ceres/ceres.h>
+#include <fmt/core.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "stage/linear_dependence.h"
+
+namespace fvm::stage {
+namespace {
+
+// d(term values)/d(free coefficients) at one command, sparse: each coefficient feeds one term.
+struct TermDerivativeEntry {
+  int term;
+  int slot;
+  double value;
+};
+using SparseTermDerivative = std::vector<TermDerivativeEntry>;
+
+SparseTermDerivative Sparse(const Eigen::MatrixXd& d) {
+  SparseTermDerivative entries;
+  for (int c = 0; c < d.cols(); ++c) {
+    for (int t = 0; t < d.rows(); ++t) {
+      if (d(t, c) != 0.0) entries.push_back({t, c, d(t, c)});
+    }
+  }
+  return entries;
+}
+
+// Forward model and, optionally, its Jacobian w.r.t. the free coefficients (3 x n, column-major) at one
+// command: Jets through the chain for the 21 term values, then the exact linear map to the coefficients.
+Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& q,
+                              const SparseTermDerivative& derivative, Eigen::Matrix3Xd* jacobian) {
+  std::array<double, kMaxCoefficients> all{};
+  layout.Expand(free, all.data());
+  double e[kNumErrorTerms];
+  layout.TermValues(all.data(), q, e);
+  if (jacobian == nullptr) return ChainForward(layout.chain(), e, q);
+  Eigen::Vector3d p;
+  const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(layout.chain(), e, q, &p);
+  jacobian->setZero(3, layout.NumFree());
+  for (const TermDerivativeEntry& d : derivative) jacobian->col(d.slot) += term_jacobian.col(d.term) * d.value;
+  return p;
+}
+
+struct PreparedObservation {
+  Eigen::Vector3d free;
+  Eigen::Vector3d reference;
+  SparseTermDerivative derivative;
+  int anchor = -1;  // index into the prepared anchors, or -1
+};
+
+struct PreparedAnchor {
+  Eigen::Vector3d position;
+  SparseTermDerivative derivative;
+};
+
+// Residual (model - reference) and its Jacobian w.r.t. the unscaled free coefficients.
+Eigen::Vector3d Residual(const ParameterLayout& layout, const double* free, const PreparedObservation& o,
+                         const std::vector<PreparedAnchor>& anchors, Eigen::Matrix3Xd* jacobian) {
+  Eigen::Vector3d r = EvaluatePoint(layout, free, o.free, o.derivative, jacobian) - o.reference;
+  if (o.anchor >= 0) {
+    const PreparedAnchor& a = anchors[static_cast<size_t>(o.anchor)];
+    Eigen::Matrix3Xd anchor_jacobian;
+    r -= EvaluatePoint(layout, free, a.position, a.derivative, jacobian ? &anchor_jacobian : nullptr) - a.position;
+    if (jacobian) *jacobian -= anchor_jacobian;
+  }
+  return r;
+}
+
+// One observation's Euclidean error as a Ceres residual block over the scaled coefficients
+// (coefficient = scale * parameter, so every parameter is of order one).
+class PointCost final : public ceres::CostFunction {
+ public:
+  PointCost(const ParameterLayout& layout, const Eigen::VectorXd& scale, const PreparedObservation& observation,
+            const std::vector<PreparedAnchor>& anchors)
+      : layout_(layout), scale_(scale), observation_(observation), anchors_(anchors) {
+    set_num_residuals(3);
+    mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(scale.size()));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Eigen::Index n = scale_.size();
+    std::array<double, kMaxCoefficients> free{};
+    for (Eigen::Index i = 0; i < n; ++i) free[static_cast<size_t>(i)] = scale_[i] * parameters[0][i];
+    const bool want_jacobian = jacobians != nullptr && jacobians[0] != nullptr;
+    Eigen::Matrix3Xd jacobian;
+    const Eigen::Vector3d r = Residual(layout_, free.data(), observation_, anchors_, want_jacobian ? &jacobian : nullptr);
+    for (int k = 0; k < 3; ++k) residuals[k] = r[k];
+    if (want_jacobian) {
+      Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>> out(jacobians[0], 3, n);
+      out = jacobian * scale_.asDiagonal();
+    }
+    return true;
+  }
+
+ private:
+  const ParameterLayout& layout_;
+  const Eigen::VectorXd& scale_;
+  const PreparedObservation& observation_;
+  const std::vector<PreparedAnchor>& anchors_;
+};
+
+// Order in which coefficients are kept when the data cannot tell some apart: lower powers first; within a
+// power, translations (positioning, straightness), then squareness, then yaw, then pitch and roll, whose effect
+// needs a height change that a flat artefact hardly gives.
+std::vector<int> KeepingOrder(const ParameterLayout& layout) {
+  const auto rank = [&](int slot) {
+    const ParameterLayout::Coefficient& c =
+        layout.coefficients()[static_cast<size_t>(layout.FindCoefficient(layout.FreeNames()[static_cast<size_t>(slot)]))];
+    const ErrorTerm& term = GetErrorTerm(c.term);
+    int kind = 0;
+    if (term.kind == ErrorKind::kSquareness) kind = 1;
+    if (term.kind == ErrorKind::kRotation) kind = term.component == 2 ? 2 : 3;
+    return std::make_tuple(c.power, kind, slot);
+  };
+  std::vector<int> order(static_cast<size_t>(layout.NumFree()));
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return rank(a) < rank(b); });
+  return order;
+}
+
+const ParameterLayout::Coefficient& FreeCoefficient(const ParameterLayout& layout, int slot) {
+  return layout.coefficients()[static_cast<size_t>(layout.FindCoefficient(layout.FreeNames()[static_cast<size_t>(slot)]))];
+}
+
+std::string FormatValue(const ParameterLayout::Coefficient& c, double si) {
+  const DisplayUnit unit = UnitOf(c);
+  return fmt::format("{:.3g} {}", si * unit.per_si, unit.name);
+}
+
+struct Prepared {
+  std::vector<PreparedObservation> observations;
+  std::vector<PreparedAnchor> anchors;
+};
+
+Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& observations,
+                 const IdentificationOptions& options) {
+  Prepared p;
+  if (options.anchor == Anchor::kFirstTile) {
+    for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, Sparse(layout.TermDerivative(a))});
+  }
+  for (const Observation& o : observations) {
+    PreparedObservation po{o.free, o.reference, Sparse(layout.TermDerivative(o.free)), -1};
+    if (options.anchor == Anchor::kFirstTile) po.anchor = o.group;
+    p.observations.push_back(std::move(po));
+  }
+  return p;
+}
+
+// Stacked residuals and Jacobian (unscaled) at the given coefficients.
+void Linearise(const ParameterLayout& layout, const std::vector<double>& free, const Prepared& p,
+               Eigen::VectorXd* residual, Eigen::MatrixXd* jacobian) {
+  const Eigen::Index m = static_cast<Eigen::Index>(p.observations.size());
+  residual->resize(3 * m);
+  jacobian->resize(3 * m, layout.NumFree());
+  Eigen::Matrix3Xd j;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    residual->segment<3>(3 * i) = Residual(layout, free.data(), p.observations[static_cast<size_t>(i)], p.anchors, &j);
+    jacobian->middleRows<3>(3 * i) = j;
+  }
+}
+
+}  // namespace
+
+void IdentificationOptions::Check() const {
+  if (loss != "none" && loss != "huber" && loss != "cauchy") {
+    throw std::invalid_argument("unknown loss '" + loss + "': use none, huber or cauchy");
+  }
+  if (!(loss_scale_mm > 0) || !(alias_tolerance > 0) || !(max_relative_uncertainty > 0) || !(noise_floor_mm > 0)) {
+    throw std::invalid_argument("identification tolerances must be positive");
+  }
+}
+
+Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions) {
+  if (positions.empty()) throw std::invalid_argument("a measurement without points has no first tile");
+  Eigen::Vector3d corner(positions[0].x(), positions[0].y(), 0.0);
+  for (const Eigen::Vector3d& p : positions) {
+    corner.x() = std::min(corner.x(), p.x());
+    corner.y() = std::max(corner.y(), p.y());
+    corner.z() += p.z() / static_cast<double>(positions.size());
+  }
+  return corner;
+}
+
+Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout) {
+  Eigen::VectorXd tau(layout.NumFree());
+  for (int slot = 0; slot < layout.NumFree(); ++slot) {
+    const ParameterLayout::Coefficient& c = FreeCoefficient(layout, slot);
+    const TermSpec& spec = layout.term(c.term);
+    const Travel& travel = layout.travel()[static_cast<size_t>(layout.chain().ArgumentAxis(c.term))];
+    double reach = 0.0;  // largest |basis function| over the travel
+    for (int k = 0; k <= 100; ++k) {
+      const double q = travel.min + (travel.max - travel.min) * k / 100.0;
+      double basis[kMaxOrder + 1];
+      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel, q), basis);
+      reach = std::max(reach, std::abs(basis[c.power]));
+    }
+    const ErrorTerm& term = GetErrorTerm(c.term);
+    double size = term.kind == ErrorKind::kTranslation ? 0.5 : 1e-3;
+    // A squareness term multiplies its carrier's coordinate: 1 mrad is its size as an angle.
+    tau[slot] = size / std::max(reach, 1e-12);
+  }
+  return tau;
+}
+
+Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
+                              const Eigen::Vector3d* anchor) {
+  Eigen::Vector3d r = Forward(layout, free, Eigen::Vector3d(observation.free)) - observation.reference;
+  if (anchor) r -= Forward(layout, free, Eigen::Vector3d(*anchor)) - *anchor;
+  return r;
+}
+
+IdentificationResult Identify(const ParameterLayout& input_layout, const std::vector<Observation>& observations,
+                              const IdentificationOptions& options) {
+  options.Check();
+  const int m = static_cast<int>(observations.size());
+  if (3 * m < input_layout.NumFree()) {
+    throw std::invalid_argument(fmt::format(
+        "{} centres give {} equations, fewer than the {} coefficients of the model: measure more placements or "
+        "choose a smaller model", m, 3 * m, input_layout.NumFree()));
+  }
+  if (options.anchor == Anchor::kFirstTile) {
+    for (const Observation& o : observations) {
+      if (o.group < 0 || o.group >= static_cast<int>(options.anchors.size())) {
+        throw std::invalid_argument("anchoring at the first tile needs a first tile for every measurement");
+      }
+    }
+  }
+
+  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0});
+  ParameterLayout& layout = result.calibration.layout;
+  Prepared prepared = Prepare(layout, observations, options);
+
+  std::vector<double> start_parameters;  // in units of the plausible sizes, for the kept coefficients
+  // Rank treatment on the Jacobian at zero error (the model is linear in its coefficients to first order).
+  {
+    const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
+    Eigen::VectorXd r0;
+    Eigen::MatrixXd j;
+    Linearise(layout, zeros, prepared, &r0, &j);
+    const Eigen::VectorXd tau = PlausibleSizes(layout);
+    const Eigen::MatrixXd js = j * tau.asDiagonal();
+    const std::vector<std::string> names = layout.FreeNames();
+    std::vector<bool> fixed(names.size(), false);
+
+    const std::vector<int> keeping_order = KeepingOrder(layout);
+    std::vector<int> rank_of(names.size());
+    for (size_t i = 0; i < keeping_order.size(); ++i) rank_of[static_cast<size_t>(keeping_order[i])] = static_cast<int>(i);
+    for (const ColumnDependence& d : FindDependentColumns(js, keeping_order, options.alias_tolerance)) {
+      fixed[static_cast<size_t>(d.column)] = true;
+      std::string why;
+      if (d.on.empty()) {
+        why = options.anchor == Anchor::kFirstTile
+                  ? "no effect on these data: anchoring every measurement at its first tile cancels it"
+                  : "no effect on these data";
+      } else {
+        why = "same effect as";
+        for (size_t k = 0; k < d.on.size(); ++k) {
+          const auto [other, factor] = d.on[k];
+          why += fmt::format("{} {:.4g} * {}", k ? " +" : "", factor * tau[other] / tau[d.column],
+                             names[static_cast<size_t>(other)]);
+        }
+        why += " on these data";
+      }
+      result.fixed.push_back({names[static_cast<size_t>(d.column)], why});
+    }
+
+    // Weakly determined coefficients: fix the worst while one's standard uncertainty, in units of its
+    // plausible size, exceeds the limit. Normal equations on scaled columns are well enough conditioned here.
+    const Eigen::MatrixXd normal = js.transpose() * js;
+    const Eigen::VectorXd gradient = js.transpose() * r0;
+    const double r0_squared = r0.squaredNorm();
+    Eigen::VectorXd start;
+    while (true) {
+      std::vector<int> kept;
+      for (size_t c = 0; c < fixed.size(); ++c) {
+        if (!fixed[c]) kept.push_back(static_cast<int>(c));
+      }
+      const Eigen::Index k = static_cast<Eigen::Index>(kept.size());
+      if (k == 0) break;
+      Eigen::MatrixXd nk(k, k);
+      Eigen::VectorXd gk(k);
+      for (Eigen::Index a = 0; a < k; ++a) {
+        gk[a] = gradient[kept[static_cast<size_t>(a)]];
+        for (Eigen::Index b = 0; b < k; ++b) nk(a, b) = normal(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]);
+      }
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(nk);
+      start = -ldlt.solve(gk);  // the linearised least-squares solution: where LM starts
+      const double rss = std::max(0.0, r0_squared - gk.dot(ldlt.solve(gk)));
+      const double dof = std::max(1.0, 3.0 * m - static_cast<double>(k));
+      const double sigma = std::max(std::sqrt(rss / dof), options.noise_floor_mm);
+      const Eigen::MatrixXd covariance = sigma * sigma * ldlt.solve(Eigen::MatrixXd::Identity(k, k));
+      // Of the coefficients the data cannot determine, fix the one we would keep last (KeepingOrder): when
+      // pitch and a squareness term explain the same thing, the squareness stays.
+      Eigen::Index worst = -1;
+      for (Eigen::Index a = 0; a < k; ++a) {
+        const double u = std::sqrt(std::max(0.0, covariance(a, a)));
+        if (!(u <= options.max_relative_uncertainty)) {
+          if (worst < 0 || rank_of[static_cast<size_t>(kept[static_cast<size_t>(a)])] >
+                               rank_of[static_cast<size_t>(kept[static_cast<size_t>(worst)])]) {
+            worst = a;
+          }
+        }
+      }
+      if (worst < 0) {
+        start_parameters.assign(start.data(), start.data() + start.size());
+        break;
+      }
+      const double u = std::sqrt(std::max(0.0, covariance(worst, worst)));
+      const int column = kept[static_cast<size_t>(worst)];
+      Eigen::Index partner = worst == 0 ? 1 : 0;  // the kept coefficient it is most correlated with
+      for (Eigen::Index a = 0; a < k; ++a) {
+        if (a == worst) continue;
+        const double rho = std::abs(covariance(worst, a)) / std::sqrt(covariance(a, a) * covariance(worst, worst));
+        const double best = std::abs(covariance(worst, partner)) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
+        if (rho > best) partner = a;
+      }
+      const ParameterLayout::Coefficient& c = FreeCoefficient(layout, column);
+      std::string why = fmt::format(
+          "undetermined by these data: its standard uncertainty would be {}, {:.0f}% of a plausible {}", FormatValue(c, u * tau[column]),
+          100.0 * u, FormatValue(c, tau[column]));
+      if (k > 1) {
+        const double rho = covariance(worst, partner) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
+        why += fmt::format(" (correlation {:+.3f} with {})", rho, names[static_cast<size_t>(kept[static_cast<size_t>(partner)])]);
+      }
+      const ErrorTerm& term = GetErrorTerm(c.term);
+      if (term.kind == ErrorKind::kRotation && term.component != 2) why += "; pitch and roll need height changes";
+      result.fixed.push_back({names[static_cast<size_t>(column)], why});
+      fixed[static_cast<size_t>(column)] = true;
+    }
+  }
+  for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
+  prepared = Prepare(layout, observations, options);
+
+  // Levenberg-Marquardt over the coefficients in units of their plausible size.
+  const Eigen::VectorXd scale = PlausibleSizes(layout);
+  const int n = layout.NumFree();
+  std::vector<double> parameters = start_parameters;
+  parameters.resize(static_cast<size_t>(n), 0.0);
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (const PreparedObservation& o : prepared.observations) {
+    ceres::LossFunction* loss = nullptr;
+    if (options.loss == "huber") loss = new ceres::HuberLoss(options.loss_scale_mm);
+    if (options.loss == "cauchy") loss = new ceres::CauchyLoss(options.loss_scale_mm);
+    if (n > 0) problem.AddResidualBlock(new PointCost(layout, scale, o, prepared.anchors), loss, parameters.data());
+  }
+  if (n > 0) {
+    ceres::Solver::Options solver;
+    solver.minimizer_type = ceres::TRUST_REGION;
+    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    solver.max_num_iterations = options.max_iterations;
+    solver.num_threads = options.num_threads;
+    solver.function_tolerance = 1e-10;
+    solver.parameter_tolerance = 1e-10;
+    solver.gradient_tolerance = 1e-14;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    result.iterations = static_cast<int>(summary.iterations.size());
+    result.converged = summary.termination_type == ceres::CONVERGENCE;
+    result.solver_report = summary.BriefReport();
+  } else {
+    result.converged = true;
+  }
+
+  std::vector<double>& values = result.calibration.values;
+  values.resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) values[static_cast<size_t>(i)] = scale[i] * parameters[static_cast<size_t>(i)];
+
+  // Residual statistics, noise and covariance at the solution.
+  Eigen::VectorXd r;
+  Eigen::MatrixXd j;
+  Linearise(layout, values, prepared, &r, &j);
+  double sum = 0, sum_sq = 0;
+  for (int i = 0; i < m; ++i) {
+    const Eigen::Vector3d ri = r.segment<3>(3 * i);
+    result.residuals.push_back(ri);
+    sum += ri.norm();
+    sum_sq += ri.squaredNorm();
+    result.max_mm = std::max(result.max_mm, ri.norm());
+  }
+  result.mean_mm = sum / m;
+  result.rms_mm = std::sqrt(sum_sq / m);
+  const double dof = std::max(1.0, 3.0 * m - n);
+  result.calibration.sigma_mm = std::max(std::sqrt(r.squaredNorm() / dof), options.noise_floor_mm);
+  if (n > 0) {
+    const Eigen::MatrixXd js = j * scale.asDiagonal();
+    const Eigen::MatrixXd normal = js.transpose() * js;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+    const double lo = std::max(eigen.eigenvalues().minCoeff(), 0.0);
+    result.condition_number = lo > 0 ? std::sqrt(eigen.eigenvalues().maxCoeff() / lo) : INFINITY;
+    const Eigen::MatrixXd scaled_cov = normal.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+    result.calibration.covariance = result.calibration.sigma_mm * result.calibration.sigma_mm *
+                                    (scale.asDiagonal() * scaled_cov * scale.asDiagonal());
+  }
+  return result;
+}
+
+}  // namespace fvm::stage

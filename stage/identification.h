@@ -1,0 +1,81 @@
+#pragma once
+// Identification of a stage error model from pairs of measurements of an uncalibrated artefact: stitching-free
+// centres (stage error included) and stitched centres (reference) of the same calottes.
+//
+// Levenberg-Marquardt (Ceres) on the Euclidean point error of eq. 6, with automatic derivatives through the
+// kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is
+// examined on the Jacobian: coefficients the data cannot tell apart from others (exact aliases such as xTy1 and
+// xWy, offsets that cancel under anchoring, pitch and roll when z barely varies) are fixed at zero, named, and
+// reported with the reason, so every model order converges to the best fit its identifiable part allows.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "stage/calibration.h"
+#include "stage/parameter_layout.h"
+
+namespace fvm::stage {
+
+struct Observation {
+  Eigen::Vector3d free = Eigen::Vector3d::Zero();       // stitching-free centre, stage coordinates, mm
+  Eigen::Vector3d reference = Eigen::Vector3d::Zero();  // stitched centre of the same calotte, mm
+  int group = 0;                                        // which measurement (placement) it belongs to
+};
+
+// How stitched coordinates are referenced. The instrument places the first tile of a stitched measurement by
+// its encoders and registers the rest to it (000:4826), so stitched = F(q) - e(first tile), e(q) = F(q) - q.
+enum class Anchor {
+  kNone,       // stitched = F(q): the published procedure, valid when every measurement starts at one spot
+  kFirstTile,  // stitched = F(q) - F(a) + a with a the measurement's first tile
+};
+
+struct IdentificationOptions {
+  Anchor anchor = Anchor::kNone;
+  std::vector<Eigen::Vector3d> anchors;     // kFirstTile: first-tile stage coordinates of each group
+  std::string loss = "none";                // "none", "huber" or "cauchy" on each point's Euclidean error
+  double loss_scale_mm = 0.005;             // where the robust loss starts to bend
+  double alias_tolerance = 1e-8;            // relative residual of a Jacobian column that counts as explained
+  double max_relative_uncertainty = 1.0;    // fix a coefficient whose uncertainty exceeds this share of its
+                                            // plausible size: the data cannot determine it
+  double noise_floor_mm = 1e-5;             // never assume less noise than 10 nm per coordinate
+  int max_iterations = 100;
+  int num_threads = 2;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct FixedCoefficient {
+  std::string name;
+  std::string reason;
+};
+
+struct IdentificationResult {
+  explicit IdentificationResult(Calibration c) : calibration(std::move(c)) {}
+  Calibration calibration;
+  std::vector<FixedCoefficient> fixed;     // what the rank treatment fixed at zero, and why
+  std::vector<Eigen::Vector3d> residuals;  // model - reference for each observation, mm
+  double mean_mm = 0, rms_mm = 0, max_mm = 0;  // of the Euclidean residuals
+  double condition_number = 0;             // of the Jacobian with coefficients in units of their plausible size
+  int iterations = 0;
+  bool converged = false;
+  std::string solver_report;               // Ceres' one-line summary
+};
+
+// Throws std::invalid_argument when there are fewer equations than coefficients, an anchor is missing, or the
+// options are inconsistent; the message says what to do.
+IdentificationResult Identify(const ParameterLayout& layout, const std::vector<Observation>& observations,
+                              const IdentificationOptions& options = {});
+
+// The residual of one observation under a model (model - reference), with the anchor when given.
+Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
+                              const Eigen::Vector3d* anchor = nullptr);
+
+// The first tile of a measurement that covers these stage positions: the instrument starts at lowest x and
+// highest y (000:7264); z is their mean.
+Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions);
+
+// A plausible size of each free coefficient: its term reaching 0.5 mm (translation) or 1 mrad (rotation,
+// squareness) at the far end of the travel. Scales the solver's parameters and judges identifiability.
+Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout);
+
+}  // namespace fvm::stage

@@ -1,0 +1,58 @@
+#include "stage/validation.h"
+
+#include <cmath>
+#include <map>
+
+namespace fvm::stage {
+namespace {
+
+Eigen::Vector3d Compensated(const Calibration* calibration, const Eigen::Vector3d& q, Eigen::MatrixXd* jacobian) {
+  if (calibration == nullptr) return q;
+  Eigen::Vector3d p;
+  const Eigen::MatrixXd j = ForwardJacobian(calibration->layout, calibration->values.data(), q, &p);
+  if (jacobian) *jacobian = j;
+  return p;
+}
+
+}  // namespace
+
+ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
+                         const std::vector<Eigen::Vector3d>& anchors) {
+  ValidationStats stats;
+  double sum = 0, sum_sq = 0, predicted_sq = 0;
+  for (const Observation& o : observations) {
+    const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
+    Eigen::MatrixXd jq, ja;
+    const Eigen::Vector3d r = Compensated(calibration, o.free, &jq) - (Compensated(calibration, a, &ja) - a) - o.reference;
+    stats.residuals.push_back(r);
+    sum += r.norm();
+    sum_sq += r.squaredNorm();
+    stats.max_mm = std::max(stats.max_mm, r.norm());
+    if (calibration != nullptr && calibration->covariance.size() > 0) {
+      const Eigen::MatrixXd d = jq - ja;
+      predicted_sq += (d * calibration->covariance * d.transpose()).trace() + 3 * calibration->sigma_mm * calibration->sigma_mm;
+    }
+  }
+  stats.count = static_cast<int>(observations.size());
+  if (stats.count > 0) {
+    stats.mean_mm = sum / stats.count;
+    stats.rms_mm = std::sqrt(sum_sq / stats.count);
+    stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
+  }
+  return stats;
+}
+
+std::vector<double> DistanceErrors(const Calibration* calibration, const std::vector<Observation>& observations) {
+  std::map<int, const Observation*> first;
+  std::vector<double> errors;
+  for (const Observation& o : observations) {
+    const auto [it, inserted] = first.emplace(o.group, &o);
+    if (inserted) continue;
+    const Observation& f = *it->second;
+    const double compensated = (Compensated(calibration, o.free, nullptr) - Compensated(calibration, f.free, nullptr)).norm();
+    errors.push_back(compensated - (o.reference - f.reference).norm());
+  }
+  return errors;
+}
+
+}  // namespace fvm::stage
