@@ -108,7 +108,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
 
   std::vector<PlacementPose> poses = IdentificationPoses();
   if (!options.same_start) {
-    std::uniform_real_distribution<double> shift(0.0, 10.0);
+    std::uniform_real_distribution<double> shift(0.0, 30.0);
     for (PlacementPose& p : poses) p.start += Eigen::Vector2d(shift(rng), -shift(rng));
   }
   for (const PlacementPose& p : ValidationPoses(options.validation_placements, rng)) poses.push_back(p);

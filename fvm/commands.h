@@ -8,4 +8,16 @@ namespace fvm::cli {
 // A subcommand that is listed in the contract but not built yet: it says so and exits 2.
 void AddNotBuilt(CLI::App& app, const std::string& name, const std::string& summary, int issue);
 
+// fvm calibrate BATCH --model N -o CAL.json (fvm/calibrate.cc).
+void RegisterCalibrate(CLI::App& app);
+// fvm correct --calibration CAL.json IN -o OUT (fvm/correct.cc).
+void RegisterCorrect(CLI::App& app);
+// fvm compare BATCH [--models ...] (fvm/compare.cc).
+void RegisterCompare(CLI::App& app);
+// fvm simulate fvm-batch ... (fvm/simulate.cc).
+void RegisterSimulate(CLI::App& app);
+
+// fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
+void RegisterDiff(CLI::App& app);
+
 }  // namespace fvm::cli

@@ -29,12 +29,12 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer("Run 'fvm <command> --help' for the options of a command.");
 
-  AddNotBuilt(app, "calibrate", "identify the YXFZ stage model (9/15/27/42 parameters) from a batch", 3);
-  AddNotBuilt(app, "correct", "compensate a stitching-free export with a calibration", 3);
-  AddNotBuilt(app, "compare", "every model order side by side on a batch", 3);
-  AddNotBuilt(app, "diff", "per-calotte and distance differences between two exports", 3);
+  fvm::cli::RegisterCalibrate(app);
+  fvm::cli::RegisterCorrect(app);
+  fvm::cli::RegisterCompare(app);
+  fvm::cli::RegisterDiff(app);
   AddNotBuilt(app, "diagnose", "find, name and model the effect that simulation and measurement miss", 6);
-  AddNotBuilt(app, "simulate", "synthetic batches, surfaces, tiles and tracker data with a recorded truth", 3);
+  fvm::cli::RegisterSimulate(app);
   AddNotBuilt(app, "info", "what a surface or point-cloud file holds", 4);
   AddNotBuilt(app, "fit", "find calottes and fit spheres; writes a centre export", 4);
   AddNotBuilt(app, "focus", "height map from a focus stack", 4);

@@ -5,6 +5,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
+#include <map>
+
 #include "artefacts/batch_observations.h"
 #include "artefacts/fvm_batch_simulation.h"
 #include "stage/fvm_stage_models.h"
@@ -37,21 +40,137 @@ IdentificationOptions AnchorOptions(const artefacts::ObservationSet& set, Anchor
   return o;
 }
 
-TEST(Identification, ExploreModels) {
+double ValidationMean(const IdentificationResult& r, const Experiment& e) {
+  return Validate(&r.calibration, e.validate.observations, e.validate.anchors).mean_mm;
+}
+
+TEST(Identification, OrdersOneAndTwoConvergeAndBeatTheSimplifiedModel) {
   for (unsigned seed : {1u, 2u, 3u}) {
     const Experiment e = Simulate(seed);
-    const ValidationStats before = Validate(nullptr, e.validate.observations, e.validate.anchors);
-    std::printf("seed %u truth mean %.1f max %.1f um; validation before %.1f um\n", seed, e.sim.truth.mean_error_um,
-                e.sim.truth.max_error_um, before.mean_mm * 1e3);
-    for (const std::string& model : FvmModelNames()) {
+    const double mean9 = ValidationMean(Identify(FvmModelLayout("9"), e.identify.observations), e);
+    for (const char* model : {"27", "42"}) {
       const IdentificationResult r = Identify(FvmModelLayout(model), e.identify.observations);
-      const ValidationStats v = Validate(&r.calibration, e.validate.observations, e.validate.anchors);
-      std::printf("  %s: free %d fixed %zu id rms %.2f um val mean %.2f rms %.2f pred %.2f cond %.3g it %d conv %d\n", model.c_str(),
-                  r.calibration.layout.NumFree(), r.fixed.size(), r.rms_mm * 1e3, v.mean_mm * 1e3, v.rms_mm * 1e3,
-                  v.predicted_rms_mm * 1e3, r.condition_number, r.iterations, r.converged);
-      if (model == "27" && seed == 1) std::printf("%s\n", r.solver_report.c_str());
+      EXPECT_TRUE(r.converged) << model << " seed " << seed << ": " << r.solver_report;
+      // The truth is first order, so the simplified model cannot follow it; 27 and 42 must not do worse.
+      EXPECT_LT(ValidationMean(r, e), mean9) << model << " seed " << seed;
+      // Noise is 0.5 um per coordinate in both measurements: a perfect model leaves sqrt(3 * 2) * 0.5 = 1.22 um
+      // rms; allow the parameter uncertainty on top.
+      EXPECT_LT(r.rms_mm, 1.6e-3) << model;
     }
   }
+}
+
+// An independent estimator of the same model on the same information: Gauss-Newton with central-difference
+// Jacobians over every coefficient, minimum-norm steps (complete orthogonal decomposition) for the rank deficiency.
+std::vector<double> IndependentLeastSquares(const ParameterLayout& layout, const std::vector<Observation>& obs) {
+  std::vector<double> x(static_cast<size_t>(layout.NumFree()), 0.0);
+  const Eigen::VectorXd tau = PlausibleSizes(layout);
+  for (int iteration = 0; iteration < 6; ++iteration) {
+    Eigen::MatrixXd j(3 * obs.size(), layout.NumFree());
+    Eigen::VectorXd r(3 * obs.size());
+    for (size_t i = 0; i < obs.size(); ++i) {
+      r.segment<3>(3 * static_cast<Eigen::Index>(i)) = Forward(layout, x, obs[i].free) - obs[i].reference;
+      for (int c = 0; c < layout.NumFree(); ++c) {
+        std::vector<double> up = x, down = x;
+        const double h = 1e-4 * tau[c];
+        up[static_cast<size_t>(c)] += h;
+        down[static_cast<size_t>(c)] -= h;
+        j.block<3, 1>(3 * static_cast<Eigen::Index>(i), c) = (Forward(layout, up, obs[i].free) - Forward(layout, down, obs[i].free)) / (2 * h);
+      }
+    }
+    const Eigen::MatrixXd js = j * tau.asDiagonal();
+    const Eigen::VectorXd step = tau.asDiagonal() * js.completeOrthogonalDecomposition().solve(-r);
+    for (int c = 0; c < layout.NumFree(); ++c) x[static_cast<size_t>(c)] += step[c];
+  }
+  return x;
+}
+
+TEST(Identification, ValidationWithinTenPercentOfAnIndependentLeastSquaresFit) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Experiment e = Simulate(seed);
+    for (const char* model : {"27", "42"}) {
+      const ParameterLayout layout = FvmModelLayout(model);
+      const std::vector<double> ls = IndependentLeastSquares(layout, e.identify.observations);
+      const Calibration reference{"ls", layout, ls, {}, 0.0};
+      const double ls_mean = Validate(&reference, e.validate.observations, e.validate.anchors).mean_mm;
+      const double ours = ValidationMean(Identify(layout, e.identify.observations), e);
+      EXPECT_LT(ours, 1.1 * ls_mean) << model << " seed " << seed << ": ours " << ours * 1e3 << " um, least squares "
+                                     << ls_mean * 1e3 << " um";
+    }
+  }
+}
+
+TEST(Identification, EstimatesLieWithinThreeUncertaintiesOfTheEstimableTruth) {
+  // Coefficients the data cannot tell apart are not estimable one by one; what the data determine is the truth
+  // projected onto the identified layout: the same layout fitted to the noise-free measurements.
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Experiment noisy = Simulate(seed);
+    const Experiment clean = Simulate(seed, "27", 0.0);
+    const IdentificationResult r = Identify(FvmModelLayout("27"), noisy.identify.observations);
+    const IdentificationResult truth = Identify(r.calibration.layout, clean.identify.observations);
+    ASSERT_TRUE(truth.fixed.empty());
+    const Eigen::VectorXd u = r.calibration.StandardUncertainty();
+    for (int i = 0; i < r.calibration.layout.NumFree(); ++i) {
+      const double z = (r.calibration.values[static_cast<size_t>(i)] - truth.calibration.values[static_cast<size_t>(i)]) / u[i];
+      EXPECT_LT(std::abs(z), 3.0) << r.calibration.layout.FreeNames()[static_cast<size_t>(i)] << " seed " << seed;
+    }
+  }
+}
+
+TEST(Identification, PredictedValidationErrorMatchesObserved) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Experiment e = Simulate(seed);
+    const IdentificationResult r = Identify(FvmModelLayout("27"), e.identify.observations);
+    const ValidationStats v = Validate(&r.calibration, e.validate.observations, e.validate.anchors);
+    // 170 centres x 3 coordinates: the rms of a correct prediction scatters by about 1/sqrt(2 * 510) = 3 %; the
+    // noise estimate from 51 centres adds 1/sqrt(2 * 138) = 6 %. Allow about three times that.
+    EXPECT_GT(v.rms_mm / v.predicted_rms_mm, 0.75) << "seed " << seed;
+    EXPECT_LT(v.rms_mm / v.predicted_rms_mm, 1.33) << "seed " << seed;
+  }
+}
+
+TEST(Identification, AnchoringAtTheFirstTileHandlesPlacementsThatStartApart) {
+  const Experiment e = Simulate(4, "27", 0.5, /*same_start=*/false);
+  const IdentificationResult plain = Identify(FvmModelLayout("27"), e.identify.observations);
+  const IdentificationResult anchored =
+      Identify(FvmModelLayout("27"), e.identify.observations, AnchorOptions(e.identify, Anchor::kFirstTile));
+  EXPECT_LT(ValidationMean(anchored, e), 2e-3);
+  EXPECT_GT(ValidationMean(plain, e), 2 * ValidationMean(anchored, e));
+  // Offsets cancel when every measurement is referenced to its own first tile: they are named, not solved for.
+  std::vector<std::string> fixed;
+  for (const FixedCoefficient& f : anchored.fixed) fixed.push_back(f.name);
+  EXPECT_THAT(fixed, ::testing::IsSupersetOf({"xTx0", "xTy0", "xTz0"}));
+}
+
+TEST(Identification, NamesTheCoefficientsItCannotDetermine) {
+  const Experiment e = Simulate(1);
+  const IdentificationResult r = Identify(FvmModelLayout("27"), e.identify.observations);
+  std::map<std::string, std::string> reasons;
+  for (const FixedCoefficient& f : r.fixed) reasons[f.name] = f.reason;
+  EXPECT_EQ(reasons["yTx0"], "same effect as 1 * xTx0 on these data");
+  EXPECT_THAT(reasons["xRy0"], ::testing::HasSubstr("pitch and roll need height changes"));
+  EXPECT_EQ(r.calibration.layout.FindCoefficient("xTy1"), -1);  // not part of the 27 model at all
+  EXPECT_EQ(r.calibration.layout.NumFree() + static_cast<int>(r.fixed.size()), 27);
+}
+
+TEST(Identification, TooFewCentresForTheModelIsAClearError) {
+  const Experiment e = Simulate(1);
+  const std::vector<Observation> few(e.identify.observations.begin(), e.identify.observations.begin() + 10);
+  EXPECT_THAT([&] { Identify(FvmModelLayout("42"), few); },
+              ::testing::ThrowsMessage<std::invalid_argument>(::testing::HasSubstr("fewer than the 42 coefficients")));
+}
+
+TEST(Identification, RobustLossResistsAFailedSphereFit) {
+  Experiment e = Simulate(2);
+  e.identify.observations[20].free += Eigen::Vector3d(0.05, -0.03, 0.02);  // a 60 um blunder
+  const double clean = ValidationMean(Identify(FvmModelLayout("27"), Simulate(2).identify.observations), e);
+  const double plain = ValidationMean(Identify(FvmModelLayout("27"), e.identify.observations), e);
+  IdentificationOptions robust;
+  robust.loss = "cauchy";
+  robust.loss_scale_mm = 0.002;
+  const double cauchy = ValidationMean(Identify(FvmModelLayout("27"), e.identify.observations, robust), e);
+  EXPECT_GT(plain, 1.5 * clean);
+  EXPECT_LT(cauchy, 1.15 * clean);
 }
 
 }  // namespace

@@ -1,0 +1,697 @@
+// The report is drawn with PLplot's C API into SVG, one PLplot stream per plot, and its page is plain HTML that
+// shows the plots with <img>, so the directory can be copied, mailed or archived as it is.
+
+#include "fvm/report.h"
+
+#include <fmt/format.h>
+#include <plplot.h>
+#include <stdlib.h>  // mkstemps
+#include <unistd.h>  // close
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "artefacts/atomic_file.h"
+#include "artefacts/input_error.h"
+
+namespace fvm::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Indices into PLplot's colour map 0. Before and after use the Okabe-Ito vermilion and blue, which stay apart for
+// colour-blind readers and in greyscale print.
+enum Colour : PLINT {
+  kBackground = 0,
+  kInk = 1,
+  kGrid = 2,
+  kMuted = 3,
+  kBefore = 4,
+  kAfter = 5,
+  kBeforeFill = 6,
+  kAfterFill = 7,
+  kColourCount = 8,
+};
+
+void SetPalette() {
+  plscmap0n(kColourCount);
+  plscol0a(kBackground, 255, 255, 255, 1.0);
+  plscol0a(kInk, 0, 0, 0, 1.0);
+  plscol0a(kGrid, 225, 225, 225, 1.0);
+  plscol0a(kMuted, 120, 120, 120, 1.0);
+  plscol0a(kBefore, 213, 94, 0, 1.0);
+  plscol0a(kAfter, 0, 114, 178, 1.0);
+  plscol0a(kBeforeFill, 213, 94, 0, 0.35);
+  plscol0a(kAfterFill, 0, 114, 178, 0.35);
+}
+
+// PLplot reads '#' as the start of an escape sequence; text from the caller (parameter names) is shown literally.
+std::string PlText(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    out += c;
+    if (c == '#') out += '#';
+  }
+  return out;
+}
+
+std::string UnitLabel(std::string_view unit) {
+  if (unit == "um") return "µm";
+  if (unit == "urad") return "µrad";
+  return PlText(unit);
+}
+
+// 1, 2 or 5 times a power of ten: the steps and scales people read at a glance.
+double NiceCeil(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {1.0, 2.0, 5.0}) {
+    if (m * power >= x * (1 - 1e-12)) return m * power;
+  }
+  return 10 * power;
+}
+
+double NiceFloor(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {5.0, 2.0}) {
+    if (m * power <= x * (1 + 1e-12)) return m * power;
+  }
+  return power;
+}
+
+std::vector<double> Finite(const std::vector<double>& values) {
+  std::vector<double> out;
+  std::copy_if(values.begin(), values.end(), std::back_inserter(out), [](double v) { return std::isfinite(v); });
+  return out;
+}
+
+double Rms(const std::vector<double>& values) {
+  double sum = 0;
+  for (const double v : values) sum += v * v;
+  return values.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(values.size()));
+}
+
+bool IsFinite(const ReportData::ErrorVector& e) {
+  return std::isfinite(e.x_mm) && std::isfinite(e.y_mm) && std::isfinite(e.dx_um) && std::isfinite(e.dy_um);
+}
+
+bool XmlDecodable(std::uint32_t c) {
+  return c >= 0x20 && c != '<' && c != '>' && c != '&' && c != '"' && c != '\'' && (c < 0xD800 || c > 0xDFFF) &&
+         c != 0xFFFE && c != 0xFFFF && c <= 0x10FFFF;
+}
+
+void AppendUtf8(std::string& out, std::uint32_t c) {
+  if (c < 0x80) {
+    out += static_cast<char>(c);
+  } else if (c < 0x800) {
+    out += static_cast<char>(0xC0 | (c >> 6));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else if (c < 0x10000) {
+    out += static_cast<char>(0xE0 | (c >> 12));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else {
+    out += static_cast<char>(0xF0 | (c >> 18));
+    out += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  }
+}
+
+// PLplot's svg driver writes every character of a text as a reference (&#x4d;). Decoding them, all but XML's
+// special characters, makes the labels searchable in the file (and by tests) and the file smaller; it stays UTF-8.
+std::string DecodeCharacterReferences(std::string_view svg) {
+  std::string out;
+  out.reserve(svg.size());
+  std::size_t i = 0;
+  while (i < svg.size()) {
+    if (svg.compare(i, 3, "&#x") == 0) {
+      const std::size_t end = svg.find(';', i + 3);
+      std::uint32_t c = 0;
+      if (end != std::string_view::npos && end > i + 3 && end - i - 3 <= 6) {
+        const auto [ptr, ec] = std::from_chars(svg.data() + i + 3, svg.data() + end, c, 16);
+        if (ec == std::errc() && ptr == svg.data() + end && XmlDecodable(c)) {
+          AppendUtf8(out, c);
+          i = end + 1;
+          continue;
+        }
+      }
+    }
+    out += svg[i++];
+  }
+  return out;
+}
+
+// A PLplot installation without its svg driver would make plinit() ask for a device on stdin; fail clearly instead.
+void RequireSvgDriver() {
+  static const bool available = [] {
+    std::array<const char*, 128> menu{}, names{};
+    const char** menu_ptr = menu.data();
+    const char** names_ptr = names.data();
+    int count = static_cast<int>(names.size());
+    plgDevs(&menu_ptr, &names_ptr, &count);
+    return std::any_of(names.begin(), names.begin() + std::clamp(count, 0, static_cast<int>(names.size())),
+                       [](const char* name) { return name != nullptr && std::string_view(name) == "svg"; });
+  }();
+  if (!available) {
+    throw std::runtime_error(
+        "PLplot has no svg driver: install the Debian package 'libplplot17' (it holds plplot5.15.0/drivers/svg.so), "
+        "or point PLPLOT_DRV_DIR at the folder that holds svg.so");
+  }
+}
+
+fs::path MakeTempFile() {
+  std::string name = (fs::temp_directory_path() / "fvm-plot-XXXXXX.svg").string();
+  const int fd = mkstemps(name.data(), 4);
+  if (fd < 0) {
+    throw std::system_error(errno, std::generic_category(), "cannot create a temporary file for a plot: " + name);
+  }
+  close(fd);
+  return name;
+}
+
+// One plot: its own PLplot stream rendering to a temporary SVG file, so plots never share state with each other
+// or with a stream the caller has open. PLplot's device writes to a file by name, hence the temporary file.
+class SvgPlot {
+ public:
+  SvgPlot(PLINT width_px, PLINT height_px) : width_px_(width_px), height_px_(height_px) {
+    RequireSvgDriver();
+    temp_ = MakeTempFile();
+    plgstrm(&caller_stream_);
+    plmkstrm(&stream_);
+    if (stream_ < 0) {
+      plsstrm(caller_stream_);
+      RemoveTemp();
+      throw std::runtime_error("PLplot has no free plot stream left for the report");
+    }
+    plsdev("svg");
+    plsfnam(temp_.c_str());
+    plspage(0, 0, width_px, height_px, 0, 0);
+    SetPalette();
+    plinit();
+    pladv(0);
+    plcol0(kInk);
+  }
+  SvgPlot(const SvgPlot&) = delete;
+  SvgPlot& operator=(const SvgPlot&) = delete;
+  ~SvgPlot() {
+    End();
+    RemoveTemp();
+  }
+
+  PLINT width_px() const { return width_px_; }
+  PLINT height_px() const { return height_px_; }
+
+  // Ends the plot and returns the SVG document.
+  std::string Finish() {
+    End();
+    std::ifstream in(temp_, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in || text.str().find("</svg>") == std::string::npos) {
+      throw std::runtime_error("PLplot did not finish the plot in " + temp_.string());
+    }
+    return DecodeCharacterReferences(text.str());
+  }
+
+ private:
+  void End() {
+    if (stream_ < 0) return;
+    plsstrm(stream_);
+    plend1();  // frees the stream and closes the file
+    stream_ = -1;
+    plsstrm(caller_stream_);
+  }
+  void RemoveTemp() {
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+  }
+
+  PLINT width_px_, height_px_;
+  fs::path temp_;
+  PLINT caller_stream_ = 0;
+  PLINT stream_ = -1;
+};
+
+// Grid lines under the data, then the frame with ticks and numbers.
+void Frame(const char* x_options, PLFLT x_tick, PLINT x_sub, const char* y_options, PLFLT y_tick, PLINT y_sub,
+           bool grid = true) {
+  if (grid) {
+    plcol0(kGrid);
+    plwidth(0.8);
+    plbox("g", x_tick, x_sub, "g", y_tick, y_sub);
+  }
+  plcol0(kInk);
+  plwidth(1.0);
+  plbox(x_options, x_tick, x_sub, y_options, y_tick, y_sub);
+}
+
+// An arrow from (x, y) to (x + dx, y + dy) in world coordinates with equal scales on both axes.
+void Arrow(PLFLT x, PLFLT y, PLFLT dx, PLFLT dy, PLFLT max_head) {
+  const PLFLT length = std::hypot(dx, dy);
+  if (!(length > 0)) return;
+  const PLFLT head = std::min(0.35 * length, max_head);
+  const PLFLT ux = dx / length, uy = dy / length;
+  const PLFLT bx = x + dx - ux * head, by = y + dy - uy * head;
+  pljoin(x, y, bx, by);
+  std::array<PLFLT, 3> hx = {x + dx, bx - uy * 0.4 * head, bx + uy * 0.4 * head};
+  std::array<PLFLT, 3> hy = {y + dy, by + ux * 0.4 * head, by - ux * 0.4 * head};
+  plfill(3, hx.data(), hy.data());
+}
+
+void Disc(PLFLT x, PLFLT y, PLFLT radius) {
+  constexpr int kSides = 16;
+  std::array<PLFLT, kSides> px, py;
+  for (int i = 0; i < kSides; ++i) {
+    const double angle = 2 * std::numbers::pi * i / kSides;
+    px[i] = x + radius * std::cos(angle);
+    py[i] = y + radius * std::sin(angle);
+  }
+  plfill(kSides, px.data(), py.data());
+}
+
+// ---- distance errors: two histograms on one pair of axes ----------------------------------------------------
+
+struct Histogram {
+  std::vector<int> counts;
+  int max_count = 0;
+};
+
+Histogram Bin(const std::vector<double>& values, double first_edge, double width, int bins) {
+  Histogram h{std::vector<int>(static_cast<std::size_t>(bins), 0)};
+  for (const double v : values) {
+    const int bin = std::clamp(static_cast<int>(std::floor((v - first_edge) / width)), 0, bins - 1);
+    h.max_count = std::max(h.max_count, ++h.counts[static_cast<std::size_t>(bin)]);
+  }
+  return h;
+}
+
+void DrawHistogram(const Histogram& h, double first_edge, double width, PLINT fill, PLINT line) {
+  std::vector<PLFLT> x = {first_edge}, y = {0};
+  for (std::size_t i = 0; i < h.counts.size(); ++i) {
+    x.insert(x.end(), {first_edge + width * static_cast<double>(i), first_edge + width * static_cast<double>(i + 1)});
+    y.insert(y.end(), 2, h.counts[i]);
+  }
+  x.push_back(x.back());
+  y.push_back(0);
+  plcol0(fill);
+  plfill(static_cast<PLINT>(x.size()), x.data(), y.data());
+  plcol0(line);
+  plwidth(1.6);
+  plline(static_cast<PLINT>(x.size()), x.data(), y.data());
+  plwidth(1.0);
+}
+
+std::string DistanceLegendText(const char* what, const std::vector<double>& values) {
+  return fmt::format("{}: n = {}, RMS {:.3g} µm", what, values.size(), Rms(values));
+}
+
+std::string RenderDistanceErrors(const ReportData& data) {
+  const std::vector<double> before = Finite(data.distance_errors_before_um);
+  const std::vector<double> after = Finite(data.distance_errors_after_um);
+  double extent = 0;
+  for (const auto* values : {&before, &after}) {
+    for (const double v : *values) extent = std::max(extent, std::abs(v));
+  }
+  if (!(extent > 0)) extent = 1.0;  // no data, or all exact: still a readable +-1 um axis
+  // Symmetric about zero, so a bias shows as an offset from the centre line; about 30 bins across.
+  const double width = NiceCeil(2 * extent / 30);
+  const int half_bins = std::max(1, static_cast<int>(std::ceil(extent / width - 1e-9)));
+  const double first_edge = -half_bins * width;
+  const Histogram hb = Bin(before, first_edge, width, 2 * half_bins);
+  const Histogram ha = Bin(after, first_edge, width, 2 * half_bins);
+  const int max_count = std::max({1, hb.max_count, ha.max_count});
+  const double y_max = max_count * 1.3;  // headroom for the legend
+  const double y_tick = std::max(1.0, NiceCeil(y_max / 6));
+
+  SvgPlot plot(800, 560);
+  plvpor(0.1, 0.96, 0.12, 0.9);
+  plwind(first_edge, -first_edge, 0, y_max);
+  const PLINT y_sub = y_tick <= 5 ? static_cast<PLINT>(y_tick) : 0;  // minor ticks on whole counts only
+  Frame("", 0, 0, "", y_tick, y_sub);
+  plcol0(kMuted);
+  pllsty(2);
+  pljoin(0, 0, 0, y_max);
+  pllsty(1);
+  if (!before.empty()) DrawHistogram(hb, first_edge, width, kBeforeFill, kBefore);
+  if (!after.empty()) DrawHistogram(ha, first_edge, width, kAfterFill, kAfter);
+  Frame("bcnst", 0, 0, "bcnstv", y_tick, y_sub, false);
+  pllab("Distance error (µm)", "Count", "Distance errors before and after compensation");
+
+  if (before.empty() && after.empty()) {
+    plcol0(kMuted);
+    plptex(0, y_max / 2, 1, 0, 0.5, "no distance errors in this report");
+    return plot.Finish();
+  }
+  const std::array<std::string, 2> texts = {DistanceLegendText("before compensation", before),
+                                            DistanceLegendText("after compensation", after)};
+  const std::array<const char*, 2> text_ptrs = {texts[0].c_str(), texts[1].c_str()};
+  const std::array<PLINT, 2> options = {PL_LEGEND_COLOR_BOX, PL_LEGEND_COLOR_BOX};
+  const std::array<PLINT, 2> text_colours = {kInk, kInk}, box_colours = {kBefore, kAfter}, patterns = {0, 0};
+  const std::array<PLFLT, 2> box_scales = {0.8, 0.8}, box_widths = {1, 1};
+  PLFLT legend_width, legend_height;
+  pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
+           PL_POSITION_TOP | PL_POSITION_RIGHT | PL_POSITION_INSIDE, 0.02, 0.03, 0.05, kBackground, kGrid, 1, 0, 0, 2,
+           options.data(), 1.0, 0.85, 2.0, 0.0, text_colours.data(), text_ptrs.data(), box_colours.data(),
+           patterns.data(), box_scales.data(), box_widths.data(), nullptr, nullptr, nullptr, nullptr, nullptr, nullptr,
+           nullptr);
+  return plot.Finish();
+}
+
+// ---- lateral error vectors over the stage area --------------------------------------------------------------
+
+double MaxLength(const std::vector<ReportData::ErrorVector>& errors) {
+  double longest = 0;
+  for (const auto& e : errors) {
+    if (IsFinite(e)) longest = std::max(longest, std::hypot(e.dx_um, e.dy_um));
+  }
+  return longest;
+}
+
+std::string RenderErrorVectors(const ReportData& data) {
+  const ReportData::StageArea& area = data.stage_area;
+  double x0 = area.x_min_mm, x1 = area.x_max_mm, y0 = area.y_min_mm, y1 = area.y_max_mm;
+  for (const auto* errors : {&data.errors_before, &data.errors_after}) {
+    for (const auto& e : *errors) {
+      if (!IsFinite(e)) continue;
+      x0 = std::min(x0, e.x_mm), x1 = std::max(x1, e.x_mm), y0 = std::min(y0, e.y_mm), y1 = std::max(y1, e.y_mm);
+    }
+  }
+  double span = std::max(x1 - x0, y1 - y0);
+  if (!(span > 0)) span = 1.0;
+  // A margin so arrows at the edge of the travel stay inside the frame.
+  const double margin = 0.06 * span;
+  const double wx0 = x0 - margin, wx1 = x1 + margin, wy0 = y0 - margin, wy1 = y1 + margin;
+
+  SvgPlot plot(800, 880);
+  plvpas(0.11, 0.95, 0.18, 0.93, (wy1 - wy0) / (wx1 - wx0));
+  plwind(wx0, wx1, wy0, wy1);
+  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
+  pllab("Stage x (mm)", "Stage y (mm)", "Lateral error vectors before and after compensation");
+
+  // The stage travel, to scale.
+  plcol0(kMuted);
+  pllsty(2);
+  const std::array<PLFLT, 5> rx = {area.x_min_mm, area.x_max_mm, area.x_max_mm, area.x_min_mm, area.x_min_mm};
+  const std::array<PLFLT, 5> ry = {area.y_min_mm, area.y_min_mm, area.y_max_mm, area.y_max_mm, area.y_min_mm};
+  plline(5, rx.data(), ry.data());
+  pllsty(1);
+  plschr(0, 0.8);
+  const std::string travel =
+      fmt::format("stage travel {:g} × {:g} mm", area.x_max_mm - area.x_min_mm, area.y_max_mm - area.y_min_mm);
+  plptex(area.x_min_mm, area.y_max_mm + 0.02 * span, 1, 0, 0, travel.c_str());
+  plschr(0, 1.0);
+
+  for (const auto* errors : {&data.errors_before, &data.errors_after}) {
+    for (const auto& e : *errors) {
+      if (IsFinite(e)) Disc(e.x_mm, e.y_mm, 0.004 * span);
+    }
+  }
+  const double longest = std::max(MaxLength(data.errors_before), MaxLength(data.errors_after));
+  // One scale for both sets, so the shrinking of the arrows is the effect of the compensation; the longest arrow
+  // is 4 to 10 % of the span, the magnification a round number.
+  const double mm_per_um = longest > 0 ? NiceFloor(0.1 * span / longest) : 0.0;
+  const double max_head = 0.018 * span;
+  for (const auto& [errors, colour] :
+       {std::pair{&data.errors_before, kBefore}, std::pair{&data.errors_after, kAfter}}) {
+    plcol0(colour);
+    plwidth(1.4);
+    for (const auto& e : *errors) {
+      if (IsFinite(e)) Arrow(e.x_mm, e.y_mm, e.dx_um * mm_per_um, e.dy_um * mm_per_um, max_head);
+    }
+  }
+  plwidth(1.0);
+
+  // The key below the frame, in a strip with the plot's mm scale: the colours, the scale arrow, the magnification.
+  PLFLT vx0, vx1, vy0, vy1;
+  plgvpd(&vx0, &vx1, &vy0, &vy1);
+  const double strip_y0 = 0.01, strip_y1 = 0.085;
+  const double mm_per_px = (wx1 - wx0) / ((vx1 - vx0) * plot.width_px());
+  const double strip_height = (strip_y1 - strip_y0) * plot.height_px() * mm_per_px;
+  plvpor(vx0, vx1, strip_y0, strip_y1);
+  plwind(wx0, wx1, 0, strip_height);
+  const double row1 = 0.75 * strip_height, row2 = 0.25 * strip_height;
+  const double swatch = 12 * mm_per_px, gap = 8 * mm_per_px;
+  plschr(0, 0.8);
+  const auto key = [&](double x, PLINT colour, const std::string& text, double y) {
+    plcol0(colour);
+    const std::array<PLFLT, 4> sx = {x, x + swatch, x + swatch, x};
+    const std::array<PLFLT, 4> sy = {y - swatch / 2, y - swatch / 2, y + swatch / 2, y + swatch / 2};
+    plfill(4, sx.data(), sy.data());
+    plcol0(kInk);
+    plptex(x + swatch + gap, y, 1, 0, 0, text.c_str());
+  };
+  key(wx0, kBefore, fmt::format("before compensation (max {:.3g} µm)", MaxLength(data.errors_before)), row1);
+  key(wx0, kAfter, fmt::format("after compensation (max {:.3g} µm)", MaxLength(data.errors_after)), row2);
+  plcol0(kInk);
+  const double column2 = wx0 + 0.62 * (wx1 - wx0);
+  if (longest > 0) {
+    const double scale_um = NiceFloor(longest);
+    plwidth(1.4);
+    Arrow(column2, row1, scale_um * mm_per_um, 0, max_head);
+    plwidth(1.0);
+    plptex(column2 + scale_um * mm_per_um + gap, row1, 1, 0, 0, fmt::format("{:g} µm", scale_um).c_str());
+    plptex(column2, row2, 1, 0, 0, fmt::format("arrows magnified × {:g}", 1000 * mm_per_um).c_str());
+  } else {
+    plptex(column2, row1, 1, 0, 0, "no lateral errors");
+  }
+  plschr(0, 1.0);
+  return plot.Finish();
+}
+
+// ---- parameters with +-2u, one panel per unit ---------------------------------------------------------------
+
+struct UnitGroup {
+  std::string unit;
+  std::vector<const ReportData::Parameter*> parameters;
+};
+
+// Micrometres first, then microradians, then any other unit in the order it first appears.
+std::vector<UnitGroup> GroupByUnit(const std::vector<ReportData::Parameter>& parameters) {
+  std::vector<UnitGroup> groups = {{"um", {}}, {"urad", {}}};
+  for (const auto& p : parameters) {
+    if (!std::isfinite(p.value)) continue;
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const UnitGroup& g) { return g.unit == p.unit; });
+    if (it == groups.end()) it = groups.insert(groups.end(), UnitGroup{p.unit, {}});
+    it->parameters.push_back(&p);
+  }
+  std::erase_if(groups, [](const UnitGroup& g) { return g.parameters.empty(); });
+  return groups;
+}
+
+void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
+  const auto n = static_cast<PLINT>(group.parameters.size());
+  std::vector<PLFLT> x, value, low, high;
+  double y_min = 0, y_max = 0;
+  for (PLINT i = 0; i < n; ++i) {
+    const ReportData::Parameter& p = *group.parameters[static_cast<std::size_t>(i)];
+    const double band = std::isfinite(p.uncertainty) ? 2 * std::abs(p.uncertainty) : 0.0;
+    x.push_back(i + 1);
+    value.push_back(p.value);
+    low.push_back(p.value - band);
+    high.push_back(p.value + band);
+    y_min = std::min(y_min, low.back());
+    y_max = std::max(y_max, high.back());
+  }
+  if (!(y_max > y_min)) y_min = -1, y_max = 1;
+  const double pad = 0.08 * (y_max - y_min);
+  y_min -= pad, y_max += pad;
+
+  plvpor(0.11, 0.98, vp_y0, vp_y1);
+  plwind(0.5, n + 0.5, y_min, y_max);
+  plcol0(kGrid);
+  plwidth(0.8);
+  for (PLINT i = 1; i <= n; ++i) pljoin(i, y_min, i, y_max);  // guides from each name up to its value
+  Frame("", 0, 0, "", 0, 0);
+  plcol0(kMuted);
+  pljoin(0.5, 0, n + 0.5, 0);
+  plcol0(kAfter);
+  plwidth(1.6);
+  plerry(n, x.data(), low.data(), high.data());
+  plwidth(1.0);
+  plschr(0, 0.7);
+  plstring(n, x.data(), value.data(), "●");
+  plschr(0, 1.0);
+  Frame("bct", 1.0, 1, "bcnstv", 0, 0, false);
+  for (PLINT i = 0; i < n; ++i) {
+    plmtex("bv", 0.8, (i + 0.5) / n, 1.0, PlText(group.parameters[static_cast<std::size_t>(i)]->name).c_str());
+  }
+  const std::string unit = UnitLabel(group.unit);
+  pllab("", fmt::format("value ± 2u ({})", unit).c_str(),
+        fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit).c_str());
+}
+
+std::string RenderParameters(const ReportData& data) {
+  const std::vector<UnitGroup> groups = GroupByUnit(data.parameters);
+  constexpr int kPanelPx = 340, kNamesPx = 85, kTitlePx = 55;
+  const int panels = std::max(1, static_cast<int>(groups.size()));
+  const int height = panels * kPanelPx;
+  SvgPlot plot(1000, height);
+  if (groups.empty()) {
+    plvpor(0.11, 0.98, static_cast<double>(kNamesPx) / height, 1.0 - static_cast<double>(kTitlePx) / height);
+    plwind(0, 1, 0, 1);
+    Frame("bc", 0, 0, "bc", 0, 0, false);
+    pllab("", "", "Parameters: value with ± 2u error bars (k = 2)");
+    plcol0(kMuted);
+    plptex(0.5, 0.5, 1, 0, 0.5, "no parameters in this report");
+    return plot.Finish();
+  }
+  for (int i = 0; i < panels; ++i) {
+    const int top_px = i * kPanelPx;  // from the top of the page
+    const double vp_y1 = 1.0 - static_cast<double>(top_px + kTitlePx) / height;
+    const double vp_y0 = 1.0 - static_cast<double>(top_px + kPanelPx - kNamesPx) / height;
+    DrawParameterPanel(groups[static_cast<std::size_t>(i)], vp_y0, vp_y1);
+  }
+  return plot.Finish();
+}
+
+// ---- the page -------------------------------------------------------------------------------------------------
+
+std::string HtmlEscape(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+struct Figure {
+  const char* file;
+  const char* heading;
+  const char* alt;
+  const char* caption;
+};
+
+constexpr std::array<Figure, 3> kFigures = {{
+    {"distance_errors.svg", "Distance errors", "Histogram of distance errors before and after compensation",
+     "Errors of the distances between calotte pairs before (vermilion) and after (blue) compensation, in "
+     "micrometres, binned on the same axes."},
+    {"error_vectors.svg", "Lateral error vectors",
+     "Lateral error vectors at their stage positions before and after compensation",
+     "Lateral errors (dx, dy) drawn as arrows at their stage positions before (vermilion) and after (blue) "
+     "compensation, magnified by one common factor given by the scale arrow, over the stage travel drawn to "
+     "scale."},
+    {"parameters.svg", "Parameters", "Identified parameters with error bars of two standard uncertainties",
+     "Identified parameter values with error bars of plus and minus two standard uncertainties (k = 2), one "
+     "panel per unit."},
+}};
+
+std::string RenderHtml(const ReportData& data) {
+  const std::string title = HtmlEscape(data.title.empty() ? "fvm report" : data.title);
+  std::string html = fmt::format(
+      "<!DOCTYPE html>\n"
+      "<html lang=\"en\">\n"
+      "<head>\n"
+      "<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<title>{0}</title>\n"
+      "<style>\n"
+      "body {{ font-family: sans-serif; color: #222; max-width: 1000px; margin: 2em auto; padding: 0 1em; }}\n"
+      "h1 {{ font-size: 1.5em; }}\n"
+      "h2 {{ font-size: 1.2em; margin-top: 2em; }}\n"
+      "table {{ border-collapse: collapse; }}\n"
+      "th, td {{ text-align: left; padding: 0.25em 1em 0.25em 0; border-bottom: 1px solid #ddd; "
+      "vertical-align: top; }}\n"
+      "th {{ font-weight: normal; color: #555; }}\n"
+      "td {{ font-variant-numeric: tabular-nums; }}\n"
+      "figure {{ margin: 0; }}\n"
+      "img {{ max-width: 100%; height: auto; }}\n"
+      "figcaption {{ color: #444; margin-top: 0.5em; }}\n"
+      "</style>\n"
+      "</head>\n"
+      "<body>\n"
+      "<h1>{0}</h1>\n",
+      title);
+  if (!data.summary.empty()) {
+    html += "<table>\n";
+    for (const auto& [key, value] : data.summary) {
+      html += fmt::format("<tr><th scope=\"row\">{}</th><td>{}</td></tr>\n", HtmlEscape(key), HtmlEscape(value));
+    }
+    html += "</table>\n";
+  }
+  for (const Figure& f : kFigures) {
+    html += fmt::format("<h2>{}</h2>\n<figure>\n<img src=\"{}\" alt=\"{}\">\n<figcaption>{}</figcaption>\n</figure>\n",
+                        f.heading, f.file, f.alt, f.caption);
+  }
+  html += "</body>\n</html>\n";
+  return html;
+}
+
+}  // namespace
+
+void WriteReport(const fs::path& dir, const ReportData& data) {
+  // Everything is drawn before DIR is touched, so a failure while plotting leaves nothing behind either. The page
+  // goes last, so it never refers to a plot that is not there yet.
+  const std::array<std::pair<const char*, std::string>, 4> files = {{
+      {kFigures[0].file, RenderDistanceErrors(data)},
+      {kFigures[1].file, RenderErrorVectors(data)},
+      {kFigures[2].file, RenderParameters(data)},
+      {"index.html", RenderHtml(data)},
+  }};
+  const auto error = [&dir](const std::string& why) {
+    return InputError(
+        fmt::format("cannot write the report to '{}': {}; choose a directory you can write", dir.string(), why));
+  };
+
+  // The outermost directory this call creates, so a failure can take back exactly what it made.
+  std::error_code ec;
+  fs::path target = dir.lexically_normal();
+  if (!target.has_filename()) target = target.parent_path();  // "out/" names "out"
+  fs::path first_created;
+  for (fs::path p = target; !p.empty() && !fs::exists(p, ec) && !ec; p = p.parent_path()) {
+    first_created = p;
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw error(ec.message());
+  if (!fs::is_directory(dir, ec)) throw error("it exists and is not a directory");
+
+  std::vector<fs::path> created;
+  try {
+    for (const auto& [name, content] : files) {
+      const fs::path path = dir / name;
+      const bool is_new = !fs::exists(path, ec);
+      WriteFileAtomically(path, content);
+      if (is_new) created.push_back(path);
+    }
+  } catch (const std::exception& e) {
+    for (const fs::path& path : created) fs::remove(path, ec);
+    if (!first_created.empty()) {
+      for (fs::path p = target; fs::remove(p, ec) && p != first_created; p = p.parent_path()) {
+      }
+    }
+    throw error(e.what());
+  }
+}
+
+}  // namespace fvm::cli
