@@ -68,23 +68,19 @@ Vec3<T> Cross(const Vec3<T>& a, const Vec3<T>& b) {
   return Vec3<T>(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
 }
 
+// Nominal motion of an axis plus its translation error (error terms and the squareness it carries).
 template <typename T>
-Vec3<T> AxisTranslation(const AxisChain& chain, Axis axis, const T* e, const Vec3<T>& q) {
+Vec3<T> AxisTranslation(const AxisChain& chain, Axis axis, const T* motion, const Vec3<T>& q) {
   const int k = static_cast<int>(axis);
-  Vec3<T> t(e[TranslationTerm(axis, 0)], e[TranslationTerm(axis, 1)], e[TranslationTerm(axis, 2)]);
+  Vec3<T> t(motion[6 * k], motion[6 * k + 1], motion[6 * k + 2]);
   t[k] += chain.IsPartSide(axis) ? T(-q[k]) : T(q[k]);
-  for (int w = 0; w < 3; ++w) {
-    if (chain.squareness_carrier[static_cast<size_t>(w)] != axis) continue;
-    const ErrorTerm& term = GetErrorTerm(kFirstSquarenessTerm + w);
-    const int other = static_cast<int>(term.axis) == k ? term.component : static_cast<int>(term.axis);
-    t[other] -= q[k] * e[kFirstSquarenessTerm + w];
-  }
   return t;
 }
 
 template <typename T>
-Vec3<T> AxisRotation(Axis axis, const T* e) {
-  return Vec3<T>(e[RotationTerm(axis, 0)], e[RotationTerm(axis, 1)], e[RotationTerm(axis, 2)]);
+Vec3<T> AxisRotation(Axis axis, const T* motion) {
+  const int k = static_cast<int>(axis);
+  return Vec3<T>(motion[6 * k + 3], motion[6 * k + 4], motion[6 * k + 5]);
 }
 
 template <typename T>
@@ -109,20 +105,40 @@ Vec3<T> RotateInverse(RotationModel model, const Vec3<T>& eps, const Vec3<T>& v)
 
 }  // namespace internal
 
-// Part coordinates of the tool point commanded to q, given the values e[0..20] of the 21 error terms at q.
+// The motion errors of the three axes, 6 per axis: translation error (kTx, kTy, kTz and, for a squareness
+// term the axis carries, -q_k * W in the other axis' direction) and rotation vector (kRx, kRy, kRz).
+inline constexpr int kMotionErrors = 18;
+
+template <typename T>
+void MotionErrors(const AxisChain& chain, const T* e, const Eigen::Matrix<T, 3, 1>& q, T* motion) {
+  for (int k = 0; k < 3; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      motion[6 * k + c] = e[TranslationTerm(static_cast<Axis>(k), c)];
+      motion[6 * k + 3 + c] = e[RotationTerm(static_cast<Axis>(k), c)];
+    }
+  }
+  for (int w = 0; w < 3; ++w) {
+    const int k = static_cast<int>(chain.squareness_carrier[static_cast<size_t>(w)]);
+    const ErrorTerm& term = GetErrorTerm(kFirstSquarenessTerm + w);
+    const int other = static_cast<int>(term.axis) == k ? term.component : static_cast<int>(term.axis);
+    motion[6 * k + other] -= q[k] * e[kFirstSquarenessTerm + w];
+  }
+}
+
+// Part coordinates of the tool point commanded to q, given the motion errors of the axes (MotionErrors).
 // instrument_pose6 (translation, rotation vector) overrides chain.instrument, so a solver can estimate it.
 template <typename T>
-Eigen::Matrix<T, 3, 1> ChainForward(const AxisChain& chain, const T* e, const Eigen::Matrix<T, 3, 1>& q,
-                                    const T* instrument_pose6 = nullptr) {
+Eigen::Matrix<T, 3, 1> ChainForwardFromMotions(const AxisChain& chain, const T* motion, const Eigen::Matrix<T, 3, 1>& q,
+                                               const T* instrument_pose6 = nullptr) {
   using internal::Vec3;
   Vec3<T> w = chain.tool_offset.template cast<T>();
   for (auto it = chain.tool_axes.rbegin(); it != chain.tool_axes.rend(); ++it) {
-    w = internal::AxisTranslation(chain, *it, e, q) +
-        internal::Rotate(chain.rotation_model, internal::AxisRotation(*it, e), w);
+    w = internal::AxisTranslation(chain, *it, motion, q) +
+        internal::Rotate(chain.rotation_model, internal::AxisRotation(*it, motion), w);
   }
   for (Axis axis : chain.part_axes) {
-    w = internal::RotateInverse(chain.rotation_model, internal::AxisRotation(axis, e),
-                                Vec3<T>(w - internal::AxisTranslation(chain, axis, e, q)));
+    w = internal::RotateInverse(chain.rotation_model, internal::AxisRotation(axis, motion),
+                                Vec3<T>(w - internal::AxisTranslation(chain, axis, motion, q)));
   }
   if (instrument_pose6 != nullptr) return ToPosedFrame(instrument_pose6, w);
   if (chain.instrument) {
@@ -132,6 +148,15 @@ Eigen::Matrix<T, 3, 1> ChainForward(const AxisChain& chain, const T* e, const Ei
     return ToPosedFrame(pose6, w);
   }
   return w;
+}
+
+// Part coordinates of the tool point commanded to q, given the values e[0..20] of the 21 error terms at q.
+template <typename T>
+Eigen::Matrix<T, 3, 1> ChainForward(const AxisChain& chain, const T* e, const Eigen::Matrix<T, 3, 1>& q,
+                                    const T* instrument_pose6 = nullptr) {
+  T motion[kMotionErrors];
+  MotionErrors(chain, e, q, motion);
+  return ChainForwardFromMotions(chain, motion, q, instrument_pose6);
 }
 
 }  // namespace fvm::stage

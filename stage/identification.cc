@@ -5,7 +5,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <algorithm>
+#include <map>
 #include <array>
 #include <cmath>
 #include <numeric>
@@ -24,12 +26,22 @@ struct TermDerivativeEntry {
 };
 using SparseTermDerivative = std::vector<TermDerivativeEntry>;
 
-SparseTermDerivative Sparse(const Eigen::MatrixXd& d) {
+// Same as ParameterLayout::TermDerivative, built sparse directly: identification prepares one per observation.
+SparseTermDerivative SparseDerivative(const ParameterLayout& layout, const Eigen::Vector3d& q) {
   SparseTermDerivative entries;
-  for (int c = 0; c < d.cols(); ++c) {
-    for (int t = 0; t < d.rows(); ++t) {
-      if (d(t, c) != 0.0) entries.push_back({t, c, d(t, c)});
+  double basis[kMaxOrder + 1];
+  int evaluated_term = -1;
+  for (size_t i = 0; i < layout.coefficients().size(); ++i) {
+    const ParameterLayout::Coefficient& c = layout.coefficients()[i];
+    if (c.state == ParameterLayout::State::kFixed) continue;
+    if (c.term != evaluated_term) {
+      const TermSpec& spec = layout.term(c.term);
+      const int axis = static_cast<int>(layout.chain().ArgumentAxis(c.term));
+      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, layout.travel()[static_cast<size_t>(axis)], q[axis]), basis);
+      evaluated_term = c.term;
     }
+    const double factor = c.state == ParameterLayout::State::kFree ? 1.0 : c.value;
+    entries.push_back({c.term, layout.SlotOf(i), factor * basis[c.power]});
   }
   return entries;
 }
@@ -44,7 +56,7 @@ Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const double* free,
   layout.TermValues(all.data(), q, e);
   if (jacobian == nullptr) return ChainForward(layout.chain(), e, q);
   Eigen::Vector3d p;
-  const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(layout.chain(), e, q, &p);
+  const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(layout.chain(), e, q, &p, layout.AxesWithErrors());
   jacobian->setZero(3, layout.NumFree());
   for (const TermDerivativeEntry& d : derivative) jacobian->col(d.slot) += term_jacobian.col(d.term) * d.value;
   return p;
@@ -62,27 +74,15 @@ struct PreparedAnchor {
   SparseTermDerivative derivative;
 };
 
-// Residual (model - reference) and its Jacobian w.r.t. the unscaled free coefficients.
-Eigen::Vector3d Residual(const ParameterLayout& layout, const double* free, const PreparedObservation& o,
-                         const std::vector<PreparedAnchor>& anchors, Eigen::Matrix3Xd* jacobian) {
-  Eigen::Vector3d r = EvaluatePoint(layout, free, o.free, o.derivative, jacobian) - o.reference;
-  if (o.anchor >= 0) {
-    const PreparedAnchor& a = anchors[static_cast<size_t>(o.anchor)];
-    Eigen::Matrix3Xd anchor_jacobian;
-    r -= EvaluatePoint(layout, free, a.position, a.derivative, jacobian ? &anchor_jacobian : nullptr) - a.position;
-    if (jacobian) *jacobian -= anchor_jacobian;
-  }
-  return r;
-}
-
-// One observation's Euclidean error as a Ceres residual block over the scaled coefficients
-// (coefficient = scale * parameter, so every parameter is of order one).
-class PointCost final : public ceres::CostFunction {
+// Observations as one Ceres residual block over the coefficients in units of their plausible size (coefficient =
+// scale * parameter, so every parameter is of order one). A block holds one placement, whose first tile is then
+// evaluated once, or a single observation when a robust loss must see each centre's error on its own.
+class BlockCost final : public ceres::CostFunction {
  public:
-  PointCost(const ParameterLayout& layout, const Eigen::VectorXd& scale, const PreparedObservation& observation,
+  BlockCost(const ParameterLayout& layout, const Eigen::VectorXd& scale, std::vector<const PreparedObservation*> block,
             const std::vector<PreparedAnchor>& anchors)
-      : layout_(layout), scale_(scale), observation_(observation), anchors_(anchors) {
-    set_num_residuals(3);
+      : layout_(layout), scale_(scale), block_(std::move(block)), anchors_(anchors) {
+    set_num_residuals(3 * static_cast<int>(block_.size()));
     mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(scale.size()));
   }
 
@@ -91,12 +91,23 @@ class PointCost final : public ceres::CostFunction {
     std::array<double, kMaxCoefficients> free{};
     for (Eigen::Index i = 0; i < n; ++i) free[static_cast<size_t>(i)] = scale_[i] * parameters[0][i];
     const bool want_jacobian = jacobians != nullptr && jacobians[0] != nullptr;
+    // The anchor term F(a) - a is common to the block (every observation of a block shares its anchor).
+    Eigen::Vector3d anchor_shift = Eigen::Vector3d::Zero();
+    Eigen::Matrix3Xd anchor_jacobian = Eigen::Matrix3Xd::Zero(3, n);
+    if (block_.front()->anchor >= 0) {
+      const PreparedAnchor& a = anchors_[static_cast<size_t>(block_.front()->anchor)];
+      anchor_shift = EvaluatePoint(layout_, free.data(), a.position, a.derivative, want_jacobian ? &anchor_jacobian : nullptr) - a.position;
+    }
     Eigen::Matrix3Xd jacobian;
-    const Eigen::Vector3d r = Residual(layout_, free.data(), observation_, anchors_, want_jacobian ? &jacobian : nullptr);
-    for (int k = 0; k < 3; ++k) residuals[k] = r[k];
-    if (want_jacobian) {
-      Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>> out(jacobians[0], 3, n);
-      out = jacobian * scale_.asDiagonal();
+    for (size_t k = 0; k < block_.size(); ++k) {
+      const PreparedObservation& o = *block_[k];
+      const Eigen::Vector3d r =
+          EvaluatePoint(layout_, free.data(), o.free, o.derivative, want_jacobian ? &jacobian : nullptr) - anchor_shift - o.reference;
+      for (int c = 0; c < 3; ++c) residuals[3 * k + static_cast<size_t>(c)] = r[c];
+      if (want_jacobian) {
+        Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>> out(jacobians[0] + 3 * k * static_cast<size_t>(n), 3, n);
+        out = (jacobian - anchor_jacobian) * scale_.asDiagonal();
+      }
     }
     return true;
   }
@@ -104,7 +115,7 @@ class PointCost final : public ceres::CostFunction {
  private:
   const ParameterLayout& layout_;
   const Eigen::VectorXd& scale_;
-  const PreparedObservation& observation_;
+  std::vector<const PreparedObservation*> block_;
   const std::vector<PreparedAnchor>& anchors_;
 };
 
@@ -145,10 +156,10 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
                  const IdentificationOptions& options) {
   Prepared p;
   if (options.anchor == Anchor::kFirstTile) {
-    for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, Sparse(layout.TermDerivative(a))});
+    for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, SparseDerivative(layout, a)});
   }
   for (const Observation& o : observations) {
-    PreparedObservation po{o.free, o.reference, Sparse(layout.TermDerivative(o.free)), -1};
+    PreparedObservation po{o.free, o.reference, SparseDerivative(layout, o.free), -1};
     if (options.anchor == Anchor::kFirstTile) po.anchor = o.group;
     p.observations.push_back(std::move(po));
   }
@@ -161,9 +172,20 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
   const Eigen::Index m = static_cast<Eigen::Index>(p.observations.size());
   residual->resize(3 * m);
   jacobian->resize(3 * m, layout.NumFree());
+  std::vector<Eigen::Vector3d> anchor_shift;
+  std::vector<Eigen::Matrix3Xd> anchor_jacobian(p.anchors.size());
+  for (size_t a = 0; a < p.anchors.size(); ++a) {
+    anchor_shift.push_back(EvaluatePoint(layout, free.data(), p.anchors[a].position, p.anchors[a].derivative, &anchor_jacobian[a]) -
+                           p.anchors[a].position);
+  }
   Eigen::Matrix3Xd j;
   for (Eigen::Index i = 0; i < m; ++i) {
-    residual->segment<3>(3 * i) = Residual(layout, free.data(), p.observations[static_cast<size_t>(i)], p.anchors, &j);
+    const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
+    residual->segment<3>(3 * i) = EvaluatePoint(layout, free.data(), o.free, o.derivative, &j) - o.reference;
+    if (o.anchor >= 0) {
+      residual->segment<3>(3 * i) -= anchor_shift[static_cast<size_t>(o.anchor)];
+      j -= anchor_jacobian[static_cast<size_t>(o.anchor)];
+    }
     jacobian->middleRows<3>(3 * i) = j;
   }
 }
@@ -248,13 +270,17 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     Linearise(layout, zeros, prepared, &r0, &j);
     const Eigen::VectorXd tau = PlausibleSizes(layout);
     const Eigen::MatrixXd js = j * tau.asDiagonal();
+    // R of js = QR has the column geometry of js in n x n: search dependences and form normal equations there.
+    const Eigen::Index n_all = js.cols();
+    const Eigen::MatrixXd r_factor =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(js).matrixQR().topRows(n_all).triangularView<Eigen::Upper>();
     const std::vector<std::string> names = layout.FreeNames();
     std::vector<bool> fixed(names.size(), false);
 
     const std::vector<int> keeping_order = KeepingOrder(layout);
     std::vector<int> rank_of(names.size());
     for (size_t i = 0; i < keeping_order.size(); ++i) rank_of[static_cast<size_t>(keeping_order[i])] = static_cast<int>(i);
-    for (const ColumnDependence& d : FindDependentColumns(js, keeping_order, options.alias_tolerance)) {
+    for (const ColumnDependence& d : FindDependentColumns(r_factor, keeping_order, options.alias_tolerance)) {
       fixed[static_cast<size_t>(d.column)] = true;
       std::string why;
       if (d.on.empty()) {
@@ -275,7 +301,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
 
     // Weakly determined coefficients: fix the worst while one's standard uncertainty, in units of its
     // plausible size, exceeds the limit. Normal equations on scaled columns are well enough conditioned here.
-    const Eigen::MatrixXd normal = js.transpose() * js;
+    const Eigen::MatrixXd normal = r_factor.transpose() * r_factor;
     const Eigen::VectorXd gradient = js.transpose() * r0;
     const double r0_squared = r0.squaredNorm();
     Eigen::VectorXd start;
@@ -349,11 +375,16 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  for (const PreparedObservation& o : prepared.observations) {
+  std::map<int, std::vector<const PreparedObservation*>> blocks;  // by group, or one per observation
+  for (size_t i = 0; i < prepared.observations.size(); ++i) {
+    const int key = options.loss == "none" ? observations[i].group : static_cast<int>(i);
+    blocks[key].push_back(&prepared.observations[i]);
+  }
+  for (auto& [key, block] : blocks) {
     ceres::LossFunction* loss = nullptr;
     if (options.loss == "huber") loss = new ceres::HuberLoss(options.loss_scale_mm);
     if (options.loss == "cauchy") loss = new ceres::CauchyLoss(options.loss_scale_mm);
-    if (n > 0) problem.AddResidualBlock(new PointCost(layout, scale, o, prepared.anchors), loss, parameters.data());
+    if (n > 0) problem.AddResidualBlock(new BlockCost(layout, scale, std::move(block), prepared.anchors), loss, parameters.data());
   }
   if (n > 0) {
     ceres::Solver::Options solver;
@@ -361,7 +392,11 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
     solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
     solver.max_num_iterations = options.max_iterations;
+    // The start is the linearised least-squares solution and the model is nearly linear: begin as Gauss-Newton,
+    // or the default damping crawls along the weakly determined directions for a dozen iterations.
+    solver.initial_trust_region_radius = 1e12;
     solver.num_threads = options.num_threads;
+    solver.minimizer_progress_to_stdout = getenv("FVM_DEBUG") != nullptr;
     solver.function_tolerance = 1e-10;
     solver.parameter_tolerance = 1e-10;
     solver.gradient_tolerance = 1e-14;

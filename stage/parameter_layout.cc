@@ -4,6 +4,8 @@
 
 #include <ceres/jet.h>
 
+#include <bit>
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -169,9 +171,8 @@ Eigen::MatrixXd ParameterLayout::TermDerivative(const Eigen::Vector3d& q) const 
     const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
     EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]),
                   basis);
-    const int slot = c.state == State::kFree ? free_slot_[i] : tied_slot_[i];
     const double factor = c.state == State::kFree ? 1.0 : c.value;
-    d(c.term, slot) += factor * basis[c.power];
+    d(c.term, SlotOf(i)) += factor * basis[c.power];
   }
   return d;
 }
@@ -206,16 +207,67 @@ Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>
   return Forward(layout, free.data(), q);
 }
 
-Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
-                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value) {
-  using Jet = ceres::Jet<double, kNumErrorTerms>;
-  Jet ej[kNumErrorTerms];
-  for (int t = 0; t < kNumErrorTerms; ++t) ej[t] = Jet(e[t], t);
-  const Eigen::Matrix<Jet, 3, 1> qj = q.cast<Jet>();
-  const Eigen::Matrix<Jet, 3, 1> p = ChainForward(chain, ej, qj);
-  Eigen::Matrix<double, 3, kNumErrorTerms> j;
-  for (int r = 0; r < 3; ++r) j.row(r) = p[r].v.transpose();
+namespace {
+
+template <int N>
+Eigen::Matrix<double, 3, kMotionErrors> MotionJacobian(const AxisChain& chain, const double* motion, const Eigen::Vector3d& q,
+                                                       unsigned moving_axes, Eigen::Vector3d* value) {
+  using Jet = ceres::Jet<double, N>;
+  Jet mj[kMotionErrors];
+  int slot = 0;
+  std::array<int, kMotionErrors> slot_of{};
+  for (int i = 0; i < kMotionErrors; ++i) {
+    const bool moving = (moving_axes >> (i / 6)) & 1u;
+    slot_of[static_cast<size_t>(i)] = moving ? slot : -1;
+    mj[i] = moving ? Jet(motion[i], slot++) : Jet(motion[i]);
+  }
+  const Eigen::Matrix<Jet, 3, 1> p = ChainForwardFromMotions(chain, mj, Eigen::Matrix<Jet, 3, 1>(q.cast<Jet>()));
+  Eigen::Matrix<double, 3, kMotionErrors> j = Eigen::Matrix<double, 3, kMotionErrors>::Zero();
+  for (int i = 0; i < kMotionErrors; ++i) {
+    if (slot_of[static_cast<size_t>(i)] < 0) continue;
+    for (int r = 0; r < 3; ++r) j(r, i) = p[r].v[slot_of[static_cast<size_t>(i)]];
+  }
   if (value) *value = Eigen::Vector3d(p[0].a, p[1].a, p[2].a);
+  return j;
+}
+
+}  // namespace
+
+unsigned ParameterLayout::AxesWithErrors() const {
+  unsigned mask = 0;
+  for (int t = 0; t < kNumErrorTerms; ++t) {
+    if (terms_[static_cast<size_t>(t)].present) mask |= 1u << static_cast<int>(chain_.ArgumentAxis(t));
+  }
+  return mask;
+}
+
+Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
+                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value,
+                                                      unsigned moving_axes) {
+  double motion[kMotionErrors];
+  MotionErrors(chain, e, q, motion);
+  Eigen::Matrix<double, 3, kMotionErrors> jm;
+  switch (std::popcount(moving_axes & 0b111u)) {  // Jets only as wide as the moving axes need
+    case 0: jm.setZero(); if (value) *value = ChainForwardFromMotions(chain, motion, q); break;
+    case 1: jm = MotionJacobian<6>(chain, motion, q, moving_axes, value); break;
+    case 2: jm = MotionJacobian<12>(chain, motion, q, moving_axes, value); break;
+    default: jm = MotionJacobian<18>(chain, motion, q, moving_axes, value); break;
+  }
+  // Terms -> motions is linear: T and R terms feed their own slot; a squareness term feeds -q_k times the
+  // carrier's translation slot in the other axis' direction.
+  Eigen::Matrix<double, 3, kNumErrorTerms> j;
+  for (int k = 0; k < 3; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      j.col(TranslationTerm(static_cast<Axis>(k), c)) = jm.col(6 * k + c);
+      j.col(RotationTerm(static_cast<Axis>(k), c)) = jm.col(6 * k + 3 + c);
+    }
+  }
+  for (int w = 0; w < 3; ++w) {
+    const int k = static_cast<int>(chain.squareness_carrier[static_cast<size_t>(w)]);
+    const ErrorTerm& term = GetErrorTerm(kFirstSquarenessTerm + w);
+    const int other = static_cast<int>(term.axis) == k ? term.component : static_cast<int>(term.axis);
+    j.col(kFirstSquarenessTerm + w) = -q[k] * jm.col(6 * k + other);
+  }
   return j;
 }
 
@@ -225,7 +277,7 @@ Eigen::MatrixXd ForwardJacobian(const ParameterLayout& layout, const double* fre
   layout.Expand(free, all.data());
   double e[kNumErrorTerms];
   layout.TermValues(all.data(), q, e);
-  return TermJacobian(layout.chain(), e, q, value) * layout.TermDerivative(q);
+  return TermJacobian(layout.chain(), e, q, value, layout.AxesWithErrors()) * layout.TermDerivative(q);
 }
 
 }  // namespace fvm::stage

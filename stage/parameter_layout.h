@@ -60,9 +60,14 @@ class ParameterLayout {
   const TermSpec& term(int index) const { return terms_[static_cast<size_t>(index)]; }
   const std::vector<Coefficient>& coefficients() const { return coefficients_; }
   int NumFree() const { return static_cast<int>(free_index_.size()); }
+  // Bit k set when axis k has a present term (its own T or R, or a squareness term it carries).
+  unsigned AxesWithErrors() const;
   std::vector<std::string> FreeNames() const;
   int FindCoefficient(std::string_view name) const;  // -1 when absent
   int FreeIndexOf(std::string_view name) const;      // -1 when not free
+  // The free slot a coefficient (by index into coefficients()) moves with: its own, or its tie target's; -1 when
+  // fixed.
+  int SlotOf(size_t coefficient) const { return free_slot_[coefficient] >= 0 ? free_slot_[coefficient] : tied_slot_[coefficient]; }
 
   // All coefficient values from the free ones.
   template <typename T>
@@ -105,9 +110,12 @@ Eigen::Matrix<T, 3, 1> Forward(const ParameterLayout& layout, const T* free, con
                                const T* instrument_pose6 = nullptr);
 Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>& free, const Eigen::Vector3d& q);
 
-// d(part coordinates) / d(21 term values) at q, by automatic differentiation (ceres::Jet); optionally the value.
+// d(part coordinates) / d(21 term values) at q, optionally the value. Automatic differentiation (ceres::Jet)
+// through the chain w.r.t. the motion errors of the axes in `moving_axes` (bit k for axis k: the others have
+// no error terms, so their derivatives are not needed), then the exact linear map from terms to motions.
 Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
-                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value = nullptr);
+                                                      const Eigen::Vector3d& q, Eigen::Vector3d* value = nullptr,
+                                                      unsigned moving_axes = 0b111);
 // d(part coordinates) / d(free coefficients) at q: TermJacobian * TermDerivative.
 Eigen::MatrixXd ForwardJacobian(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& q,
                                 Eigen::Vector3d* value = nullptr);

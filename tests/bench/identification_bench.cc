@@ -13,24 +13,32 @@
 namespace fvm::stage {
 namespace {
 
-const std::vector<Observation>& TenThousandPairs() {
-  static const std::vector<Observation> observations = [] {
+// 588 bar placements over the stage, each anchored at its own first tile.
+const artefacts::ObservationSet& TenThousandPairs() {
+  static const artefacts::ObservationSet set = [] {
     artefacts::FvmBatchOptions options;
     options.seed = 5;
     options.validation_placements = 585;  // + 3 identification placements = 588 x 17 = 9996 centres
     const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(options);
     std::vector<std::string> all = sim.batch.identify;
     all.insert(all.end(), sim.batch.validate.begin(), sim.batch.validate.end());
-    return artefacts::Observations(sim.batch, all).observations;
+    return artefacts::Observations(sim.batch, all);
   }();
-  return observations;
+  return set;
+}
+
+IdentificationOptions Anchored() {
+  IdentificationOptions options;
+  options.anchor = Anchor::kFirstTile;
+  options.anchors = TenThousandPairs().anchors;
+  return options;
 }
 
 void BM_Identify42(benchmark::State& state) {
-  const std::vector<Observation>& obs = TenThousandPairs();
+  const std::vector<Observation>& obs = TenThousandPairs().observations;
   const ParameterLayout layout = FvmModelLayout("42");
   for (auto _ : state) {
-    const IdentificationResult r = Identify(layout, obs);
+    const IdentificationResult r = Identify(layout, obs, Anchored());
     benchmark::DoNotOptimize(r.rms_mm);
     state.counters["rms_um"] = r.rms_mm * 1e3;
     state.counters["free"] = r.calibration.layout.NumFree();
@@ -42,8 +50,9 @@ BENCHMARK(BM_Identify42)->Unit(benchmark::kMillisecond);
 struct NumericPointError {
   const ParameterLayout* layout;
   const Observation* observation;
+  const Eigen::Vector3d* anchor;
   bool operator()(double const* const* parameters, double* residuals) const {
-    const Eigen::Vector3d r = Forward(*layout, parameters[0], Eigen::Vector3d(observation->free)) - observation->reference;
+    const Eigen::Vector3d r = ModelResidual(*layout, parameters[0], *observation, anchor);
     for (int k = 0; k < 3; ++k) residuals[k] = r[k];
     return true;
   }
@@ -51,14 +60,14 @@ struct NumericPointError {
 
 // The baseline gets the well-posed problem for free: the layout our rank treatment produced.
 void BM_Identify42NumericBaseline(benchmark::State& state) {
-  const std::vector<Observation>& obs = TenThousandPairs();
-  const ParameterLayout layout = Identify(FvmModelLayout("42"), obs).calibration.layout;
+  const std::vector<Observation>& obs = TenThousandPairs().observations;
+  const ParameterLayout layout = Identify(FvmModelLayout("42"), obs, Anchored()).calibration.layout;
   for (auto _ : state) {
     std::vector<double> x(static_cast<size_t>(layout.NumFree()), 0.0);
     ceres::Problem problem;
     for (const Observation& o : obs) {
       auto* cost = new ceres::DynamicNumericDiffCostFunction<NumericPointError, ceres::CENTRAL>(
-          new NumericPointError{&layout, &o});
+          new NumericPointError{&layout, &o, &TenThousandPairs().anchors[static_cast<size_t>(o.group)]});
       cost->AddParameterBlock(layout.NumFree());
       cost->SetNumResiduals(3);
       problem.AddResidualBlock(cost, nullptr, x.data());
