@@ -31,8 +31,7 @@ cmake --build build
 case "$what" in
   build) ;;
   sample)
-    build/fvm/fvm calibrate samples/bar17 --model 9 -o build/sample-calibration.json
-    echo "calibration written to build/sample-calibration.json"
+    build/fvm/fvm calibrate samples/bar17 --model 27 -o build/sample-calibration.json --report build/sample-report
     ;;
   test) ctest --test-dir build --output-on-failure -j2 ;;
   *) echo "run.sh: unknown target '$what' (use sample, test or build)" >&2; exit 2 ;;

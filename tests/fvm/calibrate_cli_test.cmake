@@ -1,0 +1,96 @@
+# The main job as a user runs it: calibrate the sample batch, correct a scan, compare the model orders, and the
+# clear failures on bad input. Expects FVM, SAMPLES and WORK.
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+function(run expected_code)
+  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT code EQUAL expected_code)
+    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}, expected ${expected_code}\n${out}\n${err}")
+  endif()
+  set(OUT "${out}" PARENT_SCOPE)
+  set(ERR "${err}" PARENT_SCOPE)
+endfunction()
+
+function(fails_naming what)  # non-zero exit, and stderr names `what`
+  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(code EQUAL 0 OR NOT err MATCHES "${what}")
+    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}; expected a failure naming '${what}', got:\n${err}")
+  endif()
+endfunction()
+
+# 1. Calibrate: the JSON holds every coefficient of the 27 model with its uncertainty, and the sample's first-order
+#    truth is followed to the noise (0.5 um per coordinate in both measurements leaves ~1.2 um per centre).
+run(0 calibrate ${SAMPLES}/bar17 --model 27 -o ${WORK}/cal.json --json)
+string(JSON model GET "${OUT}" model)
+string(JSON count LENGTH "${OUT}" parameters)
+string(JSON u GET "${OUT}" parameters 0 u)
+string(JSON after GET "${OUT}" validation mean_um)
+string(JSON before GET "${OUT}" validation before mean_um)
+if(NOT model STREQUAL "27" OR NOT count EQUAL 27 OR NOT u GREATER 0)
+  message(FATAL_ERROR "calibrate JSON: model ${model}, ${count} parameters, u ${u}")
+endif()
+if(NOT after LESS 2.0 OR NOT before GREATER 50)
+  message(FATAL_ERROR "calibrate: validation mean ${before} um before, ${after} um after")
+endif()
+file(READ ${WORK}/cal.json written)
+string(JSON written_model GET "${written}" model)
+if(NOT written_model STREQUAL "27")
+  message(FATAL_ERROR "cal.json was not written as printed")
+endif()
+
+# 2. Correct a stitching-free export with that calibration.
+run(0 correct --calibration ${WORK}/cal.json ${SAMPLES}/bar17/val-01.free.csv -o ${WORK}/val-01.corrected.csv)
+file(STRINGS ${WORK}/val-01.corrected.csv lines)
+list(FILTER lines EXCLUDE REGEX "^#")
+list(GET lines 0 header)
+list(LENGTH lines rows)
+if(NOT header STREQUAL "id,x,y,z,u_x,u_y,u_z,t" OR NOT rows EQUAL 18)
+  message(FATAL_ERROR "corrected export: header '${header}', ${rows} lines")
+endif()
+
+# 3. Compare the four orders: the contract keys, and the recommendation of a first-order model on first-order data.
+run(0 compare ${SAMPLES}/bar17 --json)
+string(JSON n LENGTH "${OUT}" models)
+string(JSON id_rms GET "${OUT}" models 2 identification rms_um)
+string(JSON val_max GET "${OUT}" models 2 validation max_um)
+string(JSON aic GET "${OUT}" models 2 aic)
+string(JSON cond GET "${OUT}" models 2 condition)
+string(JSON recommendation GET "${OUT}" recommendation)
+if(NOT n EQUAL 4 OR NOT recommendation MATCHES "^Use model 27")
+  message(FATAL_ERROR "compare: ${n} models; recommendation: ${recommendation}")
+endif()
+
+# 4. The sample batch is exactly what the simulator writes for seed 1 (same seed, same bytes).
+run(0 simulate fvm-batch -o ${WORK}/sim --seed 1)
+file(GLOB sample_files RELATIVE ${SAMPLES}/bar17 ${SAMPLES}/bar17/*)
+foreach(f ${sample_files})
+  file(SHA256 ${SAMPLES}/bar17/${f} a)
+  file(SHA256 ${WORK}/sim/${f} b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "samples/bar17/${f} differs from 'fvm simulate fvm-batch --seed 1'")
+  endif()
+endforeach()
+
+# 5. Bad input: a clear message naming the file or calotte, non-zero exit, no output written.
+file(COPY ${SAMPLES}/bar17/ DESTINATION ${WORK}/missing)
+file(REMOVE ${WORK}/missing/id-y.free.csv)
+fails_naming("id-y" calibrate ${WORK}/missing -o ${WORK}/missing.json)
+if(EXISTS ${WORK}/missing.json)
+  message(FATAL_ERROR "a failed calibrate left ${WORK}/missing.json behind")
+endif()
+
+file(MAKE_DIRECTORY ${WORK}/empty)
+fails_naming("empty" calibrate ${WORK}/empty -o ${WORK}/empty.json)
+
+file(MAKE_DIRECTORY ${WORK}/um)
+file(WRITE ${WORK}/um/p.stitched.csv "id,x,y,z\n1,-150000,-100000,-50000\n2,-140000,-100000,-50000\n")
+file(WRITE ${WORK}/um/p.free.csv "id,x,y,z\n1,-150000,-100000,-50000\n2,-140000,-100000,-50000\n")
+fails_naming("micrometre" calibrate ${WORK}/um)
+
+file(MAKE_DIRECTORY ${WORK}/few)
+file(WRITE ${WORK}/few/p.stitched.csv "id,x,y,z\n1,-150,-100,-50\n2,-140,-100,-50\n3,-130,-100,-50\n")
+file(WRITE ${WORK}/few/p.free.csv "id,x,y,z\n1,-150,-100,-50\n2,-140,-100,-50\n3,-130,-100,-50\n")
+fails_naming("fewer than the 42" calibrate ${WORK}/few --model 42)
+
+fails_naming("cal-missing.json" correct --calibration ${WORK}/cal-missing.json ${SAMPLES}/bar17/val-01.free.csv -o ${WORK}/x.csv)
