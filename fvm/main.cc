@@ -13,7 +13,11 @@ void AddNotBuilt(CLI::App& app, const std::string& name, const std::string& summ
   CLI::App* sub = app.add_subcommand(name, summary + "  [not built yet]");
   sub->allow_extras();
   sub->callback([name, issue] {
-    fmt::print(stderr, "fvm {}: not built yet (tracked in issue {}); nothing was done.\n", name, issue);
+    if (issue > 0) {
+      fmt::print(stderr, "fvm {}: not built yet (tracked in issue {}); nothing was done.\n", name, issue);
+    } else {
+      fmt::print(stderr, "fvm {}: not built yet (no issue filed for it yet); nothing was done.\n", name);
+    }
     throw CLI::RuntimeError(2);
   });
 }

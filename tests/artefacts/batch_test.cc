@@ -4,25 +4,17 @@
 #include <gtest/gtest.h>
 
 #include "artefacts/input_error.h"
-#include "tests/artefacts/temp_dir.h"
+#include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {
 namespace {
+
+using fvm::testing::InputErrorOf;
 
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
 
-template <typename F>
-std::string InputErrorOf(F read) {
-  try {
-    read();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError thrown";
-  return "";
-}
 
 Placement MakePlacement(const std::string& name, std::vector<int> ids, double offset, bool timed) {
   Placement p;

@@ -8,25 +8,16 @@
 
 #include "artefacts/atomic_file.h"
 #include "artefacts/input_error.h"
-#include "tests/artefacts/temp_dir.h"
+#include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {
 namespace {
 
+using fvm::testing::InputErrorOf;
+
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
-// The message of the InputError that `read` throws; fails the test when it throws nothing or something else.
-template <typename F>
-std::string InputErrorOf(F read) {
-  try {
-    read();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError thrown";
-  return "";
-}
 
 CentreRecord Record(int id, double x, double y, double z) {
   CentreRecord r;

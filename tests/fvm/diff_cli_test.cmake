@@ -1,14 +1,7 @@
 # fvm diff as a user runs it, on the published stitching-strategy exports (samples/stitching-strategies).
 # Variables: FVM (the executable), SAMPLES (the samples directory), WORK (a scratch directory).
 
-function(run expected_code)
-  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT code EQUAL expected_code)
-    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}, expected ${expected_code}\n${out}\n${err}")
-  endif()
-  set(OUT "${out}" PARENT_SCOPE)
-  set(ERR "${err}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
 # CMake has integer arithmetic only: a plain decimal string becomes an integer in units of 10^-digits. Digits
 # beyond are cut, not rounded: string(JSON) re-prints numbers with 17 significant digits (-14.457000000000001).

@@ -1,5 +1,6 @@
 #pragma once
-// A fresh directory per test, removed afterwards, so tests never see each other's files or a previous run's.
+// Test support for files: a fresh directory per test, removed afterwards, so tests never see each other's files
+// or a previous run's; and the message of an expected InputError.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,6 +13,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "artefacts/input_error.h"
 
 namespace fvm::testing {
 
@@ -58,6 +61,18 @@ class TempDir {
 inline std::string ReadText(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The message of the InputError that `read` throws; fails the test when it throws nothing or something else.
+template <typename F>
+std::string InputErrorOf(F read) {
+  try {
+    read();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError thrown";
+  return "";
 }
 
 }  // namespace fvm::testing
