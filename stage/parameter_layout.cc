@@ -140,6 +140,10 @@ void ParameterLayout::Drop(std::string_view coefficient) {
 }
 
 void ParameterLayout::Reindex() {
+  axes_with_errors_ = 0;
+  for (int t = 0; t < kNumErrorTerms; ++t) {
+    if (terms_[static_cast<size_t>(t)].present) axes_with_errors_ |= 1u << static_cast<int>(chain_.ArgumentAxis(t));
+  }
   free_index_.clear();
   free_slot_.assign(coefficients_.size(), -1);
   tied_slot_.assign(coefficients_.size(), -1);
@@ -232,14 +236,6 @@ Eigen::Matrix<double, 3, kMotionErrors> MotionJacobian(const AxisChain& chain, c
 }
 
 }  // namespace
-
-unsigned ParameterLayout::AxesWithErrors() const {
-  unsigned mask = 0;
-  for (int t = 0; t < kNumErrorTerms; ++t) {
-    if (terms_[static_cast<size_t>(t)].present) mask |= 1u << static_cast<int>(chain_.ArgumentAxis(t));
-  }
-  return mask;
-}
 
 Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
                                                       const Eigen::Vector3d& q, Eigen::Vector3d* value,

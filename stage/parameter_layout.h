@@ -61,7 +61,7 @@ class ParameterLayout {
   const std::vector<Coefficient>& coefficients() const { return coefficients_; }
   int NumFree() const { return static_cast<int>(free_index_.size()); }
   // Bit k set when axis k has a present term (its own T or R, or a squareness term it carries).
-  unsigned AxesWithErrors() const;
+  unsigned AxesWithErrors() const { return axes_with_errors_; }
   std::vector<std::string> FreeNames() const;
   int FindCoefficient(std::string_view name) const;  // -1 when absent
   int FreeIndexOf(std::string_view name) const;      // -1 when not free
@@ -95,6 +95,7 @@ class ParameterLayout {
   std::vector<int> free_index_;            // coefficient index of each free coefficient
   std::vector<int> free_slot_;             // free slot of each coefficient, -1 if not free
   std::vector<int> tied_slot_;             // free slot a tied coefficient follows, -1 otherwise
+  unsigned axes_with_errors_ = 0;
 };
 
 // How people read a coefficient: translations in um, rotations and squareness in urad.
