@@ -9,13 +9,8 @@
 
 namespace fvm::artefacts {
 
-struct ObservationSet {
-  std::vector<stage::Observation> observations;
-  std::vector<Eigen::Vector3d> anchors;  // first tile of each group (stage::FirstTile of its free centres)
-  std::vector<std::string> groups;       // placement name of each group
-};
-
-// Throws InputError when a name is not a placement of the batch.
-ObservationSet Observations(const Batch& batch, const std::vector<std::string>& placements);
+// One group per placement, anchored at its first tile; times when every placement has them. Throws InputError
+// when a name is not a placement of the batch.
+stage::MeasurementSet Observations(const Batch& batch, const std::vector<std::string>& placements);
 
 }  // namespace fvm::artefacts

@@ -2,7 +2,9 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -88,16 +90,67 @@ std::vector<PlacementPose> ValidationPoses(int count, std::mt19937_64& rng) {
 
 }  // namespace
 
+std::vector<std::string> HiddenEffectNames() {
+  return {"thermal_drift", "higher_order", "reference_anchor", "z_coupling", "outliers", "scale"};
+}
+
 void FvmBatchOptions::Check() const {
-  if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0) {
+  if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0 ||
+      !(height_step_mm >= 0) || !(effect_size >= 0)) {
     throw std::invalid_argument("simulation sizes must be non-negative");
   }
+  const std::vector<std::string> names = HiddenEffectNames();
+  if (!hidden_effect.empty() && std::find(names.begin(), names.end(), hidden_effect) == names.end()) {
+    throw std::invalid_argument("unknown hidden effect '" + hidden_effect + "'");
+  }
 }
+
+namespace {
+
+double EffectSize(const FvmBatchOptions& o, double default_size) { return o.effect_size > 0 ? o.effect_size : default_size; }
+
+// Adds terms to the truth, keeping the drawn values of the coefficients it already had.
+void ExtendTruth(FvmBatchTruth& truth, const std::vector<std::pair<std::string, double>>& added_terms_and_values,
+                 int order_of_added) {
+  std::map<std::string, double> by_name;
+  const std::vector<std::string> old_names = truth.layout.FreeNames();
+  for (size_t i = 0; i < old_names.size(); ++i) by_name[old_names[i]] = truth.values[i];
+  std::vector<std::pair<std::string, double>> new_coefficients;
+  for (const auto& [term, value] : added_terms_and_values) {
+    const int index = *stage::FindErrorTerm(term);
+    const stage::TermSpec spec = truth.layout.term(index);
+    const int order = spec.present ? spec.order + 1 : order_of_added;
+    truth.layout.SetTerm(term, stage::Basis::kPower, order);  // the existing coefficients keep their values
+    new_coefficients.emplace_back(term + std::to_string(order), value);
+  }
+  for (const auto& [name, value] : new_coefficients) by_name[name] = value;
+  truth.values.clear();
+  for (const std::string& name : truth.layout.FreeNames()) truth.values.push_back(by_name.count(name) ? by_name[name] : 0.0);
+}
+
+}  // namespace
 
 SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   options.Check();
   std::mt19937_64 rng(options.seed);
   SimulatedFvmBatch out{Batch{}, DrawTruth(options, rng)};
+  // Hidden effects draw from their own generator, so a batch without one is the same bytes as before.
+  std::mt19937_64 effect_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::uniform_int_distribution<int> sign(0, 1);
+  const auto signed_size = [&](double size) { return sign(effect_rng) ? size : -size; };
+  const std::string& effect = options.hidden_effect;
+  if (effect == "higher_order") {
+    // The next power of xTx, reaching the size at the far end of the travel (u = q / 100 = -2).
+    const int order = out.truth.layout.term(*stage::FindErrorTerm("xTx")).order + 1;
+    ExtendTruth(out.truth, {{"xTx", signed_size(EffectSize(options, 80.0) * 1e-3 / std::pow(2.0, order))}}, order);
+  } else if (effect == "z_coupling") {
+    std::vector<std::pair<std::string, double>> pitch_roll;
+    for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) pitch_roll.emplace_back(term, signed_size(EffectSize(options, 500.0) * 1e-6));
+    for (auto& [term, value] : pitch_roll) {
+      if (out.truth.layout.term(*stage::FindErrorTerm(term)).present) value = 0.0;  // already there: leave it
+    }
+    ExtendTruth(out.truth, pitch_roll, 0);
+  }
   const ParameterLayout& layout = out.truth.layout;
   const std::vector<double>& values = out.truth.values;
 
@@ -107,8 +160,8 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   for (const Calotte& c : CalotteBar17().calottes) bar.push_back(c.centre + Eigen::Vector3d(pitch(rng), pitch(rng), pitch(rng)));
 
   std::vector<PlacementPose> poses = IdentificationPoses();
-  if (!options.same_start) {
-    std::uniform_real_distribution<double> shift(0.0, 30.0);
+  if (!options.same_start || effect == "reference_anchor") {
+    std::uniform_real_distribution<double> shift(0.0, effect == "reference_anchor" ? EffectSize(options, 30.0) : 30.0);
     for (PlacementPose& p : poses) p.start += Eigen::Vector2d(shift(rng), -shift(rng));
   }
   for (const PlacementPose& p : ValidationPoses(options.validation_placements, rng)) poses.push_back(p);
@@ -116,16 +169,23 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   std::normal_distribution<double> noise(0.0, options.noise_um * 1e-3);
   std::uniform_real_distribution<double> tilt(-1.5e-3, 1.5e-3);  // the bar never lies perfectly flat
   const auto noisy = [&](Eigen::Vector3d v) { return Eigen::Vector3d(v.x() + noise(rng), v.y() + noise(rng), v.z() + noise(rng)); };
-  for (const PlacementPose& pose : poses) {
+  const Eigen::Vector3d drift_mm_per_s = effect == "thermal_drift"
+                                             ? Eigen::Vector3d(Eigen::Vector3d(1.0, -0.5, 0.3) * EffectSize(options, 3.0) * 1e-3 / 60.0)
+                                             : Eigen::Vector3d::Zero();
+  const double scale = effect == "scale" ? signed_size(EffectSize(options, 300.0) * 1e-6) : 0.0;
+  for (size_t p = 0; p < poses.size(); ++p) {
+    const PlacementPose& pose = poses[p];
     const double c = std::cos(pose.angle_rad), s = std::sin(pose.angle_rad);
     const double tilt_along = tilt(rng);
+    // On a wedge the bar rises from calotte 1 to 17 by -step, 0 or +step, in turn.
+    const double rise_per_mm = options.height_step_mm * (static_cast<double>(p % 3) - 1.0) / 160.0;
     Placement placement;
     placement.name = pose.name;
     std::vector<Eigen::Vector3d> commands;
     for (size_t i = 0; i < bar.size(); ++i) {
       const Eigen::Vector3d& b = bar[i];
       const Eigen::Vector3d truth(pose.start.x() + c * b.x() - s * b.y(), pose.start.y() + s * b.x() + c * b.y(),
-                                  -50.0 + b.z() + tilt_along * b.x());
+                                  -50.0 + b.z() + (tilt_along + rise_per_mm) * b.x());
       const stage::InverseResult command = stage::Inverse(layout, values.data(), truth);
       if (!command.converged) throw std::runtime_error("simulation: the stage model could not be inverted");
       commands.push_back(command.command);
@@ -133,10 +193,22 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
     const Eigen::Vector3d anchor = stage::FirstTile(commands);
     const Eigen::Vector3d anchor_error = StageError(layout, values, anchor);
     for (size_t i = 0; i < commands.size(); ++i) {
+      const double t = options.seconds_per_centre * static_cast<double>(i);
       placement.ids.push_back(static_cast<int>(i) + 1);
-      placement.free.push_back(noisy(commands[i]));
-      placement.stitched.push_back(noisy(stage::Forward(layout, values, commands[i]) - anchor_error));
-      placement.t_s.push_back(options.seconds_per_centre * static_cast<double>(i));
+      placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * t);
+      Eigen::Vector3d stitched = stage::Forward(layout, values, commands[i]) - anchor_error;
+      if (scale != 0.0) stitched.head<2>() = anchor.head<2>() + (1.0 + scale) * (stitched - anchor).head<2>();
+      placement.stitched.push_back(noisy(stitched));
+      placement.t_s.push_back(t);
+    }
+    if (effect == "outliers" && pose.name == "id-y") {
+      // Three failed sphere fits: a burr or a missing patch pulls the fitted centre sideways.
+      std::uniform_int_distribution<size_t> which(0, commands.size() - 1);
+      std::uniform_real_distribution<double> direction(-1.0, 1.0);
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d d = Eigen::Vector3d(direction(effect_rng), direction(effect_rng), 0.2 * direction(effect_rng)).normalized();
+        placement.free[which(effect_rng)] += d * EffectSize(options, 80.0) * 1e-3;
+      }
     }
     out.batch.placements.push_back(std::move(placement));
   }

@@ -24,8 +24,23 @@ struct FvmBatchOptions {
   bool same_start = true;              // identification placements share their first calotte's spot
   double pitch_error_um = 5.0;         // the bar is uncalibrated: its calottes deviate from 10 mm pitch
   double seconds_per_centre = 20.0;    // measurement time per calotte (the t column)
+  double height_step_mm = 0.0;         // the bar lies on a wedge: it rises by -step, 0, +step over its length, in turn
+
+  // One effect the stage model does not describe, hidden in the data for the discrepancy workflow
+  // (fvm diagnose); names from the contract list. `effect_size` 0 takes the default in parentheses:
+  //   thermal_drift   stitching-free centres drift with measurement time (3 um/min, mostly along x)
+  //   higher_order    the truth gets the next polynomial order of xTx (80 um at the end of the travel)
+  //   reference_anchor identification placements start apart: each is anchored at its own first tile (30 mm)
+  //   z_coupling      pitch and roll of X and Y (500 urad each); use with height_step_mm
+  //   outliers        three failed sphere fits among the identification centres (80 um)
+  //   scale           stitched distances scaled about the first tile, a lens scale error (300 ppm)
+  std::string hidden_effect;
+  double effect_size = 0.0;
   void Check() const;                  // throws std::invalid_argument
 };
+
+// The effect names SimulateFvmBatch can hide.
+std::vector<std::string> HiddenEffectNames();
 
 struct FvmBatchTruth {
   stage::ParameterLayout layout;

@@ -54,7 +54,7 @@ void PrintParameters(const stage::IdentificationResult& r) {
   }
 }
 
-ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResult& r, const artefacts::ObservationSet& shown,
+ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResult& r, const stage::MeasurementSet& shown,
                       const std::string& shown_what) {
   ReportData data;
   data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, args.batch);
@@ -87,7 +87,7 @@ ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResu
 
 void Run(const CalibrateArgs& args) {
   const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
-  const artefacts::ObservationSet identify = artefacts::Observations(batch, batch.identify);
+  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult result = IdentifyModel(args.model, args.terms, identify, args.settings);
 
   nlohmann::json doc = CalibrationToJson(result);
@@ -96,7 +96,7 @@ void Run(const CalibrateArgs& args) {
   doc["identification"]["placements"] = batch.identify;
   const stage::ValidationStats id_before = stage::Validate(nullptr, identify.observations, identify.anchors);
   doc["identification"]["before_mean_um"] = id_before.mean_mm * 1e3;
-  std::optional<artefacts::ObservationSet> validate;
+  std::optional<stage::MeasurementSet> validate;
   if (!batch.validate.empty()) {
     validate = artefacts::Observations(batch, batch.validate);
     const stage::ValidationStats before = stage::Validate(nullptr, validate->observations, validate->anchors);
@@ -110,7 +110,7 @@ void Run(const CalibrateArgs& args) {
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
-    const artefacts::ObservationSet& shown = validate ? *validate : identify;
+    const stage::MeasurementSet& shown = validate ? *validate : identify;
     WriteReport(args.report, MakeReport(args, result, shown, validate ? "validation placements" : "identification placements"));
   }
   if (args.json) {

@@ -19,7 +19,7 @@ void IdentifySettings::AddOptions(CLI::App& app) {
       ->capture_default_str();
 }
 
-stage::IdentificationOptions IdentifySettings::ToOptions(const artefacts::ObservationSet& set) const {
+stage::IdentificationOptions IdentifySettings::ToOptions(const stage::MeasurementSet& set) const {
   stage::IdentificationOptions o;
   o.anchor = anchor == "first-tile" ? stage::Anchor::kFirstTile : stage::Anchor::kNone;
   o.anchors = set.anchors;
@@ -42,7 +42,7 @@ std::string ModelName(const std::string& model, const std::string& terms) {
 }
 
 stage::IdentificationResult IdentifyModel(const std::string& model, const std::string& terms,
-                                          const artefacts::ObservationSet& set, const IdentifySettings& settings) {
+                                          const stage::MeasurementSet& set, const IdentifySettings& settings) {
   try {
     stage::IdentificationResult result = stage::Identify(ModelLayout(model, terms), set.observations, settings.ToOptions(set));
     result.calibration.model = ModelName(model, terms);

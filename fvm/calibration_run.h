@@ -17,7 +17,7 @@ struct IdentifySettings {
   double loss_scale_um = 5.0;
 
   void AddOptions(CLI::App& app);
-  stage::IdentificationOptions ToOptions(const artefacts::ObservationSet& set) const;
+  stage::IdentificationOptions ToOptions(const stage::MeasurementSet& set) const;
 };
 
 // Model "9", "15", "27", "42", or a --terms spec (then the name is "terms:<spec>").
@@ -25,7 +25,7 @@ stage::ParameterLayout ModelLayout(const std::string& model, const std::string& 
 std::string ModelName(const std::string& model, const std::string& terms);
 
 stage::IdentificationResult IdentifyModel(const std::string& model, const std::string& terms,
-                                          const artefacts::ObservationSet& set, const IdentifySettings& settings);
+                                          const stage::MeasurementSet& set, const IdentifySettings& settings);
 
 // "id-x, id-y, id-oblique"
 std::string JoinNames(const std::vector<std::string>& names);

@@ -39,7 +39,7 @@ double Rms(const std::vector<double>& v) {
 
 // Validation residuals on held-out placements: the batch.json roles, or each placement left out in turn.
 ModelScore Score(const std::string& model, const artefacts::Batch& batch, const IdentifySettings& settings) {
-  const artefacts::ObservationSet identify = artefacts::Observations(batch, batch.identify);
+  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   ModelScore score{model, stage::FvmModelLayout(model).NumFree(), IdentifyModel(model, "", identify, settings), {}, {}};
   const stage::IdentificationResult& id = score.identification;
   const double m = 3.0 * static_cast<double>(id.residuals.size());
@@ -51,7 +51,7 @@ ModelScore Score(const std::string& model, const artefacts::Batch& batch, const 
 
   std::vector<stage::Observation> held_out;
   std::vector<Eigen::Vector3d> anchors;
-  const auto add = [&](const stage::IdentificationResult& fit, const artefacts::ObservationSet& set) {
+  const auto add = [&](const stage::IdentificationResult& fit, const stage::MeasurementSet& set) {
     const stage::ValidationStats v = stage::Validate(&fit.calibration, set.observations, set.anchors);
     for (const Eigen::Vector3d& r : v.residuals) score.validation.residuals.push_back(r);
     for (double d : stage::DistanceErrors(&fit.calibration, set.observations)) score.distance_errors.push_back(d);

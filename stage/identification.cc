@@ -205,13 +205,14 @@ void IdentificationOptions::Check() const {
 
 Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions) {
   if (positions.empty()) throw std::invalid_argument("a measurement without points has no first tile");
-  Eigen::Vector3d corner(positions[0].x(), positions[0].y(), 0.0);
+  Eigen::Vector2d corner = positions[0].head<2>();
+  for (const Eigen::Vector3d& p : positions) corner = Eigen::Vector2d(std::min(corner.x(), p.x()), std::max(corner.y(), p.y()));
+  // Its height is that of the part under it: the point nearest the corner (a tilted part is not at its mean z there).
+  const Eigen::Vector3d* nearest = &positions[0];
   for (const Eigen::Vector3d& p : positions) {
-    corner.x() = std::min(corner.x(), p.x());
-    corner.y() = std::max(corner.y(), p.y());
-    corner.z() += p.z() / static_cast<double>(positions.size());
+    if ((p.head<2>() - corner).squaredNorm() < (nearest->head<2>() - corner).squaredNorm()) nearest = &p;
   }
-  return corner;
+  return Eigen::Vector3d(corner.x(), corner.y(), nearest->z());
 }
 
 Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout) {

@@ -23,6 +23,15 @@ struct Observation {
   int group = 0;                                        // which measurement (placement) it belongs to
 };
 
+// Observations with what identification, validation and diagnosis need to know about them.
+struct MeasurementSet {
+  std::vector<Observation> observations;
+  std::vector<Eigen::Vector3d> anchors;  // first tile of each group (FirstTile of its stitching-free centres)
+  std::vector<std::string> groups;       // name of each group (placement)
+  std::vector<double> t_s;               // measurement time of each observation; empty when unknown
+  std::vector<std::string> labels;       // "placement:id" of each observation, for messages
+};
+
 // How stitched coordinates are referenced. The instrument places the first tile of a stitched measurement by
 // its encoders and registers the rest to it (000:4826), so stitched = F(q) - e(first tile), e(q) = F(q) - q.
 enum class Anchor {
@@ -71,7 +80,7 @@ Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free,
                               const Eigen::Vector3d* anchor = nullptr);
 
 // The first tile of a measurement that covers these stage positions: the instrument starts at lowest x and
-// highest y (000:7264); z is their mean.
+// highest y (000:7264); z is that of the position nearest to that corner.
 Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions);
 
 // A plausible size of each free coefficient: its term reaching 0.5 mm (translation) or 1 mrad (rotation,

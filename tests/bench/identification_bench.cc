@@ -14,8 +14,8 @@ namespace fvm::stage {
 namespace {
 
 // 588 bar placements over the stage, each anchored at its own first tile.
-const artefacts::ObservationSet& TenThousandPairs() {
-  static const artefacts::ObservationSet set = [] {
+const stage::MeasurementSet& TenThousandPairs() {
+  static const stage::MeasurementSet set = [] {
     artefacts::FvmBatchOptions options;
     options.seed = 5;
     options.validation_placements = 585;  // + 3 identification placements = 588 x 17 = 9996 centres

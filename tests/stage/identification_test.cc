@@ -18,7 +18,7 @@ namespace {
 
 struct Experiment {
   artefacts::SimulatedFvmBatch sim;
-  artefacts::ObservationSet identify, validate;
+  stage::MeasurementSet identify, validate;
 };
 
 Experiment Simulate(unsigned seed, const std::string& truth = "27", double noise_um = 0.5, bool same_start = true) {
@@ -33,7 +33,7 @@ Experiment Simulate(unsigned seed, const std::string& truth = "27", double noise
   return e;
 }
 
-IdentificationOptions AnchorOptions(const artefacts::ObservationSet& set, Anchor anchor) {
+IdentificationOptions AnchorOptions(const stage::MeasurementSet& set, Anchor anchor) {
   IdentificationOptions o;
   o.anchor = anchor;
   o.anchors = set.anchors;

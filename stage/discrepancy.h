@@ -1,0 +1,64 @@
+#pragma once
+// The discrepancy workflow: fit a stage model, study where it and the measurements disagree, name the physical
+// effect that explains the disagreement, add it, refit, and show the gap shrink.
+//
+// Each candidate effect is a block of extra parameters with a physical story (ARCHITECTURE.md names):
+//   higher_order      a component needs the next polynomial order (one candidate per component: xTx, yRz, ...)
+//   z_coupling        pitch and roll (xRx, xRy, yRx, yRy) that only height changes reveal
+//   reference_anchor  each stitched measurement is anchored at the stage error of its own first tile
+//   thermal_drift     stitching-free centres drift with measurement time (needs the t column)
+//   scale             stitched distances are scaled about the first tile (lens or stitching scale)
+//   outliers          centres far outside the noise: failed sphere fits
+// Selection is statistical: every candidate is scored on the linearised fit with an F-test (extra sum of
+// squares) and BIC; the best significant one (p below alpha / number of candidates, BIC lower) is accepted only
+// if held-out placements do not get worse; otherwise no listed effect explains the gap.
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stage/identification.h"
+#include "stage/parameter_layout.h"
+
+namespace fvm::stage {
+
+struct DiagnosisOptions {
+  double alpha = 0.01;  // family-wise false-alarm probability over all candidates
+  IdentificationOptions identification;
+};
+
+struct EffectScore {
+  std::string effect;
+  std::string component;
+  int extra_parameters = 0;
+  double f_statistic = 0.0;
+  double p_value = 1.0;
+  double delta_bic = 0.0;
+  bool significant = false;
+};
+
+struct ResidualSummary {
+  int count = 0;
+  double mean_mm = 0.0;
+  double rms_mm = 0.0;
+};
+
+struct Diagnosis {
+  std::optional<std::string> effect;  // accepted effect, or none
+  std::string component;
+  std::string explanation;
+  ResidualSummary before, after;                  // identification residuals, base model and with the effect
+  ResidualSummary validation_before, validation_after;
+  double size = 0.0, size_u = 0.0;                // estimated size of the effect and its standard uncertainty
+  std::string size_unit;
+  std::vector<EffectScore> candidates;            // every candidate, best first
+  std::vector<std::string> findings;              // what the residual analysis saw, one sentence each
+  std::vector<Eigen::Vector3d> residuals_before;  // identification residuals of the base model, mm
+  std::vector<Eigen::Vector3d> residuals_after;   // ... with the effect (base model's when none is accepted)
+};
+
+Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
+                   const DiagnosisOptions& options = {});
+
+}  // namespace fvm::stage
