@@ -14,6 +14,10 @@ void RegisterCalibrate(CLI::App& app);
 void RegisterCorrect(CLI::App& app);
 // fvm compare BATCH [--models ...] (fvm/compare.cc).
 void RegisterCompare(CLI::App& app);
+// fvm diagnose BATCH --model N (fvm/diagnose.cc).
+void RegisterDiagnose(CLI::App& app);
+// fvm info FILE [--json] (fvm/info.cc).
+void RegisterInfo(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
 void RegisterSimulate(CLI::App& app);
 

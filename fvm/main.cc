@@ -37,9 +37,9 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterCorrect(app);
   fvm::cli::RegisterCompare(app);
   fvm::cli::RegisterDiff(app);
-  AddNotBuilt(app, "diagnose", "find, name and model the effect that simulation and measurement miss", 6);
+  fvm::cli::RegisterDiagnose(app);
   fvm::cli::RegisterSimulate(app);
-  AddNotBuilt(app, "info", "what a surface or point-cloud file holds", 4);
+  fvm::cli::RegisterInfo(app);
   AddNotBuilt(app, "fit", "find calottes and fit spheres; writes a centre export", 4);
   AddNotBuilt(app, "focus", "height map from a focus stack", 4);
   AddNotBuilt(app, "tiles", "plan tile layouts with and without stitching", 5);

@@ -348,15 +348,16 @@ std::string RenderDistanceErrors(const ReportData& data) {
   if (!before.empty()) DrawHistogram(hb, first_edge, width, kBeforeFill, kBefore);
   if (!after.empty()) DrawHistogram(ha, first_edge, width, kAfterFill, kAfter);
   Frame("bcnst", 0, 0, "bcnstv", y_tick, y_sub, false);
-  pllab("Distance error (µm)", "Count", "Distance errors before and after compensation");
+  pllab("Distance error (µm)", "Count", PlText(fmt::format("Distance errors before and after {}", data.change)).c_str());
 
   if (before.empty() && after.empty()) {
     plcol0(kMuted);
     plptex(0, y_max / 2, 1, 0, 0.5, "no distance errors in this report");
     return plot.Finish();
   }
-  const std::array<std::string, 2> texts = {DistanceLegendText("before compensation", before),
-                                            DistanceLegendText("after compensation", after)};
+  const std::string before_text = "before " + data.change, after_text = "after " + data.change;
+  const std::array<std::string, 2> texts = {DistanceLegendText(before_text.c_str(), before),
+                                            DistanceLegendText(after_text.c_str(), after)};
   const std::array<const char*, 2> text_ptrs = {texts[0].c_str(), texts[1].c_str()};
   const std::array<PLINT, 2> options = {PL_LEGEND_COLOR_BOX, PL_LEGEND_COLOR_BOX};
   const std::array<PLINT, 2> text_colours = {kInk, kInk}, box_colours = {kBefore, kAfter}, patterns = {0, 0};
@@ -399,7 +400,7 @@ std::string RenderErrorVectors(const ReportData& data) {
   plvpas(0.11, 0.95, 0.18, 0.93, (wy1 - wy0) / (wx1 - wx0));
   plwind(wx0, wx1, wy0, wy1);
   Frame("bcnst", 0, 0, "bcnstv", 0, 0);
-  pllab("Stage x (mm)", "Stage y (mm)", "Lateral error vectors before and after compensation");
+  pllab("Stage x (mm)", "Stage y (mm)", PlText(fmt::format("Lateral error vectors before and after {}", data.change)).c_str());
 
   // The stage travel, to scale.
   plcol0(kMuted);
@@ -453,8 +454,8 @@ std::string RenderErrorVectors(const ReportData& data) {
     plcol0(kInk);
     plptex(x + swatch + gap, y, 1, 0, 0, text.c_str());
   };
-  key(wx0, kBefore, fmt::format("before compensation (max {:.3g} µm)", MaxLength(data.errors_before)), row1);
-  key(wx0, kAfter, fmt::format("after compensation (max {:.3g} µm)", MaxLength(data.errors_after)), row2);
+  key(wx0, kBefore, fmt::format("before {} (max {:.3g} µm)", data.change, MaxLength(data.errors_before)), row1);
+  key(wx0, kAfter, fmt::format("after {} (max {:.3g} µm)", data.change, MaxLength(data.errors_after)), row2);
   plcol0(kInk);
   const double column2 = wx0 + 0.62 * (wx1 - wx0);
   if (longest > 0) {
@@ -640,8 +641,16 @@ std::string RenderHtml(const ReportData& data) {
     html += "</table>\n";
   }
   for (const Figure& f : kFigures) {
+    const auto retell = [&](std::string_view text) {  // the captions are written for a compensation
+      std::string out;
+      for (size_t at = text.find("compensation"); at != std::string_view::npos; at = text.find("compensation")) {
+        out.append(text.substr(0, at)).append(data.change);
+        text.remove_prefix(at + std::string_view("compensation").size());
+      }
+      return HtmlEscape(out.append(text));
+    };
     html += fmt::format("<h2>{}</h2>\n<figure>\n<img src=\"{}\" alt=\"{}\">\n<figcaption>{}</figcaption>\n</figure>\n",
-                        f.heading, f.file, f.alt, f.caption);
+                        f.heading, f.file, retell(f.alt), retell(f.caption));
   }
   html += "</body>\n</html>\n";
   return html;

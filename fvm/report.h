@@ -31,6 +31,9 @@ struct ReportData {
     double x_min_mm = -200.0, x_max_mm = 0.0, y_min_mm = -200.0, y_max_mm = 0.0;
   };
   StageArea stage_area;
+  // What separates "before" from "after" in titles, legends and captions: the compensation for `fvm calibrate`,
+  // the added effect for `fvm diagnose`.
+  std::string change = "compensation";
 };
 
 // Writes DIR/index.html and the SVG plots it shows (distance_errors.svg, error_vectors.svg, parameters.svg).

@@ -30,6 +30,9 @@ void Run(SimulateBatchArgs args) {
   truth["noise_um"] = args.options.noise_um;
   truth["pitch_error_um"] = args.options.pitch_error_um;
   truth["same_start"] = args.options.same_start;
+  truth["height_step_mm"] = args.options.height_step_mm;
+  truth["hidden_effect"] = args.options.hidden_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.options.hidden_effect);
+  truth["effect_size"] = args.options.effect_size;
   truth["mean_error_um"] = sim.truth.mean_error_um;
   truth["max_error_um"] = sim.truth.max_error_um;
   const std::vector<std::string> names = sim.truth.layout.FreeNames();
@@ -67,6 +70,16 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--validation-placements", args->options.validation_placements, "number of validation placements")
       ->capture_default_str();
   sub->add_option("--pitch-error-um", args->options.pitch_error_um, "calotte deviations of the uncalibrated bar (um)")
+      ->capture_default_str();
+  sub->add_option("--hidden-effect", args->options.hidden_effect,
+                  "hide one effect the stage model lacks, for 'fvm diagnose' (sizes: see --effect-size)")
+      ->check(CLI::IsMember(artefacts::HiddenEffectNames()));
+  sub->add_option("--effect-size", args->options.effect_size,
+                  "size of the hidden effect; 0 = default: thermal_drift 3 um/min, higher_order 80 um, reference_anchor "
+                  "30 mm, z_coupling 500 urad, outliers 80 um, scale 300 ppm")
+      ->capture_default_str();
+  sub->add_option("--height-step-mm", args->options.height_step_mm,
+                  "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")
       ->capture_default_str();
   sub->add_flag("--different-starts", args->different_starts,
                 "identification placements do not share their first calotte's spot (needs --anchor first-tile)");

@@ -87,3 +87,19 @@ file(WRITE ${WORK}/few/p.free.csv "id,x,y,z\n1,-150,-100,-50\n2,-140,-100,-50\n3
 fails_naming("fewer than the 42" calibrate ${WORK}/few --model 42)
 
 fails_naming("cal-missing.json" correct --calibration ${WORK}/cal-missing.json ${SAMPLES}/bar17/val-01.free.csv -o ${WORK}/x.csv)
+
+# 6. Diagnose: nothing on the clean sample; a hidden drift named, with the held-out gap shrinking.
+run(0 diagnose ${SAMPLES}/bar17 --model 27 --json)
+string(JSON effect TYPE "${OUT}" effect)
+if(NOT effect STREQUAL "NULL")
+  message(FATAL_ERROR "diagnose named an effect on the clean sample:\n${OUT}")
+endif()
+run(0 simulate fvm-batch -o ${WORK}/drift --seed 7 --hidden-effect thermal_drift)
+run(0 diagnose ${WORK}/drift --model 27 --json --report ${WORK}/drift-report)
+string(JSON effect GET "${OUT}" effect)
+string(JSON before GET "${OUT}" validation before mean_um)
+string(JSON after GET "${OUT}" validation after mean_um)
+if(NOT effect STREQUAL "thermal_drift" OR NOT EXISTS ${WORK}/drift-report/index.html OR NOT after LESS 2.5
+   OR NOT before GREATER 5)
+  message(FATAL_ERROR "diagnose on a drifting batch: ${effect}, held-out mean ${before} -> ${after} um")
+endif()

@@ -1,0 +1,142 @@
+// fvm diagnose BATCH --model N: the discrepancy workflow (stage/discrepancy.h) from the command line.
+
+#include <fmt/core.h>
+
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "artefacts/batch.h"
+#include "artefacts/batch_observations.h"
+#include "fvm/calibration_run.h"
+#include "fvm/commands.h"
+#include "fvm/report.h"
+#include "stage/discrepancy.h"
+
+namespace fvm::cli {
+namespace {
+
+struct DiagnoseArgs {
+  std::string batch;
+  std::string model = "27";
+  std::string report;
+  double alpha = 0.01;
+  bool json = false;
+  IdentifySettings settings;
+};
+
+nlohmann::json SummaryJson(const stage::ResidualSummary& s) {
+  return {{"centres", s.count}, {"mean_um", s.mean_mm * 1e3}, {"rms_um", s.rms_mm * 1e3}};
+}
+
+// First-order change of each distance from a placement's first centre to the others, from the residuals.
+std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
+  std::vector<double> errors;
+  std::map<int, size_t> first;
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const auto [it, inserted] = first.emplace(set.observations[i].group, i);
+    if (inserted) continue;
+    const Eigen::Vector3d d = set.observations[i].reference - set.observations[it->second].reference;
+    if (d.norm() > 0) errors.push_back(d.normalized().dot(residuals[i] - residuals[it->second]) * 1e3);
+  }
+  return errors;
+}
+
+ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
+  ReportData data;
+  data.title = fmt::format("fvm diagnose: model {} on {}", args.model, args.batch);
+  data.change = d.effect ? "adding " + *d.effect : "(no effect accepted)";
+  data.summary = {{"effect", d.effect.value_or("none")},
+                  {"component", d.component.empty() ? "-" : d.component},
+                  {"explanation", d.explanation},
+                  {"residual before (mean / rms)", fmt::format("{:.2f} / {:.2f} um", d.before.mean_mm * 1e3, d.before.rms_mm * 1e3)},
+                  {"residual after (mean / rms)", fmt::format("{:.2f} / {:.2f} um", d.after.mean_mm * 1e3, d.after.rms_mm * 1e3)}};
+  if (d.validation_before.count > 0) {
+    data.summary.emplace_back("held-out placements (mean before / after)",
+                              fmt::format("{:.2f} / {:.2f} um", d.validation_before.mean_mm * 1e3, d.validation_after.mean_mm * 1e3));
+  }
+  for (const std::string& f : d.findings) data.summary.emplace_back("residual analysis", f);
+  data.distance_errors_before_um = DistanceErrorsUm(identify, d.residuals_before);
+  data.distance_errors_after_um = DistanceErrorsUm(identify, d.residuals_after);
+  for (size_t i = 0; i < identify.observations.size() && i < d.residuals_after.size(); ++i) {
+    const Eigen::Vector3d& q = identify.observations[i].free;
+    data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
+    data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
+  }
+  if (d.effect) data.parameters.push_back({*d.effect + (d.component.empty() ? "" : " " + d.component), d.size, d.size_u, d.size_unit});
+  return data;
+}
+
+void Run(const DiagnoseArgs& args) {
+  const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
+  stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
+  const stage::MeasurementSet validate = artefacts::Observations(batch, batch.validate);
+  stage::DiagnosisOptions options;
+  options.alpha = args.alpha;
+  options.identification = args.settings.ToOptions(identify);
+  const stage::Diagnosis d = stage::Diagnose(ModelLayout(args.model, ""), identify, validate, options);
+  if (!args.report.empty()) WriteReport(args.report, MakeReport(args, d, identify));
+
+  nlohmann::json doc;
+  doc["batch"] = args.batch;
+  doc["model"] = args.model;
+  doc["effect"] = d.effect ? nlohmann::json(*d.effect) : nlohmann::json(nullptr);
+  doc["component"] = d.component;
+  doc["explanation"] = d.explanation;
+  doc["before"] = SummaryJson(d.before);
+  doc["after"] = SummaryJson(d.after);
+  doc["validation"] = {{"before", SummaryJson(d.validation_before)}, {"after", SummaryJson(d.validation_after)}};
+  doc["size"] = {{"value", d.size}, {"u", d.size_u}, {"unit", d.size_unit}};
+  doc["findings"] = d.findings;
+  for (const stage::EffectScore& c : d.candidates) {
+    doc["candidates"].push_back({{"effect", c.effect}, {"component", c.component}, {"extra_parameters", c.extra_parameters},
+                                 {"f", c.f_statistic}, {"p_value", c.p_value}, {"delta_bic", c.delta_bic},
+                                 {"significant", c.significant}});
+  }
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", args.model, args.batch,
+             identify.observations.size(), validate.observations.size());
+  fmt::print("  residual analysis:\n");
+  for (const std::string& f : d.findings) fmt::print("    - {}\n", f);
+  fmt::print("\n  {:<22} {:>6} {:>10} {:>10} {:>9}\n", "candidate", "extra", "F", "p", "dBIC");
+  for (size_t i = 0; i < d.candidates.size() && i < 6; ++i) {
+    const stage::EffectScore& c = d.candidates[i];
+    fmt::print("  {:<22} {:>6} {:>10.3g} {:>10.2g} {:>9.1f}{}\n", c.effect + (c.component.empty() ? "" : " " + c.component),
+               c.extra_parameters, c.f_statistic, c.p_value, c.delta_bic, c.significant ? "  significant" : "");
+  }
+  fmt::print("\n  effect: {}{}\n", d.effect.value_or("none"), d.component.empty() ? "" : " (" + d.component + ")");
+  if (d.effect) fmt::print("  size: {:.3g} +- {:.2g} {}\n", d.size, d.size_u, d.size_unit);
+  fmt::print("  {}\n\n", d.explanation);
+  fmt::print("  {:<28} {:>9} {:>9}\n", "mean 3D residual (um)", "before", "after");
+  fmt::print("  {:<28} {:>9.2f} {:>9.2f}\n", "identification", d.before.mean_mm * 1e3, d.after.mean_mm * 1e3);
+  if (d.validation_before.count > 0) {
+    fmt::print("  {:<28} {:>9.2f} {:>9.2f}\n", "held-out placements", d.validation_before.mean_mm * 1e3,
+               d.validation_after.mean_mm * 1e3);
+  }
+  if (!args.report.empty()) fmt::print("\nreport written to {}/index.html\n", args.report);
+}
+
+}  // namespace
+
+void RegisterDiagnose(CLI::App& app) {
+  auto args = std::make_shared<DiagnoseArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "diagnose", "find where model and measurements disagree, name the missing effect, add it, show the gap shrink");
+  sub->add_option("BATCH", args->batch, "batch directory (see 'fvm calibrate --help'); held-out placements confirm")
+      ->required();
+  sub->add_option("--model", args->model, "base model: 9, 15, 27 or 42")
+      ->check(CLI::IsMember({"9", "15", "27", "42"}))
+      ->capture_default_str();
+  sub->add_option("--alpha", args->alpha, "family-wise false-alarm probability of the selection")
+      ->check(CLI::Range(1e-6, 0.5))
+      ->capture_default_str();
+  sub->add_option("--report", args->report, "write residual plots before and after into this directory (HTML)");
+  sub->add_flag("--json", args->json, "print one JSON document on stdout");
+  args->settings.AddOptions(*sub);
+  sub->callback([args] { Run(*args); });
+}
+
+}  // namespace fvm::cli
