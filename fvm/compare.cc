@@ -70,18 +70,8 @@ ModelScore Score(const std::string& model, const artefacts::Batch& batch, const 
     }
   }
   stage::ValidationStats& v = score.validation;
-  v.count = static_cast<int>(v.residuals.size());
-  double sum = 0, sum_sq = 0;
-  for (const Eigen::Vector3d& r : v.residuals) {
-    sum += r.norm();
-    sum_sq += r.squaredNorm();
-    v.max_mm = std::max(v.max_mm, r.norm());
-  }
-  if (v.count > 0) {
-    v.mean_mm = sum / v.count;
-    v.rms_mm = std::sqrt(sum_sq / v.count);
-    v.predicted_rms_mm = std::sqrt(v.predicted_rms_mm / v.count);
-  }
+  static_cast<stage::ResidualSummary&>(v) = stage::Summarize(v.residuals);
+  if (v.count > 0) v.predicted_rms_mm = std::sqrt(v.predicted_rms_mm / v.count);
   return score;
 }
 

@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterDiff(app);
   fvm::cli::RegisterDiagnose(app);
   fvm::cli::RegisterSimulate(app);
-  fvm::cli::RegisterInfo(app);
+  AddNotBuilt(app, "info", "what a surface or point-cloud file holds", 4);
   AddNotBuilt(app, "fit", "find calottes and fit spheres; writes a centre export", 4);
   AddNotBuilt(app, "focus", "height map from a focus stack", 4);
   AddNotBuilt(app, "tiles", "plan tile layouts with and without stitching", 5);

@@ -15,21 +15,6 @@
 namespace fvm::stage {
 namespace {
 
-ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals) {
-  ResidualSummary s;
-  s.count = static_cast<int>(residuals.size());
-  double sum = 0, sum_sq = 0;
-  for (const Eigen::Vector3d& r : residuals) {
-    sum += r.norm();
-    sum_sq += r.squaredNorm();
-  }
-  if (s.count > 0) {
-    s.mean_mm = sum / s.count;
-    s.rms_mm = std::sqrt(sum_sq / s.count);
-  }
-  return s;
-}
-
 Eigen::VectorXd Stack(const std::vector<Eigen::Vector3d>& v) {
   Eigen::VectorXd out(3 * static_cast<Eigen::Index>(v.size()));
   for (size_t i = 0; i < v.size(); ++i) out.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
@@ -226,8 +211,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.before = Summarize(base.residuals);
   const auto validation = [&](const Calibration& cal, const MeasurementSet& set) {
     if (set.observations.empty()) return ResidualSummary{};
-    const ValidationStats v = Validate(&cal, set.observations, set.anchors);
-    return ResidualSummary{v.count, v.mean_mm, v.rms_mm};
+    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors));
   };
   d.validation_before = validation(base.calibration, validate);
 

@@ -20,6 +20,7 @@
 
 #include "stage/identification.h"
 #include "stage/parameter_layout.h"
+#include "stage/validation.h"
 
 namespace fvm::stage {
 
@@ -36,12 +37,6 @@ struct EffectScore {
   double p_value = 1.0;
   double delta_bic = 0.0;
   bool significant = false;
-};
-
-struct ResidualSummary {
-  int count = 0;
-  double mean_mm = 0.0;
-  double rms_mm = 0.0;
 };
 
 struct Diagnosis {

@@ -14,37 +14,12 @@
 #include <stdexcept>
 
 #include "stage/linear_dependence.h"
+#include "stage/validation.h"
 
 namespace fvm::stage {
 namespace {
 
-// d(term values)/d(free coefficients) at one command, sparse: each coefficient feeds one term.
-struct TermDerivativeEntry {
-  int term;
-  int slot;
-  double value;
-};
-using SparseTermDerivative = std::vector<TermDerivativeEntry>;
-
-// Same as ParameterLayout::TermDerivative, built sparse directly: identification prepares one per observation.
-SparseTermDerivative SparseDerivative(const ParameterLayout& layout, const Eigen::Vector3d& q) {
-  SparseTermDerivative entries;
-  double basis[kMaxOrder + 1];
-  int evaluated_term = -1;
-  for (size_t i = 0; i < layout.coefficients().size(); ++i) {
-    const ParameterLayout::Coefficient& c = layout.coefficients()[i];
-    if (c.state == ParameterLayout::State::kFixed) continue;
-    if (c.term != evaluated_term) {
-      const TermSpec& spec = layout.term(c.term);
-      const int axis = static_cast<int>(layout.chain().ArgumentAxis(c.term));
-      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, layout.travel()[static_cast<size_t>(axis)], q[axis]), basis);
-      evaluated_term = c.term;
-    }
-    const double factor = c.state == ParameterLayout::State::kFree ? 1.0 : c.value;
-    entries.push_back({c.term, layout.SlotOf(i), factor * basis[c.power]});
-  }
-  return entries;
-}
+using SparseTermDerivative = std::vector<ParameterLayout::TermDerivativeEntry>;
 
 // Forward model and, optionally, its Jacobian w.r.t. the free coefficients (3 x n, column-major) at one
 // command: Jets through the chain for the 21 term values, then the exact linear map to the coefficients.
@@ -57,7 +32,7 @@ Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const double* all, 
   Eigen::Vector3d p;
   const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(layout.chain(), e, q, &p, layout.AxesWithErrors());
   jacobian->setZero(3, layout.NumFree());
-  for (const TermDerivativeEntry& d : derivative) jacobian->col(d.slot) += term_jacobian.col(d.term) * d.value;
+  for (const ParameterLayout::TermDerivativeEntry& d : derivative) jacobian->col(d.slot) += term_jacobian.col(d.term) * d.value;
   return p;
 }
 
@@ -156,10 +131,10 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
                  const IdentificationOptions& options) {
   Prepared p;
   if (options.anchor == Anchor::kFirstTile) {
-    for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, SparseDerivative(layout, a)});
+    for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, layout.TermDerivativeEntries(a)});
   }
   for (const Observation& o : observations) {
-    PreparedObservation po{o.free, o.reference, SparseDerivative(layout, o.free), -1};
+    PreparedObservation po{o.free, o.reference, layout.TermDerivativeEntries(o.free), -1};
     if (options.anchor == Anchor::kFirstTile) po.anchor = o.group;
     p.observations.push_back(std::move(po));
   }
@@ -402,7 +377,6 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     // or the default damping crawls along the weakly determined directions for a dozen iterations.
     solver.initial_trust_region_radius = 1e12;
     solver.num_threads = options.num_threads;
-    solver.minimizer_progress_to_stdout = getenv("FVM_DEBUG") != nullptr;
     solver.function_tolerance = 1e-10;
     solver.parameter_tolerance = 1e-10;
     solver.gradient_tolerance = 1e-14;
@@ -424,16 +398,11 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   // about 0.1 %, far below what a covariance estimated from tens of centres can resolve.
   Eigen::VectorXd r;
   Linearise(layout, values, prepared, &r, nullptr);
-  double sum = 0, sum_sq = 0;
-  for (int i = 0; i < m; ++i) {
-    const Eigen::Vector3d ri = r.segment<3>(3 * i);
-    result.residuals.push_back(ri);
-    sum += ri.norm();
-    sum_sq += ri.squaredNorm();
-    result.max_mm = std::max(result.max_mm, ri.norm());
-  }
-  result.mean_mm = sum / m;
-  result.rms_mm = std::sqrt(sum_sq / m);
+  for (int i = 0; i < m; ++i) result.residuals.push_back(r.segment<3>(3 * i));
+  const ResidualSummary summary = Summarize(result.residuals);
+  result.mean_mm = summary.mean_mm;
+  result.rms_mm = summary.rms_mm;
+  result.max_mm = summary.max_mm;
   const double dof = std::max(1.0, 3.0 * m - n);
   result.calibration.sigma_mm = std::max(std::sqrt(r.squaredNorm() / dof), options.noise_floor_mm);
   if (n > 0) {

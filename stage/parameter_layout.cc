@@ -165,19 +165,28 @@ std::vector<std::string> ParameterLayout::FreeNames() const {
   return names;
 }
 
-Eigen::MatrixXd ParameterLayout::TermDerivative(const Eigen::Vector3d& q) const {
-  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(kNumErrorTerms, NumFree());
+std::vector<ParameterLayout::TermDerivativeEntry> ParameterLayout::TermDerivativeEntries(const Eigen::Vector3d& q) const {
+  std::vector<TermDerivativeEntry> entries;
   double basis[kMaxOrder + 1];
+  int evaluated_term = -1;
   for (size_t i = 0; i < coefficients_.size(); ++i) {
     const Coefficient& c = coefficients_[i];
     if (c.state == State::kFixed) continue;
-    const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
-    const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
-    EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]),
-                  basis);
+    if (c.term != evaluated_term) {
+      const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
+      const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
+      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]), basis);
+      evaluated_term = c.term;
+    }
     const double factor = c.state == State::kFree ? 1.0 : c.value;
-    d(c.term, SlotOf(i)) += factor * basis[c.power];
+    entries.push_back({c.term, SlotOf(i), factor * basis[c.power]});
   }
+  return entries;
+}
+
+Eigen::MatrixXd ParameterLayout::TermDerivative(const Eigen::Vector3d& q) const {
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(kNumErrorTerms, NumFree());
+  for (const TermDerivativeEntry& e : TermDerivativeEntries(q)) d(e.term, e.slot) += e.value;
   return d;
 }
 

@@ -78,6 +78,13 @@ class ParameterLayout {
   // d(term values) / d(free coefficients) at q: 21 x NumFree. Constant in the coefficients, because every
   // term is linear in them; fixed coefficients contribute nothing.
   Eigen::MatrixXd TermDerivative(const Eigen::Vector3d& q) const;
+  // The same, sparse: each non-fixed coefficient feeds one term (identification keeps one per observation).
+  struct TermDerivativeEntry {
+    int term;
+    int slot;
+    double value;
+  };
+  std::vector<TermDerivativeEntry> TermDerivativeEntries(const Eigen::Vector3d& q) const;
 
   // Exact linear dependencies between the free coefficients seen through the forward model at `commands`
   // (relative tolerance on column residuals), in layout order: the earlier coefficient is kept.

@@ -16,29 +16,38 @@ Eigen::Vector3d Compensated(const Calibration* calibration, const Eigen::Vector3
 
 }  // namespace
 
+ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals) {
+  ResidualSummary s;
+  s.count = static_cast<int>(residuals.size());
+  double sum = 0, sum_sq = 0;
+  for (const Eigen::Vector3d& r : residuals) {
+    sum += r.norm();
+    sum_sq += r.squaredNorm();
+    s.max_mm = std::max(s.max_mm, r.norm());
+  }
+  if (s.count > 0) {
+    s.mean_mm = sum / s.count;
+    s.rms_mm = std::sqrt(sum_sq / s.count);
+  }
+  return s;
+}
+
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
                          const std::vector<Eigen::Vector3d>& anchors) {
   ValidationStats stats;
-  double sum = 0, sum_sq = 0, predicted_sq = 0;
+  double predicted_sq = 0;
   for (const Observation& o : observations) {
     const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
     Eigen::MatrixXd jq, ja;
     const Eigen::Vector3d r = Compensated(calibration, o.free, &jq) - (Compensated(calibration, a, &ja) - a) - o.reference;
     stats.residuals.push_back(r);
-    sum += r.norm();
-    sum_sq += r.squaredNorm();
-    stats.max_mm = std::max(stats.max_mm, r.norm());
     if (calibration != nullptr && calibration->covariance.size() > 0) {
       const Eigen::MatrixXd d = jq - ja;
       predicted_sq += (d * calibration->covariance * d.transpose()).trace() + 3 * calibration->sigma_mm * calibration->sigma_mm;
     }
   }
-  stats.count = static_cast<int>(observations.size());
-  if (stats.count > 0) {
-    stats.mean_mm = sum / stats.count;
-    stats.rms_mm = std::sqrt(sum_sq / stats.count);
-    stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
-  }
+  static_cast<ResidualSummary&>(stats) = Summarize(stats.residuals);
+  if (stats.count > 0) stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
   return stats;
 }
 

@@ -13,9 +13,14 @@
 
 namespace fvm::stage {
 
-struct ValidationStats {
+// Count, mean, rms and largest of Euclidean residuals: the statistics every report of fvm quotes.
+struct ResidualSummary {
   int count = 0;
-  double mean_mm = 0, rms_mm = 0, max_mm = 0;  // Euclidean residuals
+  double mean_mm = 0, rms_mm = 0, max_mm = 0;
+};
+ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals);
+
+struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
   std::vector<Eigen::Vector3d> residuals;
 };
