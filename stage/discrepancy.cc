@@ -283,7 +283,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     }
     column_candidate("thermal_drift", "", columns);
   }
-  {
+  if (!identify.anchors.empty()) {  // a scale about the first tile needs one
     Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 1);
     for (size_t i = 0; i < identify.observations.size(); ++i) {
       const Observation& o = identify.observations[i];

@@ -26,7 +26,8 @@ struct Observation {
 // Observations with what identification, validation and diagnosis need to know about them.
 struct MeasurementSet {
   std::vector<Observation> observations;
-  std::vector<Eigen::Vector3d> anchors;  // first tile of each group (FirstTile of its stitching-free centres)
+  std::vector<Eigen::Vector3d> anchors;  // first tile of each group (FirstTile of its stitching-free centres);
+                                         // empty for data not referenced to a first tile (tracker readings)
   std::vector<std::string> groups;       // name of each group (placement)
   std::vector<double> t_s;               // measurement time of each observation; empty when unknown
   std::vector<std::string> labels;       // "placement:id" of each observation, for messages

@@ -37,12 +37,15 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
   ValidationStats stats;
   double predicted_sq = 0;
   for (const Observation& o : observations) {
-    const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
     Eigen::MatrixXd jq, ja;
-    const Eigen::Vector3d r = Compensated(calibration, o.free, &jq) - (Compensated(calibration, a, &ja) - a) - o.reference;
+    Eigen::Vector3d r = Compensated(calibration, o.free, &jq) - o.reference;
+    if (!anchors.empty()) {
+      const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
+      r -= Compensated(calibration, a, &ja) - a;
+    }
     stats.residuals.push_back(r);
     if (calibration != nullptr && calibration->covariance.size() > 0) {
-      const Eigen::MatrixXd d = jq - ja;
+      const Eigen::MatrixXd d = anchors.empty() ? jq : Eigen::MatrixXd(jq - ja);
       predicted_sq += (d * calibration->covariance * d.transpose()).trace() + 3 * calibration->sigma_mm * calibration->sigma_mm;
     }
   }

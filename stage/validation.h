@@ -25,7 +25,8 @@ struct ValidationStats : ResidualSummary {
   std::vector<Eigen::Vector3d> residuals;
 };
 
-// `anchors[g]` is the first tile of observation group g. A null calibration means "no compensation".
+// `anchors[g]` is the first tile of observation group g; without anchors (data not referenced to a first tile,
+// such as laser-tracker readings) the residual is F(q) - s. A null calibration means "no compensation".
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
                          const std::vector<Eigen::Vector3d>& anchors);
 
