@@ -18,6 +18,12 @@ void RegisterCompare(CLI::App& app);
 void RegisterDiagnose(CLI::App& app);
 // fvm info FILE [--json] (fvm/info.cc).
 void RegisterInfo(CLI::App& app);
+// fvm fit FILE [--artefact grid6x6|bar17] [-o centres.csv] [--json] (fvm/fit.cc).
+void RegisterFit(CLI::App& app);
+// fvm tiles plan|synthesize|simulate ... (fvm/tiles.cc).
+void RegisterTiles(CLI::App& app);
+// fvm stitch --layout L.csv --overlap PCT -o P.csv [--pixel-mm S] (fvm/stitch.cc).
+void RegisterStitch(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
 void RegisterSimulate(CLI::App& app);
 

@@ -39,11 +39,11 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterDiff(app);
   fvm::cli::RegisterDiagnose(app);
   fvm::cli::RegisterSimulate(app);
-  AddNotBuilt(app, "info", "what a surface or point-cloud file holds", 4);
-  AddNotBuilt(app, "fit", "find calottes and fit spheres; writes a centre export", 4);
+  fvm::cli::RegisterInfo(app);
+  fvm::cli::RegisterFit(app);
   AddNotBuilt(app, "focus", "height map from a focus stack", 4);
-  AddNotBuilt(app, "tiles", "plan tile layouts with and without stitching", 5);
-  AddNotBuilt(app, "stitch", "register overlapping tiles", 5);
+  fvm::cli::RegisterTiles(app);
+  fvm::cli::RegisterStitch(app);
   AddNotBuilt(app, "verify", "machine-tool volumetric verification with a laser tracker", 0);
   AddNotBuilt(app, "uncertainty", "Monte Carlo uncertainty of a verification or calibration", 0);
 

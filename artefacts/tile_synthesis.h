@@ -1,0 +1,40 @@
+#pragma once
+// Synthetic tile sets with a recorded truth, for testing and benchmarking registration: tiles cut at sub-pixel
+// positions from one random texture (a sum of sinusoids, so that every sample is exact, with no interpolation),
+// with stage errors, uneven illumination and sensor noise.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "imaging/tile_image.h"
+#include "imaging/tile_registration.h"
+
+namespace fvm::artefacts {
+
+struct TileSynthesisOptions {
+  int rows = 3, cols = 3;
+  int width = 256, height = 256;  // px
+  double overlap = 0.2;           // nominal fraction shared by neighbours
+  // Stage error: every tile's true position departs from the grid by a normal draw of this size per axis (px).
+  double position_sigma_px = 1.5;
+  // Texture: `components` sinusoids with frequencies up to max_frequency (cycles / px) and a 1/f amplitude
+  // spectrum; mean `level`, standard deviation `contrast` (image counts).
+  int components = 48;
+  double max_frequency = 0.2;
+  double level = 30000.0, contrast = 6000.0;
+  double vignetting = 0.3;  // the gain falls by this fraction from the tile's centre to its corners
+  double noise = 0.03;      // sensor noise, a fraction of `contrast`
+  std::uint64_t seed = 1;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct SynthesizedTiles {
+  std::vector<imaging::TileImage> images;      // scan order: column by column, top to bottom
+  std::vector<imaging::GridTile> tiles;        // rows, cols and nominal (grid) positions
+  std::vector<Eigen::Vector2d> truth_px;       // true top-left corners, tile 0 at its nominal position
+};
+
+SynthesizedTiles SynthesizeTiles(const TileSynthesisOptions& options);
+
+}  // namespace fvm::artefacts

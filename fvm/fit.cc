@@ -1,0 +1,274 @@
+// fvm fit FILE: finds the calottes in a height map (or an organised point cloud), fits a sphere to each, numbers
+// them as the artefact does when told which artefact it is, and writes the centre export stage calibration
+// reads (ARCHITECTURE.md section 3).
+
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "artefacts/artefact.h"
+#include "artefacts/centre_export.h"
+#include "artefacts/input_error.h"
+#include "fvm/commands.h"
+#include "imaging/calotte_detection.h"
+#include "imaging/calotte_numbering.h"
+#include "imaging/height_map.h"
+#include "imaging/point_cloud.h"
+#include "imaging/surface_file.h"
+
+namespace fvm::cli {
+namespace {
+
+struct FitArgs {
+  std::string file;
+  std::string artefact;
+  std::string output;
+  bool json = false;
+  double radius_mm = 0.0;
+  std::optional<double> rotation_deg;
+  double min_diameter_mm = 0.0;
+  double max_diameter_mm = 0.0;
+  double min_depth_mm = 0.0;
+  std::string residual = "height";
+  // Reading, as fvm info.
+  double pixel_size_mm = 0.0;
+  double pixel_size_y_mm = 0.0;
+  double z_scale_mm = 0.0;
+  double z_offset_mm = 0.0;
+  std::optional<double> invalid;
+  std::string unit = "mm";
+};
+
+imaging::HeightMap ReadMap(const FitArgs& args) {
+  imaging::SurfaceReadOptions options;
+  options.image.dx_mm = args.pixel_size_mm;
+  options.image.dy_mm = args.pixel_size_y_mm;
+  options.image.z_scale_mm = args.z_scale_mm;
+  options.image.z_offset_mm = args.z_offset_mm;
+  options.image.invalid_value = args.invalid;
+  options.cloud.mm_per_unit = args.unit == "m" ? 1000.0 : args.unit == "um" ? 0.001 : 1.0;
+  imaging::Surface surface = imaging::ReadSurface(args.file, options);
+  if (surface.height_map) return std::move(*surface.height_map);
+  if (!surface.cloud->IsOrganised()) {
+    throw InputError(
+        fmt::format("{}: an unorganised point cloud ({} points); finding calottes needs the points on "
+                    "a grid: export the measurement as a height map (X3P, AL3D, TIFF) or an organised "
+                    "cloud",
+                    args.file, surface.cloud->points.size()));
+  }
+  return imaging::CloudToHeightMap(*surface.cloud, args.file);
+}
+
+std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  if (name == "grid6x6") return artefacts::CalotteGrid6x6();
+  if (name == "bar17") return artefacts::CalotteBar17();
+  throw InputError("--artefact '" + name + "': not an artefact fvm knows; use grid6x6 or bar17");
+}
+
+// JSON keeps 0.1 nm for mm values and 0.1 nm for um values (as fvm diff): finer digits are noise.
+double Round(double v, double per_unit) { return std::round(v * per_unit) / per_unit; }
+
+void RunFit(const FitArgs& args) {
+  const std::optional<artefacts::Artefact> artefact = NamedArtefact(args.artefact);
+  const imaging::HeightMap map = ReadMap(args);
+
+  imaging::CalotteDetectionOptions options;
+  options.fit.fixed_radius_mm = args.radius_mm;
+  options.fit.residual =
+      args.residual == "orthogonal" ? imaging::SphereResidual::kOrthogonal : imaging::SphereResidual::kHeight;
+  options.min_depth_mm = args.min_depth_mm;
+  if (artefact) {
+    // The artefact's calottes are all alike: a window around their diameter keeps other dents out. Openings
+    // of ball-nose calottes can be much narrower than the ball, hence the wide lower bound.
+    double diameter = 0;
+    for (const auto& c : artefact->calottes) diameter = std::max(diameter, 2 * c.radius_mm);
+    options.min_diameter_mm = 0.3 * diameter;
+    options.max_diameter_mm = 1.5 * diameter;
+  }
+  if (args.min_diameter_mm > 0) options.min_diameter_mm = args.min_diameter_mm;
+  if (args.max_diameter_mm > 0) options.max_diameter_mm = args.max_diameter_mm;
+  if (options.max_diameter_mm < options.min_diameter_mm) {
+    throw InputError(fmt::format("--min-diameter-mm {} is larger than --max-diameter-mm {}", options.min_diameter_mm,
+                                 options.max_diameter_mm));
+  }
+
+  imaging::CalotteDetection detection;
+  std::optional<imaging::LayoutMatch> layout;
+  try {
+    detection = imaging::DetectCalottes(map, options);
+    if (detection.calottes.empty()) {
+      std::string why;
+      for (std::size_t i = 0; i < std::min<std::size_t>(detection.rejected.size(), 5); ++i) {
+        const auto& r = detection.rejected[i];
+        why += fmt::format("\n  at ({:.3f}, {:.3f}) mm: {}", r.centre_mm.x(), r.centre_mm.y(), r.reason);
+      }
+      if (detection.rejected.size() > 5) why += fmt::format("\n  and {} more", detection.rejected.size() - 5);
+      throw InputError(fmt::format(
+          "no calotte found: no round depression {}-{} mm across and more than {:.2f} um below the face{}{}",
+          options.min_diameter_mm, options.max_diameter_mm, detection.min_depth_mm * 1e3,
+          why.empty() ? "" : "; rejected:", why));
+    }
+    if (artefact) {
+      std::vector<imaging::NominalCalotte> nominal;
+      for (const auto& c : artefact->calottes) nominal.push_back({c.id, c.centre.head<2>()});
+      imaging::LayoutMatchOptions match;
+      if (args.rotation_deg) match.expected_rotation_rad = *args.rotation_deg * M_PI / 180.0;
+      std::vector<Eigen::Vector2d> found;
+      for (const auto& c : detection.calottes) found.push_back(c.fit.centre_mm.head<2>());
+      layout = imaging::MatchLayout(found, nominal, match);
+      imaging::NumberCalottes(detection, nominal, match);
+    }
+  } catch (const InputError& e) {
+    throw InputError(args.file + ": " + e.what());
+  }
+
+  artefacts::CentreExport out;
+  out.source = args.output;
+  out.comments.push_back("fvm fit " + args.file);
+  out.comments.push_back(fmt::format(
+      "{} calottes{}; sphere fit with the {} residual{}; face noise {:.3f} um", detection.calottes.size(),
+      artefact ? " of " + artefact->name + ", numbered by its layout" : "", args.residual,
+      args.radius_mm > 0 ? fmt::format(", radius fixed at {} mm", args.radius_mm) : "", detection.face.sigma_mm * 1e3));
+  for (const auto& c : detection.calottes) {
+    artefacts::CentreRecord record;
+    record.id = c.id;
+    record.position = c.fit.centre_mm;
+    record.radius_mm = c.fit.radius_mm;
+    record.form_rms_mm = c.fit.rms_deviation_mm;
+    out.centres.push_back(record);
+  }
+  if (!args.output.empty()) artefacts::WriteCentreExport(args.output, out);
+
+  if (args.json) {
+    nlohmann::ordered_json doc;
+    doc["calottes"] = nlohmann::ordered_json::array();
+    for (const auto& c : detection.calottes) {
+      const Eigen::Vector3d sd = c.fit.centre_covariance_mm2.diagonal().cwiseSqrt();
+      doc["calottes"].push_back(
+          {{"id", c.id},
+           {"x", Round(c.fit.centre_mm.x(), 1e7)},
+           {"y", Round(c.fit.centre_mm.y(), 1e7)},
+           {"z", Round(c.fit.centre_mm.z(), 1e7)},
+           {"radius", Round(c.fit.radius_mm, 1e7)},
+           {"form_rms_um", Round(c.fit.rms_deviation_mm * 1e3, 1e4)},
+           {"points", c.fit.inliers},
+           {"u_um", {Round(sd.x() * 1e3, 1e4), Round(sd.y() * 1e3, 1e4), Round(sd.z() * 1e3, 1e4)}},
+           {"min_dev_um", Round(c.fit.min_deviation_mm * 1e3, 1e4)},
+           {"max_dev_um", Round(c.fit.max_deviation_mm * 1e3, 1e4)},
+           {"mean_dev_um", Round(c.fit.mean_deviation_mm * 1e3, 1e4)},
+           {"outliers", c.fit.points - c.fit.inliers},
+           {"at_border", c.at_border}});
+    }
+    doc["file"] = args.file;
+    doc["artefact"] = artefact ? nlohmann::ordered_json(artefact->name) : nlohmann::ordered_json(nullptr);
+    doc["face"] = {{"slope_x", detection.face.b},
+                   {"slope_y", detection.face.c},
+                   {"sigma_um", Round(detection.face.sigma_mm * 1e3, 1e4)}};
+    if (layout) {
+      doc["layout"] = {{"rotation_deg", Round(layout->rotation_rad * 180 / M_PI, 1e6)},
+                       {"scale", Round(layout->scale, 1e9)},
+                       {"rms_um", Round(layout->rms_mm * 1e3, 1e4)}};
+    }
+    doc["rejected"] = nlohmann::ordered_json::array();
+    for (const auto& r : detection.rejected) {
+      doc["rejected"].push_back(
+          {{"x", Round(r.centre_mm.x(), 1e4)}, {"y", Round(r.centre_mm.y(), 1e4)}, {"reason", r.reason}});
+    }
+    if (!args.output.empty()) doc["output"] = args.output;
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+
+  fmt::print("{}: {} x {} points of {:.3g} x {:.3g} um; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n", args.file,
+             map.size_x, map.size_y, map.dx_mm * 1e3, map.dy_mm * 1e3, detection.face.sigma_mm * 1e3,
+             detection.face.b * 1e3, detection.face.c * 1e3);
+  if (layout) {
+    fmt::print("{} layout: turned {:.3f} deg, scale {:.6f}, {:.2f} um rms from nominal\n", artefact->name,
+               layout->rotation_rad * 180 / M_PI, layout->scale, layout->rms_mm * 1e3);
+  }
+  fmt::print("\n{:>4}  {:>12}  {:>12}  {:>12}  {:>10}  {:>8}  {:>20}  {:>8}\n", "id", "x [mm]", "y [mm]", "z [mm]",
+             "r [mm]", "form [um]", "u(x, y, z) [um]", "points");
+  for (const auto& c : detection.calottes) {
+    const Eigen::Vector3d sd = c.fit.centre_covariance_mm2.diagonal().cwiseSqrt() * 1e3;
+    fmt::print("{:>4}  {:>12.6f}  {:>12.6f}  {:>12.6f}  {:>10.6f}  {:>9.3f}  {:>6.3f} {:>6.3f} {:>6.3f}  {:>8}{}\n",
+               c.id, c.fit.centre_mm.x(), c.fit.centre_mm.y(), c.fit.centre_mm.z(), c.fit.radius_mm,
+               c.fit.rms_deviation_mm * 1e3, sd.x(), sd.y(), sd.z(), c.fit.inliers,
+               c.at_border ? "  cut by the map's border" : "");
+  }
+  for (const auto& r : detection.rejected) {
+    fmt::print("not a calotte at ({:.3f}, {:.3f}) mm: {}\n", r.centre_mm.x(), r.centre_mm.y(), r.reason);
+  }
+  if (artefact && detection.calottes.size() < artefact->calottes.size()) {
+    std::string missing;
+    for (const auto& n : artefact->calottes) {
+      bool seen = false;
+      for (const auto& c : detection.calottes) seen = seen || c.id == n.id;
+      if (!seen) missing += (missing.empty() ? "" : ", ") + std::to_string(n.id);
+    }
+    fmt::print("not in this map: calotte {}\n", missing);
+  }
+  if (!args.output.empty()) fmt::print("\nwrote {} ({} calottes)\n", args.output, detection.calottes.size());
+}
+
+}  // namespace
+
+void RegisterFit(CLI::App& app) {
+  auto args = std::make_shared<FitArgs>();
+  CLI::App* sub = app.add_subcommand("fit", "find calottes and fit spheres; writes a centre export");
+  sub->description(
+      "Finds the calottes (spherical dimples) in a height map: levels the face they are cut into, takes the round "
+      "depressions below it, and fits a sphere to the points of each by least squares with outliers trimmed. "
+      "With --artefact the calottes get the artefact's numbers (1..36 row by row for grid6x6, 1..17 along bar17), "
+      "matched to its nominal layout. Prints centre, radius, form deviation (RMS) and the centre's standard "
+      "uncertainty per calotte; -o writes the centre export (CSV id,x,y,z,radius,form_rms in mm) that fvm "
+      "calibrate reads. Reads what fvm info reads.");
+  sub->add_option("FILE", args->file, "height map (X3P, AL3D, TIFF/EXR/PNG) or organised point cloud")->required();
+  sub->add_option("--artefact", args->artefact, "number the calottes as this artefact does: grid6x6 or bar17");
+  sub->add_option("-o,--output", args->output, "write the centre export (CSV) here");
+  sub->add_flag("--json", args->json,
+                "print one JSON document {\"calottes\": [{\"id\", \"x\", \"y\", \"z\", \"radius\", \"form_rms_um\", "
+                "\"points\", ...}], ...}");
+  sub->add_option("--radius-mm", args->radius_mm, "fix the sphere radius (the ball that made the calottes), in mm")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--rotation-deg", args->rotation_deg,
+                  "how the artefact lies in the map: its frame turned by this (default 0: calotte 1 at lowest x, "
+                  "highest y); needed when two numberings fit equally well, e.g. a bar along y");
+  sub->add_option("--min-diameter-mm", args->min_diameter_mm,
+                  "smallest calotte opening (default 0.3 mm, or 0.3 x the artefact's calotte diameter)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--max-diameter-mm", args->max_diameter_mm,
+                  "largest calotte opening (default 3 mm, or 1.5 x the artefact's calotte diameter)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--min-depth-mm", args->min_depth_mm,
+                  "depth below the face that counts as inside a calotte (default: 8 x the face's noise, >= 0.5 um)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--residual", args->residual,
+                  "height: distance over n_z, the maximum-likelihood fit for height-map noise (default); "
+                  "orthogonal: plain distance to the sphere, as instrument software fits")
+      ->check(CLI::IsMember({"height", "orthogonal"}))
+      ->default_str("height");
+  sub->add_option("--pixel-size,--dx-mm", args->pixel_size_mm,
+                  "images: pixel size in mm (overrides the file's; required when the image does not say it)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pixel-size-y,--dy-mm", args->pixel_size_y_mm, "images: pixel size along y in mm (default: as x)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--z-scale", args->z_scale_mm, "images: mm per grey level (integer images)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--z-offset", args->z_offset_mm, "images: mm added to every height (with --z-scale)");
+  sub->add_option("--invalid", args->invalid, "images: the raw pixel value that marks a missing point, e.g. 0");
+  sub->add_option("--unit", args->unit, "point clouds: the unit of the coordinates in the file")
+      ->check(CLI::IsMember({"mm", "um", "m"}))
+      ->default_str("mm");
+  sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv");
+  sub->callback([args] { RunFit(*args); });
+}
+
+}  // namespace fvm::cli

@@ -1,0 +1,165 @@
+// fvm stitch: register the tiles of a layout (imaging/tile_registration.h) and write their positions.
+
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "artefacts/atomic_file.h"
+#include "artefacts/input_error.h"
+#include "fvm/commands.h"
+#include "imaging/tile_image.h"
+#include "imaging/tile_layout.h"
+#include "imaging/tile_plan.h"
+#include "imaging/tile_registration.h"
+
+namespace fvm::cli {
+namespace {
+
+struct StitchArgs {
+  std::string layout;
+  std::string overlap;
+  std::string output;
+  double pixel_mm = 0.0;
+  double min_quality = imaging::RegistrationOptions{}.min_quality;
+  bool json = false;
+};
+
+void RunStitch(const StitchArgs& args) {
+  const double overlap = imaging::ParseOverlap(args.overlap, "--overlap");
+  if (args.pixel_mm < 0.0 || !std::isfinite(args.pixel_mm)) {
+    throw InputError(fmt::format("--pixel-mm {}: give the pixel size in mm, e.g. 0.000875", args.pixel_mm));
+  }
+  imaging::RegistrationOptions options;
+  options.min_quality = args.min_quality;
+  if (!(options.min_quality >= -1.0 && options.min_quality <= 1.0)) {
+    throw InputError("--min-quality: give a correlation in [-1, 1], e.g. 0.5");
+  }
+  const imaging::TileLayout layout = imaging::ReadTileLayout(args.layout);
+  imaging::CheckLayoutComplete(layout);
+  const std::filesystem::path dir = std::filesystem::path(args.layout).parent_path();
+
+  std::vector<imaging::TileImage> images;
+  for (const auto& tile : layout.tiles) {
+    const std::filesystem::path file = dir / tile.file;  // an absolute tile path replaces dir
+    try {
+      images.push_back(imaging::ReadTileImage(file));
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}:{}: tile row {} col {}: {}", layout.source, tile.line, tile.row, tile.col,
+                                   e.what()));
+    }
+    if (images.back().rows() != images.front().rows() || images.back().cols() != images.front().cols()) {
+      throw InputError(fmt::format("{}:{}: tile {} is {} x {} px but {} is {} x {}; all tiles of a layout come from "
+                                   "one camera and lens: check the file",
+                                   layout.source, tile.line, tile.file, images.back().cols(), images.back().rows(),
+                                   layout.tiles.front().file, images.front().cols(), images.front().rows()));
+    }
+  }
+  const double width = static_cast<double>(images.front().cols());
+  const double height = static_cast<double>(images.front().rows());
+  // Nominal positions: from the stage when the layout has them and the pixel size converts them (image y runs
+  // down = -Y), else from the grid and the overlap. Either way the first tile of the file is the origin.
+  const bool from_stage = args.pixel_mm > 0.0 && layout.tiles.front().stage_mm.has_value();
+  const auto& first = layout.tiles.front();
+  std::vector<imaging::GridTile> grid;
+  for (const auto& tile : layout.tiles) {
+    Eigen::Vector2d nominal;
+    if (from_stage) {
+      nominal = Eigen::Vector2d(tile.stage_mm->x() - first.stage_mm->x(), first.stage_mm->y() - tile.stage_mm->y()) /
+                args.pixel_mm;
+    } else {
+      nominal = Eigen::Vector2d((tile.col - first.col) * width * (1.0 - overlap),
+                                (tile.row - first.row) * height * (1.0 - overlap));
+    }
+    grid.push_back({tile.row, tile.col, nominal});
+  }
+  const imaging::RegistrationResult result = imaging::RegisterTileGrid(images, grid, options);
+
+  std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered\n" : "file,x,y,registered\n";
+  for (size_t i = 0; i < layout.tiles.size(); ++i) {
+    const Eigen::Vector2d& p = result.positions.positions_px[i];
+    csv += fmt::format("{},{:.4f},{:.4f}", layout.tiles[i].file, p.x(), p.y());
+    if (args.pixel_mm > 0.0) {
+      // Stage frame (+Y up) of the tile centre when the layout has stage positions, else relative to the first tile.
+      const Eigen::Vector2d origin = first.stage_mm.value_or(Eigen::Vector2d::Zero());
+      csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * args.pixel_mm, origin.y() - p.y() * args.pixel_mm);
+    }
+    csv += fmt::format(",{}\n", result.positions.registered[i] ? 1 : 0);
+  }
+  WriteFileAtomically(args.output, csv);
+
+  int accepted = 0;
+  std::vector<std::string> fallback;
+  for (const auto& pair : result.pairs) accepted += pair.accepted;
+  for (size_t i = 0; i < layout.tiles.size(); ++i) {
+    if (!result.positions.registered[i]) fallback.push_back(layout.tiles[i].file);
+  }
+  if (args.json) {
+    nlohmann::ordered_json out;
+    out["tiles"] = layout.tiles.size();
+    out["size_px"] = {images.front().cols(), images.front().rows()};
+    out["nominal"] = from_stage ? "stage" : "grid";
+    out["pairs_accepted"] = accepted;
+    out["stage_fallback"] = fallback;
+    out["pairs"] = nlohmann::ordered_json::array();
+    for (const auto& pair : result.pairs) {
+      const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
+      out["pairs"].push_back({{"a", layout.tiles[static_cast<size_t>(pair.a)].file},
+                              {"b", layout.tiles[static_cast<size_t>(pair.b)].file},
+                              {"dx_px", pair.accepted ? nlohmann::ordered_json(d.x()) : nullptr},
+                              {"dy_px", pair.accepted ? nlohmann::ordered_json(d.y()) : nullptr},
+                              {"quality", pair.quality},
+                              {"accepted", pair.accepted}});
+    }
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  fmt::print("{} tiles of {} x {} px, {} pairs, {} accepted (quality >= {}); nominal positions from the {}\n",
+             layout.tiles.size(), images.front().cols(), images.front().rows(), result.pairs.size(), accepted,
+             options.min_quality, from_stage ? "stage" : "grid and overlap");
+  for (const auto& pair : result.pairs) {
+    if (!pair.accepted) {
+      fmt::print("  rejected {} - {}: quality {:.3f}\n", layout.tiles[static_cast<size_t>(pair.a)].file,
+                 layout.tiles[static_cast<size_t>(pair.b)].file, pair.quality);
+    }
+  }
+  if (!fallback.empty()) {
+    std::string list;
+    for (const auto& f : fallback) list += (list.empty() ? "" : ", ") + f;
+    fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list);
+  }
+  fmt::print("positions written to {}\n", args.output);
+}
+
+}  // namespace
+
+void RegisterStitch(CLI::App& app) {
+  auto args = std::make_shared<StitchArgs>();
+  CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
+  sub->description(
+      "Registers every tile with its right and lower neighbour by phase correlation of the overlap (sub-pixel), "
+      "solves all positions by least squares weighted by each pair's quality, and writes file,x,y: each tile's "
+      "top-left corner in pixels (x right, y down), the first tile of the layout at 0,0. Tiles that no good pair "
+      "links to an earlier one keep their stage (or grid) positions, as the instrument does.");
+  sub->add_option("--layout", args->layout, "layout CSV file,row,col[,x,y]; image paths relative to it")->required();
+  sub->add_option("--overlap", args->overlap, "nominal overlap of neighbours: percent (20) or fraction (0.2)")
+      ->required();
+  sub->add_option("-o,--output", args->output, "positions CSV file,x,y[,x_mm,y_mm],registered")->required();
+  sub->add_option("--pixel-mm", args->pixel_mm,
+                  "pixel size in mm: adds x_mm,y_mm (stage frame, +Y up) and takes nominal positions from the "
+                  "layout's x,y");
+  sub->add_option("--min-quality", args->min_quality, "reject pairs whose aligned correlation is below this")
+      ->capture_default_str();
+  sub->add_flag("--json", args->json,
+                "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], \"pairs\": "
+                "[{\"a\", \"b\", \"dx_px\", \"dy_px\", \"quality\", \"accepted\"}]}");
+  sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
+              "-o demo/positions.csv");
+  sub->callback([args] { RunStitch(*args); });
+}
+
+}  // namespace fvm::cli

@@ -1,0 +1,315 @@
+// fvm tiles: plan tile layouts with and without stitching (imaging/tile_plan.h) and simulate the published
+// stitching strategies (artefacts/tile_strategy.h).
+
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "artefacts/artefact.h"
+#include "artefacts/atomic_file.h"
+#include "artefacts/centre_export.h"
+#include "artefacts/input_error.h"
+#include "artefacts/tile_synthesis.h"
+#include "fvm/commands.h"
+#include "imaging/tile_image.h"
+#include "imaging/tile_layout.h"
+#include "imaging/tile_plan.h"
+
+namespace fvm::cli {
+namespace {
+
+using imaging::Feature;
+
+struct PlanArgs {
+  std::string lens = "10x";
+  double fov_mm = 0.0;
+  std::string region;
+  std::string overlap = "0.2";
+  std::string features;
+  std::string artefact;
+  double radius_mm = 0.0;
+  double seconds_per_tile = imaging::TilePlanOptions{}.seconds_per_tile;
+  std::string tile_pixels = "1024x1024";
+  int bytes_per_pixel = imaging::TilePlanOptions{}.bytes_per_pixel;
+  std::string output;
+  std::string free_output;
+  bool json = false;
+};
+
+std::vector<double> ParseNumbers(const std::string& text, size_t count, const std::string& what,
+                                 const std::string& example) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      values.push_back(std::stod(item, &used));
+      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      values.clear();
+      break;
+    }
+  }
+  if (values.size() != count) {
+    throw InputError(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count, example));
+  }
+  return values;
+}
+
+std::vector<Feature> LoadFeatures(const PlanArgs& args) {
+  std::vector<Feature> features;
+  if (!args.artefact.empty()) {
+    artefacts::Artefact artefact;
+    if (args.artefact == "grid6x6") {
+      artefact = artefacts::CalotteGrid6x6();
+    } else if (args.artefact == "bar17") {
+      artefact = artefacts::CalotteBar17();
+    } else {
+      throw InputError("--artefact '" + args.artefact + "': not an artefact fvm knows; use grid6x6 or bar17");
+    }
+    for (const auto& c : artefact.calottes) {
+      features.push_back({c.id, c.centre.head<2>(), args.radius_mm > 0.0 ? args.radius_mm : c.radius_mm});
+    }
+  }
+  if (!args.features.empty()) {
+    const artefacts::CentreExport centres = artefacts::ReadCentreExport(args.features);
+    for (const auto& c : centres.centres) {
+      const double r = args.radius_mm > 0.0 ? args.radius_mm : c.radius_mm.value_or(0.0);
+      if (!(r > 0.0)) {
+        throw InputError(fmt::format("{}:{}: calotte {} has no radius; add a radius column or give --radius MM",
+                                     args.features, c.line, c.id));
+      }
+      features.push_back({c.id, c.position.head<2>(), r});
+    }
+  }
+  return features;
+}
+
+std::string TileFile(int row, int col) { return fmt::format("tile_r{:03d}_c{:03d}.tif", row, col); }
+
+std::string LayoutText(const std::vector<imaging::Tile>& tiles, const std::string& comment) {
+  std::vector<imaging::TileLayoutEntry> entries;
+  for (const auto& t : tiles) entries.push_back({TileFile(t.row, t.col), t.row, t.col, t.centre_mm, 0});
+  return "# " + comment + "\n" + imaging::FormatTileLayout(entries);
+}
+
+std::string Duration(double seconds) {
+  const long s = std::lround(seconds);
+  return fmt::format("{}:{:02d}:{:02d}", s / 3600, (s / 60) % 60, s % 60);
+}
+
+std::string Bytes(double bytes) { return fmt::format("{:.2f} GB", bytes / 1e9); }
+
+void RunPlan(const PlanArgs& args) {
+  imaging::TilePlanOptions options;
+  options.fov_mm = args.fov_mm > 0.0 ? args.fov_mm : imaging::FindLens(args.lens).fov_mm;
+  options.overlap = imaging::ParseOverlap(args.overlap, "--overlap");
+  options.seconds_per_tile = args.seconds_per_tile;
+  options.bytes_per_pixel = args.bytes_per_pixel;
+  {
+    const size_t x = args.tile_pixels.find('x');
+    const std::string text = x == std::string::npos ? "" : args.tile_pixels.substr(0, x) + "," + args.tile_pixels.substr(x + 1);
+    const auto wh = ParseNumbers(text, 2, "--tile-pixels " + args.tile_pixels, "1024x1024");
+    options.pixels_x = static_cast<int>(wh[0]);
+    options.pixels_y = static_cast<int>(wh[1]);
+  }
+  options.Check();
+  if (!args.features.empty() && !args.artefact.empty()) {
+    throw InputError("give --features or --artefact, not both");
+  }
+  const std::vector<Feature> features = LoadFeatures(args);
+  imaging::Region region;
+  if (!args.region.empty()) {
+    const auto r = ParseNumbers(args.region, 4, "--region", "--region 0,0,20,20 (x0,y0,x1,y1 in mm)");
+    region = {r[0], r[1], r[2], r[3]};
+  } else if (!features.empty()) {
+    // The features' bounding box: the smallest region that holds every feature whole.
+    region = {1e300, 1e300, -1e300, -1e300};
+    for (const auto& f : features) {
+      region.x0 = std::min(region.x0, f.centre_mm.x() - f.radius_mm);
+      region.y0 = std::min(region.y0, f.centre_mm.y() - f.radius_mm);
+      region.x1 = std::max(region.x1, f.centre_mm.x() + f.radius_mm);
+      region.y1 = std::max(region.y1, f.centre_mm.y() + f.radius_mm);
+    }
+  } else {
+    throw InputError("give --region x0,y0,x1,y1 (mm), or --features / --artefact to cover their bounding box");
+  }
+  const imaging::TileGrid grid = imaging::PlanStitchedGrid(region, options);
+  const imaging::ScanCost stitched = imaging::EstimateScan(static_cast<int>(grid.tiles.size()), options);
+  std::optional<imaging::StitchingFreePlan> free;
+  std::optional<imaging::ScanCost> free_cost;
+  if (!features.empty()) {
+    free = imaging::PlanStitchingFree(grid, features);
+    free_cost = imaging::EstimateScan(static_cast<int>(free->tiles.size()), options);
+  }
+  if (!args.free_output.empty() && !free) throw InputError("--free-layout needs --features or --artefact");
+
+  const std::string describe =
+      fmt::format("fvm tiles plan: field {} mm, overlap {:.4g} %, step {:.6f} mm; region {},{},{},{} mm; scan order "
+                  "column by column from -X to +X, each from +Y to -Y; x,y = tile centre (mm)",
+                  options.fov_mm, options.overlap * 100, grid.step_mm, region.x0, region.y0, region.x1, region.y1);
+  if (!args.output.empty()) WriteFileAtomically(args.output, LayoutText(grid.tiles, describe + "; stitched"));
+  if (!args.free_output.empty()) {
+    WriteFileAtomically(args.free_output, LayoutText(free->tiles, describe + "; stitching-free"));
+  }
+
+  if (args.json) {
+    nlohmann::ordered_json out;
+    out["lens"] = args.fov_mm > 0.0 ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(args.lens);
+    out["fov_mm"] = options.fov_mm;
+    out["overlap"] = options.overlap;
+    out["step_mm"] = grid.step_mm;
+    out["region"] = {{"x0", region.x0}, {"y0", region.y0}, {"x1", region.x1}, {"y1", region.y1}};
+    out["stitched"] = {{"rows", grid.rows},
+                       {"cols", grid.cols},
+                       {"tiles", stitched.tiles},
+                       {"seconds", stitched.seconds},
+                       {"bytes", stitched.bytes}};
+    if (free) {
+      nlohmann::ordered_json covers = nlohmann::ordered_json::array();
+      for (const auto& c : free->covers) covers.push_back({{"id", c.feature_id}, {"tiles", c.tiles.size()}});
+      out["stitching_free"] = {{"tiles", free_cost->tiles},
+                               {"seconds", free_cost->seconds},
+                               {"bytes", free_cost->bytes},
+                               {"features", covers}};
+    } else {
+      out["stitching_free"] = nullptr;
+    }
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  fmt::print("field {} mm, overlap {:.4g} % (step {:.4f} mm), region x {}..{} mm, y {}..{} mm\n", options.fov_mm,
+             options.overlap * 100, grid.step_mm, region.x0, region.x1, region.y0, region.y1);
+  fmt::print("first tile at lowest X, highest Y: centre ({:.4f}, {:.4f}) mm; columns -X to +X, each +Y to -Y\n\n",
+             grid.tiles[0].centre_mm.x(), grid.tiles[0].centre_mm.y());
+  fmt::print("{:<16}{:>8}{:>12}{:>12}\n", "layout", "tiles", "scan time", "data");
+  fmt::print("{:<16}{:>8}{:>12}{:>12}   ({} x {})\n", "stitched", stitched.tiles, Duration(stitched.seconds),
+             Bytes(stitched.bytes), grid.cols, grid.rows);
+  if (free) {
+    fmt::print("{:<16}{:>8}{:>12}{:>12}   ({} features)\n", "stitching-free", free_cost->tiles,
+               Duration(free_cost->seconds), Bytes(free_cost->bytes), free->covers.size());
+  }
+  fmt::print("\ncosts assume {} s and {} x {} px of {} bytes per tile (--seconds-per-tile, --tile-pixels, "
+             "--bytes-per-pixel)\n",
+             options.seconds_per_tile, options.pixels_x, options.pixels_y, options.bytes_per_pixel);
+}
+
+struct SynthArgs {
+  std::string output;
+  int rows = 3, cols = 3, size = 256;
+  std::string overlap = "0.2";
+  double sigma_px = 1.5;
+  int bits = 16;
+  std::uint64_t seed = 1;
+};
+
+void RunSynthesize(const SynthArgs& args) {
+  artefacts::TileSynthesisOptions options;
+  options.rows = args.rows;
+  options.cols = args.cols;
+  options.width = options.height = args.size;
+  options.overlap = imaging::ParseOverlap(args.overlap, "--overlap");
+  options.position_sigma_px = args.sigma_px;
+  options.seed = args.seed;
+  try {
+    options.Check();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("fvm tiles synthesize: ") + e.what());
+  }
+  if (args.bits != 8 && args.bits != 16 && args.bits != 32) throw InputError("--bits: 8, 16 or 32 (float)");
+  if (args.bits == 8) options.level = 120.0, options.contrast = 25.0;  // inside 0..255 with the vignetting
+  const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(options);
+  std::filesystem::create_directories(args.output);
+  std::vector<imaging::TileLayoutEntry> entries;
+  std::string truth = "file,x,y\n";
+  for (size_t i = 0; i < tiles.images.size(); ++i) {
+    const auto& t = tiles.tiles[i];
+    const std::string file = TileFile(t.row, t.col);
+    imaging::WriteTileImage(std::filesystem::path(args.output) / file, tiles.images[i],
+                            args.bits == 8    ? imaging::TilePixelType::kUint8
+                            : args.bits == 16 ? imaging::TilePixelType::kUint16
+                                              : imaging::TilePixelType::kFloat);
+    entries.push_back({file, t.row, t.col, std::nullopt, 0});
+    truth += fmt::format("{},{:.6f},{:.6f}\n", file, tiles.truth_px[i].x(), tiles.truth_px[i].y());
+  }
+  WriteFileAtomically(std::filesystem::path(args.output) / "truth.csv", truth);
+  WriteFileAtomically(std::filesystem::path(args.output) / "layout.csv",
+                      fmt::format("# fvm tiles synthesize --seed {}: {} x {} tiles of {} px, overlap {}\n", args.seed,
+                                  args.rows, args.cols, args.size, options.overlap) +
+                          imaging::FormatTileLayout(entries));
+  fmt::print("{} tiles, layout.csv and truth.csv (true positions, px) written to {}\n", tiles.images.size(),
+             args.output);
+}
+
+}  // namespace
+
+void RegisterTiles(CLI::App& app) {
+  CLI::App* tiles = app.add_subcommand("tiles", "plan tile layouts with and without stitching");
+  tiles->require_subcommand(1);
+
+  auto plan_args = std::make_shared<PlanArgs>();
+  CLI::App* plan = tiles->add_subcommand("plan", "the stitched tile grid of a region and the stitching-free tiles "
+                                                 "that cover given features, with scan time and data volume");
+  plan->add_option("--lens", plan_args->lens, "lens: 2.5x (5.63 mm field), 5x (2.82), 10x (1.62), 20x (0.81), "
+                                              "50x (0.32), 100x (0.16)")
+      ->capture_default_str();
+  plan->add_option("--fov", plan_args->fov_mm, "field of view in mm, instead of the lens table's");
+  plan->add_option("--region", plan_args->region,
+                   "x0,y0,x1,y1 in mm (default: the bounding box of the features)");
+  plan->add_option("--overlap", plan_args->overlap, "overlap of neighbouring tiles: fraction (0.2) or percent (20)")
+      ->capture_default_str();
+  plan->add_option("--features", plan_args->features,
+                   "centre export (CSV id,x,y,z[,radius], mm) of the features a stitching-free scan must cover");
+  plan->add_option("--artefact", plan_args->artefact, "cover the calottes of a known artefact: grid6x6 or bar17, in "
+                                                      "its own frame");
+  plan->add_option("--radius", plan_args->radius_mm, "feature radius in mm (overrides the file's or artefact's)");
+  plan->add_option("--seconds-per-tile", plan_args->seconds_per_tile, "scan time per tile (s)")->capture_default_str();
+  plan->add_option("--tile-pixels", plan_args->tile_pixels, "pixels per tile, WxH")->capture_default_str();
+  plan->add_option("--bytes-per-pixel", plan_args->bytes_per_pixel, "stored bytes per pixel (height + colour)")
+      ->capture_default_str();
+  plan->add_option("-o,--layout", plan_args->output, "write the stitched layout CSV file,row,col,x,y");
+  plan->add_option("--free-layout", plan_args->free_output, "write the stitching-free layout CSV file,row,col,x,y");
+  plan->add_flag("--json", plan_args->json,
+                 "print one JSON document {\"fov_mm\", \"overlap\", \"step_mm\", \"region\", \"stitched\": {\"rows\", "
+                 "\"cols\", \"tiles\", \"seconds\", \"bytes\"}, \"stitching_free\": {\"tiles\", \"seconds\", \"bytes\", "
+                 "\"features\"} or null}");
+  plan->footer(
+      "Tiles are squares of the field of view on a lattice of step field x (1 - overlap), anchored at the region's "
+      "lowest X and highest Y, where the instrument starts; row 0 is the highest Y, column 0 the lowest X. The scan "
+      "takes column after column from -X to +X, each from +Y to -Y. A stitching-free scan takes only the grid tiles "
+      "that hold each feature whole.\n"
+      "Example (the published 6 x 6 grid, 225 vs 49 tiles): fvm tiles plan --lens 10x --artefact grid6x6 "
+      "--overlap 13");
+  plan->callback([plan_args] { RunPlan(*plan_args); });
+
+  auto synth_args = std::make_shared<SynthArgs>();
+  CLI::App* synth = tiles->add_subcommand(
+      "synthesize", "synthetic overlapping tiles with known positions, for trying fvm stitch");
+  synth->add_option("-o,--output", synth_args->output, "directory for the tiles, layout.csv and truth.csv")
+      ->required();
+  synth->add_option("--rows", synth_args->rows, "tile rows")->capture_default_str();
+  synth->add_option("--cols", synth_args->cols, "tile columns")->capture_default_str();
+  synth->add_option("--size", synth_args->size, "tile width and height (px)")->capture_default_str();
+  synth->add_option("--overlap", synth_args->overlap, "overlap: fraction (0.2) or percent (20)")->capture_default_str();
+  synth->add_option("--stage-error", synth_args->sigma_px, "standard deviation of the stage error per axis (px)")
+      ->capture_default_str();
+  synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer) or 32 (float)")->capture_default_str();
+  synth->add_option("--seed", synth_args->seed, "random seed")->capture_default_str();
+  synth->footer("Tiles are cut from one random texture with 30 % vignetting and 3 % noise; truth.csv holds the "
+                "true top-left corners, the first tile at 0,0.");
+  synth->callback([synth_args] { RunSynthesize(*synth_args); });
+}
+
+}  // namespace fvm::cli

@@ -1,0 +1,22 @@
+#pragma once
+// Tile images for registration: one grey channel of float, row-major (row 0 at the top = highest Y), read and
+// written through OpenImageIO (TIFF, PNG, EXR, ...; 8- and 16-bit integer and float pixels).
+
+#include <Eigen/Core>
+#include <filesystem>
+
+namespace fvm::imaging {
+
+using TileImage = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Integer pixels come back in their native counts (0..255, 0..65535), floats as stored: registration is blind to
+// gain and offset. Colour tiles are averaged to grey; an alpha channel is ignored. Throws InputError naming the
+// file when it is missing, empty, not an image, or a volume.
+TileImage ReadTileImage(const std::filesystem::path& path);
+
+enum class TilePixelType { kUint8, kUint16, kFloat };
+
+// Writes atomically; integer types round and clamp. Throws InputError naming the file when it cannot be written.
+void WriteTileImage(const std::filesystem::path& path, const TileImage& image, TilePixelType type);
+
+}  // namespace fvm::imaging

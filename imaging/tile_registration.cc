@@ -1,0 +1,268 @@
+#include "imaging/tile_registration.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <utility>
+
+namespace fvm::imaging {
+namespace {
+
+// Overlaps narrower than this give no usable correlation peak.
+constexpr int kMinOverlapPx = 8;
+
+cv::Mat View(const TileImage& image) {
+  // A read-only header on the Eigen buffer: OpenCV never writes through it.
+  return cv::Mat(static_cast<int>(image.rows()), static_cast<int>(image.cols()), CV_32F,
+                 const_cast<float*>(image.data()));
+}
+
+// Removes what does not belong to the scene: the mean, and with it slow illumination changes (vignetting,
+// a tilted part), which differ between two tiles at the same place.
+cv::Mat HighPass(const cv::Mat& crop, double sigma) {
+  cv::Mat out;
+  crop.convertTo(out, CV_32F);
+  if (sigma > 0.0) {
+    cv::Mat low;
+    cv::GaussianBlur(out, low, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
+    out -= low;
+  } else {
+    out -= cv::mean(out)[0];
+  }
+  return out;
+}
+
+// Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.
+std::pair<Eigen::Vector2d, double> PhaseShift(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat window;
+  cv::createHanningWindow(window, a.size(), CV_32F);
+  double response = 0.0;
+  // phaseCorrelate(a, b) returns t with b(x) = a(x - t).
+  const cv::Point2d t = cv::phaseCorrelate(a, b, window, &response);
+  return {Eigen::Vector2d(-t.x, -t.y), response};
+}
+
+// B's interior (a margin for the shift and the bicubic kernel) and A resampled at v + e over it.
+struct Aligned {
+  cv::Mat target, warped;
+};
+
+bool Align(const cv::Mat& a, const cv::Mat& b, const Eigen::Vector2d& e, Aligned& out) {
+  const int margin = 5 + static_cast<int>(std::ceil(e.cwiseAbs().maxCoeff()));
+  const cv::Rect inner(margin, margin, b.cols - 2 * margin, b.rows - 2 * margin);
+  if (inner.width < kMinOverlapPx || inner.height < kMinOverlapPx) return false;
+  cv::Mat map_x(inner.size(), CV_32F), map_y(inner.size(), CV_32F);
+  for (int y = 0; y < inner.height; ++y) {
+    float* mx = map_x.ptr<float>(y);
+    float* my = map_y.ptr<float>(y);
+    for (int x = 0; x < inner.width; ++x) {
+      mx[x] = static_cast<float>(x + inner.x + e.x());
+      my[x] = static_cast<float>(y + inner.y + e.y());
+    }
+  }
+  out.target = b(inner);
+  cv::remap(a, out.warped, map_x, map_y, cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  return true;
+}
+
+// Gauss-Newton on sum (B(v) - A(v + e))^2 over the interior of the crop, A resampled bicubically. Returns false
+// when it does not settle, and the phase-correlation estimate stands.
+bool RefineShift(const cv::Mat& a, const cv::Mat& b, Eigen::Vector2d& e) {
+  Eigen::Vector2d estimate = e;
+  Aligned aligned;
+  cv::Mat gx, gy;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    if (!Align(a, b, estimate, aligned)) return false;
+    // Central differences (Sobel's 1/8 scale undone) of the resampled A: the Jacobian of A(v + e) in e.
+    cv::Sobel(aligned.warped, gx, CV_32F, 1, 0, 3, 1.0 / 8.0);
+    cv::Sobel(aligned.warped, gy, CV_32F, 0, 1, 3, 1.0 / 8.0);
+    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d g = Eigen::Vector2d::Zero();
+    // The outermost ring has one-sided gradients; leave it out.
+    for (int y = 1; y + 1 < gx.rows; ++y) {
+      const float* px = gx.ptr<float>(y);
+      const float* py = gy.ptr<float>(y);
+      const float* w = aligned.warped.ptr<float>(y);
+      const float* t = aligned.target.ptr<float>(y);
+      for (int x = 1; x + 1 < gx.cols; ++x) {
+        const double r = t[x] - w[x];
+        h(0, 0) += px[x] * px[x];
+        h(0, 1) += px[x] * py[x];
+        h(1, 1) += py[x] * py[x];
+        g(0) += px[x] * r;
+        g(1) += py[x] * r;
+      }
+    }
+    h(1, 0) = h(0, 1);
+    if (!(h.determinant() > 1e-12 * h.trace() * h.trace())) return false;
+    const Eigen::Vector2d step = h.ldlt().solve(g);
+    estimate += step;
+    if ((estimate - e).norm() > 1.5) return false;  // wandered off the peak: not the same match
+    if (step.norm() < 1e-4) break;
+  }
+  e = estimate;
+  return true;
+}
+
+// Normalised cross-correlation of the aligned overlap: near 1 for the same scene under noise and uneven light,
+// near 0 for unrelated images. Unlike the phase-correlation peak it does not depend on the overlap's size.
+double AlignedCorrelation(const cv::Mat& a, const cv::Mat& b, const Eigen::Vector2d& e) {
+  Aligned aligned;
+  if (!Align(a, b, e, aligned)) return 0.0;
+  cv::Mat score;
+  cv::matchTemplate(aligned.target, aligned.warped, score, cv::TM_CCOEFF_NORMED);
+  return score.at<float>(0, 0);
+}
+
+}  // namespace
+
+void RegistrationOptions::Check() const {
+  if (!(min_quality >= -1.0 && min_quality <= 1.0)) throw std::invalid_argument("min_quality must be in [-1, 1]");
+  if (!(max_correction > 0.0 && max_correction <= 0.5)) throw std::invalid_argument("max_correction: (0, 0.5]");
+  if (!(highpass_sigma_px >= 0.0)) throw std::invalid_argument("highpass_sigma_px must be >= 0");
+}
+
+PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                              const RegistrationOptions& options) {
+  options.Check();
+  PairRegistration pair;
+  pair.nominal_px = nominal_px;
+  const int dx = static_cast<int>(std::lround(nominal_px.x()));
+  const int dy = static_cast<int>(std::lround(nominal_px.y()));
+  // The nominal overlap in a's frame.
+  const int x0 = std::max(0, dx), x1 = std::min(static_cast<int>(a.cols()), dx + static_cast<int>(b.cols()));
+  const int y0 = std::max(0, dy), y1 = std::min(static_cast<int>(a.rows()), dy + static_cast<int>(b.rows()));
+  if (x1 - x0 < kMinOverlapPx || y1 - y0 < kMinOverlapPx) return pair;
+  const cv::Rect in_a(x0, y0, x1 - x0, y1 - y0);
+  const cv::Rect in_b(x0 - dx, y0 - dy, in_a.width, in_a.height);
+
+  Eigen::Vector2d offset;
+  cv::Mat crop_a = HighPass(View(a)(in_a), options.highpass_sigma_px);
+  cv::Mat crop_b = HighPass(View(b)(in_b), options.highpass_sigma_px);
+  if (options.crop_to_overlap) {
+    const auto [e, response] = PhaseShift(crop_a, crop_b);
+    pair.response = response;
+    offset = Eigen::Vector2d(dx, dy) + e;
+  } else {
+    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
+    // representative nearest the nominal offset.
+    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
+                          static_cast<int>(std::min(a.rows(), b.rows())));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px),
+                                          HighPass(View(b)(common), options.highpass_sigma_px));
+    pair.response = response;
+    offset = e;
+    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
+    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+  }
+  const double limit = options.max_correction * std::min(in_a.width, in_a.height);
+  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) return pair;
+  Eigen::Vector2d e = offset - Eigen::Vector2d(dx, dy);
+  if (options.refine && RefineShift(crop_a, crop_b, e)) offset = Eigen::Vector2d(dx, dy) + e;
+  pair.quality = AlignedCorrelation(crop_a, crop_b, e);
+  pair.offset_px = offset;
+  pair.accepted = pair.quality >= options.min_quality;
+  return pair;
+}
+
+TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
+                                 const std::vector<PairRegistration>& pairs) {
+  const int n = static_cast<int>(nominal_px.size());
+  // Groups of tiles joined by accepted pairs (union-find); each group's root is its earliest tile.
+  std::vector<int> parent(static_cast<size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int i) {
+    while (parent[static_cast<size_t>(i)] != i) i = parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
+    return i;
+  };
+  for (const auto& pair : pairs) {
+    if (!pair.accepted) continue;
+    const int ra = find(pair.a), rb = find(pair.b);
+    if (ra != rb) parent[static_cast<size_t>(std::max(ra, rb))] = std::min(ra, rb);
+  }
+  TilePositions out;
+  out.positions_px = nominal_px;
+  out.registered.assign(static_cast<size_t>(n), false);
+  out.anchor.resize(static_cast<size_t>(n));
+  // Unknowns: every tile that is not its group's anchor.
+  std::vector<int> unknown(static_cast<size_t>(n), -1);
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    out.anchor[static_cast<size_t>(i)] = find(i);
+    if (find(i) != i) unknown[static_cast<size_t>(i)] = m++;
+  }
+  for (int i = 0; i < n; ++i) {
+    // A tile is registered when its position comes from images: it is linked to its group, or it anchors the
+    // first group (whose position is where the measurement's coordinates start, by definition).
+    out.registered[static_cast<size_t>(i)] = unknown[static_cast<size_t>(i)] >= 0 || i == 0;
+  }
+  if (m == 0) return out;
+  // Normal equations of sum w |p_b - p_a - o|^2: a weighted graph Laplacian, x and y separate with one matrix.
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(m, 2);
+  for (const auto& pair : pairs) {
+    if (!pair.accepted) continue;
+    const double w = std::max(pair.quality, 1e-6);
+    const int ua = unknown[static_cast<size_t>(pair.a)], ub = unknown[static_cast<size_t>(pair.b)];
+    const Eigen::RowVector2d o = pair.offset_px.transpose();
+    if (ua >= 0) {
+      triplets.emplace_back(ua, ua, w);
+      rhs.row(ua) -= w * o;
+    } else {
+      rhs.row(ub) += w * nominal_px[static_cast<size_t>(pair.a)].transpose();
+    }
+    if (ub >= 0) {
+      triplets.emplace_back(ub, ub, w);
+      rhs.row(ub) += w * o;
+    } else {
+      rhs.row(ua) += w * nominal_px[static_cast<size_t>(pair.b)].transpose();
+    }
+    if (ua >= 0 && ub >= 0) {
+      triplets.emplace_back(ua, ub, -w);
+      triplets.emplace_back(ub, ua, -w);
+    }
+  }
+  Eigen::SparseMatrix<double> normal(m, m);
+  normal.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("tile positions: singular normal equations");
+  const Eigen::MatrixX2d solution = solver.solve(rhs);
+  for (int i = 0; i < n; ++i) {
+    const int u = unknown[static_cast<size_t>(i)];
+    if (u >= 0) out.positions_px[static_cast<size_t>(i)] = solution.row(u).transpose();
+  }
+  return out;
+}
+
+RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
+                                    const RegistrationOptions& options) {
+  if (images.size() != tiles.size()) throw std::invalid_argument("RegisterTileGrid: one image per tile");
+  std::map<std::pair<int, int>, int> at;
+  for (size_t i = 0; i < tiles.size(); ++i) at[{tiles[i].row, tiles[i].col}] = static_cast<int>(i);
+  RegistrationResult result;
+  std::vector<Eigen::Vector2d> nominal;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    nominal.push_back(tiles[i].nominal_px);
+    for (const auto& [dr, dc] : {std::pair{0, 1}, std::pair{1, 0}}) {
+      const auto it = at.find({tiles[i].row + dr, tiles[i].col + dc});
+      if (it == at.end()) continue;
+      const size_t j = static_cast<size_t>(it->second);
+      PairRegistration pair = RegisterPair(images[i], images[j], tiles[j].nominal_px - tiles[i].nominal_px, options);
+      pair.a = static_cast<int>(i);
+      pair.b = static_cast<int>(j);
+      result.pairs.push_back(pair);
+    }
+  }
+  result.positions = SolveTilePositions(nominal, result.pairs);
+  return result;
+}
+
+}  // namespace fvm::imaging

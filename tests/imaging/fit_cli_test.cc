@@ -1,0 +1,115 @@
+// fvm fit as a user runs it: on an X3P export of a rendered 6 x 6 grid with a recorded truth, and on bad input.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "artefacts/artefact.h"
+#include "artefacts/calotte_surface.h"
+#include "artefacts/centre_export.h"
+#include "imaging/x3p.h"
+#include "tests/artefacts/test_support.h"
+
+namespace fvm {
+namespace {
+
+struct FvmRun {
+  int status = 0;
+  std::string out, err;
+};
+
+FvmRun RunFvm(const testing::TempDir& dir, const std::string& arguments) {
+  const std::string err_file = (dir / "stderr.txt").string();
+  const std::string command = std::string(FVM_EXE) + " " + arguments + " 2>" + err_file;
+  FvmRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  char buffer[4096];
+  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) run.out.append(buffer, n);
+  const int status = pclose(pipe);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.err = testing::ReadText(err_file);
+  return run;
+}
+
+TEST(FitCli, Grid6x6X3pToCentreExport) {
+  testing::TempDir dir;
+  artefacts::CalotteSurfaceOptions o;
+  o.dx_mm = o.dy_mm = 0.02;  // 440 heights per calotte: a centre bound of 13 nm in z at 0.1 um noise
+  o.margin_mm = 0.5;
+  o.rotation_rad = -0.5 * M_PI / 180;
+  o.offset_mm = Eigen::Vector2d(-20.0, 35.0);
+  o.slope_y = 0.004;
+  o.noise_sigma_mm = 1e-4;
+  o.missing_fraction = 0.03;
+  o.seed = 2;
+  const artefacts::CalotteSurface surface = artefacts::RenderCalotteSurface(artefacts::CalotteGrid6x6(), o);
+  const auto map_path = dir / "grid.x3p";
+  imaging::WriteX3p(map_path, surface.map);
+  const auto csv = dir / "grid.csv";
+
+  const FvmRun run = RunFvm(dir, "fit " + map_path.string() + " --artefact grid6x6 -o " + csv.string() + " --json");
+  ASSERT_EQ(run.status, 0) << run.err;
+  const nlohmann::json doc = nlohmann::json::parse(run.out);
+  ASSERT_EQ(doc["calottes"].size(), 36u);
+  for (std::size_t i = 0; i < 36; ++i) {
+    const auto& c = doc["calottes"][i];
+    EXPECT_EQ(c["id"].get<int>(), static_cast<int>(i) + 1);
+    const Eigen::Vector3d found(c["x"].get<double>(), c["y"].get<double>(), c["z"].get<double>());
+    EXPECT_LT((found - surface.truth[i].centre).norm(), 1e-4) << "calotte " << i + 1;
+    EXPECT_NEAR(c["radius"].get<double>(), 0.25, 2e-4);
+    EXPECT_NEAR(c["form_rms_um"].get<double>(), 0.08, 0.03);  // 0.1 um height noise, cos-weighted
+    EXPECT_GT(c["points"].get<int>(), 300);
+  }
+  EXPECT_NEAR(doc["layout"]["rotation_deg"].get<double>(), -0.5, 1e-3);
+
+  const artefacts::CentreExport export_ = artefacts::ReadCentreExport(csv);
+  ASSERT_EQ(export_.centres.size(), 36u);
+  EXPECT_THAT(export_.comments.at(0), ::testing::HasSubstr("fvm fit"));
+  for (const auto& c : export_.centres) {
+    EXPECT_LT((c.position - surface.truth[static_cast<std::size_t>(c.id - 1)].centre).norm(), 1e-4 + 1e-6);
+    ASSERT_TRUE(c.radius_mm && c.form_rms_mm);
+  }
+
+  // The table names every calotte.
+  const FvmRun table = RunFvm(dir, "fit " + map_path.string() + " --artefact grid6x6");
+  ASSERT_EQ(table.status, 0) << table.err;
+  EXPECT_THAT(table.out, ::testing::HasSubstr("grid6x6 layout: turned -0.500 deg"));
+  EXPECT_THAT(table.out, ::testing::HasSubstr("\n  36  "));
+}
+
+TEST(FitCli, BadInputFailsWithoutOutput) {
+  testing::TempDir dir;
+  imaging::HeightMap empty;
+  empty.size_x = 50;
+  empty.size_y = 40;
+  empty.dx_mm = empty.dy_mm = 0.01;
+  empty.z_mm.assign(2000, NAN);
+  const auto nan_map = dir / "nan.x3p";
+  imaging::WriteX3p(nan_map, empty);
+  const auto csv = dir / "out.csv";
+  FvmRun run = RunFvm(dir, "fit " + nan_map.string() + " -o " + csv.string());
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("no valid point"));
+  EXPECT_FALSE(std::filesystem::exists(csv));
+
+  imaging::HeightMap flat = empty;
+  flat.z_mm.assign(2000, 0.0f);
+  const auto flat_map = dir / "flat.x3p";
+  imaging::WriteX3p(flat_map, flat);
+  run = RunFvm(dir, "fit " + flat_map.string() + " -o " + csv.string());
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("no calotte found"));
+  EXPECT_FALSE(std::filesystem::exists(csv));
+
+  run = RunFvm(dir, "fit " + flat_map.string() + " --artefact plate");
+  EXPECT_NE(run.status, 0);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("grid6x6 or bar17"));
+}
+
+}  // namespace
+}  // namespace fvm

@@ -1,0 +1,102 @@
+# fvm info as a user runs it. The X3P is made here from its parts (main.xml with an inline DataList, its MD5 in
+# md5checksum.hex, zipped by CMake), so the reader is checked against a file fvm did not write. Expects FVM, WORK
+# and SUPPORT (tests/fvm/cli_support.cmake).
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK}/x3p)
+include(${SUPPORT})
+
+function(fails_naming what)  # non-zero exit, and stderr names `what`
+  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(code EQUAL 0 OR NOT err MATCHES "${what}")
+    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}; expected a failure naming '${what}', got:\n${err}")
+  endif()
+endfunction()
+
+# 1. A 3 x 2 X3P surface: 2 um x 3 um pixels, heights in metres, one invalid (empty) point.
+set(xml [=[<?xml version="1.0" encoding="UTF-8"?>
+<p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2">
+  <Record1><Revision>ISO5436 - 2000</Revision><FeatureType>SUR</FeatureType>
+    <Axes>
+      <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>2e-06</Increment><Offset>0</Offset></CX>
+      <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>3e-06</Increment><Offset>0</Offset></CY>
+      <CZ><AxisType>A</AxisType><DataType>D</DataType><Increment>1</Increment><Offset>0</Offset></CZ>
+    </Axes>
+  </Record1>
+  <Record3>
+    <MatrixDimension><SizeX>3</SizeX><SizeY>2</SizeY><SizeZ>1</SizeZ></MatrixDimension>
+    <DataList>
+      <Datum>1e-06</Datum><Datum/><Datum>-2.5e-06</Datum><Datum>0</Datum><Datum>4e-05</Datum><Datum>1e-05</Datum>
+    </DataList>
+  </Record3>
+  <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>
+</p:ISO5436_2>
+]=])
+file(WRITE ${WORK}/x3p/main.xml "${xml}")
+string(MD5 digest "${xml}")
+file(WRITE ${WORK}/x3p/md5checksum.hex "${digest} *main.xml\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/surface.x3p --format=zip main.xml md5checksum.hex
+                WORKING_DIRECTORY ${WORK}/x3p RESULT_VARIABLE code)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "cannot zip the test X3P")
+endif()
+
+run(0 info ${WORK}/surface.x3p --json)
+string(JSON size_x GET "${OUT}" size_x)
+string(JSON size_y GET "${OUT}" size_y)
+string(JSON dx GET "${OUT}" dx_mm)
+string(JSON dy GET "${OUT}" dy_mm)
+string(JSON valid GET "${OUT}" valid_points)
+string(JSON z_min GET "${OUT}" z_min_mm)
+string(JSON z_max GET "${OUT}" z_max_mm)
+string(JSON format GET "${OUT}" format)
+if(NOT size_x EQUAL 3 OR NOT size_y EQUAL 2 OR NOT valid EQUAL 5 OR NOT format STREQUAL "x3p")
+  message(FATAL_ERROR "info --json on the X3P: ${OUT}")
+endif()
+if(dx LESS 0.0019999 OR dx GREATER 0.0020001 OR dy LESS 0.0029999 OR dy GREATER 0.0030001)
+  message(FATAL_ERROR "info --json: pixel ${dx} x ${dy} mm, expected 0.002 x 0.003")
+endif()
+# CMake prints the numbers with 17 digits: compare within a part in a million.
+if(z_min LESS -0.0025000025 OR z_min GREATER -0.0024999975 OR z_max LESS 0.03999996 OR z_max GREATER 0.04000004)
+  message(FATAL_ERROR "info --json: z range ${z_min} .. ${z_max} mm, expected -0.0025 .. 0.04")
+endif()
+run(0 info ${WORK}/surface.x3p)
+if(NOT OUT MATCHES "valid points  5 of 6")
+  message(FATAL_ERROR "info text output:\n${OUT}")
+endif()
+
+# An all-invalid surface is a valid file: no valid points, and no height range (null).
+string(REGEX REPLACE "<Datum>[^<]*</Datum>" "<Datum/>" nothing "${xml}")
+file(MAKE_DIRECTORY ${WORK}/nan)
+file(WRITE ${WORK}/nan/main.xml "${nothing}")
+string(MD5 digest "${nothing}")
+file(WRITE ${WORK}/nan/md5checksum.hex "${digest} *main.xml\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/nan.x3p --format=zip main.xml md5checksum.hex
+                WORKING_DIRECTORY ${WORK}/nan)
+run(0 info ${WORK}/nan.x3p --json)
+string(JSON valid GET "${OUT}" valid_points)
+string(JSON z_type TYPE "${OUT}" z_min_mm)
+if(NOT valid EQUAL 0 OR NOT z_type STREQUAL "NULL")
+  message(FATAL_ERROR "info --json on an all-invalid X3P: ${OUT}")
+endif()
+
+# 2. Three points of XYZ text: an unorganised cloud, no grid (null pixel size).
+file(WRITE ${WORK}/three.xyz "# x y z in mm\n1 2 3\n4 5 6\n7 8 -9\n")
+run(0 info ${WORK}/three.xyz --json)
+string(JSON size_x GET "${OUT}" size_x)
+string(JSON dx_type TYPE "${OUT}" dx_mm)
+string(JSON z_min GET "${OUT}" z_min_mm)
+string(JSON kind GET "${OUT}" kind)
+if(NOT size_x EQUAL 3 OR NOT dx_type STREQUAL "NULL" OR NOT z_min EQUAL -9 OR NOT kind STREQUAL "point_cloud")
+  message(FATAL_ERROR "info --json on three points: ${OUT}")
+endif()
+
+# 3. Bad input: the file is named, the exit code is non-zero.
+file(READ ${WORK}/x3p/main.xml edited)
+string(REPLACE "<Datum>0</Datum>" "<Datum>7</Datum>" edited "${edited}")
+file(WRITE ${WORK}/x3p/main.xml "${edited}")
+execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/edited.x3p --format=zip main.xml md5checksum.hex
+                WORKING_DIRECTORY ${WORK}/x3p)
+fails_naming("edited.x3p.*md5checksum.hex" info ${WORK}/edited.x3p --json)
+file(WRITE ${WORK}/empty.x3p "")
+fails_naming("empty.x3p" info ${WORK}/empty.x3p)
+fails_naming("missing.al3d: no such file" info ${WORK}/missing.al3d)
