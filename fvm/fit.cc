@@ -17,6 +17,7 @@
 #include "artefacts/centre_export.h"
 #include "artefacts/input_error.h"
 #include "fvm/commands.h"
+#include "fvm/surface_read_args.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/calotte_numbering.h"
 #include "imaging/height_map.h"
@@ -37,24 +38,11 @@ struct FitArgs {
   double max_diameter_mm = 0.0;
   double min_depth_mm = 0.0;
   std::string residual = "height";
-  // Reading, as fvm info.
-  double pixel_size_mm = 0.0;
-  double pixel_size_y_mm = 0.0;
-  double z_scale_mm = 0.0;
-  double z_offset_mm = 0.0;
-  std::optional<double> invalid;
-  std::string unit = "mm";
+  SurfaceReadArgs read;  // as fvm info
 };
 
 imaging::HeightMap ReadMap(const FitArgs& args) {
-  imaging::SurfaceReadOptions options;
-  options.image.dx_mm = args.pixel_size_mm;
-  options.image.dy_mm = args.pixel_size_y_mm;
-  options.image.z_scale_mm = args.z_scale_mm;
-  options.image.z_offset_mm = args.z_offset_mm;
-  options.image.invalid_value = args.invalid;
-  options.cloud.mm_per_unit = args.unit == "m" ? 1000.0 : args.unit == "um" ? 0.001 : 1.0;
-  imaging::Surface surface = imaging::ReadSurface(args.file, options);
+  imaging::Surface surface = imaging::ReadSurface(args.file, args.read.ToOptions());
   if (surface.height_map) return std::move(*surface.height_map);
   if (!surface.cloud->IsOrganised()) {
     throw InputError(
@@ -255,18 +243,7 @@ void RegisterFit(CLI::App& app) {
                   "orthogonal: plain distance to the sphere, as instrument software fits")
       ->check(CLI::IsMember({"height", "orthogonal"}))
       ->default_str("height");
-  sub->add_option("--pixel-size,--dx-mm", args->pixel_size_mm,
-                  "images: pixel size in mm (overrides the file's; required when the image does not say it)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--pixel-size-y,--dy-mm", args->pixel_size_y_mm, "images: pixel size along y in mm (default: as x)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--z-scale", args->z_scale_mm, "images: mm per grey level (integer images)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--z-offset", args->z_offset_mm, "images: mm added to every height (with --z-scale)");
-  sub->add_option("--invalid", args->invalid, "images: the raw pixel value that marks a missing point, e.g. 0");
-  sub->add_option("--unit", args->unit, "point clouds: the unit of the coordinates in the file")
-      ->check(CLI::IsMember({"mm", "um", "m"}))
-      ->default_str("mm");
+  args->read.AddOptions(*sub);
   sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv");
   sub->callback([args] { RunFit(*args); });
 }

@@ -12,6 +12,7 @@
 
 #include "artefacts/input_error.h"
 #include "fvm/commands.h"
+#include "fvm/surface_read_args.h"
 #include "imaging/height_map.h"
 #include "imaging/number_text.h"
 #include "imaging/point_cloud.h"
@@ -23,12 +24,7 @@ namespace {
 struct InfoArgs {
   std::string file;
   bool json = false;
-  double pixel_size_mm = 0.0;
-  double pixel_size_y_mm = 0.0;
-  double z_scale_mm = 0.0;
-  double z_offset_mm = 0.0;
-  std::optional<double> invalid;
-  std::string unit = "mm";
+  SurfaceReadArgs read;
 };
 
 // What one file holds, in the terms of the JSON contract.
@@ -128,14 +124,7 @@ void PrintText(const std::string& file, const std::string& format, const Summary
 }
 
 void RunInfo(const InfoArgs& args) {
-  imaging::SurfaceReadOptions options;
-  options.image.dx_mm = args.pixel_size_mm;
-  options.image.dy_mm = args.pixel_size_y_mm;
-  options.image.z_scale_mm = args.z_scale_mm;
-  options.image.z_offset_mm = args.z_offset_mm;
-  options.image.invalid_value = args.invalid;
-  options.cloud.mm_per_unit = args.unit == "m" ? 1000.0 : args.unit == "um" ? 0.001 : 1.0;
-  const imaging::Surface surface = imaging::ReadSurface(args.file, options);
+  const imaging::Surface surface = imaging::ReadSurface(args.file, args.read.ToOptions());
   const std::string format = imaging::FormatName(surface.format);
   const Summary s = surface.height_map ? SummariseMap(*surface.height_map) : SummariseCloud(*surface.cloud, args.file);
 
@@ -180,19 +169,7 @@ void RegisterInfo(CLI::App& app) {
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"size_x\", \"size_y\", \"dx_mm\", \"dy_mm\", \"valid_points\", "
                 "\"z_min_mm\", \"z_max_mm\", ...}; values the file does not have are null");
-  sub->add_option("--pixel-size", args->pixel_size_mm,
-                  "images: pixel size in mm (overrides the file's; required when the image does not say it)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--pixel-size-y", args->pixel_size_y_mm, "images: pixel size along y in mm (default: as x)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--z-scale", args->z_scale_mm,
-                  "images: mm per grey level (required for integer images that do not say it)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--z-offset", args->z_offset_mm, "images: mm added to every height (with --z-scale)");
-  sub->add_option("--invalid", args->invalid, "images: the raw pixel value that marks a missing point, e.g. 0");
-  sub->add_option("--unit", args->unit, "point clouds: the unit of the coordinates in the file")
-      ->check(CLI::IsMember({"mm", "um", "m"}))
-      ->default_str("mm");
+  args->read.AddOptions(*sub);
   sub->footer("Example: fvm info scan.x3p --json");
   sub->callback([args] { RunInfo(*args); });
 }

@@ -5,13 +5,6 @@ file(MAKE_DIRECTORY ${WORK})
 
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
-function(fails_naming what)  # non-zero exit, and stderr names `what`
-  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(code EQUAL 0 OR NOT err MATCHES "${what}")
-    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}; expected a failure naming '${what}', got:\n${err}")
-  endif()
-endfunction()
-
 # 1. Calibrate: the JSON holds every coefficient of the 27 model with its uncertainty, and the sample's first-order
 #    truth is followed to the noise (0.5 um per coordinate in both measurements leaves ~1.2 um per centre).
 run(0 calibrate ${SAMPLES}/bar17 --model 27 -o ${WORK}/cal.json --json)

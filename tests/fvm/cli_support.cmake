@@ -7,3 +7,11 @@ function(run expected_code)
   set(OUT "${out}" PARENT_SCOPE)
   set(ERR "${err}" PARENT_SCOPE)
 endfunction()
+
+# Expect a failure: non-zero exit, and stderr names `what`.
+function(fails_naming what)
+  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(code EQUAL 0 OR NOT err MATCHES "${what}")
+    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}; expected a failure naming '${what}', got:\n${err}")
+  endif()
+endfunction()

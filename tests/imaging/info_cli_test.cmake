@@ -5,13 +5,6 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK}/x3p)
 include(${SUPPORT})
 
-function(fails_naming what)  # non-zero exit, and stderr names `what`
-  execute_process(COMMAND ${FVM} ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(code EQUAL 0 OR NOT err MATCHES "${what}")
-    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}; expected a failure naming '${what}', got:\n${err}")
-  endif()
-endfunction()
-
 # 1. A 3 x 2 X3P surface: 2 um x 3 um pixels, heights in metres, one invalid (empty) point.
 set(xml [=[<?xml version="1.0" encoding="UTF-8"?>
 <p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2">
