@@ -46,8 +46,11 @@ SynthesizedTiles SynthesizeTiles(const TileSynthesisOptions& options) {
       if (!out.tiles.empty()) truth += options.position_sigma_px * Eigen::Vector2d(normal(random), normal(random));
       out.tiles.push_back({row, col, nominal});
       out.truth_px.push_back(truth);
-      // sin(a + b) = sin a cos b + cos a sin b: each wave is a rank-2 outer product of a column and a row factor.
-      Eigen::MatrixXd texture = Eigen::MatrixXd::Zero(options.height, options.width);
+      // sin(a + b) = sin a cos b + cos a sin b: each wave is a rank-2 outer product of a column and a row factor,
+      // so a tile costs two multiply-adds per pixel and wave, and sin/cos only per row and column.
+      // Row-major so that each row update below is one contiguous, vectorised pass.
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> texture =
+          Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>::Zero(options.height, options.width);
       Eigen::VectorXd sy(options.height), cy(options.height);
       Eigen::RowVectorXd sx(options.width), cx(options.width);
       for (const Wave& w : waves) {
@@ -61,7 +64,10 @@ SynthesizedTiles SynthesizeTiles(const TileSynthesisOptions& options) {
           sx(x) = std::sin(a);
           cx(x) = std::cos(a);
         }
-        texture.noalias() += (scale * w.amplitude) * (cy * sx + sy * cx);
+        const double amplitude = scale * w.amplitude;
+        for (int y = 0; y < options.height; ++y) {
+          texture.row(y) += (amplitude * cy(y)) * sx + (amplitude * sy(y)) * cx;
+        }
       }
       imaging::TileImage image(options.height, options.width);
       for (int y = 0; y < options.height; ++y) {

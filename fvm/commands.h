@@ -20,6 +20,8 @@ void RegisterDiagnose(CLI::App& app);
 void RegisterInfo(CLI::App& app);
 // fvm fit FILE [--artefact grid6x6|bar17] [-o centres.csv] [--json] (fvm/fit.cc).
 void RegisterFit(CLI::App& app);
+// fvm focus STACK -o height.x3p [--measure laplacian|tenengrad|variance] [--json] (fvm/focus.cc).
+void RegisterFocus(CLI::App& app);
 // fvm tiles plan|synthesize|simulate ... (fvm/tiles.cc).
 void RegisterTiles(CLI::App& app);
 // fvm stitch --layout L.csv --overlap PCT -o P.csv [--pixel-mm S] (fvm/stitch.cc).

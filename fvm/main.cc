@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterSimulate(app);
   fvm::cli::RegisterInfo(app);
   fvm::cli::RegisterFit(app);
-  AddNotBuilt(app, "focus", "height map from a focus stack", 4);
+  fvm::cli::RegisterFocus(app);
   fvm::cli::RegisterTiles(app);
   fvm::cli::RegisterStitch(app);
   AddNotBuilt(app, "verify", "machine-tool volumetric verification with a laser tracker", 0);

@@ -75,7 +75,7 @@ bool Align(const cv::Mat& a, const cv::Mat& b, const Eigen::Vector2d& e, Aligned
 
 // Gauss-Newton on sum (B(v) - A(v + e))^2 over the interior of the crop, A resampled bicubically. Returns false
 // when it does not settle, and the phase-correlation estimate stands.
-bool RefineShift(const cv::Mat& a, const cv::Mat& b, Eigen::Vector2d& e) {
+bool RefineShift(const cv::Mat& a, const cv::Mat& b, double tolerance_px, Eigen::Vector2d& e) {
   Eigen::Vector2d estimate = e;
   Aligned aligned;
   cv::Mat gx, gy;
@@ -105,8 +105,8 @@ bool RefineShift(const cv::Mat& a, const cv::Mat& b, Eigen::Vector2d& e) {
     if (!(h.determinant() > 1e-12 * h.trace() * h.trace())) return false;
     const Eigen::Vector2d step = h.ldlt().solve(g);
     estimate += step;
-    if ((estimate - e).norm() > 1.5) return false;  // wandered off the peak: not the same match
-    if (step.norm() < 1e-4) break;
+    if ((estimate - e).norm() > 3.0) return false;  // wandered off the peak: not the same match
+    if (step.norm() < tolerance_px) break;
   }
   e = estimate;
   return true;
@@ -166,7 +166,19 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   const double limit = options.max_correction * std::min(in_a.width, in_a.height);
   if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) return pair;
   Eigen::Vector2d e = offset - Eigen::Vector2d(dx, dy);
-  if (options.refine && RefineShift(crop_a, crop_b, e)) offset = Eigen::Vector2d(dx, dy) + e;
+  if (options.refine) {
+    // Coarse to fine: the phase-correlation peak can be a pixel off, outside the basin of Gauss-Newton on fine
+    // texture (a quarter period); blurred crops widen the basin, then the full-resolution pass sets the sub-pixel.
+    cv::Mat blur_a, blur_b;
+    cv::GaussianBlur(crop_a, blur_a, cv::Size(0, 0), 2.5);
+    cv::GaussianBlur(crop_b, blur_b, cv::Size(0, 0), 2.5);
+    Eigen::Vector2d refined = e;
+    // The coarse pass only needs to land in the fine pass' basin; the fine one stops well below the noise.
+    if (RefineShift(blur_a, blur_b, 0.05, refined) && RefineShift(crop_a, crop_b, 2e-3, refined)) {
+      e = refined;
+      offset = Eigen::Vector2d(dx, dy) + e;
+    }
+  }
   pair.quality = AlignedCorrelation(crop_a, crop_b, e);
   pair.offset_px = offset;
   pair.accepted = pair.quality >= options.min_quality;

@@ -3,33 +3,6 @@
 
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
-# CMake has integer arithmetic only: a plain decimal string becomes an integer in units of 10^-digits. Digits
-# beyond are cut, not rounded: string(JSON) re-prints numbers with 17 significant digits (-14.457000000000001).
-function(scaled value digits result)
-  if(NOT value MATCHES "^(-?)([0-9]+)(\\.([0-9]*))?$")
-    message(FATAL_ERROR "'${value}' is not a plain decimal number")
-  endif()
-  set(sign "${CMAKE_MATCH_1}")
-  set(fraction "${CMAKE_MATCH_4}0000000000")
-  string(SUBSTRING "${fraction}" 0 ${digits} fraction)
-  string(REGEX REPLACE "^0+([0-9])" "\\1" digits_only "${CMAKE_MATCH_2}${fraction}")  # no octal surprises
-  set(${result} "${sign}${digits_only}" PARENT_SCOPE)
-endfunction()
-
-# |actual - expected| <= tolerance, all given as decimal strings and compared at `digits` decimals.
-function(expect_near what actual expected tolerance digits)
-  scaled("${actual}" ${digits} a)
-  scaled("${expected}" ${digits} e)
-  scaled("${tolerance}" ${digits} t)
-  math(EXPR deviation "${a} - (${e})")
-  if(deviation LESS 0)
-    math(EXPR deviation "-(${deviation})")
-  endif()
-  if(deviation GREATER t)
-    message(FATAL_ERROR "${what} = ${actual}, expected ${expected} +- ${tolerance}")
-  endif()
-endfunction()
-
 # The one pair of `fvm diff ... --json`: sets A, B, REF_MM, TEST_MM, DIFF_UM.
 function(diff_pair)
   run(0 diff ${ARGN} --json)

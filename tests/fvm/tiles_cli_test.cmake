@@ -4,34 +4,6 @@
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
 # A plain decimal string as an integer in units of 10^-digits (CMake has integer arithmetic only).
-function(scaled value digits result)
-  if(NOT value MATCHES "^(-?)([0-9]+)(\\.([0-9]*))?$")
-    message(FATAL_ERROR "'${value}' is not a plain decimal number")
-  endif()
-  set(sign "${CMAKE_MATCH_1}")  # before the next regex overwrites CMAKE_MATCH_*
-  set(fraction "${CMAKE_MATCH_4}0000000000")
-  string(SUBSTRING "${fraction}" 0 ${digits} fraction)
-  # Leading zeros off (REGEX REPLACE would re-anchor '^' after each match: 05068 -> 568).
-  string(REGEX MATCH "[1-9][0-9]*$" digits_only "${CMAKE_MATCH_2}${fraction}")
-  if(digits_only STREQUAL "")
-    set(digits_only 0)
-  endif()
-  set(${result} "${sign}${digits_only}" PARENT_SCOPE)
-endfunction()
-
-function(expect_near what actual expected tolerance)
-  scaled("${actual}" 4 a)
-  scaled("${expected}" 4 e)
-  scaled("${tolerance}" 4 t)
-  math(EXPR deviation "${a} - (${e})")
-  if(deviation LESS 0)
-    math(EXPR deviation "-(${deviation})")
-  endif()
-  if(deviation GREATER t)
-    message(FATAL_ERROR "${what} = ${actual}, expected ${expected} +- ${tolerance}")
-  endif()
-endfunction()
-
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 

@@ -1,0 +1,33 @@
+#pragma once
+// The images of a focus stack: one grey channel, row-major, 8 or 16 bit or float, as cameras and image files
+// hold them. Kept in their own type so that a 1024 x 1024 x 100 stack of 8-bit images stays 100 MB, not 400.
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <variant>
+#include <vector>
+
+namespace fvm::imaging {
+
+// A grey image that the caller owns; focus variation only reads it.
+struct StackImageView {
+  int width = 0;
+  int height = 0;
+  std::variant<std::span<const std::uint8_t>, std::span<const std::uint16_t>, std::span<const float>> pixels;
+};
+
+// A grey image that owns its pixels.
+struct StackImage {
+  int width = 0;
+  int height = 0;
+  std::variant<std::vector<std::uint8_t>, std::vector<std::uint16_t>, std::vector<float>> pixels;
+
+  StackImageView View() const {
+    return {width, height,
+            std::visit([](const auto& v) -> decltype(StackImageView::pixels) { return std::span(v.data(), v.size()); },
+                       pixels)};
+  }
+};
+
+}  // namespace fvm::imaging

@@ -1,0 +1,85 @@
+#pragma once
+// Focus variation: a height map from a stack of images taken at known z positions. Each pixel's sharpness (the
+// focus measure, over a small window) peaks in the image where the surface under it is in focus; the peak's z,
+// interpolated between the images, is the height. The peak over the pixel's mean measure tells how much to
+// trust it (the quality): texture-free or saturated spots have no clear peak and come out invalid.
+//
+// The stack is consumed one image at a time (FocusAccumulator), so that memory stays a few images whatever the
+// stack's depth; ReconstructFocusStack does it for a stack held in memory.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "imaging/focus_stack.h"
+#include "imaging/height_map.h"
+
+namespace fvm::imaging {
+
+enum class FocusMeasure {
+  kModifiedLaplacian,  // sum-modified-Laplacian (Nayar): |2I - I_left - I_right| + |2I - I_up - I_down|
+  kTenengrad,          // Sobel gradient energy Gx^2 + Gy^2
+  kVariance,           // grey-level variance
+};
+
+// "laplacian", "tenengrad", "variance".
+std::string FocusMeasureName(FocusMeasure measure);
+std::optional<FocusMeasure> ParseFocusMeasure(std::string_view name);
+
+enum class PeakFit {
+  kGaussian,   // a parabola through the log of the measure (exact for a Gaussian focus curve)
+  kParabolic,  // a parabola through the measure itself
+};
+
+struct FocusVariationOptions {
+  FocusMeasure measure = FocusMeasure::kModifiedLaplacian;
+  int window = 5;  // odd, 3 to 51 px: the measure is summed (averaged) over window x window pixels
+  PeakFit peak_fit = PeakFit::kGaussian;
+  // Peak over mean measure below this: invalid. An unfocused pixel of pure noise has a peak of about 1.2-1.5
+  // times its mean over a stack of ~30 images (the largest of N noisy samples); a textured surface in focus has
+  // several times that.
+  double min_quality = 2.0;
+  double dx_mm = 0.001;  // pixel size of the height map (the camera pixel on the object)
+  double dy_mm = 0.0;    // 0: same as dx
+  bool parallel = true;  // stripes of rows on OpenCV's thread pool; false: one thread (the benchmark's baseline)
+
+  // Throws InputError for an even or out-of-range window, a non-positive pixel size, a negative quality.
+  void Check() const;
+};
+
+struct FocusResult {
+  HeightMap height;            // mm at the peak; NaN where the quality is too low or the peak is at either end
+  std::vector<float> quality;  // peak over mean measure per pixel (row-major, same grid); 0 where flat
+  std::vector<std::int32_t> peak_index;  // the image with the largest measure per pixel
+};
+
+// Takes the images of a stack in order. Not thread-safe itself; it parallelises each image over rows.
+class FocusAccumulator {
+ public:
+  explicit FocusAccumulator(const FocusVariationOptions& options);
+  ~FocusAccumulator();
+  FocusAccumulator(const FocusAccumulator&) = delete;
+  FocusAccumulator& operator=(const FocusAccumulator&) = delete;
+
+  // Throws InputError (naming `name`, else the image's index) when the image is empty, differs in size from the
+  // first one, is smaller than the window, or its z is not beyond the previous one in the stack's direction
+  // (z must be strictly increasing or strictly decreasing: repeated or unsorted positions are refused).
+  void Add(const StackImageView& image, double z_mm, std::string_view name = {});
+  int count() const;
+
+  // Throws InputError for a stack of fewer than 3 images (a peak needs a neighbour on either side).
+  FocusResult Finish() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// The whole stack at once; z_mm[i] is the position of images[i]. Same errors as FocusAccumulator.
+FocusResult ReconstructFocusStack(const std::vector<StackImageView>& images, const std::vector<double>& z_mm,
+                                  const FocusVariationOptions& options);
+
+}  // namespace fvm::imaging
