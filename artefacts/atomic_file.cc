@@ -11,7 +11,7 @@
 #include <string>
 #include <system_error>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm {
 namespace {

@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "artefacts/atomic_file.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::artefacts {
 namespace {

@@ -12,7 +12,7 @@
 #include <string_view>
 
 #include "artefacts/atomic_file.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::artefacts {
 namespace {

@@ -6,7 +6,7 @@
 #include <map>
 #include <set>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "stage/error_terms.h"
 
 namespace fvm::cli {

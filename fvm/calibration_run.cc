@@ -1,6 +1,6 @@
 #include "fvm/calibration_run.h"
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "stage/fvm_stage_models.h"
 
 namespace fvm::cli {

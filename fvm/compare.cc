@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "artefacts/batch.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"

@@ -6,7 +6,7 @@
 
 #include "artefacts/atomic_file.h"
 #include "artefacts/centre_export.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/calibration_file.h"
 #include "fvm/commands.h"
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "artefacts/centre_export.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/commands.h"
 
 namespace fvm::cli {

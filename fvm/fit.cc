@@ -15,7 +15,7 @@
 
 #include "artefacts/artefact.h"
 #include "artefacts/centre_export.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/surface_read_args.h"
 #include "imaging/calotte_detection.h"

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/commands.h"
 #include "imaging/focus_stack_io.h"
 #include "imaging/focus_variation.h"

@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/surface_read_args.h"
 #include "imaging/height_map.h"

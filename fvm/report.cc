@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "artefacts/atomic_file.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::cli {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "artefacts/atomic_file.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "fvm/commands.h"
 #include "imaging/tile_image.h"
 #include "imaging/tile_layout.h"

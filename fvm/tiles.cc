@@ -19,7 +19,7 @@
 #include "artefacts/artefact.h"
 #include "artefacts/atomic_file.h"
 #include "artefacts/centre_export.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "artefacts/tile_synthesis.h"
 #include "fvm/commands.h"
 #include "imaging/tile_image.h"

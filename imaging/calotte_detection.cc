@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

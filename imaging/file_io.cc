@@ -11,7 +11,7 @@
 #include <random>
 #include <system_error>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

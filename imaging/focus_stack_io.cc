@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/file_io.h"
 #include "imaging/number_text.h"
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/file_io.h"
 #include "imaging/number_text.h"
 

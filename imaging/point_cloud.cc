@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/number_text.h"
 
 namespace fvm::imaging {

@@ -3,7 +3,7 @@
 #include <cctype>
 #include <string_view>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/al3d.h"
 #include "imaging/file_io.h"
 #include "imaging/x3p.h"

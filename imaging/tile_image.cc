@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/file_io.h"
 
 namespace fvm::imaging {

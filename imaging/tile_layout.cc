@@ -10,7 +10,7 @@
 #include <string_view>
 #include <utility>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

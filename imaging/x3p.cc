@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/file_io.h"
 #include "imaging/md5.h"
 #include "imaging/number_text.h"

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

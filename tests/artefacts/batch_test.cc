@@ -3,7 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "artefacts/atomic_file.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::testing {
 

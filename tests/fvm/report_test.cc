@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::cli {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "artefacts/artefact.h"
 #include "artefacts/calotte_surface.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/calotte_numbering.h"
 #include "imaging/sphere_fit.h"
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/al3d.h"
 #include "imaging/height_map_image.h"
 #include "imaging/md5.h"

@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 #include "imaging/tile_image.h"
 
 namespace fvm::imaging {

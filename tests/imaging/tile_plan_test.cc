@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "artefacts/artefact.h"
-#include "artefacts/input_error.h"
+#include "imaging/input_error.h"
 
 namespace fvm::imaging {
 namespace {
