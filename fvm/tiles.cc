@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -20,7 +21,9 @@
 #include "artefacts/atomic_file.h"
 #include "artefacts/centre_export.h"
 #include "imaging/input_error.h"
+#include "artefacts/stitching_strategy.h"
 #include "artefacts/tile_synthesis.h"
+#include "fvm/calibration_file.h"
 #include "fvm/commands.h"
 #include "imaging/tile_image.h"
 #include "imaging/tile_layout.h"
@@ -253,6 +256,57 @@ void RunSynthesize(const SynthArgs& args) {
              args.output);
 }
 
+struct StrategyArgs {
+  std::string calibration;
+  std::string lens = "10x";
+  double overlap = 0.2;
+  std::vector<double> from{-154.5487, -115.4767, -50.3624};  // Table 1, case a, calotte 1
+  std::vector<double> to{-134.5409, -115.4371, -50.4457};    // ... calotte 6
+  bool json = false;
+};
+
+void RunStrategies(const StrategyArgs& args) {
+  const stage::Calibration cal = ReadCalibration(args.calibration);
+  artefacts::StrategyOptions options;
+  options.fov_mm = imaging::FindLens(args.lens).fov_mm;
+  options.overlap = args.overlap > 1.0 ? args.overlap / 100.0 : args.overlap;
+  const Eigen::Vector3d first(args.from[0], args.from[1], args.from[2]);
+  const Eigen::Vector3d last(args.to[0], args.to[1], args.to[2]);
+  std::vector<artefacts::StrategyResult> results;
+  try {
+    results = artefacts::SimulateStitchingStrategies(cal.layout, cal.values, first, last, options);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("fvm tiles simulate: ") + e.what());
+  }
+  // The published differences (Table 1, 6 x 6 grid, 10x lens, calottes 1 and 6), for comparison.
+  const std::map<char, double> published = {{'b', -14.6}, {'c', -1.5}, {'d', -8.9}, {'e', -14.8}, {'f', -15.0}};
+  nlohmann::json doc;
+  doc["calibration"] = args.calibration;
+  doc["fov_mm"] = options.fov_mm;
+  doc["overlap"] = options.overlap;
+  for (const artefacts::StrategyResult& r : results) {
+    doc["cases"].push_back({{"case", std::string(1, r.id)}, {"description", r.description}, {"tiles", r.tiles},
+                            {"encoder_tiles", r.encoder_tiles}, {"distance_mm", r.distance_mm},
+                            {"diff_um", r.distance_error_um}});
+  }
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("stitching strategies over {:.3f} mm with the {} lens ({} mm field, {:.0f} % overlap), stage model {} "
+             "from {}\n\n",
+             (last - first).norm(), args.lens, options.fov_mm, options.overlap * 100, cal.model, args.calibration);
+  fmt::print("  {:<4} {:<36} {:>5} {:>13} {:>10} {:>14}\n", "case", "strategy", "tiles", "distance mm", "diff um",
+             "published um");
+  for (const artefacts::StrategyResult& r : results) {
+    const auto p = published.find(r.id);
+    fmt::print("  {:<4} {:<36} {:>5} {:>13.4f} {:>10.1f} {:>14}\n", r.id, r.description, r.tiles, r.distance_mm,
+               r.distance_error_um, p == published.end() ? "-" : fmt::format("{:.1f}", p->second));
+  }
+  fmt::print("\n  A tile that cannot be registered to its neighbour falls back to the encoders and carries the stage "
+             "error there;\n  the error grows with the distance from the first tile to the last such tile.\n");
+}
+
 }  // namespace
 
 void RegisterTiles(CLI::App& app) {
@@ -310,6 +364,27 @@ void RegisterTiles(CLI::App& app) {
   synth->footer("Tiles are cut from one random texture with 30 % vignetting and 3 % noise; truth.csv holds the "
                 "true top-left corners, the first tile at 0,0.");
   synth->callback([synth_args] { RunSynthesize(*synth_args); });
+
+  auto strategy_args = std::make_shared<StrategyArgs>();
+  CLI::App* strategies = tiles->add_subcommand(
+      "simulate", "the end-to-end distance error of the six published stitching strategies under a stage model");
+  strategies->add_option("--calibration", strategy_args->calibration, "stage model: a file written by 'fvm calibrate -o'")
+      ->required();
+  strategies->add_option("--lens", strategy_args->lens, "lens (field of view from the lens table)")->capture_default_str();
+  strategies->add_option("--overlap", strategy_args->overlap, "overlap: fraction (0.2) or percent (20)")
+      ->capture_default_str();
+  strategies->add_option("--from", strategy_args->from, "first calotte x,y,z in mm (default: Table 1, calotte 1)")
+      ->delimiter(',')
+      ->expected(3);
+  strategies->add_option("--to", strategy_args->to, "last calotte x,y,z in mm (default: Table 1, calotte 6)")
+      ->delimiter(',')
+      ->expected(3);
+  strategies->add_flag("--json", strategy_args->json,
+                       "print {\"cases\": [{\"case\", \"description\", \"tiles\", \"encoder_tiles\", "
+                       "\"distance_mm\", \"diff_um\"}]}");
+  strategies->footer("Cases: a all stitched; b only the end tiles; c the tile after the first missing; d a middle "
+                     "tile missing; e the tile before the last missing; f every other tile missing (000:4777).");
+  strategies->callback([strategy_args] { RunStrategies(*strategy_args); });
 }
 
 }  // namespace fvm::cli

@@ -96,3 +96,18 @@ if(NOT effect STREQUAL "thermal_drift" OR NOT EXISTS ${WORK}/drift-report/index.
    OR NOT before GREATER 5)
   message(FATAL_ERROR "diagnose on a drifting batch: ${effect}, held-out mean ${before} -> ${after} um")
 endif()
+
+# 7. The published stitching strategies under the calibrated stage: a is exact, b = e = f is the whole error of
+#    the row, and c < d grow with the distance to the last tile placed by the encoders.
+run(0 tiles simulate --calibration ${WORK}/cal.json --json)
+foreach(k RANGE 5)
+  string(JSON d GET "${OUT}" cases ${k} diff_um)
+  string(SUBSTRING "abcdef" ${k} 1 id)
+  string(REGEX REPLACE "^-" "" abs_${id} "${d}")
+endforeach()
+expect_near("case a" ${abs_a} 0 0.0001)
+expect_near("case e vs b" ${abs_e} ${abs_b} 0.0001)
+expect_near("case f vs b" ${abs_f} ${abs_b} 0.0001)
+if(NOT abs_c LESS abs_d OR NOT abs_d LESS abs_b OR NOT abs_b GREATER 1)
+  message(FATAL_ERROR "strategy errors out of the published order: c ${abs_c}, d ${abs_d}, b ${abs_b} um")
+endif()

@@ -1,0 +1,41 @@
+#pragma once
+// What stitching strategies do to a measured distance (FACTS.md section 1, 000:4777-4838, Tables 1 and 2).
+//
+// A row of tiles runs from the tile that holds the first calotte to the one that holds the last. The first tile
+// is placed by the encoders; each following tile is registered to its neighbour, so it inherits its neighbour's
+// placement; a tile whose neighbour is missing cannot be registered and falls back to the encoders. Encoders at
+// command q report a point that really is at F(q), so a tile placed by encoders at q, and every tile registered
+// after it, reports coordinates off by -e(q) = q - F(q). The distance error between the two calottes is therefore
+// set by the stage error at the last tile placed by encoders, against the first.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "stage/parameter_layout.h"
+
+namespace fvm::artefacts {
+
+struct StrategyOptions {
+  double fov_mm = 1.62;   // 10x lens (000:5785)
+  double overlap = 0.2;   // of neighbouring tiles (000:7190)
+  void Check() const;     // throws std::invalid_argument
+};
+
+struct StrategyResult {
+  char id = 'a';                      // the published case letter
+  std::string description;
+  int tiles = 0;                      // tiles taken
+  std::vector<int> encoder_tiles;     // indices (0 = first) of tiles placed by the encoders
+  double distance_mm = 0.0;           // measured distance between the two calottes
+  double distance_error_um = 0.0;     // measured - true
+};
+
+// The six published strategies: (a) all tiles stitched, (b) only the two end tiles, (c) the tile after the first
+// missing, (d) a middle tile missing, (e) the tile before the last missing, (f) every other tile missing.
+// `first` and `last` are the calottes' true positions (mm); the stage error model is F of `layout` with `values`.
+std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
+                                                        const std::vector<double>& values, const Eigen::Vector3d& first,
+                                                        const Eigen::Vector3d& last, const StrategyOptions& options = {});
+
+}  // namespace fvm::artefacts
