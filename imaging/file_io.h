@@ -1,6 +1,6 @@
 #pragma once
-// Whole-file reads and atomic writes for the surface readers and writers. imaging cannot use
-// artefacts/atomic_file.h (artefacts depends on imaging, not the other way round), so it has its own.
+// Whole-file reads and atomic writes. imaging is the lowest layer that writes user files, so the atomic write
+// lives here; artefacts/atomic_file.h (fvm::WriteFileAtomically) forwards to it.
 
 #include <cstddef>
 #include <filesystem>
