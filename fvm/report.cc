@@ -586,6 +586,7 @@ std::string HtmlEscape(std::string_view text) {
   return out;
 }
 
+// alt and caption name what separates before from after as {0} (ReportData::change).
 struct Figure {
   const char* file;
   const char* heading;
@@ -594,13 +595,13 @@ struct Figure {
 };
 
 constexpr std::array<Figure, 3> kFigures = {{
-    {"distance_errors.svg", "Distance errors", "Histogram of distance errors before and after compensation",
-     "Errors of the distances between calotte pairs before (vermilion) and after (blue) compensation, in "
+    {"distance_errors.svg", "Distance errors", "Histogram of distance errors before and after {0}",
+     "Errors of the distances between calotte pairs before (vermilion) and after (blue) {0}, in "
      "micrometres, binned on the same axes."},
     {"error_vectors.svg", "Lateral error vectors",
-     "Lateral error vectors at their stage positions before and after compensation",
+     "Lateral error vectors at their stage positions before and after {0}",
      "Lateral errors (dx, dy) drawn as arrows at their stage positions before (vermilion) and after (blue) "
-     "compensation, magnified by one common factor given by the scale arrow, over the stage travel drawn to "
+     "{0}, magnified by one common factor given by the scale arrow, over the stage travel drawn to "
      "scale."},
     {"parameters.svg", "Parameters", "Identified parameters with error bars of two standard uncertainties",
      "Identified parameter values with error bars of plus and minus two standard uncertainties (k = 2), one "
@@ -641,14 +642,7 @@ std::string RenderHtml(const ReportData& data) {
     html += "</table>\n";
   }
   for (const Figure& f : kFigures) {
-    const auto retell = [&](std::string_view text) {  // the captions are written for a compensation
-      std::string out;
-      for (size_t at = text.find("compensation"); at != std::string_view::npos; at = text.find("compensation")) {
-        out.append(text.substr(0, at)).append(data.change);
-        text.remove_prefix(at + std::string_view("compensation").size());
-      }
-      return HtmlEscape(out.append(text));
-    };
+    const auto retell = [&](const char* text) { return HtmlEscape(fmt::format(fmt::runtime(text), data.change)); };
     html += fmt::format("<h2>{}</h2>\n<figure>\n<img src=\"{}\" alt=\"{}\">\n<figcaption>{}</figcaption>\n</figure>\n",
                         f.heading, f.file, retell(f.alt), retell(f.caption));
   }
