@@ -186,6 +186,34 @@ std::vector<std::string> Findings(const std::vector<Eigen::Vector3d>& residuals,
   return out;
 }
 
+// The next power of a term's polynomial; its existing coefficients keep their states (dropped stay dropped,
+// fixed stay fixed).
+void RaiseOrder(ParameterLayout& layout, const std::string& term) {
+  const int index = *FindErrorTerm(term);
+  const TermSpec spec = layout.term(index);
+  std::vector<ParameterLayout::Coefficient> kept;
+  for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
+    if (c.term == index) kept.push_back(c);
+  }
+  layout.SetTerm(term, spec.basis, spec.order + 1);
+  for (int p = 0; p <= spec.order; ++p) {
+    const std::string name = term + std::to_string(p);
+    const auto it = std::find_if(kept.begin(), kept.end(), [&](const auto& c) { return c.name == name; });
+    if (it == kept.end()) {
+      layout.Drop(name);
+    } else if (it->state == ParameterLayout::State::kFixed) {
+      layout.Fix(name, it->value);
+    }
+  }
+}
+
+// Pitch and roll of X and Y (order 0) where the layout lacks them.
+void AddPitchAndRoll(ParameterLayout& layout) {
+  for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) {
+    if (!layout.term(*FindErrorTerm(term)).present) layout.SetTerm(term, Basis::kPower, 0);
+  }
+}
+
 // A measurement set with each observation changed by `change` (observation, index).
 MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Observation&, size_t)>& change) {
   MeasurementSet out = set;
@@ -240,28 +268,9 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     const TermSpec& spec = layout.term(t);
     if (!spec.present || spec.order >= kMaxOrder) continue;
     const std::string term(GetErrorTerm(t).vdi);
-    coefficient_candidate("higher_order", term, [&](ParameterLayout& l) {
-      // Keep the term's existing coefficients and their states: add only the next power.
-      std::vector<std::pair<std::string, ParameterLayout::Coefficient>> keep;
-      for (const auto& c : l.coefficients()) {
-        if (c.term == t) keep.emplace_back(c.name, c);
-      }
-      l.SetTerm(term, spec.basis, spec.order + 1);
-      for (int p = 0; p <= spec.order; ++p) {
-        const std::string name = term + std::to_string(p);
-        const auto it = std::find_if(keep.begin(), keep.end(), [&](const auto& k) { return k.first == name; });
-        if (it == keep.end()) l.Drop(name);
-        else if (it->second.state == ParameterLayout::State::kFixed) l.Fix(name, it->second.value);
-      }
-    });
+    coefficient_candidate("higher_order", term, [&](ParameterLayout& l) { RaiseOrder(l, term); });
   }
-  coefficient_candidate("z_coupling", "", [&](ParameterLayout& l) {
-    for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) {
-      if (!l.term(*FindErrorTerm(term)).present) {
-        l.SetTerm(term, Basis::kPower, 0);
-      }
-    }
-  });
+  coefficient_candidate("z_coupling", "", AddPitchAndRoll);
 
   const auto column_candidate = [&](const std::string& effect, const std::string& component, const Eigen::MatrixXd& columns) {
     candidates.push_back(Candidate{{effect, component}, ScoreColumns(r0, jb, columns), {}, {}});
@@ -343,17 +352,9 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   if (effect == "higher_order" || effect == "z_coupling") {
     ParameterLayout extended = layout;
     if (effect == "higher_order") {
-      const TermSpec spec = layout.term(*FindErrorTerm(best.score.component));
-      extended.SetTerm(best.score.component, spec.basis, spec.order + 1);
-      // Coefficients the input layout had dropped stay dropped.
-      for (int p = 0; p <= spec.order; ++p) {
-        const std::string name = best.score.component + std::to_string(p);
-        if (layout.FindCoefficient(name) < 0) extended.Drop(name);
-      }
+      RaiseOrder(extended, best.score.component);
     } else {
-      for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) {
-        if (!extended.term(*FindErrorTerm(term)).present) extended.SetTerm(term, Basis::kPower, 0);
-      }
+      AddPitchAndRoll(extended);
     }
     improved = identify_with(extended, identify, base_options.anchor);
     // The effect's size: the largest added coefficient the refit could determine.
