@@ -1,7 +1,6 @@
 #include "artefacts/stitching_strategy.h"
 
 #include <cmath>
-#include <set>
 #include <stdexcept>
 
 #include "stage/inverse_model.h"
@@ -14,45 +13,49 @@ void StrategyOptions::Check() const {
   }
 }
 
-std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
-                                                        const std::vector<double>& values, const Eigen::Vector3d& first,
-                                                        const Eigen::Vector3d& last, const StrategyOptions& options) {
+StrategyRow PlanStrategyRow(const stage::ParameterLayout& layout, const std::vector<double>& values,
+                            const Eigen::Vector3d& first, const Eigen::Vector3d& last, const StrategyOptions& options) {
   options.Check();
   const double length = (last - first).norm();
   if (!(length > 0)) throw std::invalid_argument("the two calottes must be apart");
-  // Tile centres along the row, the first on the first calotte, the last on the last one.
   const double step = options.fov_mm * (1.0 - options.overlap);
   const int n = std::max(2, static_cast<int>(std::ceil(length / step)) + 1);
-  std::vector<Eigen::Vector3d> centres;  // true positions under the tile centres
-  for (int i = 0; i < n; ++i) centres.push_back(first + (last - first) * (static_cast<double>(i) / (n - 1)));
-  // Where the stage must be commanded for each tile, and the error it reports there.
-  std::vector<Eigen::Vector3d> report_offset;  // reported - true, for a tile placed by encoders
-  for (const Eigen::Vector3d& p : centres) {
+  StrategyRow row;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = first + (last - first) * (static_cast<double>(i) / (n - 1));
     const stage::InverseResult q = stage::Inverse(layout, values.data(), p);
     if (!q.converged) throw std::runtime_error("the stage model could not be inverted along the row");
-    report_offset.push_back(q.command - p);
+    row.centres.push_back(p);
+    row.commands.push_back(q.command);
   }
+  return row;
+}
 
-  struct Case {
-    char id;
-    const char* description;
-    std::set<int> missing;
-  };
+std::vector<StrategyCase> StitchingStrategyCases(int n) {
   std::set<int> all_between, every_other;
   for (int i = 1; i < n - 1; ++i) {
     all_between.insert(i);
     if (i % 2 == 1) every_other.insert(i);
   }
-  const std::vector<Case> cases = {
+  // With fewer than 4 tiles some cases miss nothing (n = 2) or coincide; a tile at either end is never missing.
+  const auto inside = [n](int i) { return i > 0 && i < n - 1 ? std::set<int>{i} : std::set<int>{}; };
+  return {
       {'a', "all tiles stitched", {}},
       {'b', "only the two end tiles", all_between},
-      {'c', "the tile after the first missing", {1}},
-      {'d', "a middle tile missing", {n / 2}},
-      {'e', "the tile before the last missing", {n - 2}},
+      {'c', "the tile after the first missing", inside(1)},
+      {'d', "a middle tile missing", inside(n / 2)},
+      {'e', "the tile before the last missing", inside(n - 2)},
       {'f', "every other tile missing", every_other},
   };
+}
+
+std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
+                                                        const std::vector<double>& values, const Eigen::Vector3d& first,
+                                                        const Eigen::Vector3d& last, const StrategyOptions& options) {
+  const StrategyRow row = PlanStrategyRow(layout, values, first, last, options);
+  const int n = static_cast<int>(row.centres.size());
   std::vector<StrategyResult> results;
-  for (const Case& c : cases) {
+  for (const StrategyCase& c : StitchingStrategyCases(n)) {
     StrategyResult r{c.id, c.description, n - static_cast<int>(c.missing.size()), {0}, 0.0, 0.0};
     // Walk the row: a tile whose predecessor is missing falls back to the encoders; the others inherit.
     int anchor = 0;
@@ -63,10 +66,12 @@ std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLa
         r.encoder_tiles.push_back(i);
       }
     }
-    const Eigen::Vector3d measured_first = first + report_offset[0];
-    const Eigen::Vector3d measured_last = last + report_offset[static_cast<size_t>(anchor)];
+    // A tile placed by encoders at q reports its true point p as q: off by q - p, inherited along the chain.
+    const Eigen::Vector3d measured_first = row.commands.front();
+    const Eigen::Vector3d measured_last = last + (row.commands[static_cast<size_t>(anchor)] -
+                                                  row.centres[static_cast<size_t>(anchor)]);
     r.distance_mm = (measured_last - measured_first).norm();
-    r.distance_error_um = (r.distance_mm - length) * 1e3;
+    r.distance_error_um = (r.distance_mm - (last - first).norm()) * 1e3;
     results.push_back(std::move(r));
   }
   return results;

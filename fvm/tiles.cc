@@ -1,5 +1,6 @@
 // fvm tiles: plan tile layouts with and without stitching (imaging/tile_plan.h) and simulate the published
-// stitching strategies (artefacts/tile_strategy.h).
+// stitching strategies on coordinates (artefacts/stitching_strategy.h) or on rendered tiles
+// (artefacts/rendered_stitching_strategy.h).
 
 #include <fmt/core.h>
 
@@ -21,6 +22,7 @@
 #include "artefacts/atomic_file.h"
 #include "artefacts/centre_export.h"
 #include "imaging/input_error.h"
+#include "artefacts/rendered_stitching_strategy.h"
 #include "artefacts/stitching_strategy.h"
 #include "artefacts/tile_synthesis.h"
 #include "fvm/calibration_file.h"
@@ -232,7 +234,7 @@ void RunSynthesize(const SynthArgs& args) {
     throw InputError(std::string("fvm tiles synthesize: ") + e.what());
   }
   if (args.bits != 8 && args.bits != 16 && args.bits != 32) throw InputError("--bits: 8, 16 or 32 (float)");
-  if (args.bits == 8) options.level = 120.0, options.contrast = 25.0;  // inside 0..255 with the vignetting
+  if (args.bits == 8) options.camera.level = 120.0, options.camera.contrast = 25.0;  // 0..255 with the vignetting
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(options);
   std::filesystem::create_directories(args.output);
   std::vector<imaging::TileLayoutEntry> entries;
@@ -262,49 +264,89 @@ struct StrategyArgs {
   double overlap = 0.2;
   std::vector<double> from{-154.5487, -115.4767, -50.3624};  // Table 1, case a, calotte 1
   std::vector<double> to{-134.5409, -115.4371, -50.4457};    // ... calotte 6
+  bool render = false;
+  int tile_px = artefacts::RenderedStrategyOptions{}.tile_px;
+  std::uint64_t seed = 1;
   bool json = false;
 };
 
 void RunStrategies(const StrategyArgs& args) {
   const stage::Calibration cal = ReadCalibration(args.calibration);
-  artefacts::StrategyOptions options;
-  options.fov_mm = imaging::FindLens(args.lens).fov_mm;
-  options.overlap = args.overlap > 1.0 ? args.overlap / 100.0 : args.overlap;
+  artefacts::RenderedStrategyOptions options;
+  options.geometry.fov_mm = imaging::FindLens(args.lens).fov_mm;
+  options.geometry.overlap = args.overlap > 1.0 ? args.overlap / 100.0 : args.overlap;
+  options.tile_px = args.tile_px;
+  options.seed = args.seed;
   const Eigen::Vector3d first(args.from[0], args.from[1], args.from[2]);
   const Eigen::Vector3d last(args.to[0], args.to[1], args.to[2]);
   std::vector<artefacts::StrategyResult> results;
+  std::optional<artefacts::RenderedStrategies> rendered;
   try {
-    results = artefacts::SimulateStitchingStrategies(cal.layout, cal.values, first, last, options);
+    results = artefacts::SimulateStitchingStrategies(cal.layout, cal.values, first, last, options.geometry);
+    if (args.render) {
+      if (!args.json) fmt::print(stderr, "rendering and registering the row's tiles ...\n");
+      rendered = artefacts::SimulateRenderedStrategies(cal.layout, cal.values, first, last, options);
+    }
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("fvm tiles simulate: ") + e.what());
   }
   // The published differences (Table 1, 6 x 6 grid, 10x lens, calottes 1 and 6), for comparison.
   const std::map<char, double> published = {{'b', -14.6}, {'c', -1.5}, {'d', -8.9}, {'e', -14.8}, {'f', -15.0}};
-  nlohmann::json doc;
+  nlohmann::ordered_json doc;
   doc["calibration"] = args.calibration;
-  doc["fov_mm"] = options.fov_mm;
-  doc["overlap"] = options.overlap;
-  for (const artefacts::StrategyResult& r : results) {
-    doc["cases"].push_back({{"case", std::string(1, r.id)}, {"description", r.description}, {"tiles", r.tiles},
-                            {"encoder_tiles", r.encoder_tiles}, {"distance_mm", r.distance_mm},
-                            {"diff_um", r.distance_error_um}});
+  doc["fov_mm"] = options.geometry.fov_mm;
+  doc["overlap"] = options.geometry.overlap;
+  if (rendered) {
+    doc["rendered"] = {{"tile_px", options.tile_px},
+                       {"pixel_um", rendered->pixel_mm * 1e3},
+                       {"row_tiles", rendered->row_tiles},
+                       {"pair_rms_px", rendered->pair_rms_px},
+                       {"rejected_pairs", rendered->rejected_pairs},
+                       {"seed", options.seed}};
+  }
+  for (size_t k = 0; k < results.size(); ++k) {
+    const artefacts::StrategyResult& r = results[k];
+    nlohmann::ordered_json c = {{"case", std::string(1, r.id)}, {"description", r.description},
+                                {"tiles", r.tiles},           {"encoder_tiles", r.encoder_tiles},
+                                {"distance_mm", r.distance_mm}, {"diff_um", r.distance_error_um}};
+    if (rendered) {
+      const artefacts::RenderedStrategyResult& g = rendered->cases[k];
+      c["rendered"] = {{"encoder_tiles", g.result.encoder_tiles}, {"distance_mm", g.result.distance_mm},
+                       {"diff_um", g.result.distance_error_um},  {"pairs", g.pairs},
+                       {"accepted_pairs", g.accepted_pairs}};
+    }
+    doc["cases"].push_back(c);
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
     return;
   }
   fmt::print("stitching strategies over {:.3f} mm with the {} lens ({} mm field, {:.0f} % overlap), stage model {} "
-             "from {}\n\n",
-             (last - first).norm(), args.lens, options.fov_mm, options.overlap * 100, cal.model, args.calibration);
-  fmt::print("  {:<4} {:<36} {:>5} {:>13} {:>10} {:>14}\n", "case", "strategy", "tiles", "distance mm", "diff um",
-             "published um");
-  for (const artefacts::StrategyResult& r : results) {
+             "from {}\n",
+             (last - first).norm(), args.lens, options.geometry.fov_mm, options.geometry.overlap * 100, cal.model,
+             args.calibration);
+  if (rendered) {
+    fmt::print("rendered: {} tiles of {} px ({:.3f} um / px), neighbour pairs registered to {:.3f} px rms ({:.3f} um), "
+               "{} rejected; seed {}\n",
+               rendered->row_tiles, options.tile_px, rendered->pixel_mm * 1e3, rendered->pair_rms_px,
+               rendered->pair_rms_px * rendered->pixel_mm * 1e3, rendered->rejected_pairs, options.seed);
+  }
+  fmt::print("\n  {:<4} {:<36} {:>5} {:>13} {:>10} {:>12} {:>14}\n", "case", "strategy", "tiles", "distance mm",
+             "diff um", rendered ? "rendered um" : "", "published um");
+  for (size_t k = 0; k < results.size(); ++k) {
+    const artefacts::StrategyResult& r = results[k];
     const auto p = published.find(r.id);
-    fmt::print("  {:<4} {:<36} {:>5} {:>13.4f} {:>10.1f} {:>14}\n", r.id, r.description, r.tiles, r.distance_mm,
-               r.distance_error_um, p == published.end() ? "-" : fmt::format("{:.1f}", p->second));
+    fmt::print("  {:<4} {:<36} {:>5} {:>13.4f} {:>10.1f} {:>12} {:>14}\n", r.id, r.description, r.tiles,
+               r.distance_mm, r.distance_error_um,
+               rendered ? fmt::format("{:.1f}", rendered->cases[k].result.distance_error_um) : "",
+               p == published.end() ? "-" : fmt::format("{:.1f}", p->second));
   }
   fmt::print("\n  A tile that cannot be registered to its neighbour falls back to the encoders and carries the stage "
              "error there;\n  the error grows with the distance from the first tile to the last such tile.\n");
+  if (rendered) {
+    fmt::print("  'rendered' comes from images: tiles rendered where the stage really is, registered, and the calottes "
+               "fitted in\n  their tiles; it differs from 'diff' by the registration and fit noise.\n");
+  }
 }
 
 }  // namespace
@@ -379,9 +421,18 @@ void RegisterTiles(CLI::App& app) {
   strategies->add_option("--to", strategy_args->to, "last calotte x,y,z in mm (default: Table 1, calotte 6)")
       ->delimiter(',')
       ->expected(3);
+  strategies->add_flag("--render", strategy_args->render,
+                       "also render the row's tiles where the stage really puts them, register them as fvm stitch "
+                       "does and fit the calottes in their tiles (a few seconds)");
+  strategies->add_option("--tile-px", strategy_args->tile_px, "with --render: pixels across a tile")
+      ->capture_default_str();
+  strategies->add_option("--seed", strategy_args->seed, "with --render: seed of the texture and the noise")
+      ->capture_default_str();
   strategies->add_flag("--json", strategy_args->json,
                        "print {\"cases\": [{\"case\", \"description\", \"tiles\", \"encoder_tiles\", "
-                       "\"distance_mm\", \"diff_um\"}]}");
+                       "\"distance_mm\", \"diff_um\"[, \"rendered\": {\"encoder_tiles\", \"distance_mm\", "
+                       "\"diff_um\", \"pairs\", \"accepted_pairs\"}]}][, \"rendered\": {\"tile_px\", "
+                       "\"pixel_um\", \"row_tiles\", \"pair_rms_px\", \"rejected_pairs\", \"seed\"}]}");
   strategies->footer("Cases: a all stitched; b only the end tiles; c the tile after the first missing; d a middle "
                      "tile missing; e the tile before the last missing; f every other tile missing (000:4777).");
   strategies->callback([strategy_args] { RunStrategies(*strategy_args); });

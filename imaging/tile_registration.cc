@@ -9,6 +9,7 @@
 #include <numeric>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
@@ -257,6 +258,7 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
                                     const RegistrationOptions& options) {
   if (images.size() != tiles.size()) throw std::invalid_argument("RegisterTileGrid: one image per tile");
+  options.Check();
   std::map<std::pair<int, int>, int> at;
   for (size_t i = 0; i < tiles.size(); ++i) at[{tiles[i].row, tiles[i].col}] = static_cast<int>(i);
   RegistrationResult result;
@@ -266,12 +268,27 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     for (const auto& [dr, dc] : {std::pair{0, 1}, std::pair{1, 0}}) {
       const auto it = at.find({tiles[i].row + dr, tiles[i].col + dc});
       if (it == at.end()) continue;
-      const size_t j = static_cast<size_t>(it->second);
-      PairRegistration pair = RegisterPair(images[i], images[j], tiles[j].nominal_px - tiles[i].nominal_px, options);
+      PairRegistration pair;
       pair.a = static_cast<int>(i);
-      pair.b = static_cast<int>(j);
+      pair.b = it->second;
       result.pairs.push_back(pair);
     }
+  }
+  // Pairs are independent: each writes only its own slot, so the result does not depend on the thread count.
+  const auto register_range = [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
+      const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
+      pair = RegisterPair(images[a], images[b], tiles[b].nominal_px - tiles[a].nominal_px, options);
+      pair.a = static_cast<int>(a);
+      pair.b = static_cast<int>(b);
+    }
+  };
+  const cv::Range all(0, static_cast<int>(result.pairs.size()));
+  if (options.parallel) {
+    cv::parallel_for_(all, register_range);
+  } else {
+    register_range(all);
   }
   result.positions = SolveTilePositions(nominal, result.pairs);
   return result;

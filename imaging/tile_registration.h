@@ -31,6 +31,9 @@ struct RegistrationOptions {
   bool refine = true;
   // High-pass scale (px) applied before matching, so that uneven illumination and tilt do not correlate.
   double highpass_sigma_px = 8.0;
+  // Register the pairs of a grid on OpenCV's thread pool (false: one thread, the benchmark's baseline). The
+  // result is the same either way.
+  bool parallel = true;
   void Check() const;  // throws std::invalid_argument for values outside their ranges
 };
 
@@ -70,8 +73,8 @@ struct RegistrationResult {
   std::vector<PairRegistration> pairs;  // right and lower neighbours of every tile
 };
 
-// Registers each tile with its right (col + 1) and lower (row + 1) neighbour, then solves. Tiles in scan order:
-// index 0 is the anchor. images[i] belongs to tiles[i].
+// Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, then solves. Tiles in
+// scan order: index 0 is the anchor. images[i] belongs to tiles[i].
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
                                     const RegistrationOptions& options);
 
