@@ -26,7 +26,7 @@ struct RegistrationOptions {
   // Correlate only the nominal overlap (true) or the whole frames (false: the baseline of the benchmark, slower
   // and noisier, since most of each frame has nothing to match).
   bool crop_to_overlap = true;
-  // Refine the phase-correlation peak by Gauss-Newton on the overlap (bicubic resampling): the peak's centroid
+  // Refine the phase-correlation peak by Gauss-Newton on the overlap (Lanczos-4 resampling): the peak's centroid
   // alone is biased towards whole pixels by up to ~0.1 px.
   bool refine = true;
   // High-pass scale (px) applied before matching, so that uneven illumination and tilt do not correlate.
