@@ -75,9 +75,10 @@ imaging::TileImage TileScene::Photograph(const Eigen::Vector2d& top_left_px, int
 SynthesizedTiles SynthesizeTiles(const TileSynthesisOptions& options) {
   options.Check();
   std::mt19937_64 random(options.seed);
-  const TileScene scene(options.camera, random);
-  std::normal_distribution<double> normal(0.0, 1.0);
   SynthesizedTiles out;
+  out.scene = TileScene(options.camera, random);
+  const TileScene& scene = out.scene;
+  std::normal_distribution<double> normal(0.0, 1.0);
   const double step_x = options.width * (1.0 - options.overlap), step_y = options.height * (1.0 - options.overlap);
   for (int col = 0; col < options.cols; ++col) {
     for (int row = 0; row < options.rows; ++row) {

@@ -29,6 +29,7 @@ struct TileCameraOptions {
 // of the part's pixel frame (x right, y down).
 class TileScene {
  public:
+  TileScene() = default;  // no texture
   // Draws the texture from `random`.
   TileScene(const TileCameraOptions& options, std::mt19937_64& random);
   // A width x height tile whose pixel (0, 0) samples the texture at top_left_px; noise drawn from `random`.
@@ -58,6 +59,7 @@ struct SynthesizedTiles {
   std::vector<imaging::TileImage> images;      // scan order: column by column, top to bottom
   std::vector<imaging::GridTile> tiles;        // rows, cols and nominal (grid) positions
   std::vector<Eigen::Vector2d> truth_px;       // true top-left corners, tile 0 at its nominal position
+  TileScene scene;  // what the tiles were photographed from: Photograph(p, ...) is the scene at p of the tiles' frame
 };
 
 SynthesizedTiles SynthesizeTiles(const TileSynthesisOptions& options);

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,8 @@
 #include "fvm/commands.h"
 #include "imaging/tile_image.h"
 #include "imaging/tile_layout.h"
+#include "imaging/tile_mosaic.h"
+#include "imaging/x3p.h"
 #include "imaging/tile_plan.h"
 #include "imaging/tile_registration.h"
 
@@ -24,6 +27,7 @@ struct StitchArgs {
   std::string layout;
   std::string overlap;
   std::string output;
+  std::string mosaic;
   double pixel_mm = 0.0;
   double min_quality = imaging::RegistrationOptions{}.min_quality;
   bool json = false;
@@ -39,15 +43,20 @@ void RunStitch(const StitchArgs& args) {
   if (!(options.min_quality >= -1.0 && options.min_quality <= 1.0)) {
     throw InputError("--min-quality: give a correlation in [-1, 1], e.g. 0.5");
   }
+  const bool height_map = std::filesystem::path(args.mosaic).extension() == ".x3p";
+  if (height_map && !(args.pixel_mm > 0.0)) {
+    throw InputError("--mosaic " + args.mosaic + ": an X3P height map needs the pixel size; give --pixel-mm");
+  }
   const imaging::TileLayout layout = imaging::ReadTileLayout(args.layout);
   imaging::CheckLayoutComplete(layout);
   const std::filesystem::path dir = std::filesystem::path(args.layout).parent_path();
 
   std::vector<imaging::TileImage> images;
+  imaging::TilePixelType pixel_type = imaging::TilePixelType::kFloat;
   for (const auto& tile : layout.tiles) {
     const std::filesystem::path file = dir / tile.file;  // an absolute tile path replaces dir
     try {
-      images.push_back(imaging::ReadTileImage(file));
+      images.push_back(imaging::ReadTileImage(file, images.empty() ? &pixel_type : nullptr));
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}:{}: tile row {} col {}: {}", layout.source, tile.line, tile.row, tile.col,
                                    e.what()));
@@ -90,7 +99,27 @@ void RunStitch(const StitchArgs& args) {
     }
     csv += fmt::format(",{}\n", result.positions.registered[i] ? 1 : 0);
   }
+  if (height_map && pixel_type != imaging::TilePixelType::kFloat) {
+    throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
+                                 "float tiles in mm (or write the mosaic as .tif)",
+                                 args.mosaic, pixel_type == imaging::TilePixelType::kUint8 ? 8 : 16));
+  }
   WriteFileAtomically(args.output, csv);
+  if (!args.mosaic.empty()) {
+    if (!args.json) fmt::print(stderr, "fusing {} tiles ...\n", images.size());
+    imaging::Mosaic mosaic = imaging::FuseTiles(images, result.positions.positions_px);
+    if (height_map) {
+      imaging::WriteX3p(args.mosaic, imaging::MosaicToHeightMap(mosaic, static_cast<int>(width),
+                                                                static_cast<int>(height), args.pixel_mm,
+                                                                first.stage_mm.value_or(Eigen::Vector2d::Zero())));
+    } else {
+      // Integer pixels have no NaN: where no tile reaches is 0.
+      if (pixel_type != imaging::TilePixelType::kFloat) mosaic.image = mosaic.image.unaryExpr([](float v) {
+        return std::isnan(v) ? 0.0f : v;
+      });
+      imaging::WriteTileImage(args.mosaic, mosaic.image, pixel_type);
+    }
+  }
 
   int accepted = 0;
   std::vector<std::string> fallback;
@@ -132,7 +161,7 @@ void RunStitch(const StitchArgs& args) {
     for (const auto& f : fallback) list += (list.empty() ? "" : ", ") + f;
     fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list);
   }
-  fmt::print("positions written to {}\n", args.output);
+  fmt::print("positions written to {}{}\n", args.output, args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic);
 }
 
 }  // namespace
@@ -149,6 +178,10 @@ void RegisterStitch(CLI::App& app) {
   sub->add_option("--overlap", args->overlap, "nominal overlap of neighbours: percent (20) or fraction (0.2)")
       ->required();
   sub->add_option("-o,--output", args->output, "positions CSV file,x,y[,x_mm,y_mm],registered")->required();
+  sub->add_option("--mosaic", args->mosaic,
+                  "also fuse the registered tiles (feathered seams) into one image in the tiles' pixel type (TIFF, "
+                  "PNG, EXR; NaN or 0 where no tile reaches), or into an X3P height map in the stage frame when the "
+                  "name ends in .x3p (float tiles holding heights in mm; needs --pixel-mm)");
   sub->add_option("--pixel-mm", args->pixel_mm,
                   "pixel size in mm: adds x_mm,y_mm (stage frame, +Y up) and takes nominal positions from the "
                   "layout's x,y");
@@ -158,7 +191,7 @@ void RegisterStitch(CLI::App& app) {
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], \"pairs\": "
                 "[{\"a\", \"b\", \"dx_px\", \"dy_px\", \"quality\", \"accepted\"}]}");
   sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
-              "-o demo/positions.csv");
+              "-o demo/positions.csv --mosaic demo/mosaic.tif");
   sub->callback([args] { RunStitch(*args); });
 }
 

@@ -14,7 +14,7 @@
 
 namespace fvm::imaging {
 
-TileImage ReadTileImage(const std::filesystem::path& path) {
+TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
   CheckReadableFile(path);
   std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
   if (!input) {
@@ -36,11 +36,13 @@ TileImage ReadTileImage(const std::filesystem::path& path) {
     throw InputError(path.string() + ": cannot read the pixels (" + input->geterror() + "); is the file truncated?");
   }
   double scale = 1.0;
+  TilePixelType stored = TilePixelType::kFloat;
   switch (spec.format.basetype) {
-    case OIIO::TypeDesc::UINT8: scale = 255.0; break;
-    case OIIO::TypeDesc::UINT16: scale = 65535.0; break;
+    case OIIO::TypeDesc::UINT8: scale = 255.0, stored = TilePixelType::kUint8; break;
+    case OIIO::TypeDesc::UINT16: scale = 65535.0, stored = TilePixelType::kUint16; break;
     default: break;
   }
+  if (type != nullptr) *type = stored;
   const int alpha = spec.alpha_channel;
   const int grey_channels = alpha >= 0 && channels > 1 ? channels - 1 : channels;
   TileImage image(spec.height, spec.width);

@@ -67,6 +67,32 @@ foreach(i RANGE 1 9)
   endif()
 endforeach()
 
+# The fused mosaic: 8-bit like its tiles, as wide as three tiles at 80 % steps (665.6 px) give or take the stage
+# error (1.5 px per tile); an X3P height map needs float tiles and the pixel size, and sits in the stage frame.
+run(0 stitch --layout ${WORK}/set/layout.csv --overlap 20 -o ${WORK}/set/positions.csv --mosaic ${WORK}/set/mosaic.png)
+run(0 info ${WORK}/set/mosaic.png --pixel-size 0.001 --z-scale 1 --json)
+string(JSON size_x GET "${OUT}" size_x)
+string(JSON size_y GET "${OUT}" size_y)
+if(size_x LESS 656 OR size_x GREATER 676 OR size_y LESS 656 OR size_y GREATER 676)
+  message(FATAL_ERROR "mosaic of 3 x 3 tiles is ${size_x} x ${size_y} px, expected about 666 x 666")
+endif()
+fails_naming("--mosaic .*m.x3p: an X3P height map needs the pixel size"
+             stitch --layout ${WORK}/set/layout.csv --overlap 20 -o ${WORK}/bad.csv --mosaic ${WORK}/m.x3p)
+fails_naming("the tiles hold 8-bit counts, not heights"
+             stitch --layout ${WORK}/set/layout.csv --overlap 20 -o ${WORK}/bad.csv --mosaic ${WORK}/m.x3p --pixel-mm 0.001)
+if(EXISTS ${WORK}/bad.csv OR EXISTS ${WORK}/m.x3p)
+  message(FATAL_ERROR "a refused mosaic left output behind")
+endif()
+run(0 tiles synthesize -o ${WORK}/heights --rows 2 --cols 2 --size 128 --bits 32 --seed 3)
+run(0 stitch --layout ${WORK}/heights/layout.csv --overlap 20 -o ${WORK}/heights/p.csv --pixel-mm 0.002
+    --mosaic ${WORK}/heights/m.x3p)
+run(0 info ${WORK}/heights/m.x3p --json)
+string(JSON dx GET "${OUT}" dx_mm)
+string(JSON x0 GET "${OUT}" x0_mm)
+# The first tile's centre is the origin: its top-left pixel sits 63.5 px to the left.
+expect_near("height map dx" ${dx} 0.002 0.000001 6)
+expect_near("height map x0" ${x0} -0.127 0.000001 6)
+
 # Bad input: exit 1, the message names the culprit, no output written.
 run(1 stitch --layout ${WORK}/set/layout.csv --overlap 0 -o ${WORK}/bad.csv)
 if(NOT ERR MATCHES "--overlap '0': tiles must overlap" OR EXISTS ${WORK}/bad.csv)
