@@ -109,7 +109,8 @@ RenderedStrategies SimulateRenderedStrategies(const stage::ParameterLayout& layo
       pair.b = index[static_cast<size_t>(pair.b)];
       pairs.push_back(pair);
     }
-    const imaging::TilePositions solved = imaging::SolveTilePositions(nominal, pairs);
+    const imaging::TilePositions solved =
+        imaging::SolveTilePositions(nominal, pairs, options.registration.stage_sigma_px);
     // A tile's centre as the instrument reports it: the first tile's encoder reading plus the solved shift in
     // x and y; its height from the encoder of the tile its chain starts from.
     const auto reported = [&](int t) {

@@ -10,6 +10,7 @@ void TileCameraOptions::Check() const {
   if (components < 1 || !(max_frequency > 0.0 && max_frequency <= 0.5)) {
     throw std::invalid_argument("tiles: components >= 1, max frequency in (0, 0.5]");
   }
+  if (!(wave_spread_deg >= 0.0 && wave_spread_deg <= 360.0)) throw std::invalid_argument("tiles: spread in [0, 360]");
   if (!(vignetting >= 0.0 && vignetting < 1.0) || !(noise >= 0.0) || !(contrast >= 0.0)) {
     throw std::invalid_argument("tiles: vignetting in [0, 1), noise and contrast >= 0");
   }
@@ -29,7 +30,7 @@ TileScene::TileScene(const TileCameraOptions& options, std::mt19937_64& random) 
   for (int k = 0; k < options.components; ++k) {
     // Frequencies from a tenth of the maximum up: slower waves would look like illumination, not texture.
     const double f = options.max_frequency * (0.1 + 0.9 * uniform(random));
-    const double angle = 2.0 * std::numbers::pi * uniform(random);
+    const double angle = (options.wave_angle_deg + options.wave_spread_deg * uniform(random)) * std::numbers::pi / 180;
     waves_.push_back({f * std::cos(angle), f * std::sin(angle), 2.0 * std::numbers::pi * uniform(random), 1.0 / f});
     power += 0.5 / (f * f);
   }

@@ -19,6 +19,11 @@ namespace fvm::artefacts {
 struct TileCameraOptions {
   int components = 48;
   double max_frequency = 0.2;
+  // Directions of the waves (their crests' normals, from +x towards +y of the pixel frame): uniform in
+  // [wave_angle_deg, wave_angle_deg + wave_spread_deg). The default covers every direction; a narrow spread is a
+  // machined lay (marks across wave_angle_deg), and a spread of 0 a texture that does not change along the marks.
+  double wave_angle_deg = 0.0;
+  double wave_spread_deg = 360.0;
   double level = 30000.0, contrast = 6000.0;
   double vignetting = 0.3;  // the gain falls by this fraction from the tile's centre to its corners
   double noise = 0.03;      // sensor noise, a fraction of `contrast`

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <Eigen/LU>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -30,6 +31,7 @@ struct StitchArgs {
   std::string mosaic;
   double pixel_mm = 0.0;
   double min_quality = imaging::RegistrationOptions{}.min_quality;
+  double stage_sigma_px = imaging::RegistrationOptions{}.stage_sigma_px;
   bool json = false;
 };
 
@@ -42,6 +44,10 @@ void RunStitch(const StitchArgs& args) {
   options.min_quality = args.min_quality;
   if (!(options.min_quality >= -1.0 && options.min_quality <= 1.0)) {
     throw InputError("--min-quality: give a correlation in [-1, 1], e.g. 0.5");
+  }
+  options.stage_sigma_px = args.stage_sigma_px;
+  if (!(options.stage_sigma_px > 0.0) || !std::isfinite(options.stage_sigma_px)) {
+    throw InputError("--stage-sigma: give the stage's positioning error over the grid in pixels, e.g. 2");
   }
   const bool height_map = std::filesystem::path(args.mosaic).extension() == ".x3p";
   if (height_map && !(args.pixel_mm > 0.0)) {
@@ -88,7 +94,7 @@ void RunStitch(const StitchArgs& args) {
   }
   const imaging::RegistrationResult result = imaging::RegisterTileGrid(images, grid, options);
 
-  std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered\n" : "file,x,y,registered\n";
+  std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered,u_x,u_y\n" : "file,x,y,registered,u_x,u_y\n";
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
     const Eigen::Vector2d& p = result.positions.positions_px[i];
     csv += fmt::format("{},{:.4f},{:.4f}", layout.tiles[i].file, p.x(), p.y());
@@ -97,7 +103,8 @@ void RunStitch(const StitchArgs& args) {
       const Eigen::Vector2d origin = first.stage_mm.value_or(Eigen::Vector2d::Zero());
       csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * args.pixel_mm, origin.y() - p.y() * args.pixel_mm);
     }
-    csv += fmt::format(",{}\n", result.positions.registered[i] ? 1 : 0);
+    const Eigen::Vector2d& u = result.positions.sigma_px[i];
+    csv += fmt::format(",{},{:.4f},{:.4f}\n", result.positions.registered[i] ? 1 : 0, u.x(), u.y());
   }
   if (height_map && pixel_type != imaging::TilePixelType::kFloat) {
     throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
@@ -122,10 +129,15 @@ void RunStitch(const StitchArgs& args) {
   }
 
   int accepted = 0;
-  std::vector<std::string> fallback;
+  std::vector<std::string> fallback, stage_bound;
   for (const auto& pair : result.pairs) accepted += pair.accepted;
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (!result.positions.registered[i]) fallback.push_back(layout.tiles[i].file);
+    if (!result.positions.registered[i]) {
+      fallback.push_back(layout.tiles[i].file);
+    } else if (result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
+      // Linked by images, but along one axis only: a texture of parallel marks.
+      stage_bound.push_back(layout.tiles[i].file);
+    }
   }
   if (args.json) {
     nlohmann::ordered_json out;
@@ -134,13 +146,21 @@ void RunStitch(const StitchArgs& args) {
     out["nominal"] = from_stage ? "stage" : "grid";
     out["pairs_accepted"] = accepted;
     out["stage_fallback"] = fallback;
+    out["stage_along_one_axis"] = stage_bound;
     out["pairs"] = nlohmann::ordered_json::array();
     for (const auto& pair : result.pairs) {
       const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
+      // Standard uncertainty per axis where the pair determines both; null along an axis it leaves to the stage.
+      nlohmann::ordered_json sigma = {nullptr, nullptr};
+      if (pair.accepted && std::abs(pair.information.determinant()) > 0.0) {
+        const Eigen::Matrix2d covariance = pair.information.inverse();
+        sigma = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
+      }
       out["pairs"].push_back({{"a", layout.tiles[static_cast<size_t>(pair.a)].file},
                               {"b", layout.tiles[static_cast<size_t>(pair.b)].file},
                               {"dx_px", pair.accepted ? nlohmann::ordered_json(d.x()) : nullptr},
                               {"dy_px", pair.accepted ? nlohmann::ordered_json(d.y()) : nullptr},
+                              {"sigma_px", sigma},
                               {"quality", pair.quality},
                               {"accepted", pair.accepted}});
     }
@@ -156,11 +176,23 @@ void RunStitch(const StitchArgs& args) {
                  layout.tiles[static_cast<size_t>(pair.b)].file, pair.quality);
     }
   }
+  const auto list = [](const std::vector<std::string>& files) {
+    std::string text;
+    for (const auto& f : files) text += (text.empty() ? "" : ", ") + f;
+    return text;
+  };
   if (!fallback.empty()) {
-    std::string list;
-    for (const auto& f : fallback) list += (list.empty() ? "" : ", ") + f;
-    fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list);
+    fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list(fallback));
   }
+  if (!stage_bound.empty()) {
+    fmt::print("  registered across but not along parallel marks, where the stage decides (u above {:g} px): {}\n",
+               0.5 * options.stage_sigma_px, list(stage_bound));
+  }
+  double worst = 0.0;
+  for (size_t i = 0; i < layout.tiles.size(); ++i) {
+    if (result.positions.registered[i]) worst = std::max(worst, result.positions.sigma_px[i].maxCoeff());
+  }
+  fmt::print("largest standard uncertainty of a registered tile against the first of its chain: {:.4f} px\n", worst);
   fmt::print("positions written to {}{}\n", args.output, args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic);
 }
 
@@ -177,7 +209,10 @@ void RegisterStitch(CLI::App& app) {
   sub->add_option("--layout", args->layout, "layout CSV file,row,col[,x,y]; image paths relative to it")->required();
   sub->add_option("--overlap", args->overlap, "nominal overlap of neighbours: percent (20) or fraction (0.2)")
       ->required();
-  sub->add_option("-o,--output", args->output, "positions CSV file,x,y[,x_mm,y_mm],registered")->required();
+  sub->add_option("-o,--output", args->output,
+                  "positions CSV file,x,y[,x_mm,y_mm],registered,u_x,u_y (u: standard uncertainty in px against "
+                  "the first tile of the chain)")
+      ->required();
   sub->add_option("--mosaic", args->mosaic,
                   "also fuse the registered tiles (feathered seams) into one image in the tiles' pixel type (TIFF, "
                   "PNG, EXR; NaN or 0 where no tile reaches), or into an X3P height map in the stage frame when the "
@@ -187,9 +222,14 @@ void RegisterStitch(CLI::App& app) {
                   "layout's x,y");
   sub->add_option("--min-quality", args->min_quality, "reject pairs whose aligned correlation is below this")
       ->capture_default_str();
+  sub->add_option("--stage-sigma", args->stage_sigma_px,
+                  "the stage's positioning error over the grid (px, standard deviation): what holds a tile along a "
+                  "direction its images do not determine")
+      ->capture_default_str();
   sub->add_flag("--json", args->json,
-                "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], \"pairs\": "
-                "[{\"a\", \"b\", \"dx_px\", \"dy_px\", \"quality\", \"accepted\"}]}");
+                "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], "
+                "\"stage_along_one_axis\": [files], \"pairs\": [{\"a\", \"b\", \"dx_px\", \"dy_px\", \"sigma_px\", "
+                "\"quality\", \"accepted\"}]}");
   sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
               "-o demo/positions.csv --mosaic demo/mosaic.tif");
   sub->callback([args] { RunStitch(*args); });

@@ -31,6 +31,10 @@ struct RegistrationOptions {
   bool refine = true;
   // High-pass scale (px) applied before matching, so that uneven illumination and tilt do not correlate.
   double highpass_sigma_px = 8.0;
+  // How far (px, standard deviation) a tile may be from its nominal position: the stage's error over the grid.
+  // Along directions the images determine it moves nothing (their precision is ~0.01 px); along directions they
+  // do not (a texture of parallel marks), it keeps the tile near its stage position.
+  double stage_sigma_px = 2.0;
   // Register the pairs of a grid on OpenCV's thread pool (false: one thread, the benchmark's baseline). The
   // result is the same either way.
   bool parallel = true;
@@ -42,12 +46,18 @@ struct PairRegistration {
   Eigen::Vector2d nominal_px = Eigen::Vector2d::Zero();  // b's top-left in a's frame, from the stage / grid
   Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();   // measured, when accepted
   double response = 0.0;  // phase-correlation peak
-  double quality = 0.0;   // normalised cross-correlation once aligned, in [-1, 1]; the weight in the solve
+  double quality = 0.0;   // normalised cross-correlation once aligned, in [-1, 1]
+  // The offset's inverse covariance (px^-2), the pair's weight in the solve: the texture's gradient energy over
+  // the overlap, less what the noise contributes, over the residual variance. A direction along which the
+  // texture does not change (machining marks, a scratch, a polished face) carries none: the overlap cannot tell
+  // a shift along it, and the stage decides it.
+  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   bool accepted = false;
 };
 
 // Where b's top-left corner lies in a's pixel frame. Rejected (accepted = false) when the nominal overlap is
-// smaller than 8 x 8 px, the shift is implausible, or the quality is below the threshold.
+// smaller than 8 x 8 px, the shift is implausible, the quality is below the threshold, or the texture's gradient
+// energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
 
@@ -55,13 +65,17 @@ struct TilePositions {
   std::vector<Eigen::Vector2d> positions_px;
   std::vector<bool> registered;  // false: no accepted pair links the tile to an earlier one: stage position
   std::vector<int> anchor;       // the tile whose stage position each tile's chain starts from
+  // Standard uncertainty of each position relative to its anchor, per axis (px); 0 for an anchor. Near the stage
+  // sigma along an axis that the images do not determine, where the tile stays near its stage position.
+  std::vector<Eigen::Vector2d> sigma_px;
 };
 
-// Weighted least squares over accepted pairs: p_b - p_a = offset, weight = quality. In every connected group of
-// tiles the first (lowest index, i.e. earliest in the scan) keeps its nominal position; a group of one tile is a
-// tile without a good neighbour.
+// Generalised least squares over accepted pairs, p_b - p_a = offset weighted by each pair's information, and the
+// stage, p = nominal with standard deviation stage_sigma_px per axis. In every connected group of tiles the first
+// (lowest index, i.e. earliest in the scan) keeps its nominal position exactly; a group of one tile is a tile
+// without a good neighbour.
 TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
-                                 const std::vector<PairRegistration>& pairs);
+                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px = 2.0);
 
 struct GridTile {
   int row = 0, col = 0;

@@ -46,7 +46,7 @@ run(0 stitch --layout ${WORK}/set/layout.csv --overlap 20 -o ${WORK}/set/positio
 file(STRINGS ${WORK}/set/positions.csv positions)
 file(STRINGS ${WORK}/set/truth.csv truth)
 list(GET positions 0 header)
-if(NOT header STREQUAL "file,x,y,x_mm,y_mm,registered")
+if(NOT header STREQUAL "file,x,y,x_mm,y_mm,registered,u_x,u_y")
   message(FATAL_ERROR "positions header '${header}'")
 endif()
 foreach(i RANGE 1 9)
