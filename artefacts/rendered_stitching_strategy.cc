@@ -65,6 +65,7 @@ RenderedStrategies SimulateRenderedStrategies(const stage::ParameterLayout& layo
     true_px.emplace_back((c.x() - half) / s + 0.5, -(c.y() + half) / s + 0.5);
     encoder_px.emplace_back((q.x() - half) / s + 0.5, -(q.y() + half) / s + 0.5);
     images.push_back(scene.Photograph(true_px.back(), options.tile_px, options.tile_px, random));
+    out.encoder_centres_mm.push_back(q.head<2>());
   }
   // Every neighbour pair once; each case uses those whose two tiles it takes.
   std::vector<imaging::PairRegistration> neighbours;
@@ -134,6 +135,7 @@ RenderedStrategies SimulateRenderedStrategies(const stage::ParameterLayout& layo
     r.coordinate_error_um = coordinates[k].distance_error_um;
     out.cases.push_back(std::move(r));
   }
+  out.images = std::move(images);
   return out;
 }
 

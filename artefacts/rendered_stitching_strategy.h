@@ -46,6 +46,9 @@ struct RenderedStrategies {
   double pair_rms_px = 0.0;  // registration error of the accepted neighbour pairs against the rendered truth
   int rejected_pairs = 0;    // of the row's n - 1 neighbour pairs
   std::vector<RenderedStrategyResult> cases;
+  // The rendered row, for fvm stitch: the images, in scan order, and where the encoders put each tile's centre.
+  std::vector<imaging::TileImage> images;
+  std::vector<Eigen::Vector2d> encoder_centres_mm;
 };
 
 // `first` and `last` are the calottes' true positions (mm), the stage error model F of `layout` with `values`.

@@ -265,10 +265,31 @@ struct StrategyArgs {
   std::vector<double> from{-154.5487, -115.4767, -50.3624};  // Table 1, case a, calotte 1
   std::vector<double> to{-134.5409, -115.4371, -50.4457};    // ... calotte 6
   bool render = false;
+  std::string tiles_output;
   int tile_px = artefacts::RenderedStrategyOptions{}.tile_px;
   std::uint64_t seed = 1;
   bool json = false;
 };
+
+// The rendered row as a tile set for fvm stitch: 16-bit TIFFs and a layout whose x, y are the encoder readings of
+// the tile centres, so that stitching them with the pixel size reproduces case a.
+void WriteRenderedRow(const artefacts::RenderedStrategies& row, const artefacts::RenderedStrategyOptions& options,
+                      const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  std::vector<imaging::TileLayoutEntry> entries;
+  for (size_t i = 0; i < row.images.size(); ++i) {
+    const std::string file = TileFile(0, static_cast<int>(i));
+    imaging::WriteTileImage(directory / file, row.images[i], imaging::TilePixelType::kUint16);
+    entries.push_back({file, 0, static_cast<int>(i), row.encoder_centres_mm[i], 0});
+  }
+  WriteFileAtomically(directory / "layout.csv",
+                      fmt::format("# fvm tiles simulate --render --seed {}: the row of {} tiles of {} px, {:.6f} mm per "
+                                  "px, x,y = encoder readings of the tile centres (mm). Stitch with:\n# fvm stitch "
+                                  "--layout layout.csv --overlap {:g} --pixel-mm {:.9g} -o positions.csv\n",
+                                  options.seed, row.images.size(), options.tile_px, row.pixel_mm,
+                                  options.geometry.overlap * 100, row.pixel_mm) +
+                          imaging::FormatTileLayout(entries));
+}
 
 void RunStrategies(const StrategyArgs& args) {
   const stage::Calibration cal = ReadCalibration(args.calibration);
@@ -279,6 +300,7 @@ void RunStrategies(const StrategyArgs& args) {
   options.seed = args.seed;
   const Eigen::Vector3d first(args.from[0], args.from[1], args.from[2]);
   const Eigen::Vector3d last(args.to[0], args.to[1], args.to[2]);
+  if (!args.tiles_output.empty() && !args.render) throw InputError("--tiles needs --render");
   std::vector<artefacts::StrategyResult> results;
   std::optional<artefacts::RenderedStrategies> rendered;
   try {
@@ -290,6 +312,7 @@ void RunStrategies(const StrategyArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("fvm tiles simulate: ") + e.what());
   }
+  if (!args.tiles_output.empty()) WriteRenderedRow(*rendered, options, args.tiles_output);
   // The published differences (Table 1, 6 x 6 grid, 10x lens, calottes 1 and 6), for comparison.
   const std::map<char, double> published = {{'b', -14.6}, {'c', -1.5}, {'d', -8.9}, {'e', -14.8}, {'f', -15.0}};
   nlohmann::ordered_json doc;
@@ -426,6 +449,9 @@ void RegisterTiles(CLI::App& app) {
                        "does and fit the calottes in their tiles (a few seconds)");
   strategies->add_option("--tile-px", strategy_args->tile_px, "with --render: pixels across a tile")
       ->capture_default_str();
+  strategies->add_option("--tiles", strategy_args->tiles_output,
+                         "with --render: write the row's tiles (16-bit TIFF) and layout.csv (encoder positions) to "
+                         "this directory, ready for fvm stitch");
   strategies->add_option("--seed", strategy_args->seed, "with --render: seed of the texture and the noise")
       ->capture_default_str();
   strategies->add_flag("--json", strategy_args->json,
