@@ -202,10 +202,12 @@ void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
   sub->description(
-      "Registers every tile with its right and lower neighbour by phase correlation of the overlap (sub-pixel), "
-      "solves all positions by least squares weighted by each pair's quality, and writes file,x,y: each tile's "
-      "top-left corner in pixels (x right, y down), the first tile of the layout at 0,0. Tiles that no good pair "
-      "links to an earlier one keep their stage (or grid) positions, as the instrument does.");
+      "Registers every tile with its right and lower neighbour by phase correlation of the overlap, refined to "
+      "sub-pixel with the pair's uncertainty; solves all positions by least squares weighted by those "
+      "uncertainties, and writes file,x,y: each tile's top-left corner in pixels (x right, y down), the first tile "
+      "of the layout at 0,0, with its standard uncertainty. Tiles that no good pair links to an earlier one keep "
+      "their stage (or grid) positions, as the instrument does; along parallel marks, where images cannot tell a "
+      "shift, the stage position holds too.");
   sub->add_option("--layout", args->layout, "layout CSV file,row,col[,x,y]; image paths relative to it")->required();
   sub->add_option("--overlap", args->overlap, "nominal overlap of neighbours: percent (20) or fraction (0.2)")
       ->required();

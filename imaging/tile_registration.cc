@@ -61,7 +61,7 @@ void SubtractQuadratic(cv::Mat& crop) {
 // (all pixels positive) are matched in the logarithm, where the camera's shading (vignetting) is a smooth term
 // added to the scene rather than a gain on it: the low-pass of shaded texture is the texture's low-pass shifted by
 // sigma^2 grad(g) / g, in opposite directions in A and B, and that biased every pair of a row the same way
-// (0.010 px a pair under 30 % vignetting, 1 um over 16 tiles of 6 um pixels; 0.000 px in the logarithm). Then
+// (0.010 px a pair under 30 % vignetting, 1 um over 16 tiles of 6 um pixels; below 0.001 px in the logarithm). Then
 // the shading and the part's tilt go as a quadratic surface, before the high-pass: a high-pass alone mirrors
 // their slope at the crop's edges into a ridge that sits at the same place of both crops and so pins the shift
 // to the whole-pixel crop, which along a direction without texture is all there is. Last, a Gaussian high-pass
@@ -154,7 +154,7 @@ std::optional<cv::Rect> Interior(const cv::Mat& b, int margin) {
 
 // Sub-pixel shift by inverse-compositional Gauss-Newton on sum (A(v + e) - B(v))^2 over B's interior: the
 // Jacobian is B's gradient, so it and the 2 x 2 normal matrix are computed once; each step only resamples A.
-// Returns false when it does not settle within 2 px of the start, and the phase-correlation estimate stands.
+// Returns false when it does not settle within 4 px of the start, and the phase-correlation estimate stands.
 bool RefineShift(const cv::Mat& a, const cv::Mat& b, double tolerance_px, Eigen::Vector2d& e) {
   // Up to 4 px from the start: on a lay (marks in one direction) the correlation peak is a ridge, and its top
   // can lie a few pixels along it from the truth.
