@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace fvm::imaging {
 namespace {
@@ -51,9 +52,18 @@ void SubtractQuadratic(cv::Mat& crop) {
   }
   // A crop a few samples thin cannot hold a quadratic: the pseudo-inverse takes what it can.
   const Eigen::Matrix<double, 6, 1> c = normal.completeOrthogonalDecomposition().solve(rhs);
+  // Row by row: c0 + c2 v + c5 v^2 + (c1 + c4 v) u + c3 u^2.
+  std::vector<float> u(static_cast<size_t>(crop.cols));
+  for (int x = 0; x < crop.cols; ++x) u[static_cast<size_t>(x)] = static_cast<float>((x - cx) / scale);
   for (int y = 0; y < crop.rows; ++y) {
+    const double v = (y - cy) / scale;
+    const auto constant = static_cast<float>(c(0) + c(2) * v + c(5) * v * v);
+    const auto linear = static_cast<float>(c(1) + c(4) * v), square = static_cast<float>(c(3));
     float* row = crop.ptr<float>(y);
-    for (int x = 0; x < crop.cols; ++x) row[x] -= static_cast<float>(basis(x, y).dot(c));
+    for (int x = 0; x < crop.cols; ++x) {
+      const float ux = u[static_cast<size_t>(x)];
+      row[x] -= constant + (linear + square * ux) * ux;
+    }
   }
 }
 
@@ -248,6 +258,7 @@ Alignment MeasureAlignment(const cv::Mat& a, const cv::Mat& b, const Eigen::Vect
   // The texture's gradient energy from the cross products of A's and B's gradients: the two images' noise is
   // independent, so it adds nothing on average, where the energy of one image's gradients counts its noise too.
   // The energies of A and B alone scale the cross products' spread under pure noise.
+  // Sums per row in float (a row is at most a few thousand terms), over rows in double.
   Eigen::Matrix2d cross = Eigen::Matrix2d::Zero(), energy_a = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d energy_b = Eigen::Matrix2d::Zero();
   double residual = 0.0;
@@ -255,15 +266,19 @@ Alignment MeasureAlignment(const cv::Mat& a, const cv::Mat& b, const Eigen::Vect
     const float *pbx = bx.ptr<float>(y), *pby = by.ptr<float>(y), *pax = ax.ptr<float>(y), *pay = ay.ptr<float>(y);
     const float* w = warped.ptr<float>(y);
     const float* t = target.ptr<float>(y);
+    float cxx = 0, cxy = 0, cyx = 0, cyy = 0, axx = 0, axy = 0, ayy = 0, bxx = 0, bxy = 0, byy = 0, rr = 0;
     for (int x = 0; x < bx.cols; ++x) {
-      const Eigen::Vector2d gb(pbx[x], pby[x]), ga(pax[x], pay[x]);
-      cross += ga * gb.transpose();
-      energy_a += ga * ga.transpose();
-      energy_b += gb * gb.transpose();
-      residual += (w[x] - t[x]) * (w[x] - t[x]);
+      cxx += pax[x] * pbx[x], cxy += pax[x] * pby[x], cyx += pay[x] * pbx[x], cyy += pay[x] * pby[x];
+      axx += pax[x] * pax[x], axy += pax[x] * pay[x], ayy += pay[x] * pay[x];
+      bxx += pbx[x] * pbx[x], bxy += pbx[x] * pby[x], byy += pby[x] * pby[x];
+      rr += (w[x] - t[x]) * (w[x] - t[x]);
     }
+    // The cross products symmetrised: A's x gradient against B's y counts as much as the other way round.
+    cross += (Eigen::Matrix2d() << cxx, 0.5 * (cxy + cyx), 0.5 * (cxy + cyx), cyy).finished();
+    energy_a += (Eigen::Matrix2d() << axx, axy, axy, ayy).finished();
+    energy_b += (Eigen::Matrix2d() << bxx, bxy, bxy, byy).finished();
+    residual += rr;
   }
-  cross = (0.5 * (cross + cross.transpose())).eval();
   const double n = static_cast<double>(bx.total());
   const double variance = std::max(residual / n, 1e-12 * energy_b.trace() / n);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(cross);
