@@ -33,19 +33,26 @@ cv::Mat View(const TileImage& image) {
                  const_cast<float*>(image.data()));
 }
 
-// A quadratic surface z = c0 + c1 x + c2 y + c3 x^2 + c4 x y + c5 y^2 fitted to the crop (every 4th pixel each way)
-// and subtracted: lens shading and a tilted part are smooth across a tile, and a quadratic takes them out whole.
-void SubtractQuadratic(cv::Mat& crop) {
+// A crop ready for matching: `value` high-passed, 0 where the tile had no valid pixel; `valid` 1 where it had
+// one, 0 elsewhere (CV_32F), or empty when every pixel is valid. Focus-variation height maps leave steep flanks
+// and dark spots invalid (NaN); intensity tiles have none.
+struct Prepared {
+  cv::Mat value;
+  cv::Mat valid;
+};
+
+// A quadratic surface z = c0 + c1 x + c2 y + c3 x^2 + c4 x y + c5 y^2 fitted to the valid pixels of the crop
+// (every 4th each way) and subtracted: lens shading and a tilted part are smooth across a tile, and a quadratic
+// takes them out whole.
+void SubtractQuadratic(cv::Mat& crop, const cv::Mat& valid) {
   Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
   const double cx = crop.cols / 2.0, cy = crop.rows / 2.0, scale = std::max(cx, cy);
-  const auto basis = [&](int x, int y) {
-    const double u = (x - cx) / scale, v = (y - cy) / scale;
-    return (Eigen::Matrix<double, 6, 1>() << 1, u, v, u * u, u * v, v * v).finished();
-  };
   for (int y = 0; y < crop.rows; y += 4) {
     for (int x = 0; x < crop.cols; x += 4) {
-      const Eigen::Matrix<double, 6, 1> b = basis(x, y);
+      if (!valid.empty() && valid.at<float>(y, x) == 0.0f) continue;
+      const double u = (x - cx) / scale, v = (y - cy) / scale;
+      const Eigen::Matrix<double, 6, 1> b = (Eigen::Matrix<double, 6, 1>() << 1, u, v, u * u, u * v, v * v).finished();
       normal += b * b.transpose();
       rhs += b * crop.at<float>(y, x);
     }
@@ -67,6 +74,23 @@ void SubtractQuadratic(cv::Mat& crop) {
   }
 }
 
+// A Gaussian blur that ignores invalid pixels (normalised convolution) and marks valid where at least 99 % of
+// the kernel's weight fell on valid pixels.
+Prepared Blur(const Prepared& in, double sigma) {
+  Prepared out;
+  if (in.valid.empty()) {
+    cv::GaussianBlur(in.value, out.value, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
+    return out;
+  }
+  cv::Mat weight;
+  cv::GaussianBlur(in.value, out.value, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);  // invalid are 0
+  cv::GaussianBlur(in.valid, weight, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
+  cv::threshold(weight, out.valid, 0.99, 1.0, cv::THRESH_BINARY);
+  out.value = out.value / cv::max(weight, 1e-6);
+  out.value = out.value.mul(out.valid);
+  return out;
+}
+
 // Removes what does not belong to the scene and differs between two tiles at the same place. Intensity images
 // (all pixels positive) are matched in the logarithm, where the camera's shading (vignetting) is a smooth term
 // added to the scene rather than a gain on it: the low-pass of shaded texture is the texture's low-pass shifted by
@@ -76,26 +100,32 @@ void SubtractQuadratic(cv::Mat& crop) {
 // their slope at the crop's edges into a ridge that sits at the same place of both crops and so pins the shift
 // to the whole-pixel crop, which along a direction without texture is all there is. Last, a Gaussian high-pass
 // removes the rest of the slow changes.
-cv::Mat HighPass(const cv::Mat& crop, double sigma) {
-  cv::Mat out;
-  crop.convertTo(out, CV_32F);
+Prepared HighPass(const cv::Mat& crop, double sigma) {
+  Prepared out;
+  crop.convertTo(out.value, CV_32F);
+  const cv::Mat finite = out.value == out.value;  // NaN is the one value unequal to itself
+  if (cv::countNonZero(finite) < static_cast<int>(finite.total())) {
+    finite.convertTo(out.valid, CV_32F, 1.0 / 255.0);
+    out.value.setTo(0.0f, ~finite);
+  }
   double lowest = 0.0;
-  cv::minMaxLoc(out, &lowest);
-  if (lowest > 0.0) cv::log(out, out);
-  SubtractQuadratic(out);
+  cv::minMaxLoc(out.value, &lowest, nullptr, nullptr, nullptr, finite);
+  if (lowest > 0.0) cv::log(cv::max(out.value, lowest), out.value);  // invalid pixels get log(lowest): masked
+  SubtractQuadratic(out.value, out.valid);
+  if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   if (sigma > 0.0) {
-    cv::Mat low;
-    cv::GaussianBlur(out, low, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
-    out -= low;
+    const Prepared low = Blur({out.value, out.valid}, sigma);
+    out.value -= low.value;
+    if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   }
   return out;
 }
 
-// Where two tiles overlap when b's top-left corner sits at `whole` in a's frame, both crops high-passed; none
-// when the overlap is narrower than kMinOverlapPx.
+// Where two tiles overlap when b's top-left corner sits at `whole` in a's frame, both crops prepared; none when
+// the overlap is narrower than kMinOverlapPx.
 struct Overlap {
   cv::Rect in_a, in_b;
-  cv::Mat a, b;
+  Prepared a, b;
 };
 
 std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const Eigen::Vector2i& whole,
@@ -162,10 +192,27 @@ std::optional<cv::Rect> Interior(const cv::Mat& b, int margin) {
   return inner;
 }
 
+// Where a pixel of `inner` counts: B valid there, and A valid wherever its resampling at v + e and the 3 x 3
+// gradients reach. Empty when both crops are whole.
+cv::Mat Usable(const cv::Mat& a_valid, const cv::Mat& b_valid, const Eigen::Vector2d& e, const cv::Rect& inner) {
+  if (a_valid.empty() && b_valid.empty()) return {};
+  cv::Mat usable = cv::Mat::ones(inner.size(), CV_32F);
+  if (!b_valid.empty()) usable = b_valid(inner).clone();
+  if (!a_valid.empty()) {
+    cv::Mat shifted;
+    cv::threshold(ShiftedCrop(a_valid, e, inner), shifted, 0.999, 1.0, cv::THRESH_BINARY);
+    usable = usable.mul(shifted);
+  }
+  cv::erode(usable, usable, cv::Mat::ones(3, 3, CV_8U));
+  return usable;
+}
+
 // Sub-pixel shift by inverse-compositional Gauss-Newton on sum (A(v + e) - B(v))^2 over B's interior: the
 // Jacobian is B's gradient, so it and the 2 x 2 normal matrix are computed once; each step only resamples A.
-// Returns false when it does not settle within 4 px of the start, and the phase-correlation estimate stands.
-bool RefineShift(const cv::Mat& a, const cv::Mat& b, double tolerance_px, Eigen::Vector2d& e) {
+// Pixels that are not usable (invalid in either crop) are left out, their set fixed at the start of each
+// interior. Returns false when it does not settle within 4 px of the start, and the phase-correlation estimate
+// stands.
+bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e) {
   // Up to 4 px from the start: on a lay (marks in one direction) the correlation peak is a ridge, and its top
   // can lie a few pixels along it from the truth.
   constexpr double kWander = 4.0;
@@ -176,13 +223,18 @@ bool RefineShift(const cv::Mat& a, const cv::Mat& b, double tolerance_px, Eigen:
   // wider margin, so that a narrow overlap keeps most of its pixels while the shift stays small.
   while (iteration < kIterations) {
     const double reach = estimate.cwiseAbs().maxCoeff() + 1.0;
-    const auto inner = Interior(b, 4 + static_cast<int>(std::ceil(reach)));
+    const auto inner = Interior(b.value, 4 + static_cast<int>(std::ceil(reach)));
     if (!inner) return false;
     // Central differences (Sobel's 1/8 scale undone) of B, taken from B's own pixels around the interior.
     cv::Mat gx, gy;
-    cv::Sobel(b(*inner), gx, CV_32F, 1, 0, 3, 1.0 / 8.0);
-    cv::Sobel(b(*inner), gy, CV_32F, 0, 1, 3, 1.0 / 8.0);
-    const cv::Mat target = b(*inner);
+    cv::Sobel(b.value(*inner), gx, CV_32F, 1, 0, 3, 1.0 / 8.0);
+    cv::Sobel(b.value(*inner), gy, CV_32F, 0, 1, 3, 1.0 / 8.0);
+    const cv::Mat usable = Usable(a.valid, b.valid, estimate, *inner);
+    if (!usable.empty()) {
+      gx = gx.mul(usable);
+      gy = gy.mul(usable);
+    }
+    const cv::Mat target = b.value(*inner);
     Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
     for (int y = 0; y < gx.rows; ++y) {
       const float* px = gx.ptr<float>(y);
@@ -200,7 +252,7 @@ bool RefineShift(const cv::Mat& a, const cv::Mat& b, double tolerance_px, Eigen:
     // damping only slows each step by 1 %.
     const Eigen::LDLT<Eigen::Matrix2d> solve(h + 0.01 * h.trace() * Eigen::Matrix2d::Identity());
     for (; iteration < kIterations; ++iteration) {
-      const cv::Mat warped = ShiftedCrop(a, estimate, *inner);
+      const cv::Mat warped = ShiftedCrop(a.value, estimate, *inner);
       Eigen::Vector2d g = Eigen::Vector2d::Zero();
       for (int y = 0; y < gx.rows; ++y) {
         const float* px = gx.ptr<float>(y);
@@ -237,50 +289,55 @@ struct Alignment {
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
 };
 
-Alignment MeasureAlignment(const cv::Mat& a, const cv::Mat& b, const Eigen::Vector2d& e) {
+Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Vector2d& e) {
   Alignment out;
-  const auto inner = Interior(b, 4 + static_cast<int>(std::ceil(e.cwiseAbs().maxCoeff())));
+  const auto inner = Interior(b.value, 4 + static_cast<int>(std::ceil(e.cwiseAbs().maxCoeff())));
   if (!inner) return out;
-  const cv::Mat target = b(*inner);
-  const cv::Mat warped = ShiftedCrop(a, e, *inner);
-  // Normalised cross-correlation: near 1 for the same scene under noise and uneven light, near 0 for unrelated
-  // images. Unlike the phase-correlation peak it does not depend on the overlap's size.
-  cv::Mat score;
-  cv::matchTemplate(target, warped, score, cv::TM_CCOEFF_NORMED);
-  out.quality = score.at<float>(0, 0);
-
+  const cv::Mat target = b.value(*inner);
+  const cv::Mat warped = ShiftedCrop(a.value, e, *inner);
+  const cv::Mat usable = Usable(a.valid, b.valid, e, *inner);
   // Gradients of both aligned crops (central differences: Sobel's 1/8 scale undone).
   cv::Mat bx, by, ax, ay;
   cv::Sobel(target, bx, CV_32F, 1, 0, 3, 1.0 / 8.0);
   cv::Sobel(target, by, CV_32F, 0, 1, 3, 1.0 / 8.0);
   cv::Sobel(warped, ax, CV_32F, 1, 0, 3, 1.0 / 8.0);
   cv::Sobel(warped, ay, CV_32F, 0, 1, 3, 1.0 / 8.0);
-  // The texture's gradient energy from the cross products of A's and B's gradients: the two images' noise is
-  // independent, so it adds nothing on average, where the energy of one image's gradients counts its noise too.
-  // The energies of A and B alone scale the cross products' spread under pure noise.
-  // Sums per row in float (a row is at most a few thousand terms), over rows in double.
+  // Sums per row in float (a row is at most a few thousand terms), over rows in double. The texture's gradient
+  // energy comes from the cross products of A's and B's gradients: the two images' noise is independent, so it
+  // adds nothing on average, where the energy of one image's gradients counts its noise too. The energies of A
+  // and B alone scale the cross products' spread under pure noise. The quality is the normalised
+  // cross-correlation of the values.
   Eigen::Matrix2d cross = Eigen::Matrix2d::Zero(), energy_a = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d energy_b = Eigen::Matrix2d::Zero();
-  double residual = 0.0;
+  double n = 0.0, sw = 0.0, st = 0.0, sww = 0.0, stt = 0.0, swt = 0.0;
   for (int y = 0; y < bx.rows; ++y) {
     const float *pbx = bx.ptr<float>(y), *pby = by.ptr<float>(y), *pax = ax.ptr<float>(y), *pay = ay.ptr<float>(y);
     const float* w = warped.ptr<float>(y);
     const float* t = target.ptr<float>(y);
-    float cxx = 0, cxy = 0, cyx = 0, cyy = 0, axx = 0, axy = 0, ayy = 0, bxx = 0, bxy = 0, byy = 0, rr = 0;
+    const float* use = usable.empty() ? nullptr : usable.ptr<float>(y);
+    float cxx = 0, cxy = 0, cyx = 0, cyy = 0, axx = 0, axy = 0, ayy = 0, bxx = 0, bxy = 0, byy = 0;
+    float count = 0, rw = 0, rt = 0, rww = 0, rtt = 0, rwt = 0;
     for (int x = 0; x < bx.cols; ++x) {
+      if (use != nullptr && use[x] == 0.0f) continue;
       cxx += pax[x] * pbx[x], cxy += pax[x] * pby[x], cyx += pay[x] * pbx[x], cyy += pay[x] * pby[x];
       axx += pax[x] * pax[x], axy += pax[x] * pay[x], ayy += pay[x] * pay[x];
       bxx += pbx[x] * pbx[x], bxy += pbx[x] * pby[x], byy += pby[x] * pby[x];
-      rr += (w[x] - t[x]) * (w[x] - t[x]);
+      count += 1, rw += w[x], rt += t[x], rww += w[x] * w[x], rtt += t[x] * t[x], rwt += w[x] * t[x];
     }
     // The cross products symmetrised: A's x gradient against B's y counts as much as the other way round.
     cross += (Eigen::Matrix2d() << cxx, 0.5 * (cxy + cyx), 0.5 * (cxy + cyx), cyy).finished();
     energy_a += (Eigen::Matrix2d() << axx, axy, axy, ayy).finished();
     energy_b += (Eigen::Matrix2d() << bxx, bxy, bxy, byy).finished();
-    residual += rr;
+    n += count, sw += rw, st += rt, sww += rww, stt += rtt, swt += rwt;
   }
-  const double n = static_cast<double>(bx.total());
-  const double variance = std::max(residual / n, 1e-12 * energy_b.trace() / n);
+  if (n < kMinOverlapPx * kMinOverlapPx) return out;
+  const double var_w = sww / n - (sw / n) * (sw / n), var_t = stt / n - (st / n) * (st / n);
+  const double covariance = swt / n - (sw / n) * (st / n);
+  if (!(var_w > 0.0 && var_t > 0.0)) return out;
+  out.quality = covariance / std::sqrt(var_w * var_t);
+  // The residual's variance: mean of (w - t)^2.
+  const double residual = (sww - 2.0 * swt + stt) / n;
+  const double variance = std::max(residual, 1e-12 * energy_b.trace() / n);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(cross);
   for (int k = 0; k < 2; ++k) {
     const Eigen::Vector2d u = directions.eigenvectors().col(k);
@@ -317,7 +374,7 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
 
   Eigen::Vector2d offset;
   if (options.crop_to_overlap) {
-    const auto [e, response] = PhaseShift(nominal->a, nominal->b);
+    const auto [e, response] = PhaseShift(nominal->a.value, nominal->b.value);
     pair.response = response;
     offset = nominal_whole.cast<double>() + e;
   } else {
@@ -325,8 +382,8 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     // representative nearest the nominal offset.
     const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
                           static_cast<int>(std::min(a.rows(), b.rows())));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px),
-                                          HighPass(View(b)(common), options.highpass_sigma_px));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px).value);
     pair.response = response;
     offset = e;
     offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
@@ -344,12 +401,10 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   if (options.refine) {
     // Coarse to fine: the phase-correlation peak can be a pixel off, outside the basin of Gauss-Newton on fine
     // texture (a quarter period); blurred crops widen the basin, then the full-resolution pass sets the sub-pixel.
-    cv::Mat blur_a, blur_b;
-    cv::GaussianBlur(overlap->a, blur_a, cv::Size(0, 0), 2.5);
-    cv::GaussianBlur(overlap->b, blur_b, cv::Size(0, 0), 2.5);
     Eigen::Vector2d refined = e;
     // The coarse pass only needs to land in the fine pass' basin; the fine one stops well below the noise.
-    if (RefineShift(blur_a, blur_b, 0.05, refined) && RefineShift(overlap->a, overlap->b, 2e-3, refined)) {
+    if (RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, refined) &&
+        RefineShift(overlap->a, overlap->b, 2e-3, refined)) {
       e = refined;
     }
   }
