@@ -56,9 +56,11 @@ TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) 
       image(y, x) = static_cast<float>(sum / grey_channels * scale);
     }
   }
-  if (!image.allFinite()) {
-    throw InputError(path.string() + ": holds NaN or infinite pixels; fill invalid pixels before stitching");
+  // NaN marks an invalid point, as focus-variation height maps export steep flanks; infinity marks nothing.
+  if (image.array().isInf().any()) {
+    throw InputError(path.string() + ": holds infinite pixels; mark invalid points as NaN");
   }
+  if (image.array().isNaN().all()) throw InputError(path.string() + ": holds no valid pixel");
   return image;
 }
 

@@ -13,8 +13,9 @@ enum class TilePixelType { kUint8, kUint16, kFloat };
 
 // Integer pixels come back in their native counts (0..255, 0..65535), floats as stored: registration is blind to
 // gain and offset. Colour tiles are averaged to grey; an alpha channel is ignored. `type`, when given, receives
-// the stored pixel type (other integer types count as float). Throws InputError naming the file when it is
-// missing, empty, not an image, or a volume.
+// the stored pixel type (other integer types count as float). NaN pixels are invalid points (a height map's steep
+// flanks); registration and fusing leave them out. Throws InputError naming the file when it is missing, empty,
+// not an image, a volume, holds infinite pixels or no valid one.
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type = nullptr);
 
 // Writes atomically; integer types round and clamp. Throws InputError naming the file when it cannot be written.

@@ -42,6 +42,9 @@ Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::V
   // Weighted sums of value and weight: premultiplying before resampling keeps the border's zero weight from
   // ringing into the values.
   cv::Mat sum = cv::Mat::zeros(height, width, CV_32F), weight = cv::Mat::zeros(height, width, CV_32F);
+  // Where some tile's valid pixels surround the point entirely (bilinear validity 1): elsewhere the resampling
+  // kernel would reach across an invalid pixel and make up a height the instrument never measured.
+  cv::Mat covered = cv::Mat::zeros(height, width, CV_32F);
   for (size_t i = 0; i < tiles.size(); ++i) {
     const cv::Mat tile(static_cast<int>(tiles[i].rows()), static_cast<int>(tiles[i].cols()), CV_32F,
                        const_cast<float*>(tiles[i].data()));
@@ -49,22 +52,30 @@ Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::V
     const int ix = static_cast<int>(std::floor(at.x())), iy = static_cast<int>(std::floor(at.y()));
     const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, at.x() - ix, 0, 1, at.y() - iy);
     const cv::Size size(tile.cols + 1, tile.rows + 1);
-    const cv::Mat w = FeatherWeights(tile.cols, tile.rows);
-    cv::Mat moved_value, moved_weight;
-    cv::warpAffine(tile.mul(w), moved_value, shift, size, cv::INTER_LANCZOS4, cv::BORDER_CONSTANT, 0);
+    // Invalid pixels (NaN) weigh nothing.
+    cv::Mat w = FeatherWeights(tile.cols, tile.rows), value = tile.clone(), valid;
+    const cv::Mat invalid = tile != tile;
+    w.setTo(0.0f, invalid);
+    value.setTo(0.0f, invalid);
+    cv::Mat(~invalid).convertTo(valid, CV_32F, 1.0 / 255.0);
+    cv::Mat moved_value, moved_weight, moved_valid;
+    cv::warpAffine(value.mul(w), moved_value, shift, size, cv::INTER_LANCZOS4, cv::BORDER_CONSTANT, 0);
     cv::warpAffine(w, moved_weight, shift, size, cv::INTER_LANCZOS4, cv::BORDER_CONSTANT, 0);
+    cv::warpAffine(valid, moved_valid, shift, size, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
     const cv::Rect roi(ix, iy, size.width, size.height);
     sum(roi) += moved_value;
     weight(roi) += moved_weight;
+    covered(roi) = cv::max(covered(roi), moved_valid);
   }
   out.image.resize(height, width);
   // A tile's corner pixel weighs 4 / (w h); a sum below a four-hundredth of that is the resampling kernel's
-  // tail beyond the tiles, not a tile's pixel.
+  // tail beyond the tiles or around an invalid pixel, not a tile's pixel.
   const float floor = 0.01f / static_cast<float>(tiles.front().size());
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       const float w = weight.at<float>(y, x);
-      out.image(y, x) = w > floor ? sum.at<float>(y, x) / w : std::numeric_limits<float>::quiet_NaN();
+      const bool measured = w > floor && covered.at<float>(y, x) > 0.999f;
+      out.image(y, x) = measured ? sum.at<float>(y, x) / w : std::numeric_limits<float>::quiet_NaN();
     }
   }
   return out;

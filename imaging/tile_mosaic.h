@@ -2,6 +2,7 @@
 // Fusing registered tiles into one image: a mosaic of intensity tiles, or one height map of height tiles. Each
 // tile is resampled at its sub-pixel position (Lanczos-4) and blended with a weight that falls linearly to zero at
 // its border (feathering), so that the seams between tiles with different shading or height offsets do not show.
+// Invalid pixels (NaN) of a tile carry no weight: another tile's valid pixel there fills the hole.
 //
 // Pixel frame as in tile_registration.h: x to the right, y down, positions are the tiles' top-left pixels.
 
