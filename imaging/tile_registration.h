@@ -47,10 +47,10 @@ struct PairRegistration {
   Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();   // measured, when accepted
   double response = 0.0;  // phase-correlation peak
   double quality = 0.0;   // normalised cross-correlation once aligned, in [-1, 1]
-  // The offset's inverse covariance (px^-2), the pair's weight in the solve: the texture's gradient energy over
-  // the overlap, less what the noise contributes, over the residual variance. A direction along which the
-  // texture does not change (machining marks, a scratch, a polished face) carries none: the overlap cannot tell
-  // a shift along it, and the stage decides it.
+  // The offset's inverse covariance (px^-2), the pair's weight in the solve: from the texture the two tiles
+  // share (the cross products of their gradients, which their independent noise leaves alone) and the residual
+  // variance, with a floor of 0.005 px. A direction along which the texture does not change (machining marks, a
+  // polished face) carries none: the overlap cannot tell a shift along it, and the stage decides it.
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   bool accepted = false;
 };
