@@ -1,5 +1,7 @@
 #include "artefacts/artefact.h"
 
+#include "imaging/input_error.h"
+
 namespace fvm::artefacts {
 
 Artefact CalotteBar17() {
@@ -16,6 +18,12 @@ Artefact CalotteGrid6x6() {
     }
   }
   return grid;
+}
+
+Artefact KnownArtefact(const std::string& name) {
+  if (name == "grid6x6") return CalotteGrid6x6();
+  if (name == "bar17") return CalotteBar17();
+  throw InputError("--artefact '" + name + "': not an artefact fvm knows; use grid6x6 or bar17");
 }
 
 }  // namespace fvm::artefacts

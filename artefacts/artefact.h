@@ -25,4 +25,7 @@ Artefact CalotteBar17();
 // top to bottom (1 at top left, 6 top right, 31 bottom left).
 Artefact CalotteGrid6x6();
 
+// The artefact of that name: "grid6x6" or "bar17". Throws InputError naming the known ones otherwise.
+Artefact KnownArtefact(const std::string& name);
+
 }  // namespace fvm::artefacts

@@ -56,9 +56,7 @@ imaging::HeightMap ReadMap(const FitArgs& args) {
 
 std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
   if (name.empty()) return std::nullopt;
-  if (name == "grid6x6") return artefacts::CalotteGrid6x6();
-  if (name == "bar17") return artefacts::CalotteBar17();
-  throw InputError("--artefact '" + name + "': not an artefact fvm knows; use grid6x6 or bar17");
+  return artefacts::KnownArtefact(name);
 }
 
 // JSON keeps 0.1 nm for mm values and 0.1 nm for um values (as fvm diff): finer digits are noise.

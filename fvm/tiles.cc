@@ -76,14 +76,7 @@ std::vector<double> ParseNumbers(const std::string& text, size_t count, const st
 std::vector<Feature> LoadFeatures(const PlanArgs& args) {
   std::vector<Feature> features;
   if (!args.artefact.empty()) {
-    artefacts::Artefact artefact;
-    if (args.artefact == "grid6x6") {
-      artefact = artefacts::CalotteGrid6x6();
-    } else if (args.artefact == "bar17") {
-      artefact = artefacts::CalotteBar17();
-    } else {
-      throw InputError("--artefact '" + args.artefact + "': not an artefact fvm knows; use grid6x6 or bar17");
-    }
+    const artefacts::Artefact artefact = artefacts::KnownArtefact(args.artefact);
     for (const auto& c : artefact.calottes) {
       features.push_back({c.id, c.centre.head<2>(), args.radius_mm > 0.0 ? args.radius_mm : c.radius_mm});
     }
