@@ -21,6 +21,7 @@
 #include "artefacts/artefact.h"
 #include "artefacts/atomic_file.h"
 #include "artefacts/centre_export.h"
+#include "artefacts/height_tile_synthesis.h"
 #include "imaging/input_error.h"
 #include "artefacts/rendered_stitching_strategy.h"
 #include "artefacts/stitching_strategy.h"
@@ -206,17 +207,69 @@ void RunPlan(const PlanArgs& args) {
 
 struct SynthArgs {
   std::string output;
-  int rows = 3, cols = 3, size = 256;
+  int rows = 0, cols = 0, size = 256;  // 0: 3, or with --artefact as many as cover it
   std::string overlap = "0.2";
   double sigma_px = 1.5;
-  int bits = 16;
+  int bits = 0;  // 0: 16, or with --artefact 32
+  std::string artefact;
   std::uint64_t seed = 1;
 };
 
-void RunSynthesize(const SynthArgs& args) {
-  artefacts::TileSynthesisOptions options;
+// Height-map tiles of a known artefact (float TIFF, heights in mm, NaN where invalid), the layout with the stage
+// positions the tiles were taken at, the true tile positions and the true calottes.
+void RunSynthesizeHeights(const SynthArgs& args) {
+  if (args.bits != 0 && args.bits != 32) throw InputError("--bits: height tiles are float (32)");
+  artefacts::HeightTileOptions options;
   options.rows = args.rows;
   options.cols = args.cols;
+  options.size = args.size;
+  options.overlap = imaging::ParseOverlap(args.overlap, "--overlap");
+  options.position_sigma_px = args.sigma_px;
+  options.seed = args.seed;
+  artefacts::SynthesizedHeightTiles tiles;
+  try {
+    tiles = artefacts::SynthesizeHeightTiles(artefacts::KnownArtefact(args.artefact), options);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("fvm tiles synthesize: ") + e.what());
+  }
+  const std::filesystem::path dir(args.output);
+  std::filesystem::create_directories(dir);
+  const double pixel = tiles.surface.map.dx_mm;
+  std::vector<imaging::TileLayoutEntry> entries;
+  std::string truth = "file,x,y,x_mm,y_mm\n";
+  for (size_t i = 0; i < tiles.images.size(); ++i) {
+    const auto& t = tiles.tiles[i];
+    const std::string file = TileFile(t.row, t.col);
+    imaging::WriteTileImage(dir / file, tiles.images[i], imaging::TilePixelType::kFloat);
+    entries.push_back({file, t.row, t.col, tiles.nominal_centre_mm[i], 0});
+    const Eigen::Vector2d error = tiles.truth_px[i] - t.nominal_px;
+    truth += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f}\n", file, tiles.truth_px[i].x(), tiles.truth_px[i].y(),
+                         tiles.nominal_centre_mm[i].x() + error.x() * pixel,
+                         tiles.nominal_centre_mm[i].y() - error.y() * pixel);
+  }
+  artefacts::CentreExport calottes;
+  calottes.comments.push_back(fmt::format("fvm tiles synthesize --artefact {} --seed {}: the true calottes (mm)",
+                                          args.artefact, args.seed));
+  for (const auto& c : tiles.surface.truth) calottes.centres.push_back({c.id, c.centre, std::nullopt, c.radius_mm});
+  artefacts::WriteCentreExport(dir / "calottes.csv", calottes);
+  WriteFileAtomically(dir / "truth.csv", truth);
+  WriteFileAtomically(
+      dir / "layout.csv",
+      fmt::format("# fvm tiles synthesize --artefact {} --seed {}: {} height tiles of {} px, {} mm per px; x,y = stage "
+                  "positions of the tile centres (mm). Stitch with:\n# fvm stitch --layout layout.csv --overlap {:g} "
+                  "--pixel-mm {} -o positions.csv --mosaic mosaic.x3p\n",
+                  args.artefact, args.seed, tiles.images.size(), args.size, pixel, options.overlap * 100, pixel) +
+          imaging::FormatTileLayout(entries));
+  fmt::print("{} height tiles of {} ({} x {} px, {} mm per px), layout.csv, truth.csv (true positions) and "
+             "calottes.csv (true calottes) written to {}\n",
+             tiles.images.size(), args.artefact, args.size, args.size, pixel, args.output);
+}
+
+void RunSynthesize(const SynthArgs& args) {
+  if (!args.artefact.empty()) return RunSynthesizeHeights(args);
+  artefacts::TileSynthesisOptions options;
+  options.rows = args.rows > 0 ? args.rows : 3;
+  options.cols = args.cols > 0 ? args.cols : 3;
   options.width = options.height = args.size;
   options.overlap = imaging::ParseOverlap(args.overlap, "--overlap");
   options.position_sigma_px = args.sigma_px;
@@ -226,8 +279,9 @@ void RunSynthesize(const SynthArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("fvm tiles synthesize: ") + e.what());
   }
-  if (args.bits != 8 && args.bits != 16 && args.bits != 32) throw InputError("--bits: 8, 16 or 32 (float)");
-  if (args.bits == 8) options.camera.level = 120.0, options.camera.contrast = 25.0;  // 0..255 with the vignetting
+  const int bits = args.bits == 0 ? 16 : args.bits;
+  if (bits != 8 && bits != 16 && bits != 32) throw InputError("--bits: 8, 16 or 32 (float)");
+  if (bits == 8) options.camera.level = 120.0, options.camera.contrast = 25.0;  // 0..255 with the vignetting
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(options);
   std::filesystem::create_directories(args.output);
   std::vector<imaging::TileLayoutEntry> entries;
@@ -236,8 +290,8 @@ void RunSynthesize(const SynthArgs& args) {
     const auto& t = tiles.tiles[i];
     const std::string file = TileFile(t.row, t.col);
     imaging::WriteTileImage(std::filesystem::path(args.output) / file, tiles.images[i],
-                            args.bits == 8    ? imaging::TilePixelType::kUint8
-                            : args.bits == 16 ? imaging::TilePixelType::kUint16
+                            bits == 8    ? imaging::TilePixelType::kUint8
+                            : bits == 16 ? imaging::TilePixelType::kUint16
                                               : imaging::TilePixelType::kFloat);
     entries.push_back({file, t.row, t.col, std::nullopt, 0});
     truth += fmt::format("{},{:.6f},{:.6f}\n", file, tiles.truth_px[i].x(), tiles.truth_px[i].y());
@@ -245,7 +299,7 @@ void RunSynthesize(const SynthArgs& args) {
   WriteFileAtomically(std::filesystem::path(args.output) / "truth.csv", truth);
   WriteFileAtomically(std::filesystem::path(args.output) / "layout.csv",
                       fmt::format("# fvm tiles synthesize --seed {}: {} x {} tiles of {} px, overlap {}\n", args.seed,
-                                  args.rows, args.cols, args.size, options.overlap) +
+                                  options.rows, options.cols, args.size, options.overlap) +
                           imaging::FormatTileLayout(entries));
   fmt::print("{} tiles, layout.csv and truth.csv (true positions, px) written to {}\n", tiles.images.size(),
              args.output);
@@ -411,16 +465,22 @@ void RegisterTiles(CLI::App& app) {
       "synthesize", "synthetic overlapping tiles with known positions, for trying fvm stitch");
   synth->add_option("-o,--output", synth_args->output, "directory for the tiles, layout.csv and truth.csv")
       ->required();
-  synth->add_option("--rows", synth_args->rows, "tile rows")->capture_default_str();
-  synth->add_option("--cols", synth_args->cols, "tile columns")->capture_default_str();
+  synth->add_option("--rows", synth_args->rows, "tile rows (default 3; with --artefact, as many as cover it)");
+  synth->add_option("--cols", synth_args->cols, "tile columns (default 3; with --artefact, as many as cover it)");
   synth->add_option("--size", synth_args->size, "tile width and height (px)")->capture_default_str();
   synth->add_option("--overlap", synth_args->overlap, "overlap: fraction (0.2) or percent (20)")->capture_default_str();
   synth->add_option("--stage-error", synth_args->sigma_px, "standard deviation of the stage error per axis (px)")
       ->capture_default_str();
-  synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer) or 32 (float)")->capture_default_str();
+  synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer, the default) or 32 (float)");
+  synth->add_option("--artefact", synth_args->artefact,
+                    "height-map tiles of grid6x6 or bar17 instead (float, mm, 10 um pixels, NaN on steep flanks), "
+                    "with calottes.csv, the true calottes");
   synth->add_option("--seed", synth_args->seed, "random seed")->capture_default_str();
   synth->footer("Tiles are cut from one random texture with 30 % vignetting and 3 % noise; truth.csv holds the "
-                "true top-left corners, the first tile at 0,0.");
+                "true top-left corners, the first tile at 0,0. With --artefact they are cut from one height map of "
+                "the artefact (0.5 um of roughness, 0.1 um of noise per tile) and the layout holds the stage "
+                "positions: fvm tiles synthesize --artefact grid6x6 -o g && cd g && fvm stitch --layout layout.csv "
+                "--overlap 20 --pixel-mm 0.01 -o p.csv --mosaic m.x3p && fvm fit m.x3p --artefact grid6x6 -o c.csv");
   synth->callback([synth_args] { RunSynthesize(*synth_args); });
 
   auto strategy_args = std::make_shared<StrategyArgs>();

@@ -7,10 +7,9 @@
 
 #include <cmath>
 #include <cstdio>
-#include <random>
 
 #include "artefacts/artefact.h"
-#include "artefacts/calotte_surface.h"
+#include "artefacts/height_tile_synthesis.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/tile_mosaic.h"
 #include "imaging/tile_registration.h"
@@ -18,58 +17,18 @@
 namespace fvm::imaging {
 namespace {
 
-struct HeightTiles {
-  artefacts::CalotteSurface surface;
-  std::vector<TileImage> images;
-  std::vector<GridTile> tiles;
-  std::vector<Eigen::Vector2d> truth_px;  // top-left corners in the map's image frame (row 0 = highest y)
-};
-
-// A rows x cols grid of 256 px tiles at 205 px steps (20 % overlap) cut from one rendered map of the grid
-// (10 um pixels, 0.5 um of frozen roughness), each off its grid position by a whole-pixel stage error, with
-// 0.1 um of noise of its own.
-HeightTiles CutTiles(int rows, int cols, std::uint64_t seed) {
-  artefacts::CalotteSurfaceOptions options;
-  options.dx_mm = options.dy_mm = 0.01;
-  options.noise_sigma_mm = 0.0005;
-  options.max_slope_deg = 50.0;             // the 10x lens loses the steeper flanks: NaN rings inside the rims
-  options.missing_fraction = 0.002;   // and a few dropouts
-  options.seed = seed;
-  HeightTiles out;
-  out.surface = artefacts::RenderCalotteSurface(artefacts::CalotteGrid6x6(), options);
-  const HeightMap& map = out.surface.map;
-  std::mt19937_64 random(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  const int size = 256, step = 205;
-  for (int col = 0; col < cols; ++col) {
-    for (int row = 0; row < rows; ++row) {
-      const Eigen::Vector2d nominal(col * step, row * step);
-      Eigen::Vector2d truth = nominal;
-      if (!out.tiles.empty()) truth += Eigen::Vector2d(std::round(1.5 * normal(random)), std::round(1.5 * normal(random)));
-      truth += Eigen::Vector2d(2, 2);  // room for a stage error at the map's edge
-      TileImage image(size, size);
-      for (int r = 0; r < size; ++r) {
-        for (int c = 0; c < size; ++c) {
-          const int ix = static_cast<int>(truth.x()) + c, iy = map.size_y - 1 - (static_cast<int>(truth.y()) + r);
-          image(r, c) = map.at(ix, iy) + static_cast<float>(0.0001 * normal(random));
-        }
-      }
-      out.images.push_back(image);
-      out.tiles.push_back({row, col, nominal});
-      out.truth_px.push_back(truth - Eigen::Vector2d(2, 2));  // tile 0 at 0, 0
-    }
-  }
-  return out;
-}
-
 TEST(HeightTileStitching, FusedTilesGiveTheCalottesOfTheWholeMap) {
-  const HeightTiles set = CutTiles(5, 5, 3);
+  // 5 x 5 tiles of 256 px (20 % overlap) of 10 um pixels, 0.5 um of roughness, 0.1 um of noise per tile.
+  artefacts::HeightTileOptions options;
+  options.rows = options.cols = 5;
+  options.seed = 3;
+  const artefacts::SynthesizedHeightTiles set = artefacts::SynthesizeHeightTiles(artefacts::CalotteGrid6x6(), options);
   const RegistrationResult result = RegisterTileGrid(set.images, set.tiles, {});
   int accepted = 0;
   for (const auto& pair : result.pairs) accepted += pair.accepted;
   double sum = 0.0;
   for (size_t i = 0; i < set.tiles.size(); ++i) {
-    sum += (result.positions.positions_px[i] - (set.truth_px[i] - set.truth_px[0])).squaredNorm();
+    sum += (result.positions.positions_px[i] - set.truth_px[i]).squaredNorm();
   }
   const double rms = std::sqrt(sum / static_cast<double>(set.tiles.size()));
   std::printf("%d of %zu pairs accepted, rms position error %.4f px\n", accepted, result.pairs.size(), rms);
@@ -79,10 +38,9 @@ TEST(HeightTileStitching, FusedTilesGiveTheCalottesOfTheWholeMap) {
 
   // Fuse into one map in the artefact's frame: the first tile's centre is where it was cut from.
   const HeightMap& map = set.surface.map;
-  const Eigen::Vector2d first_centre(map.x0_mm + (2 + 127.5) * map.dx_mm,
-                                     map.y0_mm + (map.size_y - 1 - (2 + 127.5)) * map.dy_mm);
   const auto calottes = [&](const std::vector<Eigen::Vector2d>& positions) {
-    return DetectCalottes(MosaicToHeightMap(FuseTiles(set.images, positions), 256, 256, map.dx_mm, first_centre));
+    return DetectCalottes(
+        MosaicToHeightMap(FuseTiles(set.images, positions), 256, 256, map.dx_mm, set.first_centre_mm));
   };
   // The reference: the calottes fitted in the single map the tiles were cut from. Stitching places tiles in x and
   // y; the heights are each tile's own, with its own noise, so the centres' z differ by the fits' scatter (up to
