@@ -104,6 +104,30 @@ std::string LayoutText(const std::vector<imaging::Tile>& tiles, const std::strin
   return "# " + comment + "\n" + imaging::FormatTileLayout(entries);
 }
 
+// A tile set for fvm stitch: every image as TileFile(row, col) in `directory`, and layout.csv headed by
+// `comment` (its lines get '#'), with the stage positions of the tile centres when given. Returns the file names.
+std::vector<std::string> WriteTileSet(const std::filesystem::path& directory,
+                                      const std::vector<imaging::TileImage>& images,
+                                      const std::vector<imaging::GridTile>& grid,
+                                      const std::vector<Eigen::Vector2d>& stage_mm, imaging::TilePixelType type,
+                                      const std::string& comment) {
+  std::filesystem::create_directories(directory);
+  std::vector<imaging::TileLayoutEntry> entries;
+  std::vector<std::string> files;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const imaging::GridTile& t = grid[i];
+    files.push_back(TileFile(t.row, t.col));
+    imaging::WriteTileImage(directory / files.back(), images[i], type);
+    entries.push_back({files.back(), t.row, t.col,
+                       stage_mm.empty() ? std::nullopt : std::optional<Eigen::Vector2d>(stage_mm[i]), 0});
+  }
+  std::string header;
+  std::stringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) header += "# " + line + "\n";
+  WriteFileAtomically(directory / "layout.csv", header + imaging::FormatTileLayout(entries));
+  return files;
+}
+
 std::string Duration(double seconds) {
   const long s = std::lround(seconds);
   return fmt::format("{}:{:02d}:{:02d}", s / 3600, (s / 60) % 60, s % 60);
@@ -233,17 +257,17 @@ void RunSynthesizeHeights(const SynthArgs& args) {
     throw InputError(std::string("fvm tiles synthesize: ") + e.what());
   }
   const std::filesystem::path dir(args.output);
-  std::filesystem::create_directories(dir);
   const double pixel = tiles.surface.map.dx_mm;
-  std::vector<imaging::TileLayoutEntry> entries;
+  const std::vector<std::string> files = WriteTileSet(
+      dir, tiles.images, tiles.tiles, tiles.nominal_centre_mm, imaging::TilePixelType::kFloat,
+      fmt::format("fvm tiles synthesize --artefact {} --seed {}: {} height tiles of {} px, {} mm per px; x,y = stage "
+                  "positions of the tile centres (mm). Stitch with:\nfvm stitch --layout layout.csv --overlap {:g} "
+                  "--pixel-mm {} -o positions.csv --mosaic mosaic.x3p",
+                  args.artefact, args.seed, tiles.images.size(), args.size, pixel, options.overlap * 100, pixel));
   std::string truth = "file,x,y,x_mm,y_mm\n";
-  for (size_t i = 0; i < tiles.images.size(); ++i) {
-    const auto& t = tiles.tiles[i];
-    const std::string file = TileFile(t.row, t.col);
-    imaging::WriteTileImage(dir / file, tiles.images[i], imaging::TilePixelType::kFloat);
-    entries.push_back({file, t.row, t.col, tiles.nominal_centre_mm[i], 0});
-    const Eigen::Vector2d error = tiles.truth_px[i] - t.nominal_px;
-    truth += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f}\n", file, tiles.truth_px[i].x(), tiles.truth_px[i].y(),
+  for (size_t i = 0; i < files.size(); ++i) {
+    const Eigen::Vector2d error = tiles.truth_px[i] - tiles.tiles[i].nominal_px;
+    truth += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f}\n", files[i], tiles.truth_px[i].x(), tiles.truth_px[i].y(),
                          tiles.nominal_centre_mm[i].x() + error.x() * pixel,
                          tiles.nominal_centre_mm[i].y() - error.y() * pixel);
   }
@@ -253,13 +277,6 @@ void RunSynthesizeHeights(const SynthArgs& args) {
   for (const auto& c : tiles.surface.truth) calottes.centres.push_back({c.id, c.centre, std::nullopt, c.radius_mm});
   artefacts::WriteCentreExport(dir / "calottes.csv", calottes);
   WriteFileAtomically(dir / "truth.csv", truth);
-  WriteFileAtomically(
-      dir / "layout.csv",
-      fmt::format("# fvm tiles synthesize --artefact {} --seed {}: {} height tiles of {} px, {} mm per px; x,y = stage "
-                  "positions of the tile centres (mm). Stitch with:\n# fvm stitch --layout layout.csv --overlap {:g} "
-                  "--pixel-mm {} -o positions.csv --mosaic mosaic.x3p\n",
-                  args.artefact, args.seed, tiles.images.size(), args.size, pixel, options.overlap * 100, pixel) +
-          imaging::FormatTileLayout(entries));
   fmt::print("{} height tiles of {} ({} x {} px, {} mm per px), layout.csv, truth.csv (true positions) and "
              "calottes.csv (true calottes) written to {}\n",
              tiles.images.size(), args.artefact, args.size, args.size, pixel, args.output);
@@ -283,24 +300,18 @@ void RunSynthesize(const SynthArgs& args) {
   if (bits != 8 && bits != 16 && bits != 32) throw InputError("--bits: 8, 16 or 32 (float)");
   if (bits == 8) options.camera.level = 120.0, options.camera.contrast = 25.0;  // 0..255 with the vignetting
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(options);
-  std::filesystem::create_directories(args.output);
-  std::vector<imaging::TileLayoutEntry> entries;
+  const std::vector<std::string> files = WriteTileSet(
+      args.output, tiles.images, tiles.tiles, {},
+      bits == 8    ? imaging::TilePixelType::kUint8
+      : bits == 16 ? imaging::TilePixelType::kUint16
+                   : imaging::TilePixelType::kFloat,
+      fmt::format("fvm tiles synthesize --seed {}: {} x {} tiles of {} px, overlap {}", args.seed, options.rows,
+                  options.cols, args.size, options.overlap));
   std::string truth = "file,x,y\n";
-  for (size_t i = 0; i < tiles.images.size(); ++i) {
-    const auto& t = tiles.tiles[i];
-    const std::string file = TileFile(t.row, t.col);
-    imaging::WriteTileImage(std::filesystem::path(args.output) / file, tiles.images[i],
-                            bits == 8    ? imaging::TilePixelType::kUint8
-                            : bits == 16 ? imaging::TilePixelType::kUint16
-                                              : imaging::TilePixelType::kFloat);
-    entries.push_back({file, t.row, t.col, std::nullopt, 0});
-    truth += fmt::format("{},{:.6f},{:.6f}\n", file, tiles.truth_px[i].x(), tiles.truth_px[i].y());
+  for (size_t i = 0; i < files.size(); ++i) {
+    truth += fmt::format("{},{:.6f},{:.6f}\n", files[i], tiles.truth_px[i].x(), tiles.truth_px[i].y());
   }
   WriteFileAtomically(std::filesystem::path(args.output) / "truth.csv", truth);
-  WriteFileAtomically(std::filesystem::path(args.output) / "layout.csv",
-                      fmt::format("# fvm tiles synthesize --seed {}: {} x {} tiles of {} px, overlap {}\n", args.seed,
-                                  options.rows, options.cols, args.size, options.overlap) +
-                          imaging::FormatTileLayout(entries));
   fmt::print("{} tiles, layout.csv and truth.csv (true positions, px) written to {}\n", tiles.images.size(),
              args.output);
 }
@@ -322,20 +333,14 @@ struct StrategyArgs {
 // the tile centres, so that stitching them with the pixel size reproduces case a.
 void WriteRenderedRow(const artefacts::RenderedStrategies& row, const artefacts::RenderedStrategyOptions& options,
                       const std::filesystem::path& directory) {
-  std::filesystem::create_directories(directory);
-  std::vector<imaging::TileLayoutEntry> entries;
-  for (size_t i = 0; i < row.images.size(); ++i) {
-    const std::string file = TileFile(0, static_cast<int>(i));
-    imaging::WriteTileImage(directory / file, row.images[i], imaging::TilePixelType::kUint16);
-    entries.push_back({file, 0, static_cast<int>(i), row.encoder_centres_mm[i], 0});
-  }
-  WriteFileAtomically(directory / "layout.csv",
-                      fmt::format("# fvm tiles simulate --render --seed {}: the row of {} tiles of {} px, {:.6f} mm per "
-                                  "px, x,y = encoder readings of the tile centres (mm). Stitch with:\n# fvm stitch "
-                                  "--layout layout.csv --overlap {:g} --pixel-mm {:.9g} -o positions.csv\n",
-                                  options.seed, row.images.size(), options.tile_px, row.pixel_mm,
-                                  options.geometry.overlap * 100, row.pixel_mm) +
-                          imaging::FormatTileLayout(entries));
+  std::vector<imaging::GridTile> grid;
+  for (size_t i = 0; i < row.images.size(); ++i) grid.push_back({0, static_cast<int>(i), Eigen::Vector2d::Zero()});
+  WriteTileSet(directory, row.images, grid, row.encoder_centres_mm, imaging::TilePixelType::kUint16,
+               fmt::format("fvm tiles simulate --render --seed {}: the row of {} tiles of {} px, {:.6f} mm per px, "
+                           "x,y = encoder readings of the tile centres (mm). Stitch with:\nfvm stitch --layout "
+                           "layout.csv --overlap {:g} --pixel-mm {:.9g} -o positions.csv",
+                           options.seed, row.images.size(), options.tile_px, row.pixel_mm,
+                           options.geometry.overlap * 100, row.pixel_mm));
 }
 
 void RunStrategies(const StrategyArgs& args) {
