@@ -66,7 +66,6 @@ SynthesizedHeightTiles SynthesizeHeightTiles(const Artefact& artefact, const Hei
       out.nominal_centre_mm.push_back(centre_mm(nominal + Eigen::Vector2d::Constant(border)));
     }
   }
-  out.first_centre_mm = out.nominal_centre_mm.front();
   return out;
 }
 

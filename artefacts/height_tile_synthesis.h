@@ -38,8 +38,8 @@ struct SynthesizedHeightTiles {
   std::vector<imaging::TileImage> images;   // heights in mm, NaN where invalid; scan order, column by column
   std::vector<imaging::GridTile> tiles;     // rows, cols and nominal (grid) positions, px
   std::vector<Eigen::Vector2d> truth_px;    // true top-left corners, tile 0 at 0, 0
-  std::vector<Eigen::Vector2d> nominal_centre_mm;  // where the stage was told to put each tile's centre
-  Eigen::Vector2d first_centre_mm = Eigen::Vector2d::Zero();  // the first tile's true centre (it has no error)
+  // Where the stage was told to put each tile's centre; the first tile has no error, so its entry is also true.
+  std::vector<Eigen::Vector2d> nominal_centre_mm;
 };
 
 SynthesizedHeightTiles SynthesizeHeightTiles(const Artefact& artefact, const HeightTileOptions& options);

@@ -45,8 +45,7 @@ RenderedStrategies SimulateRenderedStrategies(const stage::ParameterLayout& layo
                                               const RenderedStrategyOptions& options) {
   options.Check();
   const StrategyRow row = PlanStrategyRow(layout, values, first, last, options.geometry);
-  const std::vector<StrategyResult> coordinates =
-      SimulateStitchingStrategies(layout, values, first, last, options.geometry);
+  const std::vector<StrategyResult> coordinates = SimulateStitchingStrategies(row);
   const int n = static_cast<int>(row.centres.size());
   RenderedStrategies out;
   out.row_tiles = n;
@@ -132,7 +131,7 @@ RenderedStrategies SimulateRenderedStrategies(const stage::ParameterLayout& layo
     const Eigen::Vector3d b = reported(static_cast<int>(taken.size()) - 1) + fit_last;
     r.result.distance_mm = (b - a).norm();
     r.result.distance_error_um = (r.result.distance_mm - (last - first).norm()) * 1e3;
-    r.coordinate_error_um = coordinates[k].distance_error_um;
+    r.coordinates = coordinates[k];
     out.cases.push_back(std::move(r));
   }
   out.images = std::move(images);

@@ -34,8 +34,8 @@ struct RenderedStrategyOptions {
 };
 
 struct RenderedStrategyResult {
-  StrategyResult result;             // from the images: tiles solved by registration, calottes fitted
-  double coordinate_error_um = 0.0;  // the coordinate model's distance error for the same case
+  StrategyResult result;       // from the images: tiles solved by registration, calottes fitted
+  StrategyResult coordinates;  // the coordinate model (stitching_strategy.h) for the same case and row
   int pairs = 0;                     // neighbour pairs the case has (both tiles taken)
   int accepted_pairs = 0;
 };

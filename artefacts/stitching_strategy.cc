@@ -49,11 +49,10 @@ std::vector<StrategyCase> StitchingStrategyCases(int n) {
   };
 }
 
-std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
-                                                        const std::vector<double>& values, const Eigen::Vector3d& first,
-                                                        const Eigen::Vector3d& last, const StrategyOptions& options) {
-  const StrategyRow row = PlanStrategyRow(layout, values, first, last, options);
+std::vector<StrategyResult> SimulateStitchingStrategies(const StrategyRow& row) {
   const int n = static_cast<int>(row.centres.size());
+  const Eigen::Vector3d& first = row.centres.front();
+  const Eigen::Vector3d& last = row.centres.back();
   std::vector<StrategyResult> results;
   for (const StrategyCase& c : StitchingStrategyCases(n)) {
     StrategyResult r{c.id, c.description, n - static_cast<int>(c.missing.size()), {0}, 0.0, 0.0};
@@ -75,6 +74,12 @@ std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLa
     results.push_back(std::move(r));
   }
   return results;
+}
+
+std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
+                                                        const std::vector<double>& values, const Eigen::Vector3d& first,
+                                                        const Eigen::Vector3d& last, const StrategyOptions& options) {
+  return SimulateStitchingStrategies(PlanStrategyRow(layout, values, first, last, options));
 }
 
 }  // namespace fvm::artefacts

@@ -56,8 +56,11 @@ struct StrategyResult {
   double distance_error_um = 0.0;     // measured - true
 };
 
-// The six strategies on coordinates. `first` and `last` are the calottes' true positions (mm); the stage error
-// model is F of `layout` with `values`.
+// The six strategies on coordinates over a planned row (its first and last centres are the calottes).
+std::vector<StrategyResult> SimulateStitchingStrategies(const StrategyRow& row);
+
+// The same, planning the row. `first` and `last` are the calottes' true positions (mm); the stage error model is
+// F of `layout` with `values`.
 std::vector<StrategyResult> SimulateStitchingStrategies(const stage::ParameterLayout& layout,
                                                         const std::vector<double>& values, const Eigen::Vector3d& first,
                                                         const Eigen::Vector3d& last, const StrategyOptions& options = {});

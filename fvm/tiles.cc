@@ -356,10 +356,12 @@ void RunStrategies(const StrategyArgs& args) {
   std::vector<artefacts::StrategyResult> results;
   std::optional<artefacts::RenderedStrategies> rendered;
   try {
-    results = artefacts::SimulateStitchingStrategies(cal.layout, cal.values, first, last, options.geometry);
     if (args.render) {
       if (!args.json) fmt::print(stderr, "rendering and registering the row's tiles ...\n");
       rendered = artefacts::SimulateRenderedStrategies(cal.layout, cal.values, first, last, options);
+      for (const artefacts::RenderedStrategyResult& c : rendered->cases) results.push_back(c.coordinates);
+    } else {
+      results = artefacts::SimulateStitchingStrategies(cal.layout, cal.values, first, last, options.geometry);
     }
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("fvm tiles simulate: ") + e.what());

@@ -36,10 +36,10 @@ TEST(RenderedStitchingStrategy, AgreesWithTheCoordinateModelWithinRegistrationNo
     // noise over ~2000 points each gives a few nm). A sign or frame error in the chain costs microns per pair.
     const double bound_um = 16.0 * r.pair_rms_px * r.pixel_mm * 1e3 + 0.1;
     for (const RenderedStrategyResult& c : r.cases) {
-      EXPECT_NEAR(c.result.distance_error_um, c.coordinate_error_um, bound_um) << c.result.id << " seed " << seed;
+      EXPECT_NEAR(c.result.distance_error_um, c.coordinates.distance_error_um, bound_um) << c.result.id << " seed " << seed;
       EXPECT_EQ(c.accepted_pairs, c.pairs) << c.result.id;
       std::printf("seed %d case %c: rendered %.2f um, coordinates %.2f um (bound %.2f)\n", static_cast<int>(seed),
-                  c.result.id, c.result.distance_error_um, c.coordinate_error_um, bound_um);
+                  c.result.id, c.result.distance_error_um, c.coordinates.distance_error_um, bound_um);
     }
     // The published pattern from images: c re-anchors at tile 2, d at tile 9 (of 16), e at the last.
     const auto error = [&](char id) { return r.cases[static_cast<size_t>(id - 'a')].result.distance_error_um; };
@@ -66,7 +66,7 @@ TEST(RenderedStitchingStrategy, UnregistrableTilesFallBackToTheEncoders) {
   const RenderedStrategyResult& a = r.cases[0];
   EXPECT_EQ(a.accepted_pairs, 0);
   EXPECT_EQ(static_cast<int>(a.result.encoder_tiles.size()), r.row_tiles);
-  EXPECT_NEAR(a.result.distance_error_um, r.cases[1].coordinate_error_um, 0.1);
+  EXPECT_NEAR(a.result.distance_error_um, r.cases[1].coordinates.distance_error_um, 0.1);
 }
 
 TEST(RenderedStitchingStrategy, RejectsACalotteLargerThanTheField) {

@@ -40,7 +40,7 @@ TEST(HeightTileStitching, FusedTilesGiveTheCalottesOfTheWholeMap) {
   const HeightMap& map = set.surface.map;
   const auto calottes = [&](const std::vector<Eigen::Vector2d>& positions) {
     return DetectCalottes(
-        MosaicToHeightMap(FuseTiles(set.images, positions), 256, 256, map.dx_mm, set.first_centre_mm));
+        MosaicToHeightMap(FuseTiles(set.images, positions), 256, 256, map.dx_mm, set.nominal_centre_mm.front()));
   };
   // The reference: the calottes fitted in the single map the tiles were cut from. Stitching places tiles in x and
   // y; the heights are each tile's own, with its own noise, so the centres' z differ by the fits' scatter (up to
