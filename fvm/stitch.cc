@@ -74,12 +74,20 @@ void RunStitch(const StitchArgs& args) {
                                    layout.tiles.front().file, images.front().cols(), images.front().rows()));
     }
   }
+  if (height_map && pixel_type != imaging::TilePixelType::kFloat) {
+    throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
+                                 "float tiles in mm (or write the mosaic as .tif)",
+                                 args.mosaic, pixel_type == imaging::TilePixelType::kUint8 ? 8 : 16));
+  }
   const double width = static_cast<double>(images.front().cols());
   const double height = static_cast<double>(images.front().rows());
   // Nominal positions: from the stage when the layout has them and the pixel size converts them (image y runs
   // down = -Y), else from the grid and the overlap. Either way the first tile of the file is the origin.
   const bool from_stage = args.pixel_mm > 0.0 && layout.tiles.front().stage_mm.has_value();
   const auto& first = layout.tiles.front();
+  // The stage frame (+Y up) of the first tile's centre when the layout has stage positions, else 0, 0: the origin
+  // of the x_mm, y_mm columns and of an X3P mosaic.
+  const Eigen::Vector2d origin = first.stage_mm.value_or(Eigen::Vector2d::Zero());
   std::vector<imaging::GridTile> grid;
   for (const auto& tile : layout.tiles) {
     Eigen::Vector2d nominal;
@@ -99,17 +107,10 @@ void RunStitch(const StitchArgs& args) {
     const Eigen::Vector2d& p = result.positions.positions_px[i];
     csv += fmt::format("{},{:.4f},{:.4f}", layout.tiles[i].file, p.x(), p.y());
     if (args.pixel_mm > 0.0) {
-      // Stage frame (+Y up) of the tile centre when the layout has stage positions, else relative to the first tile.
-      const Eigen::Vector2d origin = first.stage_mm.value_or(Eigen::Vector2d::Zero());
       csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * args.pixel_mm, origin.y() - p.y() * args.pixel_mm);
     }
     const Eigen::Vector2d& u = result.positions.sigma_px[i];
     csv += fmt::format(",{},{:.4f},{:.4f}\n", result.positions.registered[i] ? 1 : 0, u.x(), u.y());
-  }
-  if (height_map && pixel_type != imaging::TilePixelType::kFloat) {
-    throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
-                                 "float tiles in mm (or write the mosaic as .tif)",
-                                 args.mosaic, pixel_type == imaging::TilePixelType::kUint8 ? 8 : 16));
   }
   WriteFileAtomically(args.output, csv);
   if (!args.mosaic.empty()) {
@@ -117,8 +118,7 @@ void RunStitch(const StitchArgs& args) {
     imaging::Mosaic mosaic = imaging::FuseTiles(images, result.positions.positions_px);
     if (height_map) {
       imaging::WriteX3p(args.mosaic, imaging::MosaicToHeightMap(mosaic, static_cast<int>(width),
-                                                                static_cast<int>(height), args.pixel_mm,
-                                                                first.stage_mm.value_or(Eigen::Vector2d::Zero())));
+                                                                static_cast<int>(height), args.pixel_mm, origin));
     } else {
       // Integer pixels have no NaN: where no tile reaches is 0.
       if (pixel_type != imaging::TilePixelType::kFloat) mosaic.image = mosaic.image.unaryExpr([](float v) {
