@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/batch.h"
+#include "artefacts/io/batch.h"
 #include "stage/identification.h"
 
 namespace fvm::artefacts {

@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "artefacts/atomic_file.h"
-#include "artefacts/batch.h"
-#include "imaging/input_error.h"
-#include "fvm/calibration_file.h"
+#include "core/file_io.h"
+#include "artefacts/io/batch.h"
+#include "core/input_error.h"
+#include "stage/io/calibration_file.h"
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "fvm/report.h"
@@ -90,7 +90,7 @@ void Run(const CalibrateArgs& args) {
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult result = IdentifyModel(args.model, args.terms, identify, args.settings);
 
-  nlohmann::json doc = CalibrationToJson(result);
+  nlohmann::json doc = stage::CalibrationToJson(result);
   doc["batch"] = args.batch;
   doc["anchor"] = args.settings.anchor;
   doc["identification"]["placements"] = batch.identify;

@@ -1,6 +1,6 @@
 #include "fvm/calibration_run.h"
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 #include "stage/fvm_stage_models.h"
 
 namespace fvm::cli {

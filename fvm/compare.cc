@@ -5,8 +5,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "artefacts/batch.h"
-#include "imaging/input_error.h"
+#include "artefacts/io/batch.h"
+#include "core/input_error.h"
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"

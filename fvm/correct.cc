@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "artefacts/atomic_file.h"
-#include "artefacts/centre_export.h"
-#include "imaging/input_error.h"
-#include "fvm/calibration_file.h"
+#include "core/file_io.h"
+#include "artefacts/io/centre_export.h"
+#include "core/input_error.h"
+#include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
 
 namespace fvm::cli {
@@ -26,7 +26,7 @@ void Run(const CorrectArgs& args) {
     throw InputError(fmt::format("{}: only centre exports (.csv) can be corrected so far; point clouds and height "
                                  "maps wait for the imaging readers (issue 4)", args.input));
   }
-  const stage::Calibration cal = ReadCalibration(args.calibration);
+  const stage::Calibration cal = stage::ReadCalibration(args.calibration);
   const artefacts::CentreExport input = artefacts::ReadCentreExport(in);
 
   // Same rows, compensated; u_x, u_y, u_z are the standard uncertainties the model's covariance gives each point.

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "artefacts/batch.h"
+#include "artefacts/io/batch.h"
 #include "artefacts/batch_observations.h"
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"

@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "artefacts/centre_export.h"
-#include "imaging/input_error.h"
+#include "artefacts/io/centre_export.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
 
 namespace fvm::cli {

@@ -13,16 +13,16 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/artefact.h"
-#include "artefacts/centre_export.h"
-#include "imaging/input_error.h"
+#include "artefacts/geometry/artefact.h"
+#include "artefacts/io/centre_export.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/surface_read_args.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/calotte_numbering.h"
 #include "imaging/height_map.h"
 #include "imaging/point_cloud.h"
-#include "imaging/surface_file.h"
+#include "imaging/io/surface_file.h"
 
 namespace fvm::cli {
 namespace {

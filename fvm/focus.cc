@@ -12,13 +12,13 @@
 #include <string>
 #include <vector>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
-#include "imaging/focus_stack_io.h"
+#include "imaging/io/focus_stack_io.h"
 #include "imaging/focus_variation.h"
 #include "imaging/height_map.h"
-#include "imaging/height_map_image.h"
-#include "imaging/x3p.h"
+#include "imaging/io/height_map_image.h"
+#include "imaging/io/x3p.h"
 
 namespace fvm::cli {
 namespace {

@@ -10,13 +10,13 @@
 #include <optional>
 #include <string>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/surface_read_args.h"
 #include "imaging/height_map.h"
-#include "imaging/number_text.h"
+#include "core/number_text.h"
 #include "imaging/point_cloud.h"
-#include "imaging/surface_file.h"
+#include "imaging/io/surface_file.h"
 
 namespace fvm::cli {
 namespace {
@@ -39,7 +39,7 @@ struct Summary {
 };
 
 // Heights are floats: print the shortest decimal that is that float (0.1, not 0.10000000149011612).
-double FloatValue(double v) { return *imaging::ParseDouble(imaging::FormatShortest(static_cast<float>(v))); }
+double FloatValue(double v) { return *ParseDouble(FormatShortest(static_cast<float>(v))); }
 
 Summary SummariseMap(const imaging::HeightMap& map) {
   Summary s;

@@ -24,8 +24,8 @@
 #include <utility>
 #include <vector>
 
-#include "artefacts/atomic_file.h"
-#include "imaging/input_error.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
 
 namespace fvm::cli {
 namespace {

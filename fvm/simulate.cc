@@ -4,8 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "artefacts/atomic_file.h"
-#include "artefacts/fvm_batch_simulation.h"
+#include "core/file_io.h"
+#include "artefacts/simulation/fvm_batch_simulation.h"
 #include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"
 

@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/atomic_file.h"
-#include "imaging/input_error.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
-#include "imaging/tile_image.h"
-#include "imaging/tile_layout.h"
+#include "imaging/io/tile_image.h"
+#include "imaging/io/tile_layout.h"
 #include "imaging/tile_mosaic.h"
-#include "imaging/x3p.h"
+#include "imaging/io/x3p.h"
 #include "imaging/tile_plan.h"
 #include "imaging/tile_registration.h"
 

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "imaging/surface_file.h"
+#include "imaging/io/surface_file.h"
 
 namespace fvm::cli {
 

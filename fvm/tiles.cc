@@ -18,18 +18,18 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/artefact.h"
-#include "artefacts/atomic_file.h"
-#include "artefacts/centre_export.h"
-#include "artefacts/height_tile_synthesis.h"
-#include "imaging/input_error.h"
-#include "artefacts/rendered_stitching_strategy.h"
-#include "artefacts/stitching_strategy.h"
-#include "artefacts/tile_synthesis.h"
-#include "fvm/calibration_file.h"
+#include "artefacts/geometry/artefact.h"
+#include "core/file_io.h"
+#include "artefacts/io/centre_export.h"
+#include "artefacts/simulation/height_tile_synthesis.h"
+#include "core/input_error.h"
+#include "artefacts/simulation/rendered_stitching_strategy.h"
+#include "artefacts/simulation/stitching_strategy.h"
+#include "artefacts/simulation/tile_synthesis.h"
+#include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
-#include "imaging/tile_image.h"
-#include "imaging/tile_layout.h"
+#include "imaging/io/tile_image.h"
+#include "imaging/io/tile_layout.h"
 #include "imaging/tile_plan.h"
 
 namespace fvm::cli {
@@ -344,7 +344,7 @@ void WriteRenderedRow(const artefacts::RenderedStrategies& row, const artefacts:
 }
 
 void RunStrategies(const StrategyArgs& args) {
-  const stage::Calibration cal = ReadCalibration(args.calibration);
+  const stage::Calibration cal = stage::ReadCalibration(args.calibration);
   artefacts::RenderedStrategyOptions options;
   options.geometry.fov_mm = imaging::FindLens(args.lens).fov_mm;
   options.geometry.overlap = args.overlap > 1.0 ? args.overlap / 100.0 : args.overlap;

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 
 namespace fvm::imaging {
 namespace {

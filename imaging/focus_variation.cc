@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 
 namespace fvm::imaging {
 namespace {

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "imaging/input_error.h"
-#include "imaging/number_text.h"
+#include "core/input_error.h"
+#include "core/number_text.h"
 
 namespace fvm::imaging {
 namespace {

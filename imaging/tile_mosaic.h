@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "imaging/height_map.h"
-#include "imaging/tile_image.h"
+#include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 

@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "imaging/tile_image.h"
+#include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "imaging/tile_image.h"
+#include "imaging/io/tile_image.h"
 #include "imaging/tile_pair_registration.h"
 
 namespace fvm::imaging {

@@ -1,4 +1,4 @@
-#include "artefacts/artefact.h"
+#include "artefacts/geometry/artefact.h"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-#include "artefacts/batch.h"
+#include "artefacts/io/batch.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 #include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {

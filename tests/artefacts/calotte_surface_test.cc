@@ -1,4 +1,4 @@
-#include "artefacts/calotte_surface.h"
+#include "artefacts/simulation/calotte_surface.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "artefacts/centre_export.h"
+#include "artefacts/io/centre_export.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -6,8 +6,8 @@
 #include <cmath>
 #include <limits>
 
-#include "artefacts/atomic_file.h"
-#include "imaging/input_error.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
 #include "tests/artefacts/test_support.h"
 
 namespace fvm::artefacts {

@@ -1,7 +1,7 @@
 // The stitching strategies played on rendered, registered tiles agree with the coordinate model up to the
 // registration and fit noise, and show the published pattern.
 
-#include "artefacts/rendered_stitching_strategy.h"
+#include "artefacts/simulation/rendered_stitching_strategy.h"
 
 #include <gtest/gtest.h>
 

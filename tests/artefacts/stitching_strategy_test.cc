@@ -1,4 +1,4 @@
-#include "artefacts/stitching_strategy.h"
+#include "artefacts/simulation/stitching_strategy.h"
 
 #include <gtest/gtest.h>
 

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 
 namespace fvm::testing {
 

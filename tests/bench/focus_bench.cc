@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "artefacts/focus_stack_render.h"
+#include "artefacts/simulation/focus_stack_render.h"
 #include "imaging/focus_variation.h"
 
 namespace {

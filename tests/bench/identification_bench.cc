@@ -6,7 +6,7 @@
 #include <ceres/ceres.h>
 
 #include "artefacts/batch_observations.h"
-#include "artefacts/fvm_batch_simulation.h"
+#include "artefacts/simulation/fvm_batch_simulation.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/identification.h"
 

@@ -14,8 +14,8 @@
 #include <random>
 #include <vector>
 
-#include "artefacts/artefact.h"
-#include "artefacts/calotte_surface.h"
+#include "artefacts/geometry/artefact.h"
+#include "artefacts/simulation/calotte_surface.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/sphere_fit.h"
 

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <map>
 
-#include "artefacts/tile_synthesis.h"
+#include "artefacts/simulation/tile_synthesis.h"
 #include "imaging/tile_registration.h"
 
 namespace {

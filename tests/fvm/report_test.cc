@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 
 namespace fvm::cli {
 namespace {

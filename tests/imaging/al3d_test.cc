@@ -1,4 +1,4 @@
-#include "imaging/al3d.h"
+#include "imaging/io/al3d.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -9,9 +9,9 @@
 #include <map>
 #include <vector>
 
-#include "artefacts/artefact.h"
-#include "artefacts/calotte_surface.h"
-#include "imaging/input_error.h"
+#include "artefacts/geometry/artefact.h"
+#include "artefacts/simulation/calotte_surface.h"
+#include "core/input_error.h"
 #include "imaging/calotte_numbering.h"
 #include "imaging/sphere_fit.h"
 

@@ -9,10 +9,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "artefacts/artefact.h"
-#include "artefacts/calotte_surface.h"
-#include "artefacts/centre_export.h"
-#include "imaging/x3p.h"
+#include "artefacts/geometry/artefact.h"
+#include "artefacts/simulation/calotte_surface.h"
+#include "artefacts/io/centre_export.h"
+#include "imaging/io/x3p.h"
 #include "tests/artefacts/test_support.h"
 
 namespace fvm {

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/focus_stack_render.h"
-#include "imaging/focus_stack_io.h"
+#include "artefacts/simulation/focus_stack_render.h"
+#include "imaging/io/focus_stack_io.h"
 #include "imaging/focus_variation.h"
 #include "tests/artefacts/test_support.h"
 

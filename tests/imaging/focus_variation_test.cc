@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "artefacts/calotte_surface.h"
-#include "artefacts/focus_stack_render.h"
+#include "artefacts/simulation/calotte_surface.h"
+#include "artefacts/simulation/focus_stack_render.h"
 #include "imaging/focus_variation.h"
 #include "tests/artefacts/test_support.h"
 

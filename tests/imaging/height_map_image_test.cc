@@ -1,4 +1,4 @@
-#include "imaging/height_map_image.h"
+#include "imaging/io/height_map_image.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gmock/gmock.h>

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "artefacts/artefact.h"
-#include "artefacts/height_tile_synthesis.h"
+#include "artefacts/geometry/artefact.h"
+#include "artefacts/simulation/height_tile_synthesis.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/tile_mosaic.h"
 #include "imaging/tile_registration.h"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "imaging/point_cloud_io.h"
+#include "imaging/io/point_cloud_io.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
 

@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "imaging/input_error.h"
-#include "imaging/al3d.h"
-#include "imaging/height_map_image.h"
-#include "imaging/md5.h"
-#include "imaging/point_cloud_io.h"
-#include "imaging/x3p.h"
-#include "imaging/zip_archive.h"
+#include "core/input_error.h"
+#include "imaging/io/al3d.h"
+#include "imaging/io/height_map_image.h"
+#include "imaging/io/md5.h"
+#include "imaging/io/point_cloud_io.h"
+#include "imaging/io/x3p.h"
+#include "imaging/io/zip_archive.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
 

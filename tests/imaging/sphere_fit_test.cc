@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "imaging/input_error.h"
+#include "core/input_error.h"
 
 namespace fvm::imaging {
 namespace {

@@ -1,12 +1,12 @@
-#include "imaging/surface_file.h"
+#include "imaging/io/surface_file.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "imaging/al3d.h"
-#include "imaging/x3p.h"
+#include "imaging/io/al3d.h"
+#include "imaging/io/x3p.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
 

@@ -1,14 +1,14 @@
 // Tile layout files and tile images: round trips and bad input.
 
-#include "imaging/tile_layout.h"
+#include "imaging/io/tile_layout.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
-#include "imaging/input_error.h"
-#include "imaging/tile_image.h"
+#include "core/input_error.h"
+#include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 namespace {

@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <random>
 
-#include "artefacts/tile_synthesis.h"
+#include "artefacts/simulation/tile_synthesis.h"
 #include "imaging/tile_registration.h"
 
 namespace fvm::imaging {

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "artefacts/artefact.h"
-#include "imaging/input_error.h"
+#include "artefacts/geometry/artefact.h"
+#include "core/input_error.h"
 
 namespace fvm::imaging {
 namespace {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "artefacts/tile_synthesis.h"
+#include "artefacts/simulation/tile_synthesis.h"
 
 namespace fvm::imaging {
 namespace {

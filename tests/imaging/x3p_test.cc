@@ -1,4 +1,4 @@
-#include "imaging/x3p.h"
+#include "imaging/io/x3p.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "imaging/height_map.h"
-#include "imaging/md5.h"
-#include "imaging/zip_archive.h"
+#include "imaging/io/md5.h"
+#include "imaging/io/zip_archive.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
 

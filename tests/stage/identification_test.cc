@@ -9,7 +9,7 @@
 #include <map>
 
 #include "artefacts/batch_observations.h"
-#include "artefacts/fvm_batch_simulation.h"
+#include "artefacts/simulation/fvm_batch_simulation.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/validation.h"
 

@@ -1,0 +1,41 @@
+#pragma once
+// A batch directory: pairs <placement>.stitched.csv / <placement>.free.csv of the same calottes, and an optional
+// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (ARCHITECTURE.md section 3).
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "artefacts/io/centre_export.h"
+
+namespace fvm::artefacts {
+
+struct Placement {
+  std::string name;
+  std::vector<int> ids;                    // the calottes, in the stitched file's order
+  std::vector<Eigen::Vector3d> stitched;   // reference (stitched) centres, mm, in ids order
+  std::vector<Eigen::Vector3d> free;       // stitching-free centres, mm, in ids order
+  std::vector<double> t_s;                 // time of each stitching-free centre when the export has t, else empty
+};
+
+struct Batch {
+  std::filesystem::path dir;
+  std::vector<Placement> placements;  // sorted by name
+  bool has_roles = false;             // batch.json present
+  std::vector<std::string> identify;  // placement names (all of them when there is no batch.json)
+  std::vector<std::string> validate;  // placement names (empty when there is no batch.json)
+  std::string lens;                   // from batch.json, may be empty
+
+  const Placement& Get(const std::string& name) const;  // throws InputError when absent
+};
+
+// Throws InputError naming the file and calotte id on: a missing or empty directory, a placement with only one
+// of its two files, ids present in one file of a pair and not the other, unreadable exports (see
+// ReadCentreExport), a batch.json that is not JSON, names an unknown placement, or puts one in both roles.
+Batch ReadBatch(const std::filesystem::path& dir);
+
+// Writes a batch (pairs and, when roles are given, batch.json) atomically file by file.
+void WriteBatch(const std::filesystem::path& dir, const Batch& batch);
+
+}  // namespace fvm::artefacts

@@ -1,0 +1,42 @@
+#include "core/number_text.h"
+
+#include <charconv>
+#include <system_error>
+
+namespace fvm {
+namespace {
+
+template <typename T>
+std::optional<T> ParseWhole(std::string_view text) {
+  text = TrimBlanks(text);
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  if (text.empty()) return std::nullopt;
+  T value{};
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+template <typename T>
+std::string Shortest(T value) {
+  char buffer[64];
+  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return error == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+}  // namespace
+
+std::string_view TrimBlanks(std::string_view text) {
+  constexpr std::string_view kBlanks(" \t\r\n\0", 5);
+  const size_t begin = text.find_first_not_of(kBlanks);
+  if (begin == std::string_view::npos) return {};
+  return text.substr(begin, text.find_last_not_of(kBlanks) - begin + 1);
+}
+
+std::optional<double> ParseDouble(std::string_view text) { return ParseWhole<double>(text); }
+std::optional<std::int64_t> ParseInt(std::string_view text) { return ParseWhole<std::int64_t>(text); }
+
+std::string FormatShortest(double value) { return Shortest(value); }
+std::string FormatShortest(float value) { return Shortest(value); }
+
+}  // namespace fvm

@@ -1,0 +1,239 @@
+#include "imaging/io/height_map_image.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/input_error.h"
+#include "core/file_io.h"
+#include "core/number_text.h"
+
+namespace fvm::imaging {
+namespace {
+
+constexpr std::string_view kDescriptionTag = "fvm height map";
+constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
+
+[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& problem) {
+  throw InputError(path.string() + ": " + problem);
+}
+
+// "fvm height map; dx_mm=0.001; dy_mm=0.001; ..." -> {dx_mm: 0.001, ...}; empty for other descriptions.
+std::map<std::string, double> ParseDescription(std::string_view text) {
+  std::map<std::string, double> values;
+  if (text.substr(0, kDescriptionTag.size()) != kDescriptionTag) return values;
+  size_t start = kDescriptionTag.size();
+  while (start < text.size()) {
+    const size_t end = std::min(text.find(';', start), text.size());
+    const std::string_view item = TrimBlanks(text.substr(start, end - start));
+    const size_t equals = item.find('=');
+    if (equals != std::string_view::npos) {
+      if (const std::optional<double> value = ParseDouble(item.substr(equals + 1))) {
+        values[std::string(TrimBlanks(item.substr(0, equals)))] = *value;
+      }
+    }
+    start = end + 1;
+  }
+  return values;
+}
+
+bool IsIntegerType(OIIO::TypeDesc type) {
+  switch (type.basetype) {
+    case OIIO::TypeDesc::UINT8:
+    case OIIO::TypeDesc::INT8:
+    case OIIO::TypeDesc::UINT16:
+    case OIIO::TypeDesc::INT16:
+    case OIIO::TypeDesc::UINT32:
+    case OIIO::TypeDesc::INT32:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// Raw counts of one channel: integer images are read in their own type (OpenImageIO would otherwise scale
+// them to 0..1), float images as double.
+std::vector<double> ReadChannel(OIIO::ImageInput& input, const std::filesystem::path& path, int channel,
+                                std::size_t n) {
+  const OIIO::TypeDesc native = input.spec().format;
+  std::vector<double> values(n);
+  const auto read = [&](OIIO::TypeDesc type, void* data) {
+    // OpenImageIO 2.4 reports a truncated TIFF strip only through geterror(), with read_image still true.
+    const bool read = input.read_image(0, 0, channel, channel + 1, type, data);
+    const std::string error = input.geterror();
+    if (!read || !error.empty()) {
+      Fail(path, "cannot read the image data (" + error + "); the file is damaged or incomplete");
+    }
+  };
+  const auto convert = [&](auto tag, OIIO::TypeDesc::BASETYPE type) {
+    std::vector<decltype(tag)> raw(n);
+    read(OIIO::TypeDesc(type), raw.data());
+    for (std::size_t i = 0; i < n; ++i) values[i] = static_cast<double>(raw[i]);
+  };
+  switch (native.basetype) {
+    case OIIO::TypeDesc::UINT8:
+      convert(std::uint8_t{}, OIIO::TypeDesc::UINT8);
+      break;
+    case OIIO::TypeDesc::INT8:
+      convert(std::int8_t{}, OIIO::TypeDesc::INT8);
+      break;
+    case OIIO::TypeDesc::UINT16:
+      convert(std::uint16_t{}, OIIO::TypeDesc::UINT16);
+      break;
+    case OIIO::TypeDesc::INT16:
+      convert(std::int16_t{}, OIIO::TypeDesc::INT16);
+      break;
+    case OIIO::TypeDesc::UINT32:
+      convert(std::uint32_t{}, OIIO::TypeDesc::UINT32);
+      break;
+    case OIIO::TypeDesc::INT32:
+      convert(std::int32_t{}, OIIO::TypeDesc::INT32);
+      break;
+    default:
+      read(OIIO::TypeDesc::DOUBLE, values.data());
+      break;
+  }
+  return values;
+}
+
+}  // namespace
+
+void HeightMapImageOptions::Check() const {
+  for (const double v : {dx_mm, dy_mm, z_scale_mm}) {
+    if (!(v >= 0.0) || !std::isfinite(v)) {
+      throw InputError(
+          "image options: pixel size and z scale must be positive mm (or 0 to take them from the "
+          "file), got " +
+          FormatShortest(v));
+    }
+  }
+  if (!std::isfinite(z_offset_mm)) throw InputError("image options: the z offset must be a finite number of mm");
+}
+
+HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapImageOptions& options) {
+  options.Check();
+  CheckReadableFile(path);
+  std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    Fail(path, "cannot read it as an image (" + OIIO::geterror() +
+                   "); height-map images are single-channel TIFF, EXR or PNG files");
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  if (spec.width < 1 || spec.height < 1 || spec.depth > 1 ||
+      static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxPoints) {
+    Fail(path, "is a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
+                   std::to_string(spec.depth) + " image, not a height map fvm can hold");
+  }
+  const int alpha = spec.alpha_channel;
+  if (spec.nchannels > 2 || (spec.nchannels == 2 && alpha < 0)) {
+    Fail(path, "has " + std::to_string(spec.nchannels) +
+                   " channels (a colour rendering?); a height map has one grey channel, and optionally alpha: "
+                   "export the heights themselves");
+  }
+  const int height_channel = alpha == 0 ? 1 : 0;
+
+  const std::map<std::string, double> described = ParseDescription(spec.get_string_attribute("ImageDescription"));
+  const auto described_value = [&](const std::string& key) -> std::optional<double> {
+    const auto it = described.find(key);
+    if (it == described.end() || !std::isfinite(it->second)) return std::nullopt;
+    return it->second;
+  };
+  // A resolution in pixels per centimetre is a deliberate statement about the sample; see the header.
+  const auto resolution = [&](const char* key) -> std::optional<double> {
+    const float per_cm = spec.get_float_attribute(key, 0.0f);
+    if (spec.get_string_attribute("ResolutionUnit") != "cm" || !(per_cm > 0.0f)) return std::nullopt;
+    return 10.0 / static_cast<double>(per_cm);
+  };
+  double dx = options.dx_mm;
+  double dy = options.dy_mm > 0.0 ? options.dy_mm : options.dx_mm;
+  if (dx == 0.0) {
+    const std::optional<double> file_dx =
+        described_value("dx_mm") ? described_value("dx_mm") : resolution("XResolution");
+    std::optional<double> file_dy = described_value("dy_mm") ? described_value("dy_mm") : resolution("YResolution");
+    if (!file_dx || !(*file_dx > 0.0)) {
+      Fail(path, "the image does not say its pixel size; give it, e.g. --pixel-size 0.00175 (mm)");
+    }
+    dx = *file_dx;
+    if (dy == 0.0) dy = file_dy && *file_dy > 0.0 ? *file_dy : dx;
+  }
+  const bool integer = IsIntegerType(spec.format);
+  double z_scale = options.z_scale_mm;
+  double z_offset = options.z_offset_mm;
+  if (z_scale == 0.0) {
+    if (const std::optional<double> scale = described_value("z_scale_mm"); scale && *scale > 0.0) {
+      z_scale = *scale;
+      z_offset = described_value("z_offset_mm").value_or(0.0);
+    } else if (integer) {
+      Fail(path, "holds " + std::string(spec.format.c_str()) +
+                     " grey levels but does not say how many mm one level is; give it, e.g. --z-scale 0.0001 (mm)");
+    } else {
+      z_scale = 1.0;  // float images hold mm
+    }
+  }
+
+  const std::size_t n = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
+  const std::vector<double> raw = ReadChannel(*input, path, height_channel, n);
+  std::vector<double> coverage;
+  if (alpha >= 0) coverage = ReadChannel(*input, path, alpha, n);
+  HeightMap map;
+  map.size_x = spec.width;
+  map.size_y = spec.height;
+  map.dx_mm = dx;
+  map.dy_mm = dy;
+  map.x0_mm = described_value("x0_mm").value_or(0.0);
+  map.y0_mm = described_value("y0_mm").value_or(0.0);
+  map.source = std::string("image (") + input->format_name() + ", " + spec.format.c_str() + ")";
+  map.z_mm.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool invalid = !std::isfinite(raw[i]) || (options.invalid_value && raw[i] == *options.invalid_value) ||
+                         (!coverage.empty() && coverage[i] == 0.0);
+    map.z_mm[i] = invalid ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z_offset + z_scale * raw[i]);
+  }
+  input->close();
+  return map;
+}
+
+void WriteHeightMapImage(const std::filesystem::path& path, const HeightMap& map) {
+  if (map.size_x < 1 || map.size_y < 1 ||
+      map.z_mm.size() != static_cast<std::size_t>(map.size_x) * static_cast<std::size_t>(map.size_y) ||
+      !(map.dx_mm > 0.0) || !(map.dy_mm > 0.0)) {
+    throw std::invalid_argument("height-map image writer: the height map is malformed (sizes, spacing or count)");
+  }
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".tif" && extension != ".tiff" && extension != ".exr") {
+    throw InputError(path.string() +
+                     ": height-map images are written as float32 TIFF (.tif) or OpenEXR (.exr); "
+                     "choose one of these extensions");
+  }
+  OIIO::ImageSpec spec(map.size_x, map.size_y, 1, OIIO::TypeDesc::FLOAT);
+  spec.attribute("ImageDescription",
+                 std::string(kDescriptionTag) + "; dx_mm=" + FormatShortest(map.dx_mm) +
+                     "; dy_mm=" + FormatShortest(map.dy_mm) + "; x0_mm=" + FormatShortest(map.x0_mm) +
+                     "; y0_mm=" + FormatShortest(map.y0_mm) + "; z_scale_mm=1; z_offset_mm=0; z in mm, NaN invalid");
+  spec.attribute("XResolution", static_cast<float>(10.0 / map.dx_mm));
+  spec.attribute("YResolution", static_cast<float>(10.0 / map.dy_mm));
+  spec.attribute("ResolutionUnit", "cm");
+  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(temporary.string());
+    if (!output) throw InputError(path.string() + ": cannot write this image type (" + OIIO::geterror() + ")");
+    if (!output->open(temporary.string(), spec) || !output->write_image(OIIO::TypeDesc::FLOAT, map.z_mm.data()) ||
+        !output->close()) {
+      throw InputError(path.string() + ": cannot write (" + output->geterror() +
+                       "); check that the directory exists, is writable and has free space");
+    }
+  });
+}
+
+}  // namespace fvm::imaging

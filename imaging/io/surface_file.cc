@@ -1,0 +1,125 @@
+#include "imaging/io/surface_file.h"
+
+#include <cctype>
+#include <string_view>
+
+#include "core/input_error.h"
+#include "imaging/io/al3d.h"
+#include "core/file_io.h"
+#include "imaging/io/x3p.h"
+
+namespace fvm::imaging {
+namespace {
+
+bool StartsWith(std::string_view text, std::string_view prefix) { return text.substr(0, prefix.size()) == prefix; }
+
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+std::optional<SurfaceFormat> FromContent(std::string_view head) {
+  using namespace std::string_view_literals;
+  if (StartsWith(head, "PK\x03\x04"sv) || StartsWith(head, "PK\x05\x06"sv)) return SurfaceFormat::kX3p;
+  if (StartsWith(head, "AliconaImaging")) return SurfaceFormat::kAl3d;
+  if (StartsWith(head, "II*\0"sv) || StartsWith(head, "MM\0*"sv) || StartsWith(head, "\x76\x2f\x31\x01"sv) ||
+      StartsWith(head, "\x89PNG"sv)) {
+    return SurfaceFormat::kImage;
+  }
+  if (StartsWith(head, "ply\n") || StartsWith(head, "ply\r\n")) return SurfaceFormat::kPly;
+  if (StartsWith(head, "# .PCD") || StartsWith(head, "VERSION") || StartsWith(head, "FIELDS")) {
+    return SurfaceFormat::kPcd;
+  }
+  return std::nullopt;
+}
+
+std::optional<SurfaceFormat> FromExtension(const std::filesystem::path& path) {
+  const std::string extension = Lower(path.extension().string());
+  if (extension == ".x3p") return SurfaceFormat::kX3p;
+  if (extension == ".al3d") return SurfaceFormat::kAl3d;
+  if (extension == ".tif" || extension == ".tiff" || extension == ".exr" || extension == ".png") {
+    return SurfaceFormat::kImage;
+  }
+  if (extension == ".pcd") return SurfaceFormat::kPcd;
+  if (extension == ".ply") return SurfaceFormat::kPly;
+  if (extension == ".xyz" || extension == ".csv" || extension == ".txt" || extension == ".asc" || extension == ".pts") {
+    return SurfaceFormat::kXyz;
+  }
+  return std::nullopt;
+}
+
+bool LooksLikeText(std::string_view head) {
+  for (const char c : head) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 && c != '\n' && c != '\r' && c != '\t') return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string FormatName(SurfaceFormat format) {
+  switch (format) {
+    case SurfaceFormat::kX3p:
+      return "x3p";
+    case SurfaceFormat::kAl3d:
+      return "al3d";
+    case SurfaceFormat::kImage:
+      return "image";
+    case SurfaceFormat::kPcd:
+      return "pcd";
+    case SurfaceFormat::kPly:
+      return "ply";
+    default:
+      return "xyz";
+  }
+}
+
+bool IsPointCloudFormat(SurfaceFormat format) {
+  return format == SurfaceFormat::kPcd || format == SurfaceFormat::kPly || format == SurfaceFormat::kXyz;
+}
+
+SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
+  const std::string head = ReadFileHead(path, 64);
+  if (head.empty()) throw InputError(path.string() + ": the file is empty; export or copy it again");
+  if (const std::optional<SurfaceFormat> format = FromContent(head)) return *format;
+  if (const std::optional<SurfaceFormat> format = FromExtension(path)) return *format;
+  if (LooksLikeText(head)) return SurfaceFormat::kXyz;
+  throw InputError(path.string() +
+                   ": not a format fvm reads; it reads X3P, Alicona AL3D, height-map images (TIFF, EXR, PNG), "
+                   "PCD, PLY and XYZ/CSV text");
+}
+
+void SurfaceReadOptions::Check() const {
+  image.Check();
+  cloud.Check();
+}
+
+Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions& options) {
+  options.Check();
+  Surface surface;
+  surface.format = DetectSurfaceFormat(path);
+  switch (surface.format) {
+    case SurfaceFormat::kX3p:
+      surface.height_map = ReadX3p(path);
+      break;
+    case SurfaceFormat::kAl3d:
+      surface.height_map = ReadAl3d(path);
+      break;
+    case SurfaceFormat::kImage:
+      surface.height_map = ReadHeightMapImage(path, options.image);
+      break;
+    case SurfaceFormat::kPcd:
+      surface.cloud = ReadPointCloud(path, PointCloudFormat::kPcd, options.cloud);
+      break;
+    case SurfaceFormat::kPly:
+      surface.cloud = ReadPointCloud(path, PointCloudFormat::kPly, options.cloud);
+      break;
+    case SurfaceFormat::kXyz:
+      surface.cloud = ReadPointCloud(path, PointCloudFormat::kXyz, options.cloud);
+      break;
+  }
+  return surface;
+}
+
+}  // namespace fvm::imaging

@@ -1,0 +1,571 @@
+#include "imaging/io/x3p.h"
+
+#include <bit>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <ctime>
+#include <limits>
+#include <optional>
+#include <pugixml.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "core/input_error.h"
+#include "core/file_io.h"
+#include "imaging/io/md5.h"
+#include "core/number_text.h"
+#include "imaging/io/zip_archive.h"
+
+namespace fvm::imaging {
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "X3P binary data is little-endian and is copied as it is; add byte swapping for this platform");
+
+constexpr double kMmPerMetre = 1000.0;
+// HeightMap sizes are ints; beyond this a map would not fit in memory anyway.
+constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
+constexpr std::size_t kMaxXmlBytes = std::size_t{1} << 31;
+constexpr const char* kMainXml = "main.xml";
+constexpr const char* kChecksumFile = "md5checksum.hex";
+constexpr const char* kDataBin = "bindata/data.bin";
+constexpr const char* kValidBin = "bindata/valid.bin";
+constexpr const char* kNamespace = "http://www.opengps.eu/2008/ISO5436_2";
+constexpr const char* kReexport = "the file is damaged or was edited: export it from the instrument again";
+
+[[noreturn]] void Fail(const std::string& name, const std::string& problem) { throw InputError(name + ": " + problem); }
+
+// ---------------------------------------------------------------------------------------------------------------
+// Reading
+
+std::string_view LocalName(const pugi::xml_node& node) {
+  const std::string_view full = node.name();
+  const size_t colon = full.find(':');
+  return colon == std::string_view::npos ? full : full.substr(colon + 1);
+}
+
+// Records are unqualified in the schema, but some writers prefix them: match local names.
+pugi::xml_node Child(const pugi::xml_node& parent, std::string_view local) {
+  for (pugi::xml_node child = parent.first_child(); child; child = child.next_sibling()) {
+    if (child.type() == pugi::node_element && LocalName(child) == local) return child;
+  }
+  return {};
+}
+
+pugi::xml_node Required(const std::string& name, const pugi::xml_node& parent, std::string_view local,
+                        const std::string& where) {
+  const pugi::xml_node child = Child(parent, local);
+  if (!child) {
+    Fail(name, "main.xml has no <" + where + "/" + std::string(local) +
+                   ">, which every X3P surface has (ISO 25178-72); " + kReexport);
+  }
+  return child;
+}
+
+std::string_view Text(const pugi::xml_node& node) { return TrimBlanks(node.text().get()); }
+
+double RequiredNumber(const std::string& name, const pugi::xml_node& parent, std::string_view local,
+                      const std::string& where) {
+  const pugi::xml_node node = Required(name, parent, local, where);
+  const std::optional<double> value = ParseDouble(Text(node));
+  if (!value || !std::isfinite(*value)) {
+    Fail(name, "main.xml <" + where + "/" + std::string(local) + "> is '" + std::string(Text(node)) +
+                   "', not a finite number; " + kReexport);
+  }
+  return *value;
+}
+
+std::uint64_t RequiredCount(const std::string& name, const pugi::xml_node& parent, std::string_view local) {
+  const pugi::xml_node node = Required(name, parent, local, "Record3/MatrixDimension");
+  const std::optional<std::int64_t> value = ParseInt(Text(node));
+  if (!value || *value < 1 || static_cast<std::uint64_t>(*value) > kMaxPoints) {
+    Fail(name, "main.xml <MatrixDimension/" + std::string(local) + "> is '" + std::string(Text(node)) +
+                   "', not a point count between 1 and " + std::to_string(kMaxPoints) + "; " + kReexport);
+  }
+  return static_cast<std::uint64_t>(*value);
+}
+
+struct Axis {
+  char type = 'I';     // I incremental, A absolute
+  char data_type = 0;  // I, L, F, D; 0 when not given
+  double increment = 1.0;
+  double offset = 0.0;
+};
+
+Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_view local) {
+  const std::string where = "Record1/Axes/" + std::string(local);
+  const pugi::xml_node node = Required(name, axes, local, "Record1/Axes");
+  Axis axis;
+  const std::string_view type = Text(Required(name, node, "AxisType", where));
+  if (type != "I" && type != "A") {
+    Fail(name, "main.xml <" + where + "/AxisType> is '" + std::string(type) + "', not I or A; " + kReexport);
+  }
+  axis.type = type.front();
+  if (const pugi::xml_node data_type = Child(node, "DataType")) {
+    const std::string_view code = Text(data_type);
+    if (code.size() != 1 || std::string_view("ILFD").find(code.front()) == std::string_view::npos) {
+      Fail(name, "main.xml <" + where + "/DataType> is '" + std::string(code) +
+                     "', not one of I (int16), L (int32), F (float32), D (float64); " + kReexport);
+    }
+    axis.data_type = code.front();
+  }
+  if (Child(node, "Increment")) axis.increment = RequiredNumber(name, node, "Increment", where);
+  if (Child(node, "Offset")) axis.offset = RequiredNumber(name, node, "Offset", where);
+  if (axis.increment == 0.0 || (axis.type == 'I' && axis.increment < 0.0)) {
+    Fail(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
+                   "; a grid needs a positive spacing; " + kReexport);
+  }
+  return axis;
+}
+
+std::size_t TypeSize(char data_type) {
+  switch (data_type) {
+    case 'I':
+      return 2;
+    case 'L':
+    case 'F':
+      return 4;
+    default:
+      return 8;
+  }
+}
+
+std::string Lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+bool IsMd5(std::string_view text) {
+  return text.size() == 32 && text.find_first_not_of("0123456789abcdefABCDEF") == std::string_view::npos;
+}
+
+// `what` names the checked content, `where` the place the expected digest came from.
+void VerifyMd5(const std::string& name, std::string_view content, std::string_view expected, const std::string& what,
+               const std::string& where) {
+  expected = TrimBlanks(expected);
+  if (!IsMd5(expected)) {
+    Fail(name, where + " holds '" + std::string(expected.substr(0, 40)) + "', not an MD5 digest of " + what + "; " +
+                   kReexport);
+  }
+  const std::string actual = Md5Hex(content);
+  if (Lower(expected) != actual) {
+    Fail(name, what + " does not match its MD5 checksum (" + where + " says " + Lower(expected) + ", the content has " +
+                   actual + "); " + kReexport);
+  }
+}
+
+void VerifyChecksumFile(const std::string& name, const ZipReader& zip, const std::string& checksum_file,
+                        const std::string& xml) {
+  const std::string text = zip.Read(checksum_file, 4096);
+  // md5sum's format: the digest, then " *main.xml" (or nothing after it in some writers).
+  const std::string_view trimmed = TrimBlanks(text);
+  const std::string_view digest = trimmed.substr(0, trimmed.find_first_of(" \t*\r\n"));
+  VerifyMd5(name, xml, digest, std::string(kMainXml), checksum_file);
+}
+
+std::string Describe(const pugi::xml_node& root) {
+  std::string source = "X3P (ISO 25178-72)";
+  const pugi::xml_node record2 = Child(root, "Record2");
+  if (!record2) return source;
+  const pugi::xml_node instrument = Child(record2, "Instrument");
+  std::string who;
+  for (const char* field : {"Manufacturer", "Model"}) {
+    const std::string_view text = Text(Child(instrument, field));
+    if (text.empty() || text == "unknown") continue;
+    if (!who.empty()) who += ' ';
+    who += text;
+  }
+  if (!who.empty()) source.append(", ").append(who);
+  if (const std::string_view date = Text(Child(record2, "Date")); !date.empty()) source.append(", ").append(date);
+  return source;
+}
+
+template <typename T>
+double Load(const char* p) {
+  T value;
+  std::memcpy(&value, p, sizeof value);
+  return static_cast<double>(value);
+}
+
+}  // namespace
+
+HeightMap ParseX3p(std::string bytes, const std::string& name) {
+  const ZipReader zip(std::move(bytes), name);
+  if (!zip.Has(kMainXml)) {
+    Fail(name, "the archive has no main.xml: not an X3P file (ISO 25178-72); export the surface as X3P");
+  }
+  const std::string xml = zip.Read(kMainXml, kMaxXmlBytes);
+  // Before parsing: a damaged main.xml is better reported as a checksum failure than as an XML error.
+  if (zip.Has(kChecksumFile)) VerifyChecksumFile(name, zip, kChecksumFile, xml);
+
+  pugi::xml_document document;
+  const pugi::xml_parse_result parsed = document.load_buffer(xml.data(), xml.size());
+  if (!parsed) {
+    Fail(name, std::string("main.xml is not well-formed XML (") + parsed.description() + " at byte " +
+                   std::to_string(parsed.offset) + "); " + kReexport);
+  }
+  const pugi::xml_node root = document.document_element();
+  if (LocalName(root) != "ISO5436_2") {
+    Fail(name, "main.xml has root <" + std::string(root.name()) + ">, not <ISO5436_2>: not an X3P file");
+  }
+  if (const pugi::xml_node record4 = Child(root, "Record4")) {
+    const std::string checksum_file(Text(Child(record4, "ChecksumFile")));
+    if (!checksum_file.empty() && checksum_file != kChecksumFile && zip.Has(checksum_file)) {
+      VerifyChecksumFile(name, zip, checksum_file, xml);
+    }
+  }
+
+  const pugi::xml_node record1 = Required(name, root, "Record1", "ISO5436_2");
+  const std::string feature(Text(Child(record1, "FeatureType")));
+  if (!feature.empty() && feature != "SUR" && feature != "PRF") {
+    Fail(name, "holds FeatureType " + feature +
+                   " (a point cloud); fvm reads X3P surfaces on a grid (SUR, PRF): export the surface as a grid, "
+                   "or as PLY/PCD for a point cloud");
+  }
+  const pugi::xml_node axes = Required(name, record1, "Axes", "Record1");
+  const Axis cx = ParseAxis(name, axes, "CX");
+  const Axis cy = ParseAxis(name, axes, "CY");
+  const Axis cz = ParseAxis(name, axes, "CZ");
+  if (cx.type != 'I' || cy.type != 'I') {
+    Fail(name,
+         "has absolute X/Y axes (a list of x, y, z points); fvm reads X3P surfaces on a regular grid "
+         "(AxisType I for CX and CY): export the surface on a grid");
+  }
+  if (cz.type != 'A') Fail(name, "main.xml <Record1/Axes/CZ/AxisType> is I; heights need an absolute axis (A)");
+  if (cz.data_type == 0) {
+    Fail(name, "main.xml <Record1/Axes/CZ> has no DataType (I, L, F or D), so its heights cannot be decoded; " +
+                   std::string(kReexport));
+  }
+
+  const pugi::xml_node record3 = Required(name, root, "Record3", "ISO5436_2");
+  const pugi::xml_node dimension = Required(name, record3, "MatrixDimension", "Record3");
+  const std::uint64_t size_x = RequiredCount(name, dimension, "SizeX");
+  const std::uint64_t size_y = RequiredCount(name, dimension, "SizeY");
+  const std::uint64_t size_z = RequiredCount(name, dimension, "SizeZ");
+  if (size_z != 1) {
+    Fail(name, "has SizeZ " + std::to_string(size_z) + " (several layers); fvm reads single-layer surfaces");
+  }
+  if (size_x * size_y > kMaxPoints) {
+    Fail(name, "main.xml says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
+                   " points, more than fvm can hold (" + std::to_string(kMaxPoints) + ")");
+  }
+  const std::size_t n = static_cast<std::size_t>(size_x * size_y);
+  const std::string points_said = "MatrixDimension says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
+                                  " = " + std::to_string(n) + " points";
+
+  std::vector<double> raw;  // the file's values, before Offset and Increment
+  std::vector<bool> valid;
+  if (const pugi::xml_node link = Child(record3, "DataLink")) {
+    const std::string data_file(Text(Required(name, link, "PointDataLink", "Record3/DataLink")));
+    if (!zip.Has(data_file)) Fail(name, "main.xml links point data '" + data_file + "', which the archive lacks");
+    const std::size_t type_size = TypeSize(cz.data_type);
+    const std::size_t expected = n * type_size;
+    if (zip.DeclaredSize(data_file) != expected) {
+      Fail(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
+                     " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
+                     " bytes; " + kReexport);
+    }
+    const std::string data = zip.Read(data_file, expected);
+    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData")) {
+      VerifyMd5(name, data, Text(md5), data_file, "main.xml <MD5ChecksumPointData>");
+    }
+    raw.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const char* p = data.data() + i * type_size;
+      switch (cz.data_type) {
+        case 'I':
+          raw[i] = Load<std::int16_t>(p);
+          break;
+        case 'L':
+          raw[i] = Load<std::int32_t>(p);
+          break;
+        case 'F':
+          raw[i] = Load<float>(p);
+          break;
+        default:
+          raw[i] = Load<double>(p);
+          break;
+      }
+    }
+    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink")) {
+      const std::string valid_file(Text(valid_link));
+      if (!zip.Has(valid_file))
+        Fail(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
+      const std::size_t needed = (n + 7) / 8;
+      const std::size_t declared = zip.DeclaredSize(valid_file);
+      // A few writers pad the bit file; more than twice the size it needs is a lie about the sizes.
+      if (declared < needed || declared > 2 * needed + 64) {
+        Fail(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
+                       " holds " + std::to_string(declared) + " bytes; " + kReexport);
+      }
+      const std::string bits = zip.Read(valid_file, declared);
+      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints")) {
+        VerifyMd5(name, bits, Text(md5), valid_file, "main.xml <MD5ChecksumValidPoints>");
+      }
+      valid.resize(n);
+      // Point i is bit (i % 8) of byte i / 8, least significant bit first.
+      for (std::size_t i = 0; i < n; ++i) valid[i] = (static_cast<unsigned char>(bits[i / 8]) >> (i % 8)) & 1u;
+    }
+  } else if (const pugi::xml_node list = Child(record3, "DataList")) {
+    std::size_t count = 0;
+    for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
+      if (datum.type() == pugi::node_element && LocalName(datum) == "Datum") ++count;
+    }
+    if (count != n) {
+      Fail(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " + kReexport);
+    }
+    raw.resize(n);
+    std::size_t i = 0;
+    for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
+      if (datum.type() != pugi::node_element || LocalName(datum) != "Datum") continue;
+      const std::string_view text = Text(datum);
+      if (text.empty()) {  // an empty Datum is an invalid point
+        raw[i++] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      const std::optional<double> value = ParseDouble(text);
+      if (!value) {
+        Fail(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
+                       "', not a number; " + kReexport);
+      }
+      raw[i++] = *value;
+    }
+  } else {
+    Fail(name, "main.xml <Record3> has neither a DataLink nor a DataList: the file holds no heights; " +
+                   std::string(kReexport));
+  }
+
+  HeightMap map;
+  map.size_x = static_cast<int>(size_x);
+  map.size_y = static_cast<int>(size_y);
+  map.dx_mm = cx.increment * kMmPerMetre;
+  map.dy_mm = cy.increment * kMmPerMetre;
+  map.x0_mm = cx.offset * kMmPerMetre;
+  map.y0_mm = cy.offset * kMmPerMetre;
+  map.source = Describe(root);
+  map.z_mm.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    // ISO 5436-2 scales every type the same way; floats usually carry increment 1 and offset 0.
+    const double z_m = cz.offset + cz.increment * raw[i];
+    const bool ok = (valid.empty() || valid[i]) && std::isfinite(z_m);
+    map.z_mm[i] = ok ? static_cast<float>(z_m * kMmPerMetre) : std::numeric_limits<float>::quiet_NaN();
+  }
+  return map;
+}
+
+HeightMap ReadX3p(const std::filesystem::path& path) { return ParseX3p(ReadFileBytes(path), path.string()); }
+
+// ---------------------------------------------------------------------------------------------------------------
+// Writing
+
+namespace {
+
+char TypeCode(X3pDataType type) {
+  switch (type) {
+    case X3pDataType::kInt16:
+      return 'I';
+    case X3pDataType::kInt32:
+      return 'L';
+    case X3pDataType::kFloat32:
+      return 'F';
+    default:
+      return 'D';
+  }
+}
+
+bool IsInteger(X3pDataType type) { return type == X3pDataType::kInt16 || type == X3pDataType::kInt32; }
+
+std::string UtcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S+00:00", &utc);
+  return text;
+}
+
+void CheckMap(const HeightMap& map) {
+  if (map.size_x < 1 || map.size_y < 1 ||
+      map.z_mm.size() != static_cast<std::size_t>(map.size_x) * static_cast<std::size_t>(map.size_y) ||
+      !(map.dx_mm > 0.0) || !(map.dy_mm > 0.0) || !std::isfinite(map.dx_mm) || !std::isfinite(map.dy_mm)) {
+    throw std::invalid_argument("X3P writer: the height map is malformed (sizes, spacing or point count)");
+  }
+}
+
+pugi::xml_node Add(pugi::xml_node parent, const char* tag, const std::string& text) {
+  pugi::xml_node node = parent.append_child(tag);
+  node.text().set(text.c_str());
+  return node;
+}
+
+void AddAxis(pugi::xml_node axes, const char* tag, char axis_type, char data_type, double increment, double offset) {
+  pugi::xml_node axis = axes.append_child(tag);
+  Add(axis, "AxisType", std::string(1, axis_type));
+  Add(axis, "DataType", std::string(1, data_type));
+  Add(axis, "Increment", FormatShortest(increment));
+  Add(axis, "Offset", FormatShortest(offset));
+}
+
+template <typename T>
+void Store(std::string& bytes, T value) {
+  char buffer[sizeof(T)];
+  std::memcpy(buffer, &value, sizeof value);
+  bytes.append(buffer, sizeof buffer);
+}
+
+}  // namespace
+
+void X3pWriteOptions::Check() const {
+  if (IsInteger(z_type) && !(z_increment_mm > 0.0 && std::isfinite(z_increment_mm))) {
+    throw InputError("X3P: integer heights (I, L) need a positive z increment in mm, e.g. 1e-6 for 1 nm steps");
+  }
+}
+
+std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
+  options.Check();
+  CheckMap(map);
+  const std::size_t n = map.z_mm.size();
+  const char code = TypeCode(options.z_type);
+  const double z_increment_m = IsInteger(options.z_type) ? options.z_increment_mm / kMmPerMetre : 1.0;
+
+  // Heights as the file holds them: metres for F and D, counts of the increment for I and L.
+  std::vector<bool> valid(n);
+  std::vector<double> value(n, 0.0);
+  std::int64_t lowest = 0, highest = 0;
+  if (options.z_type == X3pDataType::kInt16) lowest = INT16_MIN, highest = INT16_MAX;
+  if (options.z_type == X3pDataType::kInt32) lowest = INT32_MIN, highest = INT32_MAX;
+  bool any_invalid = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    valid[i] = std::isfinite(map.z_mm[i]);
+    any_invalid = any_invalid || !valid[i];
+    if (!valid[i]) continue;
+    const double z_m = static_cast<double>(map.z_mm[i]) / kMmPerMetre;
+    if (IsInteger(options.z_type)) {
+      const double steps = std::round(static_cast<double>(map.z_mm[i]) / options.z_increment_mm);
+      if (steps < static_cast<double>(lowest) || steps > static_cast<double>(highest)) {
+        throw InputError("X3P: height " + FormatShortest(map.z_mm[i]) + " mm is " + FormatShortest(steps) +
+                         " steps of " + FormatShortest(options.z_increment_mm) + " mm, beyond the range of type " +
+                         std::string(1, code) + "; choose a larger increment or type L, F or D");
+      }
+      value[i] = steps;
+    } else {
+      value[i] = z_m;
+    }
+  }
+
+  std::string data;
+  std::string bits;
+  if (options.binary) {
+    data.reserve(n * TypeSize(code));
+    for (std::size_t i = 0; i < n; ++i) {
+      switch (options.z_type) {
+        case X3pDataType::kInt16:
+          Store(data, static_cast<std::int16_t>(value[i]));
+          break;
+        case X3pDataType::kInt32:
+          Store(data, static_cast<std::int32_t>(value[i]));
+          break;
+        case X3pDataType::kFloat32:
+          Store(data, valid[i] ? static_cast<float>(value[i]) : std::numeric_limits<float>::quiet_NaN());
+          break;
+        default:
+          Store(data, valid[i] ? value[i] : std::numeric_limits<double>::quiet_NaN());
+          break;
+      }
+    }
+    if (any_invalid) {
+      bits.assign((n + 7) / 8, '\0');
+      for (std::size_t i = 0; i < n; ++i) {
+        if (valid[i]) bits[i / 8] = static_cast<char>(static_cast<unsigned char>(bits[i / 8]) | (1u << (i % 8)));
+      }
+    }
+  }
+
+  pugi::xml_document document;
+  pugi::xml_node declaration = document.append_child(pugi::node_declaration);
+  declaration.append_attribute("version") = "1.0";
+  declaration.append_attribute("encoding") = "UTF-8";
+  declaration.append_attribute("standalone") = "no";
+  pugi::xml_node root = document.append_child("p:ISO5436_2");
+  root.append_attribute("xmlns:p") = kNamespace;
+  root.append_attribute("xmlns:xsi") = "http://www.w3.org/2001/XMLSchema-instance";
+  root.append_attribute("xsi:schemaLocation") =
+      "http://www.opengps.eu/2008/ISO5436_2 http://www.opengps.eu/2008/ISO5436_2/ISO5436_2_XML.xsd";
+
+  pugi::xml_node record1 = root.append_child("Record1");
+  Add(record1, "Revision", "ISO5436 - 2000");
+  Add(record1, "FeatureType", "SUR");
+  pugi::xml_node axes = record1.append_child("Axes");
+  AddAxis(axes, "CX", 'I', 'D', map.dx_mm / kMmPerMetre, map.x0_mm / kMmPerMetre);
+  AddAxis(axes, "CY", 'I', 'D', map.dy_mm / kMmPerMetre, map.y0_mm / kMmPerMetre);
+  AddAxis(axes, "CZ", 'A', code, z_increment_m, 0.0);
+
+  const std::string date = options.date.empty() ? UtcNow() : options.date;
+  pugi::xml_node record2 = root.append_child("Record2");
+  Add(record2, "Date", date);
+  Add(record2, "Creator", options.creator);
+  pugi::xml_node instrument = record2.append_child("Instrument");
+  Add(instrument, "Manufacturer", options.manufacturer);
+  Add(instrument, "Model", options.model);
+  Add(instrument, "Serial", "not available");
+  Add(instrument, "Version", "not available");
+  Add(record2, "CalibrationDate", date);
+  pugi::xml_node probing = record2.append_child("ProbingSystem");
+  Add(probing, "Type", "NonContacting");
+  Add(probing, "Identification", "focus variation");
+  if (!options.comment.empty()) Add(record2, "Comment", options.comment);
+
+  pugi::xml_node record3 = root.append_child("Record3");
+  pugi::xml_node dimension = record3.append_child("MatrixDimension");
+  Add(dimension, "SizeX", std::to_string(map.size_x));
+  Add(dimension, "SizeY", std::to_string(map.size_y));
+  Add(dimension, "SizeZ", "1");
+  if (options.binary) {
+    pugi::xml_node link = record3.append_child("DataLink");
+    Add(link, "PointDataLink", kDataBin);
+    Add(link, "MD5ChecksumPointData", Md5Hex(data));
+    if (!bits.empty()) {
+      Add(link, "ValidPointsLink", kValidBin);
+      Add(link, "MD5ChecksumValidPoints", Md5Hex(bits));
+    }
+  } else {
+    pugi::xml_node list = record3.append_child("DataList");
+    for (std::size_t i = 0; i < n; ++i) {
+      pugi::xml_node datum = list.append_child("Datum");
+      if (!valid[i]) continue;  // empty: an invalid point
+      if (IsInteger(options.z_type)) {
+        datum.text().set(std::to_string(static_cast<std::int64_t>(value[i])).c_str());
+      } else if (options.z_type == X3pDataType::kFloat32) {
+        datum.text().set(FormatShortest(static_cast<float>(value[i])).c_str());
+      } else {
+        datum.text().set(FormatShortest(value[i]).c_str());
+      }
+    }
+  }
+  pugi::xml_node record4 = root.append_child("Record4");
+  Add(record4, "ChecksumFile", kChecksumFile);
+
+  std::ostringstream xml;
+  document.save(xml, "  ", pugi::format_default, pugi::encoding_utf8);
+  std::vector<ZipEntry> entries;
+  entries.push_back({kMainXml, xml.str()});
+  entries.push_back({kChecksumFile, Md5Hex(entries.front().content) + " *main.xml\n"});
+  if (options.binary) {
+    entries.push_back({kDataBin, std::move(data)});
+    if (!bits.empty()) entries.push_back({kValidBin, std::move(bits)});
+  }
+  return BuildZip(entries);
+}
+
+void WriteX3p(const std::filesystem::path& path, const HeightMap& map, const X3pWriteOptions& options) {
+  WriteFileAtomically(path, BuildX3p(map, options));
+}
+
+}  // namespace fvm::imaging
