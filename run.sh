@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
 # The one entry script: installs what is missing (Debian packages, as root), configures and builds fvm, then
-#   bash run.sh sample   calibrates the bundled sample batch and prints the result
-#   bash run.sh test     runs the whole test suite
-#   bash run.sh build    only builds
+#   bash run.sh sample     calibrates the bundled sample batch and prints the result
+#   bash run.sh test       the whole test suite (what CI runs): the Release build's tests, then the same tests
+#                          under AddressSanitizer and UndefinedBehaviorSanitizer, then every reader's fuzzer
+#   bash run.sh unit       only the Release build's tests
+#   bash run.sh sanitize   only the sanitizer build and its tests (build-asan/)
+#   bash run.sh fuzz [N]   only the fuzzers, N executions each (build-fuzz/, clang)
+#   bash run.sh build      only builds
 set -euo pipefail
 cd "$(dirname "$0")"
 what="${1:-sample}"
 
-packages=(cmake ninja-build ccache g++ pkg-config
+packages=(cmake ninja-build ccache g++ pkg-config clang libclang-rt-14-dev
   libeigen3-dev libceres-dev libopencv-dev libpcl-dev libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libfmt-dev libboost-dev libplplot-dev
   libzip-dev libpugixml-dev libssl-dev)
@@ -26,14 +30,45 @@ if ((${#missing[@]})); then
   fi
 fi
 
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build
+build_release() {
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build build
+}
+
+# The whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer: any report fails the test that
+# made it (UBSan aborts instead of printing and going on). Benchmarks are not built here.
+sanitize() {
+  local flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g1"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DFVM_BENCH=OFF \
+    -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_C_FLAGS="$flags" \
+    -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+    -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+    -DCMAKE_MODULE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
+  cmake --build build-asan
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1" \
+    LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0" \
+    UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+    ctest --test-dir build-asan --output-on-failure -j2
+}
+
+fuzz() {
+  if [[ -f tests/fuzz/run.sh ]]; then bash tests/fuzz/run.sh "$@"; fi
+}
 
 case "$what" in
-  build) ;;
+  build) build_release ;;
   sample)
+    build_release
     build/fvm/fvm calibrate samples/bar17 --model 27 -o build/sample-calibration.json --report build/sample-report
     ;;
-  test) ctest --test-dir build --output-on-failure -j2 ;;
-  *) echo "run.sh: unknown target '$what' (use sample, test or build)" >&2; exit 2 ;;
+  unit) build_release && ctest --test-dir build --output-on-failure -j2 ;;
+  sanitize) sanitize ;;
+  fuzz) shift; fuzz "$@" ;;
+  test)
+    build_release
+    ctest --test-dir build --output-on-failure -j2
+    sanitize
+    fuzz
+    ;;
+  *) echo "run.sh: unknown target '$what' (use sample, test, unit, sanitize, fuzz or build)" >&2; exit 2 ;;
 esac
