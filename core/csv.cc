@@ -60,9 +60,10 @@ class RecordParser {
         ++pos;
         while (true) {
           if (pos >= n) {
-            throw InputError(fmt::format("{}:{}: field {}: the quote opened here is never closed; close the field "
-                                         "with \" (a quote inside a quoted field is written \"\")",
-                                         name_, opened, fields.size() + 1));
+            throw InputError(
+                fmt::format("{}:{}: field {}: the quote opened here is never closed; close the field "
+                            "with \" (a quote inside a quoted field is written \"\")",
+                            name_, opened, fields.size() + 1));
           }
           const char c = text_[pos++];
           if (c == '"') {
@@ -78,9 +79,10 @@ class RecordParser {
         }
         while (pos < n && IsBlank(text_[pos], separator_)) ++pos;
         if (pos < n && text_[pos] != separator_ && text_[pos] != '\n') {
-          throw InputError(fmt::format("{}:{}: field {}: text after the closing quote; quote the whole field and "
-                                       "write a quote inside it as \"\"",
-                                       name_, line, fields.size() + 1));
+          throw InputError(
+              fmt::format("{}:{}: field {}: text after the closing quote; quote the whole field and "
+                          "write a quote inside it as \"\"",
+                          name_, line, fields.size() + 1));
         }
       } else {
         const std::size_t start = pos;
@@ -107,9 +109,10 @@ class RecordParser {
 
 CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& options) {
   if (text.size() > options.max_bytes) {
-    throw InputError(fmt::format("{}: {} bytes is more than the {} a CSV table may have here; is this the right "
-                                 "file?",
-                                 name, text.size(), options.max_bytes));
+    throw InputError(
+        fmt::format("{}: {} bytes is more than the {} a CSV table may have here; is this the right "
+                    "file?",
+                    name, text.size(), options.max_bytes));
   }
   if (text.substr(0, kByteOrderMark.size()) == kByteOrderMark) text.remove_prefix(kByteOrderMark.size());
   CsvTable table;
@@ -146,9 +149,10 @@ CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& opt
         if (key.empty()) continue;  // a trailing separator: an unnamed column, ignored like any other extra one
         for (std::size_t j = 0; j < i; ++j) {
           if (table.lower_header_[j] == key) {
-            throw InputError(fmt::format("{}:{}: column '{}' appears twice in the header (fields {} and {}); keep "
-                                         "one of them",
-                                         file, first_line, key, j + 1, i + 1));
+            throw InputError(
+                fmt::format("{}:{}: column '{}' appears twice in the header (fields {} and {}); keep "
+                            "one of them",
+                            file, first_line, key, j + 1, i + 1));
           }
         }
       }
@@ -174,13 +178,15 @@ CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& opt
   }
   if (!parser) {
     if (TrimBlanks(text).empty()) {
-      throw InputError(fmt::format("{}: the file is empty, no header line; write a header line {} and the rows "
-                                   "below it",
-                                   file, expected));
+      throw InputError(
+          fmt::format("{}: the file is empty, no header line; write a header line {} and the rows "
+                      "below it",
+                      file, expected));
     }
-    throw InputError(fmt::format("{}:{}: no header line (only comments or blank lines); the first line that is not "
-                                 "a '#' comment must name the columns ({})",
-                                 file, line - 1, expected));
+    throw InputError(
+        fmt::format("{}:{}: no header line (only comments or blank lines); the first line that is not "
+                    "a '#' comment must name the columns ({})",
+                    file, line - 1, expected));
   }
   return table;
 }
@@ -200,12 +206,10 @@ int CsvTable::Require(std::string_view column) const {
   if (index >= 0) return index;
   const bool looks_like_data = !header_.empty() && ParseDouble(header_.front()).has_value();
   const std::string expected = expected_header_.empty() ? std::string() : " " + expected_header_;
-  throw InputError(fmt::format("{}:{}: the header has no column '{}'; {}", name_, header_line_, column,
-                               looks_like_data
-                                   ? fmt::format("this line looks like data: add a header line{} above the rows",
-                                                 expected)
-                                   : fmt::format("the first line that is not a '#' comment names the columns{}",
-                                                 expected)));
+  throw InputError(fmt::format(
+      "{}:{}: the header has no column '{}'; {}", name_, header_line_, column,
+      looks_like_data ? fmt::format("this line looks like data: add a header line{} above the rows", expected)
+                      : fmt::format("the first line that is not a '#' comment names the columns{}", expected)));
 }
 
 std::string CsvTable::Where(const CsvRow& row) const { return fmt::format("{}:{}", name_, row.line); }
@@ -254,7 +258,8 @@ std::int64_t CsvTable::Int(const CsvRow& row, int column, std::int64_t min, std:
   if (text.empty()) FailCell(row, column, context, " is empty; " + range);
   const std::optional<std::int64_t> value = ParseInt(text);
   if (!value) FailCell(row, column, context, fmt::format(": '{}' is not a whole number; {}", text, range));
-  if (*value < min || *value > max) FailCell(row, column, context, fmt::format(": {} is out of range; {}", text, range));
+  if (*value < min || *value > max)
+    FailCell(row, column, context, fmt::format(": {} is out of range; {}", text, range));
   return *value;
 }
 

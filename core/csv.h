@@ -37,7 +37,7 @@ struct CsvOptions {
 };
 
 struct CsvRow {
-  int line = 0;  // the line the row starts on (1-based, as an editor counts)
+  int line = 0;                     // the line the row starts on (1-based, as an editor counts)
   std::vector<std::string> fields;  // as many as the header has (the reader refuses other counts)
 };
 

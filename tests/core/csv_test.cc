@@ -120,7 +120,7 @@ TEST(Csv, NumbersAreWholeFieldsAndFixedFormatMatchesPrintf) {
   EXPECT_EQ(table.Int(table.rows()[0], 1, 0, 12), 12);
   EXPECT_EQ(FormatFixed(1.0 / 3.0, 6), "0.333333");
   EXPECT_EQ(FormatFixed(-0.0000004, 6), "-0.000000");  // as printf("%.6f") writes it
-  EXPECT_EQ(FormatFixed(2.5, 0), "2");                  // round half to even, as printf
+  EXPECT_EQ(FormatFixed(2.5, 0), "2");                 // round half to even, as printf
   EXPECT_EQ(AsciiLower("Form_RMS"), "form_rms");
 }
 
@@ -164,7 +164,8 @@ TEST(Csv, TableErrorsNameFileAndLineExactly) {
             "separated by ';'");
   EXPECT_EQ(ParseError("id,x\n1,2,5\n"),
             "f.csv:2: 3 fields where the header (line 1) has 2; write numbers with '.' as the decimal mark, not ','");
-  EXPECT_EQ(ParseError("id,X,x\n"), "f.csv:1: column 'x' appears twice in the header (fields 2 and 3); keep one of them");
+  EXPECT_EQ(ParseError("id,X,x\n"),
+            "f.csv:1: column 'x' appears twice in the header (fields 2 and 3); keep one of them");
   EXPECT_EQ(ParseError("a,b\n1,\"open\n2,3\n"),
             "f.csv:2: field 2: the quote opened here is never closed; close the field with \" (a quote inside a "
             "quoted field is written \"\")");
@@ -184,7 +185,8 @@ TEST(Csv, BoundsAreCheckedBeforeTheTableGrows) {
   small.max_columns = 3;
   EXPECT_EQ(ParseError("a\n1\n2\n# c\n3\n", small),
             "f.csv:5: more than 2 rows; split the table or check that this is the right file");
-  EXPECT_EQ(ParseError("a,b,c,d\n", small), "f.csv:1: more than 3 fields in one row; is this a CSV table? (separator ',')");
+  EXPECT_EQ(ParseError("a,b,c,d\n", small),
+            "f.csv:1: more than 3 fields in one row; is this a CSV table? (separator ',')");
   EXPECT_NO_THROW(ParseCsv("a,b,c\n1,2,3\n4,5,6\n", "f.csv", small));
   small.max_bytes = 8;
   EXPECT_EQ(ParseError("a,b,c\n1,2,3\n", small),
