@@ -33,10 +33,27 @@ std::string_view TrimBlanks(std::string_view text) {
   return text.substr(begin, text.find_last_not_of(kBlanks) - begin + 1);
 }
 
+std::string AsciiLower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return out;
+}
+
 std::optional<double> ParseDouble(std::string_view text) { return ParseWhole<double>(text); }
 std::optional<std::int64_t> ParseInt(std::string_view text) { return ParseWhole<std::int64_t>(text); }
 
 std::string FormatShortest(double value) { return Shortest(value); }
 std::string FormatShortest(float value) { return Shortest(value); }
+
+std::string FormatFixed(double value, int decimals) {
+  decimals = decimals < 0 ? 0 : decimals;
+  std::string text(size_t{320} + static_cast<size_t>(decimals), '\0');  // 1e308 has 309 digits before the point
+  const auto [end, error] =
+      std::to_chars(text.data(), text.data() + text.size(), value, std::chars_format::fixed, decimals);
+  text.resize(error == std::errc() ? static_cast<size_t>(end - text.data()) : 0);
+  return text;
+}
 
 }  // namespace fvm

@@ -1,5 +1,5 @@
 #pragma once
-// Numbers in text fields of surface files (X3P XML, AL3D tags, XYZ lines): locale-independent, whole-field
+// Numbers in text fields (X3P XML, AL3D tags, XYZ lines, CSV cells): locale-independent, whole-field
 // parsing (no trailing garbage accepted), and the shortest text that reads back to the same value.
 
 #include <cstdint>
@@ -15,8 +15,14 @@ std::optional<std::int64_t> ParseInt(std::string_view text);
 
 std::string_view TrimBlanks(std::string_view text);
 
+// 'A'..'Z' to 'a'..'z' and nothing else, whatever the locale: for matching names (header columns, extensions).
+std::string AsciiLower(std::string_view text);
+
 // Round-trip exact: ParseDouble(FormatShortest(v)) == v.
 std::string FormatShortest(double value);
 std::string FormatShortest(float value);
+
+// Fixed notation with `decimals` digits after '.', as printf("%.*f") in the C locale, whatever the locale.
+std::string FormatFixed(double value, int decimals);
 
 }  // namespace fvm

@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
 
 #include "core/input_error.h"
+#include "core/number_text.h"
 
 namespace fvm::imaging {
 namespace {
@@ -148,23 +150,20 @@ StitchingFreePlan PlanStitchingFree(const TileGrid& grid, const std::vector<Feat
 }
 
 double ParseOverlap(std::string_view text, std::string_view what) {
-  std::string s(text);
+  std::string_view s = TrimBlanks(text);
   bool percent = false;
   if (!s.empty() && s.back() == '%') {
     percent = true;
-    s.pop_back();
+    s.remove_suffix(1);
   }
-  double value = 0.0;
-  size_t used = 0;
-  try {
-    value = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
+  // '.' is the decimal mark whatever the locale: std::stod follows the C locale and under a German one stops at
+  // the '.' of 0.2.
+  const std::optional<double> parsed = ParseDouble(s);
   const std::string name(what);
-  if (s.empty() || used != s.size() || !std::isfinite(value)) {
+  if (!parsed || !std::isfinite(*parsed)) {
     throw InputError(name + " '" + std::string(text) + "': not a number; give a fraction (0.2) or percent (20)");
   }
+  double value = *parsed;
   if (percent || value >= 1.0) value /= 100.0;
   if (!(value > 0.0)) {
     throw InputError(name + " '" + std::string(text) +

@@ -11,75 +11,48 @@
 
 #include "core/input_error.h"
 #include "core/file_io.h"
-#include "core/number_text.h"
+#include "core/csv.h"
 
 namespace fvm::imaging {
 namespace {
 
-std::string At(const std::filesystem::path& list, int line) { return list.string() + ":" + std::to_string(line); }
-
-std::vector<std::string_view> SplitComma(std::string_view text) {
-  std::vector<std::string_view> fields;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t comma = text.find(',', start);
-    fields.push_back(TrimBlanks(text.substr(start, comma == std::string_view::npos ? comma : comma - start)));
-    if (comma == std::string_view::npos) return fields;
-    start = comma + 1;
-  }
-}
+// A focus-variation stack has tens to hundreds of images; a list beyond this is a mistake, refused before the
+// images are read.
+constexpr std::size_t kMaxStackImages = 10000;
 
 }  // namespace
 
 std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& list) {
-  const std::string text = ReadFileBytes(list, std::size_t{1} << 26);
+  CsvOptions options;
+  options.expected_header = "file,z_mm";
+  options.max_bytes = std::size_t{1} << 26;
+  options.max_rows = kMaxStackImages;
+  const CsvTable table = ReadCsv(list, options);
+  const int file_column = table.Require("file");
+  int z_column = table.Optional("z_mm");  // "z" is accepted too; the message asks for the documented name
+  if (z_column < 0) z_column = table.Optional("z");
+  if (z_column < 0) z_column = table.Require("z_mm");
   std::vector<FocusStackEntry> entries;
-  int file_column = -1, z_column = -1;
-  int line_number = 0;
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
-    std::string_view line = TrimBlanks(std::string_view(text).substr(start, end - start));
-    start = end + 1;
-    ++line_number;
-    if (line.empty() || line.front() == '#') continue;
-    const std::vector<std::string_view> fields = SplitComma(line);
-    if (file_column < 0) {
-      for (std::size_t i = 0; i < fields.size(); ++i) {
-        if (fields[i] == "file") file_column = static_cast<int>(i);
-        if (fields[i] == "z_mm" || fields[i] == "z") z_column = static_cast<int>(i);
-      }
-      if (file_column < 0 || z_column < 0) {
-        throw InputError(At(list, line_number) + ": the header must name the columns 'file' and 'z_mm' (found '" +
-                         std::string(line) + "')");
-      }
-      continue;
-    }
-    if (static_cast<int>(fields.size()) <= std::max(file_column, z_column) || fields[file_column].empty()) {
-      throw InputError(At(list, line_number) + ": expected 'file,z_mm', found '" + std::string(line) + "'");
-    }
-    const std::optional<double> z = ParseDouble(fields[z_column]);
-    if (!z || !std::isfinite(*z)) {
-      throw InputError(At(list, line_number) + ": z_mm '" + std::string(fields[z_column]) + "' is not a number");
-    }
-    std::filesystem::path file(std::string(fields[file_column]));
+  for (const CsvRow& row : table.rows()) {
+    const std::string_view name = table.Text(row, file_column);
+    if (name.empty()) table.Fail(row, "no image file named; expected 'file,z_mm'");
+    const double z = table.Double(row, z_column);
+    const std::string_view z_text = table.Text(row, z_column);
+    std::filesystem::path file{std::string(name)};
     if (file.is_relative()) file = list.parent_path() / file;
     if (!entries.empty()) {
-      const double step = *z - entries.back().z_mm;
+      const double step = z - entries.back().z_mm;
       if (step == 0.0) {
-        throw InputError(At(list, line_number) + ": z = " + std::string(fields[z_column]) +
-                         " mm repeats line " + std::to_string(entries.back().line) +
-                         "; each image of a stack needs its own z");
+        table.Fail(row, "z = " + std::string(z_text) + " mm repeats line " + std::to_string(entries.back().line) +
+                            "; each image of a stack needs its own z");
       }
       if (entries.size() >= 2 && (step > 0.0) != (entries[1].z_mm > entries[0].z_mm)) {
-        throw InputError(At(list, line_number) + ": z = " + std::string(fields[z_column]) +
-                         " mm is out of order; list the images by increasing or decreasing z");
+        table.Fail(row, "z = " + std::string(z_text) +
+                            " mm is out of order; list the images by increasing or decreasing z");
       }
     }
-    entries.push_back({file, *z, line_number});
+    entries.push_back({file, z, row.line});
   }
-  if (file_column < 0) throw InputError(list.string() + ": empty; expected a header 'file,z_mm' and one row per image");
   if (entries.size() < 3) {
     throw InputError(list.string() + ": " + std::to_string(entries.size()) +
                      " image(s); a focus stack needs at least 3 (a focus peak needs an image on either side)");

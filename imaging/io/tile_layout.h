@@ -4,12 +4,18 @@
 // nominal stage position of the tile's centre in mm, optional. `fvm tiles plan` writes it, `fvm stitch` reads it.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace fvm::imaging {
+
+// Bounds checked while reading, before anything is sized by them: a damaged layout (issue 19: a column index of
+// 2147483647) fails naming its line instead of overflowing rows x cols. The published scans have 15 x 15 tiles.
+inline constexpr int kMaxTilesPerAxis = 100000;
+inline constexpr std::int64_t kMaxLayoutTiles = 1000000;  // rows x cols of the grid the tiles span
 
 struct TileLayoutEntry {
   std::string file;  // as written in the layout
@@ -26,14 +32,15 @@ struct TileLayout {
 };
 
 // Throws InputError "FILE:LINE: problem; what to do" on a missing file, a header without file,row,col, a short or
-// non-numeric row, negative indices, x without y, a (row, col) given twice, or no tiles.
+// non-numeric row, an index outside 0 .. kMaxTilesPerAxis - 1, a grid of more than kMaxLayoutTiles, x without y,
+// a (row, col) given twice, or no tiles. Columns other than file,row,col,x,y are ignored.
 TileLayout ReadTileLayout(const std::filesystem::path& path);
 
 // Throws InputError naming the first missing (row, col) when the tiles do not fill the rows x cols rectangle:
-// registration needs every neighbour it is told about.
+// registration needs every neighbour it is told about; and when the grid or a tile is outside the bounds above.
 void CheckLayoutComplete(const TileLayout& layout);
 
-// The CSV text, 6 decimals of mm for x, y.
+// The CSV text, 6 decimals of mm for x, y; file names quoted when they hold a comma or a quote.
 std::string FormatTileLayout(const std::vector<TileLayoutEntry>& tiles);
 
 }  // namespace fvm::imaging

@@ -119,14 +119,14 @@ TEST_P(BadCentreExport, ThrowsNamingFileLineAndCalotte) {
 INSTANTIATE_TEST_SUITE_P(
     CentreExport, BadCentreExport,
     ::testing::Values(
-        BadCase{"HeaderWithoutZ", "# c\nid,x,y\n1,2,3\n", ":2:", "no column z"},
+        BadCase{"HeaderWithoutZ", "# c\nid,x,y\n1,2,3\n", ":2:", "no column 'z'"},
         BadCase{"HeaderMissing", "1,2,3,4\n", ":1:", "add a header line"},
         BadCase{"DuplicateColumn", "id,x,y,z,X\n1,2,3,4,5\n", ":1:", "'x' appears twice"},
         BadCase{"ShortRow", "id,x,y,z\n1,2,3,4\n2,2,3\n", ":3:", "3 fields where the header (line 1) has 4"},
         BadCase{"DecimalComma", "id,x,y,z\n1,2,5,3,4\n", ":2:", "'.' as the decimal mark"},
-        BadCase{"NonNumeric", "id,x,y,z\n1,2,3,4\n2,2,abc,4\n", ":3:", "calotte 2: y 'abc' is not a number"},
+        BadCase{"NonNumeric", "id,x,y,z\n1,2,3,4\n2,2,abc,4\n", ":3:", "calotte 2: column 'y' (field 3): 'abc' is not a number"},
         BadCase{"EmptyCoordinate", "id,x,y,z\n5,1,,3\n", ":2:", "calotte 5: y is empty"},
-        BadCase{"NotAnId", "id,x,y,z\n1.5,1,2,3\n", ":2:", "id '1.5'"},
+        BadCase{"NotAnId", "id,x,y,z\n1.5,1,2,3\n", ":2:", "column 'id' (field 1): '1.5' is not a whole number"},
         BadCase{"NaN", "id,x,y,z\n1,2,3,4\n\n2,nan,3,4\n", ":4:", "calotte 2: x is nan"},
         BadCase{"Infinite", "id,x,y,z,t\n9,1,2,-inf,0\n", ":2:", "calotte 9: z is -inf"},
         BadCase{"NaNTime", "id,x,y,z,t\n9,1,2,3,NaN\n", ":2:", "calotte 9: t is NaN"},
@@ -139,7 +139,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(CentreExport, MissingFileIsNamed) {
   testing::TempDir dir;
   const auto path = dir / "absent.csv";
-  EXPECT_THAT(InputErrorOf([&] { ReadCentreExport(path); }), HasSubstr(path.string() + ": cannot open"));
+  EXPECT_THAT(InputErrorOf([&] { ReadCentreExport(path); }), HasSubstr(path.string() + ": no such file"));
 }
 
 TEST(CentreExport, FailingWriteLeavesNoFileBehind) {

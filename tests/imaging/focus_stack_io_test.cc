@@ -32,11 +32,20 @@ TEST(FocusStackIo, ListResolvesRelativePathsAndRefusesBadStacks) {
   EXPECT_EQ(entries[2].line, 5);
 
   ExpectError(dir.Write("one.csv", "file,z_mm\na.png,0\n"), "1 image(s); a focus stack needs at least 3");
-  ExpectError(dir.Write("header.csv", "name,z\na.png,0\n"), "header.csv:1: the header must name");
+  ExpectError(dir.Write("header.csv", "name,z\na.png,0\n"), "header.csv:1: the header has no column 'file'");
   ExpectError(dir.Write("repeat.csv", "file,z_mm\na.png,0\nb.png,0.001\nc.png,0.001\n"), "repeat.csv:4: z = 0.001");
   ExpectError(dir.Write("order.csv", "file,z_mm\na.png,0\nb.png,0.001\nc.png,0.0005\n"), "order.csv:4");
-  ExpectError(dir.Write("number.csv", "file,z_mm\na.png,zero\n"), "number.csv:2: z_mm 'zero' is not a number");
+  ExpectError(dir.Write("number.csv", "file,z_mm\na.png,zero\n"), "number.csv:2: column 'z_mm' (field 2): 'zero' is not a number");
   ExpectError(dir / "missing.csv", "missing.csv");
+  ExpectError(dir.Write("quoted.csv", "file,z_mm\n\"a,1.png\",0\nb.png,1,5\n"),
+              "quoted.csv:3: 3 fields where the header (line 1) has 2; write numbers with '.' as the decimal mark");
+
+  // The list is bounded before any image is read: 10000 images at most (a stack has tens to hundreds).
+  std::string many = "file,z_mm\n";
+  for (int i = 0; i <= 10000; ++i) many += "i" + std::to_string(i) + ".png," + std::to_string(i) + "\n";
+  ExpectError(dir.Write("many.csv", many), "many.csv:10002: more than 10000 rows");
+  many.resize(many.rfind("i10000.png"));
+  EXPECT_EQ(imaging::ReadFocusStackList(dir.Write("most.csv", many)).size(), 10000u);
 }
 
 TEST(FocusStackIo, ImagesRoundTripIn8And16Bit) {

@@ -52,10 +52,55 @@ TEST(TileLayout, BadInputNamesFileLineAndTile) {
   Write(Scratch("twice.csv"), "file,row,col\na,0,0\nb,0,0\n");
   EXPECT_NE(ErrorOf(Scratch("twice.csv")).find("twice.csv:3: tile row 0 col 0 is given twice"), std::string::npos);
   Write(Scratch("header.csv"), "name,row,col\na,0,0\n");
-  EXPECT_NE(ErrorOf(Scratch("header.csv")).find("no 'file' column"), std::string::npos);
+  EXPECT_NE(ErrorOf(Scratch("header.csv")).find("header.csv:1: the header has no column 'file'"), std::string::npos);
   Write(Scratch("negative.csv"), "file,row,col\na,-1,0\n");
   EXPECT_NE(ErrorOf(Scratch("negative.csv")).find("negative.csv:2:"), std::string::npos);
   EXPECT_NE(ErrorOf(Scratch("absent.csv")).find("absent.csv"), std::string::npos);
+}
+
+// Issue 19: row + 1 and col + 1 overflowed int and the presence grid was written out of bounds. Indices are now
+// bounded while reading, before anything is sized by them.
+TEST(TileLayout, HugeIndicesAreRefusedNamingFileAndLine) {
+  Write(Scratch("overflow.csv"), "file,row,col\na.tif,0,2147483647\n");
+  EXPECT_EQ(ErrorOf(Scratch("overflow.csv")),
+            Scratch("overflow.csv").string() +
+                ":2: column 'col' (field 3): 2147483647 is out of range; give a whole number from 0 to 99999");
+  Write(Scratch("overflow_row.csv"), "# c\nfile,row,col\na.tif,0,0\nb.tif,2147483647,0\n");
+  EXPECT_EQ(ErrorOf(Scratch("overflow_row.csv")),
+            Scratch("overflow_row.csv").string() +
+                ":4: column 'row' (field 2): 2147483647 is out of range; give a whole number from 0 to 99999");
+  // Each index within its bound, but the grid they span is 100000 x 100000 tiles: refused at the line that makes it.
+  Write(Scratch("wide.csv"), "file,row,col\na.tif,0,99999\nb.tif,99999,0\n");
+  EXPECT_EQ(ErrorOf(Scratch("wide.csv")),
+            Scratch("wide.csv").string() +
+                ":3: tile row 99999 col 0 makes the grid 100000 x 100000, more than the 1000000 tiles a layout may "
+                "span; check the row and col columns");
+  // The largest grid allowed is read; its hole is reported, nothing overflows.
+  Write(Scratch("largest.csv"), "file,row,col\na.tif,0,99999\nb.tif,9,0\n");
+  EXPECT_EQ(ErrorOf(Scratch("largest.csv")),
+            Scratch("largest.csv").string() +
+                ": the layout has a hole: no tile at row 0 col 0 of the 10 x 100000 grid; stitching needs a full grid "
+                "(stitching-free layouts are not stitched)");
+  // A layout built in code is checked too before the grid is allocated.
+  TileLayout built;
+  built.source = "built";
+  built.rows = 2147483647;
+  built.cols = 2;
+  EXPECT_THROW(CheckLayoutComplete(built), InputError);
+}
+
+TEST(TileLayout, FileNamesWithCommasAndQuotesRoundTrip) {
+  std::vector<TileLayoutEntry> tiles = {{"scan, day 1/a \"b\".tif", 0, 0, Eigen::Vector2d(-0.5, 1e-7), 0},
+                                        {"#2.tif", 0, 1, Eigen::Vector2d(1.25, 0), 0}};
+  const std::string text = FormatTileLayout(tiles);
+  EXPECT_EQ(text, "file,row,col,x,y\n\"scan, day 1/a \"\"b\"\".tif\",0,0,-0.500000,0.000000\n\"#2.tif\",0,1,1.250000,"
+                  "0.000000\n");
+  Write(Scratch("names.csv"), text);
+  const TileLayout layout = ReadTileLayout(Scratch("names.csv"));
+  ASSERT_EQ(layout.tiles.size(), 2u);
+  EXPECT_EQ(layout.tiles[0].file, tiles[0].file);
+  EXPECT_EQ(layout.tiles[1].file, "#2.tif");
+  EXPECT_EQ(layout.cols, 2);
 }
 
 TEST(TileImage, RoundTripsEightSixteenBitAndFloat) {
