@@ -50,6 +50,7 @@ class ImageFileReader {
 // What to write: one image of `channels` channels in `type`, with optional metadata.
 struct ImageWriteSpec {
   int width = 0, height = 0, channels = 1;
+  int alpha_channel = -1;  // -1: none
   PixelType type = PixelType::kFloat;
   std::string description;      // empty: none
   std::string resolution_unit;  // empty: no resolution

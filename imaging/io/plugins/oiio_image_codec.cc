@@ -95,6 +95,7 @@ ImageWriteResult Write(const std::filesystem::path& path, const ImageWriteSpec& 
                        const void* data, std::string* error) {
   try {
     OIIO::ImageSpec spec(request.width, request.height, request.channels, ToOiio(request.type));
+    spec.alpha_channel = request.alpha_channel;
     if (!request.description.empty()) spec.attribute("ImageDescription", request.description);
     if (!request.resolution_unit.empty()) {
       spec.attribute("XResolution", request.x_resolution);
