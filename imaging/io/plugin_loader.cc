@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <string>
 #include <system_error>
 #include <vector>
 
@@ -57,12 +58,6 @@ Loaded Load(const PluginSpec& spec) {
 }
 
 }  // namespace
-
-std::string PluginSearchPath() {
-  std::string path;
-  for (const std::filesystem::path& dir : SearchDirectories()) path += (path.empty() ? "" : ":") + dir.string();
-  return path;
-}
 
 const void* LoadPlugin(const PluginSpec& spec, std::string_view action) {
   // One attempt per plugin and process: a failure is remembered, so that every file of that format gets the same

@@ -5,7 +5,6 @@
 // Where a plugin is looked for: $FVM_PLUGIN_DIR when set (and only there, so that a test can hide the plugins);
 // else the build tree's plugin directory, fixed at configure time; else <directory of the executable>/../lib/fvm.
 
-#include <string>
 #include <string_view>
 
 namespace fvm::imaging {
@@ -21,8 +20,5 @@ struct PluginSpec {
 // be loaded, every call throws InputError "<action> needs <library>: <file> could not be loaded (<why>);
 // install the Debian package <package>". Loaded plugins are never unloaded.
 const void* LoadPlugin(const PluginSpec& spec, std::string_view action);
-
-// The directories searched, in order, for messages and tests.
-std::string PluginSearchPath();
 
 }  // namespace fvm::imaging
