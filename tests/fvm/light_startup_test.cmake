@@ -30,7 +30,7 @@ endfunction()
 
 # The heavy libraries a log names (the loader writes "file=<name> [0];  needed by ..." for each).
 function(heavy_in text result)
-  string(REGEX MATCHALL "file=[^ ]*(${heavy})[^ ]*" found "${text}")
+  string(REGEX MATCHALL "file=[^ \n]*(${heavy})[^ \n]*" found "${text}")
   list(REMOVE_DUPLICATES found)
   set(${result} "${found}" PARENT_SCOPE)
 endfunction()
@@ -39,6 +39,7 @@ function(expect_light tag)
   run_logged(${tag} 0 ${ARGN})
   heavy_in("${LOADED}" found)
   if(found)
+    list(JOIN found ", " found)
     message(FATAL_ERROR "fvm ${ARGN} loaded heavy libraries it does not use: ${found}\n"
                         "(load them through imaging/io/plugin_loader.h on first use of their format)")
   endif()
