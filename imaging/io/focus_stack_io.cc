@@ -1,17 +1,22 @@
 #include "imaging/io/focus_stack_io.h"
 
-#include <OpenImageIO/imageio.h>
-
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <tuple>
+#include <type_traits>
+#include <variant>
 
 #include "core/input_error.h"
 #include "core/file_io.h"
 #include "core/csv.h"
+#include "core/number_text.h"
+#include "imaging/io/image_codec.h"
 
 namespace fvm::imaging {
 namespace {
@@ -62,35 +67,36 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
 
 StackImage ReadStackImage(const std::filesystem::path& path) {
   CheckReadableFile(path);
-  std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
-  if (!input) throw InputError(path.string() + ": cannot read the image (" + OIIO::geterror() + ")");
-  const OIIO::ImageSpec& spec = input->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.nchannels < 1) {
+  std::string error;
+  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
+  if (!input) throw InputError(path.string() + ": cannot read the image (" + error + ")");
+  const ImageHeader& spec = input->Header();
+  if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.channels < 1) {
     throw InputError(path.string() + ": not a 2D image");
   }
   StackImage image;
   image.width = spec.width;
   image.height = spec.height;
   const std::size_t n = std::size_t(spec.width) * std::size_t(spec.height);
-  const auto read = [&](OIIO::TypeDesc type, void* data, int channels) {
-    if (!input->read_image(0, 0, 0, channels, type, data) || !input->geterror().empty()) {
+  const auto read = [&](PixelType type, void* data, int channels) {
+    if (!input->ReadPixels(0, channels, type, data, &error) || !error.empty()) {
       throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
     }
   };
-  if (spec.nchannels == 1 && spec.format.basetype == OIIO::TypeDesc::UINT8) {
+  if (spec.channels == 1 && spec.type == PixelType::kUint8) {
     std::vector<std::uint8_t> pixels(n);
-    read(OIIO::TypeDesc::UINT8, pixels.data(), 1);
+    read(PixelType::kUint8, pixels.data(), 1);
     image.pixels = std::move(pixels);
-  } else if (spec.nchannels == 1 && spec.format.basetype == OIIO::TypeDesc::UINT16) {
+  } else if (spec.channels == 1 && spec.type == PixelType::kUint16) {
     std::vector<std::uint16_t> pixels(n);
-    read(OIIO::TypeDesc::UINT16, pixels.data(), 1);
+    read(PixelType::kUint16, pixels.data(), 1);
     image.pixels = std::move(pixels);
   } else {
-    // Float, other integer types and colour: grey as float, in the file's own scale (OpenImageIO maps integer
+    // Float, other integer types and colour: grey as float, in the file's own scale (the codec maps integer
     // types to 0..1, which does not matter: the focus peak does not depend on the scale).
-    const int channels = std::min(spec.nchannels, 3);
+    const int channels = std::min(spec.channels, 3);
     std::vector<float> all(n * std::size_t(channels));
-    read(OIIO::TypeDesc::FLOAT, all.data(), channels);
+    read(PixelType::kFloat, all.data(), channels);
     std::vector<float> grey(n);
     for (std::size_t i = 0; i < n; ++i) {
       float sum = 0.0f;
@@ -107,22 +113,30 @@ void WriteStackImage(const std::filesystem::path& path, const StackImage& image)
   const auto [type, data, size] = std::visit(
       [](const auto& v) {
         using T = typename std::decay_t<decltype(v)>::value_type;
-        const OIIO::TypeDesc t = std::is_same_v<T, std::uint8_t>    ? OIIO::TypeDesc::UINT8
-                                 : std::is_same_v<T, std::uint16_t> ? OIIO::TypeDesc::UINT16
-                                                                    : OIIO::TypeDesc::FLOAT;
+        const PixelType t = std::is_same_v<T, std::uint8_t>    ? PixelType::kUint8
+                            : std::is_same_v<T, std::uint16_t> ? PixelType::kUint16
+                                                               : PixelType::kFloat;
         return std::tuple(t, static_cast<const void*>(v.data()), v.size());
       },
       image.pixels);
   if (image.width <= 0 || image.height <= 0 || size != n) {
     throw InputError(path.string() + ": the image is empty or its pixel count does not match its size");
   }
-  const OIIO::ImageSpec spec(image.width, image.height, 1, type);
+  ImageWriteSpec spec;
+  spec.width = image.width;
+  spec.height = image.height;
+  spec.type = type;
+  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(temporary.string());
-    if (!output) throw InputError(path.string() + ": cannot write this image type (" + OIIO::geterror() + ")");
-    if (!output->open(temporary.string(), spec) || !output->write_image(type, data) || !output->close()) {
-      throw InputError(path.string() + ": cannot write (" + output->geterror() +
-                       "); check that the directory exists, is writable and has free space");
+    std::string error;
+    switch (codec.write(temporary, spec, type, data, &error)) {
+      case ImageWriteResult::kWritten:
+        return;
+      case ImageWriteResult::kUnknownFormat:
+        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
+      case ImageWriteResult::kFailed:
+        throw InputError(path.string() + ": cannot write (" + error +
+                         "); check that the directory exists, is writable and has free space");
     }
   });
 }

@@ -1,7 +1,5 @@
 #include "imaging/io/height_map_image.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -18,6 +16,7 @@
 #include "core/input_error.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
+#include "imaging/io/image_codec.h"
 
 namespace fvm::imaging {
 namespace {
@@ -48,60 +47,45 @@ std::map<std::string, double> ParseDescription(std::string_view text) {
   return values;
 }
 
-bool IsIntegerType(OIIO::TypeDesc type) {
-  switch (type.basetype) {
-    case OIIO::TypeDesc::UINT8:
-    case OIIO::TypeDesc::INT8:
-    case OIIO::TypeDesc::UINT16:
-    case OIIO::TypeDesc::INT16:
-    case OIIO::TypeDesc::UINT32:
-    case OIIO::TypeDesc::INT32:
-      return true;
-    default:
-      return false;
-  }
-}
-
-// Raw counts of one channel: integer images are read in their own type (OpenImageIO would otherwise scale
-// them to 0..1), float images as double.
-std::vector<double> ReadChannel(OIIO::ImageInput& input, const std::filesystem::path& path, int channel,
+// Raw counts of one channel: integer images are read in their own type (the codec would otherwise scale them
+// to 0..1), float images as double.
+std::vector<double> ReadChannel(ImageFileReader& input, const std::filesystem::path& path, int channel,
                                 std::size_t n) {
-  const OIIO::TypeDesc native = input.spec().format;
   std::vector<double> values(n);
-  const auto read = [&](OIIO::TypeDesc type, void* data) {
-    // OpenImageIO 2.4 reports a truncated TIFF strip only through geterror(), with read_image still true.
-    const bool read = input.read_image(0, 0, channel, channel + 1, type, data);
-    const std::string error = input.geterror();
+  const auto read = [&](PixelType type, void* data) {
+    // OpenImageIO 2.4 reports a truncated TIFF strip only as an error text, with the read itself succeeding.
+    std::string error;
+    const bool read = input.ReadPixels(channel, channel + 1, type, data, &error);
     if (!read || !error.empty()) {
       Fail(path, "cannot read the image data (" + error + "); the file is damaged or incomplete");
     }
   };
-  const auto convert = [&](auto tag, OIIO::TypeDesc::BASETYPE type) {
+  const auto convert = [&](auto tag, PixelType type) {
     std::vector<decltype(tag)> raw(n);
-    read(OIIO::TypeDesc(type), raw.data());
+    read(type, raw.data());
     for (std::size_t i = 0; i < n; ++i) values[i] = static_cast<double>(raw[i]);
   };
-  switch (native.basetype) {
-    case OIIO::TypeDesc::UINT8:
-      convert(std::uint8_t{}, OIIO::TypeDesc::UINT8);
+  switch (input.Header().type) {
+    case PixelType::kUint8:
+      convert(std::uint8_t{}, PixelType::kUint8);
       break;
-    case OIIO::TypeDesc::INT8:
-      convert(std::int8_t{}, OIIO::TypeDesc::INT8);
+    case PixelType::kInt8:
+      convert(std::int8_t{}, PixelType::kInt8);
       break;
-    case OIIO::TypeDesc::UINT16:
-      convert(std::uint16_t{}, OIIO::TypeDesc::UINT16);
+    case PixelType::kUint16:
+      convert(std::uint16_t{}, PixelType::kUint16);
       break;
-    case OIIO::TypeDesc::INT16:
-      convert(std::int16_t{}, OIIO::TypeDesc::INT16);
+    case PixelType::kInt16:
+      convert(std::int16_t{}, PixelType::kInt16);
       break;
-    case OIIO::TypeDesc::UINT32:
-      convert(std::uint32_t{}, OIIO::TypeDesc::UINT32);
+    case PixelType::kUint32:
+      convert(std::uint32_t{}, PixelType::kUint32);
       break;
-    case OIIO::TypeDesc::INT32:
-      convert(std::int32_t{}, OIIO::TypeDesc::INT32);
+    case PixelType::kInt32:
+      convert(std::int32_t{}, PixelType::kInt32);
       break;
     default:
-      read(OIIO::TypeDesc::DOUBLE, values.data());
+      read(PixelType::kDouble, values.data());
       break;
   }
   return values;
@@ -124,50 +108,49 @@ void HeightMapImageOptions::Check() const {
 HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapImageOptions& options) {
   options.Check();
   CheckReadableFile(path);
-  std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
+  std::string error;
+  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) {
-    Fail(path, "cannot read it as an image (" + OIIO::geterror() +
-                   "); height-map images are single-channel TIFF, EXR or PNG files");
+    Fail(path, "cannot read it as an image (" + error + "); height-map images are single-channel TIFF, EXR or PNG files");
   }
-  const OIIO::ImageSpec& spec = input->spec();
+  const ImageHeader& spec = input->Header();
   if (spec.width < 1 || spec.height < 1 || spec.depth > 1 ||
       static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxPoints) {
     Fail(path, "is a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
                    std::to_string(spec.depth) + " image, not a height map fvm can hold");
   }
   const int alpha = spec.alpha_channel;
-  if (spec.nchannels > 2 || (spec.nchannels == 2 && alpha < 0)) {
-    Fail(path, "has " + std::to_string(spec.nchannels) +
+  if (spec.channels > 2 || (spec.channels == 2 && alpha < 0)) {
+    Fail(path, "has " + std::to_string(spec.channels) +
                    " channels (a colour rendering?); a height map has one grey channel, and optionally alpha: "
                    "export the heights themselves");
   }
   const int height_channel = alpha == 0 ? 1 : 0;
 
-  const std::map<std::string, double> described = ParseDescription(spec.get_string_attribute("ImageDescription"));
+  const std::map<std::string, double> described = ParseDescription(spec.description);
   const auto described_value = [&](const std::string& key) -> std::optional<double> {
     const auto it = described.find(key);
     if (it == described.end() || !std::isfinite(it->second)) return std::nullopt;
     return it->second;
   };
   // A resolution in pixels per centimetre is a deliberate statement about the sample; see the header.
-  const auto resolution = [&](const char* key) -> std::optional<double> {
-    const float per_cm = spec.get_float_attribute(key, 0.0f);
-    if (spec.get_string_attribute("ResolutionUnit") != "cm" || !(per_cm > 0.0f)) return std::nullopt;
+  const auto resolution = [&](float per_cm) -> std::optional<double> {
+    if (spec.resolution_unit != "cm" || !(per_cm > 0.0f)) return std::nullopt;
     return 10.0 / static_cast<double>(per_cm);
   };
   double dx = options.dx_mm;
   double dy = options.dy_mm > 0.0 ? options.dy_mm : options.dx_mm;
   if (dx == 0.0) {
     const std::optional<double> file_dx =
-        described_value("dx_mm") ? described_value("dx_mm") : resolution("XResolution");
-    std::optional<double> file_dy = described_value("dy_mm") ? described_value("dy_mm") : resolution("YResolution");
+        described_value("dx_mm") ? described_value("dx_mm") : resolution(spec.x_resolution);
+    std::optional<double> file_dy = described_value("dy_mm") ? described_value("dy_mm") : resolution(spec.y_resolution);
     if (!file_dx || !(*file_dx > 0.0)) {
       Fail(path, "the image does not say its pixel size; give it, e.g. --pixel-size 0.00175 (mm)");
     }
     dx = *file_dx;
     if (dy == 0.0) dy = file_dy && *file_dy > 0.0 ? *file_dy : dx;
   }
-  const bool integer = IsIntegerType(spec.format);
+  const bool integer = IsIntegerPixelType(spec.type);
   double z_scale = options.z_scale_mm;
   double z_offset = options.z_offset_mm;
   if (z_scale == 0.0) {
@@ -175,7 +158,7 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
       z_scale = *scale;
       z_offset = described_value("z_offset_mm").value_or(0.0);
     } else if (integer) {
-      Fail(path, "holds " + std::string(spec.format.c_str()) +
+      Fail(path, "holds " + spec.type_name +
                      " grey levels but does not say how many mm one level is; give it, e.g. --z-scale 0.0001 (mm)");
     } else {
       z_scale = 1.0;  // float images hold mm
@@ -193,14 +176,13 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
   map.dy_mm = dy;
   map.x0_mm = described_value("x0_mm").value_or(0.0);
   map.y0_mm = described_value("y0_mm").value_or(0.0);
-  map.source = std::string("image (") + input->format_name() + ", " + spec.format.c_str() + ")";
+  map.source = "image (" + spec.format_name + ", " + spec.type_name + ")";
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const bool invalid = !std::isfinite(raw[i]) || (options.invalid_value && raw[i] == *options.invalid_value) ||
                          (!coverage.empty() && coverage[i] == 0.0);
     map.z_mm[i] = invalid ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z_offset + z_scale * raw[i]);
   }
-  input->close();
   return map;
 }
 
@@ -217,21 +199,27 @@ void WriteHeightMapImage(const std::filesystem::path& path, const HeightMap& map
                      ": height-map images are written as float32 TIFF (.tif) or OpenEXR (.exr); "
                      "choose one of these extensions");
   }
-  OIIO::ImageSpec spec(map.size_x, map.size_y, 1, OIIO::TypeDesc::FLOAT);
-  spec.attribute("ImageDescription",
-                 std::string(kDescriptionTag) + "; dx_mm=" + FormatShortest(map.dx_mm) +
+  ImageWriteSpec spec;
+  spec.width = map.size_x;
+  spec.height = map.size_y;
+  spec.type = PixelType::kFloat;
+  spec.description = std::string(kDescriptionTag) + "; dx_mm=" + FormatShortest(map.dx_mm) +
                      "; dy_mm=" + FormatShortest(map.dy_mm) + "; x0_mm=" + FormatShortest(map.x0_mm) +
-                     "; y0_mm=" + FormatShortest(map.y0_mm) + "; z_scale_mm=1; z_offset_mm=0; z in mm, NaN invalid");
-  spec.attribute("XResolution", static_cast<float>(10.0 / map.dx_mm));
-  spec.attribute("YResolution", static_cast<float>(10.0 / map.dy_mm));
-  spec.attribute("ResolutionUnit", "cm");
+                     "; y0_mm=" + FormatShortest(map.y0_mm) + "; z_scale_mm=1; z_offset_mm=0; z in mm, NaN invalid";
+  spec.x_resolution = static_cast<float>(10.0 / map.dx_mm);
+  spec.y_resolution = static_cast<float>(10.0 / map.dy_mm);
+  spec.resolution_unit = "cm";
+  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(temporary.string());
-    if (!output) throw InputError(path.string() + ": cannot write this image type (" + OIIO::geterror() + ")");
-    if (!output->open(temporary.string(), spec) || !output->write_image(OIIO::TypeDesc::FLOAT, map.z_mm.data()) ||
-        !output->close()) {
-      throw InputError(path.string() + ": cannot write (" + output->geterror() +
-                       "); check that the directory exists, is writable and has free space");
+    std::string error;
+    switch (codec.write(temporary, spec, PixelType::kFloat, map.z_mm.data(), &error)) {
+      case ImageWriteResult::kWritten:
+        return;
+      case ImageWriteResult::kUnknownFormat:
+        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
+      case ImageWriteResult::kFailed:
+        throw InputError(path.string() + ": cannot write (" + error +
+                         "); check that the directory exists, is writable and has free space");
     }
   });
 }

@@ -1,10 +1,5 @@
 #include "imaging/io/point_cloud_io.h"
 
-#include <pcl/PCLPointCloud2.h>
-#include <pcl/console/print.h>
-#include <pcl/io/pcd_io.h>
-#include <pcl/io/ply_io.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -19,6 +14,7 @@
 #include "core/input_error.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
+#include "imaging/io/cloud_codec.h"
 
 namespace fvm::imaging {
 namespace {
@@ -32,18 +28,6 @@ std::string Lower(std::string_view text) {
   for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
 }
-
-// PCL reports problems on the console in its own words; ours name the file and what to do instead.
-class QuietPcl {
- public:
-  QuietPcl() : previous_(pcl::console::getVerbosityLevel()) { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
-  ~QuietPcl() { pcl::console::setVerbosityLevel(previous_); }
-  QuietPcl(const QuietPcl&) = delete;
-  QuietPcl& operator=(const QuietPcl&) = delete;
-
- private:
-  pcl::console::VERBOSITY_LEVEL previous_;
-};
 
 std::vector<std::string_view> Words(std::string_view line) {
   std::vector<std::string_view> words;
@@ -194,45 +178,45 @@ void CheckPlyHeader(const std::string& name, std::string_view head, std::size_t 
   }
 }
 
-double ReadValue(const std::uint8_t* p, std::uint8_t datatype) {
+double ReadValue(const std::uint8_t* p, CloudFieldType datatype) {
   const auto load = [p](auto value) {
     std::memcpy(&value, p, sizeof value);
     return static_cast<double>(value);
   };
   switch (datatype) {
-    case pcl::PCLPointField::INT8:
+    case CloudFieldType::kInt8:
       return load(std::int8_t{});
-    case pcl::PCLPointField::UINT8:
+    case CloudFieldType::kUint8:
       return load(std::uint8_t{});
-    case pcl::PCLPointField::INT16:
+    case CloudFieldType::kInt16:
       return load(std::int16_t{});
-    case pcl::PCLPointField::UINT16:
+    case CloudFieldType::kUint16:
       return load(std::uint16_t{});
-    case pcl::PCLPointField::INT32:
+    case CloudFieldType::kInt32:
       return load(std::int32_t{});
-    case pcl::PCLPointField::UINT32:
+    case CloudFieldType::kUint32:
       return load(std::uint32_t{});
-    case pcl::PCLPointField::FLOAT32:
+    case CloudFieldType::kFloat32:
       return load(float{});
     default:
       return load(double{});
   }
 }
 
-PointCloud ExtractXyz(const pcl::PCLPointCloud2& blob, const std::string& name, const PointCloudReadOptions& options) {
-  const pcl::PCLPointField* fields[3] = {nullptr, nullptr, nullptr};
-  for (const pcl::PCLPointField& field : blob.fields) {
+PointCloud ExtractXyz(const CloudBlob& blob, const std::string& name, const PointCloudReadOptions& options) {
+  const CloudField* fields[3] = {nullptr, nullptr, nullptr};
+  for (const CloudField& field : blob.fields) {
     for (int axis = 0; axis < 3; ++axis) {
       if (field.name == std::string(1, static_cast<char>('x' + axis)) && fields[axis] == nullptr) fields[axis] = &field;
     }
   }
   for (int axis = 0; axis < 3; ++axis) {
-    const pcl::PCLPointField* field = fields[axis];
+    const CloudField* field = fields[axis];
     if (field == nullptr) {
       Fail(name,
            std::string("has no '") + static_cast<char>('x' + axis) + "' field; fvm reads clouds of x, y, z points");
     }
-    const std::size_t size = pcl::getFieldSize(field->datatype);
+    const std::size_t size = CloudFieldSize(field->type);
     if (size == 0 || field->count < 1 || field->offset + size > blob.point_step) {
       Fail(name, "its '" + field->name + "' field does not fit the point record; the file is damaged: write it again");
     }
@@ -253,7 +237,7 @@ PointCloud ExtractXyz(const pcl::PCLPointCloud2& blob, const std::string& name, 
       const std::uint8_t* point = blob.data.data() + row * blob.row_step + col * blob.point_step;
       Eigen::Vector3d p;
       for (int axis = 0; axis < 3; ++axis) {
-        p[axis] = ReadValue(point + fields[axis]->offset, fields[axis]->datatype) * options.mm_per_unit;
+        p[axis] = ReadValue(point + fields[axis]->offset, fields[axis]->type) * options.mm_per_unit;
       }
       cloud.points.push_back(p);
     }
@@ -272,29 +256,11 @@ PointCloud ReadWithPcl(const std::filesystem::path& path, PointCloudFormat forma
   } else {
     CheckPlyHeader(name, head, size);
   }
-  pcl::PCLPointCloud2 blob;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0;
-  int result = -1;
+  const CloudCodec& codec = LoadCloudCodec("reading " + name);
+  CloudBlob blob;
   std::string why;
-  {
-    const QuietPcl quiet;
-    try {
-      if (pcd) {
-        pcl::PCDReader reader;
-        result = reader.read(name, blob, origin, orientation, version, 0);
-      } else {
-        pcl::PLYReader reader;
-        result = reader.read(name, blob, origin, orientation, version, 0);
-      }
-    } catch (const std::exception& e) {
-      why = std::string(" (") + e.what() + ")";
-      result = -1;
-    }
-  }
-  if (result < 0) {
-    Fail(name, std::string("PCL cannot read it as ") + (pcd ? "PCD" : "PLY") + why +
+  if (!codec.read(path, pcd ? CloudFileType::kPcd : CloudFileType::kPly, &blob, &why)) {
+    Fail(name, std::string("PCL cannot read it as ") + (pcd ? "PCD" : "PLY") + (why.empty() ? "" : " (" + why + ")") +
                    "; the file is damaged, or not a point cloud of this format");
   }
   PointCloud cloud = ExtractXyz(blob, name, options);
@@ -438,17 +404,13 @@ void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud)
     WriteFileAtomically(path, text);
     return;
   }
-  pcl::PCLPointCloud2 blob;
+  CloudBlob blob;
   blob.width = static_cast<std::uint32_t>(cloud.width);
   blob.height = static_cast<std::uint32_t>(cloud.height);
   blob.is_dense = std::all_of(cloud.points.begin(), cloud.points.end(), [](const auto& p) { return p.allFinite(); });
   for (int axis = 0; axis < 3; ++axis) {
-    pcl::PCLPointField field;
-    field.name = std::string(1, static_cast<char>('x' + axis));
-    field.offset = static_cast<std::uint32_t>(axis * sizeof(double));
-    field.datatype = pcl::PCLPointField::FLOAT64;
-    field.count = 1;
-    blob.fields.push_back(field);
+    blob.fields.push_back({std::string(1, static_cast<char>('x' + axis)),
+                           static_cast<std::uint32_t>(axis * sizeof(double)), CloudFieldType::kFloat64, 1});
   }
   blob.point_step = 3 * sizeof(double);
   blob.row_step = blob.point_step * blob.width;
@@ -456,19 +418,13 @@ void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud)
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     std::memcpy(blob.data.data() + i * blob.point_step, cloud.points[i].data(), blob.point_step);
   }
+  const CloudCodec& codec = LoadCloudCodec("writing " + path.string());
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    const QuietPcl quiet;
-    int result = -1;
-    if (format == PointCloudFormat::kPcd) {
-      result = pcl::PCDWriter().writeBinary(temporary.string(), blob);
-    } else {
-      result = pcl::PLYWriter().writeBinary(temporary.string(), blob, Eigen::Vector4f::Zero(),
-                                            Eigen::Quaternionf::Identity(), false);
-    }
-    if (result < 0) {
-      throw InputError(path.string() +
-                       ": cannot write; check that the directory exists, is writable and has "
-                       "free space");
+    std::string why;
+    if (!codec.write(temporary, format == PointCloudFormat::kPcd ? CloudFileType::kPcd : CloudFileType::kPly, blob,
+                     &why)) {
+      throw InputError(path.string() + ": cannot write" + (why.empty() ? "" : " (" + why + ")") +
+                       "; check that the directory exists, is writable and has free space");
     }
   });
 }

@@ -1,7 +1,5 @@
 #include "imaging/io/tile_image.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -11,35 +9,37 @@
 
 #include "core/input_error.h"
 #include "core/file_io.h"
+#include "imaging/io/image_codec.h"
 
 namespace fvm::imaging {
 
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
   CheckReadableFile(path);
-  std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
+  std::string error;
+  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) {
-    throw InputError(path.string() + ": cannot read it as an image (" + OIIO::geterror() +
+    throw InputError(path.string() + ": cannot read it as an image (" + error +
                      "); tiles are grey or colour TIFF, PNG or EXR files");
   }
-  const OIIO::ImageSpec& spec = input->spec();
+  const ImageHeader& spec = input->Header();
   // 2^28 pixels is 1 GB of floats: beyond any microscope camera, so a corrupt header, not a tile.
   if (spec.width < 1 || spec.height < 1 || spec.depth > 1 ||
       static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > (std::uint64_t{1} << 28)) {
     throw InputError(path.string() + ": a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
                      " x " + std::to_string(spec.depth) + " image is not a tile fvm can register");
   }
-  const int channels = spec.nchannels;
+  const int channels = spec.channels;
   std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * channels);
   // Reading as FLOAT converts integers to 0..1; scaling back keeps native counts, which reads better in messages
   // and makes no difference to registration.
-  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data())) {
-    throw InputError(path.string() + ": cannot read the pixels (" + input->geterror() + "); is the file truncated?");
+  if (!input->ReadPixels(0, channels, PixelType::kFloat, pixels.data(), &error)) {
+    throw InputError(path.string() + ": cannot read the pixels (" + error + "); is the file truncated?");
   }
   double scale = 1.0;
   TilePixelType stored = TilePixelType::kFloat;
-  switch (spec.format.basetype) {
-    case OIIO::TypeDesc::UINT8: scale = 255.0, stored = TilePixelType::kUint8; break;
-    case OIIO::TypeDesc::UINT16: scale = 65535.0, stored = TilePixelType::kUint16; break;
+  switch (spec.type) {
+    case PixelType::kUint8: scale = 255.0, stored = TilePixelType::kUint8; break;
+    case PixelType::kUint16: scale = 65535.0, stored = TilePixelType::kUint16; break;
     default: break;
   }
   if (type != nullptr) *type = stored;
@@ -65,24 +65,30 @@ TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) 
 }
 
 void WriteTileImage(const std::filesystem::path& path, const TileImage& image, TilePixelType type) {
-  const OIIO::TypeDesc format = type == TilePixelType::kUint8    ? OIIO::TypeDesc::UINT8
-                                : type == TilePixelType::kUint16 ? OIIO::TypeDesc::UINT16
-                                                                 : OIIO::TypeDesc::FLOAT;
+  const PixelType format = type == TilePixelType::kUint8    ? PixelType::kUint8
+                           : type == TilePixelType::kUint16 ? PixelType::kUint16
+                                                            : PixelType::kFloat;
   const double scale = type == TilePixelType::kUint8 ? 255.0 : type == TilePixelType::kUint16 ? 65535.0 : 1.0;
-  // OIIO converts float 0..1 to the integer range; clamp so that out-of-range values saturate, not wrap.
+  // The codec converts float 0..1 to the integer range; clamp so that out-of-range values saturate, not wrap.
   std::vector<float> data(static_cast<size_t>(image.size()));
   for (Eigen::Index i = 0; i < image.size(); ++i) {
     const double v = image.data()[i] / scale;
     data[static_cast<size_t>(i)] = static_cast<float>(scale == 1.0 ? v : std::clamp(v, 0.0, 1.0));
   }
-  OIIO::ImageSpec spec(static_cast<int>(image.cols()), static_cast<int>(image.rows()), 1, format);
+  ImageWriteSpec spec;
+  spec.width = static_cast<int>(image.cols());
+  spec.height = static_cast<int>(image.rows());
+  spec.type = format;
+  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(temporary.string());
-    if (!output) throw InputError(path.string() + ": cannot write this image type (" + OIIO::geterror() + ")");
-    if (!output->open(temporary.string(), spec) || !output->write_image(OIIO::TypeDesc::FLOAT, data.data()) ||
-        !output->close()) {
-      throw InputError(path.string() + ": cannot write (" + output->geterror() +
-                       "); check that the directory exists and is writable");
+    std::string error;
+    switch (codec.write(temporary, spec, PixelType::kFloat, data.data(), &error)) {
+      case ImageWriteResult::kWritten:
+        return;
+      case ImageWriteResult::kUnknownFormat:
+        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
+      case ImageWriteResult::kFailed:
+        throw InputError(path.string() + ": cannot write (" + error + "); check that the directory exists and is writable");
     }
   });
 }

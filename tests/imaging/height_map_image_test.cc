@@ -1,6 +1,5 @@
 #include "imaging/io/height_map_image.h"
 
-#include <OpenImageIO/imageio.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -9,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "imaging/io/image_codec.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
 
@@ -24,20 +24,22 @@ using ::testing::HasSubstr;
 using testing::SampleMap;
 
 // A 3 x 2 image as another program writes it: given type and channels, optional resolution, no fvm metadata.
+// Written through the image plugin's codec directly, below fvm's height-map writer.
 template <typename T>
-void WriteForeignImage(const std::filesystem::path& path, OIIO::TypeDesc type, int channels,
-                       const std::vector<T>& pixels, const std::string& resolution_unit = "", float resolution = 0) {
-  OIIO::ImageSpec spec(3, 2, channels, type);
+void WriteForeignImage(const std::filesystem::path& path, PixelType type, int channels, const std::vector<T>& pixels,
+                       const std::string& resolution_unit = "", float resolution = 0) {
+  ImageWriteSpec spec;
+  spec.width = 3;
+  spec.height = 2;
+  spec.channels = channels;
+  spec.type = type;
   if (channels == 2) spec.alpha_channel = 1;
-  if (!resolution_unit.empty()) {
-    spec.attribute("XResolution", resolution);
-    spec.attribute("YResolution", resolution);
-    spec.attribute("ResolutionUnit", resolution_unit);
-  }
-  auto out = OIIO::ImageOutput::create(path.string());
-  ASSERT_TRUE(out && out->open(path.string(), spec));
-  ASSERT_TRUE(out->write_image(type, pixels.data()));
-  ASSERT_TRUE(out->close());
+  spec.resolution_unit = resolution_unit;
+  spec.x_resolution = spec.y_resolution = resolution;
+  std::string error;
+  ASSERT_EQ(LoadImageCodec("writing a test image").write(path, spec, type, pixels.data(), &error),
+            ImageWriteResult::kWritten)
+      << error;
 }
 
 TEST(HeightMapImage, FloatTiffAndExrRoundTripsAreExact) {
@@ -69,7 +71,7 @@ TEST(HeightMapImage, OptionsOverrideTheFile) {
 TEST(HeightMapImage, SixteenBitCountsNeedScaleAndPixelSize) {
   TempDir dir;
   const auto file = dir / "depth16.tif";
-  WriteForeignImage<std::uint16_t>(file, OIIO::TypeDesc::UINT16, 1, {0, 1, 2, 1000, 65535, 7});
+  WriteForeignImage<std::uint16_t>(file, PixelType::kUint16, 1, {0, 1, 2, 1000, 65535, 7});
   EXPECT_THAT(InputErrorOf([&] { ReadHeightMapImage(file); }),
               AllOf(HasSubstr("depth16.tif"), HasSubstr("--pixel-size")));
   HeightMapImageOptions options;
@@ -89,9 +91,9 @@ TEST(HeightMapImage, ResolutionCountsInCentimetresOnly) {
   TempDir dir;
   HeightMapImageOptions scale;
   scale.z_scale_mm = 1.0;
-  WriteForeignImage<std::uint16_t>(dir / "cm.tif", OIIO::TypeDesc::UINT16, 1, {1, 2, 3, 4, 5, 6}, "cm", 5000.0f);
+  WriteForeignImage<std::uint16_t>(dir / "cm.tif", PixelType::kUint16, 1, {1, 2, 3, 4, 5, 6}, "cm", 5000.0f);
   EXPECT_DOUBLE_EQ(ReadHeightMapImage(dir / "cm.tif", scale).dx_mm, 0.002);
-  WriteForeignImage<std::uint16_t>(dir / "dpi.tif", OIIO::TypeDesc::UINT16, 1, {1, 2, 3, 4, 5, 6}, "in", 72.0f);
+  WriteForeignImage<std::uint16_t>(dir / "dpi.tif", PixelType::kUint16, 1, {1, 2, 3, 4, 5, 6}, "in", 72.0f);
   EXPECT_THAT(InputErrorOf([&] { ReadHeightMapImage(dir / "dpi.tif", scale); }), HasSubstr("pixel size"));
 }
 
@@ -99,12 +101,12 @@ TEST(HeightMapImage, AlphaZeroIsInvalidAndColourIsRejected) {
   TempDir dir;
   HeightMapImageOptions options;
   options.dx_mm = 0.001;
-  WriteForeignImage<float>(dir / "alpha.tif", OIIO::TypeDesc::FLOAT, 2, {1, 1, 2, 0, 3, 1, 4, 1, 5, 1, 6, 0});
+  WriteForeignImage<float>(dir / "alpha.tif", PixelType::kFloat, 2, {1, 1, 2, 0, 3, 1, 4, 1, 5, 1, 6, 0});
   const HeightMap map = ReadHeightMapImage(dir / "alpha.tif", options);
   EXPECT_EQ(map.z_mm[0], 1.0f);
   EXPECT_TRUE(std::isnan(map.z_mm[1]));
   EXPECT_TRUE(std::isnan(map.z_mm[5]));
-  WriteForeignImage<std::uint8_t>(dir / "rgb.png", OIIO::TypeDesc::UINT8, 3, std::vector<std::uint8_t>(18, 9));
+  WriteForeignImage<std::uint8_t>(dir / "rgb.png", PixelType::kUint8, 3, std::vector<std::uint8_t>(18, 9));
   EXPECT_THAT(InputErrorOf([&] { ReadHeightMapImage(dir / "rgb.png", options); }), HasSubstr("3 channels"));
 }
 

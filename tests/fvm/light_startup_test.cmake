@@ -1,0 +1,107 @@
+# Commands that never meet an image or a PCD/PLY file must not load OpenImageIO, PCL or VTK (half a second and
+# 130 MB at start-up, issue 15): the dynamic loader's own log (LD_DEBUG=libs) lists every library a process
+# loads. The positive control shows the log does name them when a TIFF is read, and that without the plugin a
+# TIFF fails with a clear message while an X3P still reads. Variables: FVM, SAMPLES, WORK.
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK}/ld ${WORK}/x3p ${WORK}/no-plugins)
+include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
+
+set(heavy "libOpenImageIO|libpcl_|libvtk")
+
+# Runs fvm with the loader's log in ${WORK}/ld/<tag>.<pid>; sets LOADED to the log's text.
+function(run_logged tag expected_code)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env LD_DEBUG=libs LD_DEBUG_OUTPUT=${WORK}/ld/${tag} ${FVM} ${ARGN}
+                  RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT code EQUAL expected_code)
+    message(FATAL_ERROR "fvm ${ARGN}: exit ${code}, expected ${expected_code}\n${out}\n${err}")
+  endif()
+  file(GLOB logs ${WORK}/ld/${tag}.*)
+  if(NOT logs)
+    message(FATAL_ERROR "fvm ${ARGN}: the dynamic loader wrote no log to ${WORK}/ld/${tag}.*")
+  endif()
+  set(loaded "")
+  foreach(log ${logs})
+    file(READ ${log} text)
+    string(APPEND loaded "${text}")
+  endforeach()
+  set(LOADED "${loaded}" PARENT_SCOPE)
+  set(ERR "${err}" PARENT_SCOPE)
+endfunction()
+
+# The heavy libraries a log names (the loader writes "file=<name> [0];  needed by ..." for each).
+function(heavy_in text result)
+  string(REGEX MATCHALL "file=[^ \n]*(${heavy})[^ \n]*" found "${text}")
+  list(REMOVE_DUPLICATES found)
+  set(${result} "${found}" PARENT_SCOPE)
+endfunction()
+
+function(expect_light tag)
+  run_logged(${tag} 0 ${ARGN})
+  heavy_in("${LOADED}" found)
+  if(found)
+    list(JOIN found ", " found)
+    message(FATAL_ERROR "fvm ${ARGN} loaded heavy libraries it does not use: ${found}\n"
+                        "(load them through imaging/io/plugin_loader.h on first use of their format)")
+  endif()
+endfunction()
+
+expect_light(version --version)
+expect_light(calibrate calibrate ${SAMPLES}/bar17 --model 27 -o ${WORK}/cal.json)
+expect_light(compare compare ${SAMPLES}/bar17 --json)
+expect_light(diff diff ${SAMPLES}/stitching-strategies/x/a.csv ${SAMPLES}/stitching-strategies/x/b.csv)
+expect_light(diagnose diagnose ${SAMPLES}/bar17 --model 27 --json)
+expect_light(simulate simulate fvm-batch -o ${WORK}/sim --seed 1)
+
+# Positive control: a TIFF loads the image plugin and OpenImageIO behind it, so the check above can fail.
+run(0 tiles synthesize -o ${WORK}/tile --rows 1 --cols 1 --size 64 --bits 32 --seed 1)
+file(GLOB tiffs ${WORK}/tile/*.tif)
+list(GET tiffs 0 tiff)
+run_logged(tiff 0 info ${tiff} --pixel-size 0.001 --json)
+heavy_in("${LOADED}" found)
+if(NOT LOADED MATCHES "libfvm_image_oiio.so" OR NOT found MATCHES "libOpenImageIO")
+  message(FATAL_ERROR "fvm info on a TIFF: the loader log names neither the image plugin nor OpenImageIO; "
+                      "the check for light commands would pass whatever they load")
+endif()
+
+# Without the plugin: the TIFF fails naming what is missing and what to install; an X3P still reads.
+set(xml [=[<?xml version="1.0" encoding="UTF-8"?>
+<p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2">
+  <Record1><Revision>ISO5436 - 2000</Revision><FeatureType>SUR</FeatureType>
+    <Axes>
+      <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>2e-06</Increment><Offset>0</Offset></CX>
+      <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>3e-06</Increment><Offset>0</Offset></CY>
+      <CZ><AxisType>A</AxisType><DataType>D</DataType><Increment>1</Increment><Offset>0</Offset></CZ>
+    </Axes>
+  </Record1>
+  <Record3>
+    <MatrixDimension><SizeX>2</SizeX><SizeY>1</SizeY><SizeZ>1</SizeZ></MatrixDimension>
+    <DataList><Datum>1e-06</Datum><Datum>-2.5e-06</Datum></DataList>
+  </Record3>
+  <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>
+</p:ISO5436_2>
+]=])
+file(WRITE ${WORK}/x3p/main.xml "${xml}")
+string(MD5 digest "${xml}")
+file(WRITE ${WORK}/x3p/md5checksum.hex "${digest} *main.xml\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/surface.x3p --format=zip main.xml md5checksum.hex
+                WORKING_DIRECTORY ${WORK}/x3p RESULT_VARIABLE code)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "cannot zip the test X3P")
+endif()
+
+execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${tiff} --pixel-size 0.001
+                RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT code EQUAL 1 OR NOT err MATCHES "reading [^\n]*\\.tif needs OpenImageIO: libfvm_image_oiio\\.so could not be loaded"
+   OR NOT err MATCHES "install the Debian package libopenimageio")
+  message(FATAL_ERROR "fvm info on a TIFF without the plugin: exit ${code}, expected 1 and a message naming the "
+                      "plugin and the package to install, got:\n${err}")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${WORK}/surface.x3p --json
+                RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "fvm info on an X3P without the plugins: exit ${code}\n${err}")
+endif()
+string(JSON size_x GET "${out}" size_x)
+if(NOT size_x EQUAL 2)
+  message(FATAL_ERROR "fvm info on an X3P without the plugins: size_x ${size_x}, expected 2")
+endif()
