@@ -8,6 +8,7 @@
 #include "artefacts/io/batch.h"
 #include "core/input_error.h"
 #include "stage/io/calibration_file.h"
+#include "core/exit_codes.h"
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "fvm/report.h"
@@ -85,6 +86,16 @@ ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResu
   return data;
 }
 
+// Exit 3 after everything is written and printed: a script must not take an unconverged calibration as done.
+void FailIfNotConverged(const stage::IdentificationResult& result) {
+  if (!result.converged) {
+    throw NotConvergedError(fmt::format("model {}: the solver stopped after {} iterations without converging; the "
+                                        "calibration was written but do not use it: check the batch for outliers or "
+                                        "try --loss huber",
+                                        result.calibration.model, result.iterations));
+  }
+}
+
 void Run(const CalibrateArgs& args) {
   const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
@@ -115,6 +126,7 @@ void Run(const CalibrateArgs& args) {
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
+    FailIfNotConverged(result);
     return;
   }
 
@@ -142,6 +154,7 @@ void Run(const CalibrateArgs& args) {
   }
   if (!args.output.empty()) fmt::print("\ncalibration written to {}\n", args.output);
   if (!args.report.empty()) fmt::print("report written to {}/index.html\n", args.report);
+  FailIfNotConverged(result);
 }
 
 }  // namespace
@@ -163,6 +176,8 @@ void RegisterCalibrate(CLI::App& app) {
   sub->add_option("--report", args->report, "write an HTML report with plots into this directory");
   sub->add_flag("--json", args->json, "print the calibration JSON on stdout instead of the table");
   args->settings.AddOptions(*sub);
+  sub->footer("Exit 3 when the solver did not converge (the calibration is still written).\n"
+              "Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json");
   sub->callback([args] { Run(*args); });
 }
 

@@ -1,6 +1,7 @@
 #include "fvm/calibration_run.h"
 
 #include "core/input_error.h"
+#include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"
 
 namespace fvm::cli {
@@ -25,6 +26,7 @@ stage::IdentificationOptions IdentifySettings::ToOptions(const stage::Measuremen
   o.anchors = set.anchors;
   o.loss = loss;
   o.loss_scale_mm = loss_scale_um * 1e-3;
+  o.num_threads = ThreadCount();
   return o;
 }
 

@@ -2,8 +2,32 @@
 // Every subcommand registers itself on the application from its own file (fvm/<command>.cc).
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace fvm::cli {
+
+// Options of the whole program (fvm --threads N --quiet), read by the commands that do long work.
+struct CommonOptions {
+  int threads = 0;     // 0: all cores
+  bool quiet = false;  // no progress lines
+};
+CommonOptions& Common();
+// Progress lines only where someone watches: stderr is a terminal and --quiet was not given.
+bool ShowProgress();
+// --threads for libraries that take a count: all cores when not given.
+int ThreadCount();
+
+// A command's own --help shows its one-line summary, a blank line, then these details; `fvm --help` lists only
+// the summary.
+inline void AddDetails(CLI::App* sub, const std::string& details) {
+  sub->description(sub->get_description() + "\n\n" + details);
+}
+
+// An old spelling of `new_name` that scripts may still use: it sets the same variable and is left out of --help.
+template <typename T>
+CLI::Option* AddHiddenAlias(CLI::App* app, const std::string& old_name, T& variable, const std::string& new_name) {
+  return app->add_option(old_name, variable, "old spelling of " + new_name)->group("");
+}
 
 // A subcommand that is listed in the contract but not built yet: it says so and exits 2.
 void AddNotBuilt(CLI::App& app, const std::string& name, const std::string& summary, int issue);

@@ -162,6 +162,7 @@ void RegisterCompare(CLI::App& app) {
   sub->add_option("--models", args->models, "models to compare")->delimiter(',')->check(CLI::IsMember(stage::FvmModelNames()));
   sub->add_flag("--json", args->json, "print one JSON document on stdout");
   args->settings.AddOptions(*sub);
+  sub->footer("Example:\n  fvm compare samples/bar17 --models 15,27,42");
   sub->callback([args] { Run(*args); });
 }
 

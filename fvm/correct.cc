@@ -69,6 +69,8 @@ void RegisterCorrect(CLI::App& app) {
   sub->add_option("IN", args->input, "stitching-free centre export (CSV: id,x,y,z in mm)")->required();
   sub->add_option("-o,--output", args->output, "corrected export (CSV: id,x,y,z,u_x,u_y,u_z in mm)")->required();
   sub->add_flag("--json", args->json, "print the corrected centres as JSON");
+  sub->footer("Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm correct --calibration stage.json "
+              "samples/bar17/val-01.free.csv -o val-01.corrected.csv");
   sub->callback([args] { Run(*args); });
 }
 

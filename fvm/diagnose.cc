@@ -136,6 +136,7 @@ void RegisterDiagnose(CLI::App& app) {
   sub->add_option("--report", args->report, "write residual plots before and after into this directory (HTML)");
   sub->add_flag("--json", args->json, "print one JSON document on stdout");
   args->settings.AddOptions(*sub);
+  sub->footer("Example:\n  fvm simulate fvm-batch -o drift --hidden-effect thermal_drift && fvm diagnose drift --model 27");
   sub->callback([args] { Run(*args); });
 }
 

@@ -208,7 +208,7 @@ void RunDiff(const DiffOptions& options) {
 void RegisterDiff(CLI::App& app) {
   auto options = std::make_shared<DiffOptions>();
   CLI::App* sub = app.add_subcommand("diff", "per-calotte and distance differences between two exports");
-  sub->description(
+  AddDetails(sub,
       "Per-calotte differences TEST - REF (dx, dy, dz, |d| in um) for the calottes in both centre exports, and for "
       "each pair of calottes their distance in REF and in TEST (mm) and its change (um). Calottes in only one file "
       "are left out with a warning.");

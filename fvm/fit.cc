@@ -209,7 +209,7 @@ void RunFit(const FitArgs& args) {
 void RegisterFit(CLI::App& app) {
   auto args = std::make_shared<FitArgs>();
   CLI::App* sub = app.add_subcommand("fit", "find calottes and fit spheres; writes a centre export");
-  sub->description(
+  AddDetails(sub,
       "Finds the calottes (spherical dimples) in a height map: levels the face they are cut into, takes the round "
       "depressions below it, and fits a sphere to the points of each by least squares with outliers trimmed. "
       "With --artefact the calottes get the artefact's numbers (1..36 row by row for grid6x6, 1..17 along bar17), "

@@ -13,12 +13,14 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "core/progress.h"
 #include "fvm/commands.h"
 #include "imaging/io/focus_stack_io.h"
 #include "imaging/focus_variation.h"
 #include "imaging/height_map.h"
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/x3p.h"
+#include "imaging/tile_registration.h"  // SetImagingThreads
 
 namespace fvm::cli {
 namespace {
@@ -78,7 +80,9 @@ void RunFocus(const FocusArgs& args) {
 
   const std::filesystem::path list(args.stack);
   const std::vector<imaging::FocusStackEntry> entries = imaging::ReadFocusStackList(list);
+  imaging::SetImagingThreads(ThreadCount());
   imaging::FocusAccumulator accumulator(options);
+  Progress progress("focus stack slices", static_cast<int>(entries.size()), ShowProgress());
   for (const imaging::FocusStackEntry& entry : entries) {
     const std::string where = list.string() + ":" + std::to_string(entry.line) + " (" + entry.file.string() + ")";
     imaging::StackImage image;
@@ -88,7 +92,9 @@ void RunFocus(const FocusArgs& args) {
       throw InputError(list.string() + ":" + std::to_string(entry.line) + ": " + e.what());
     }
     accumulator.Add(image.View(), entry.z_mm, where);
+    progress.Advance();
   }
+  progress.Finish();
   const imaging::FocusResult result = accumulator.Finish();
   const imaging::HeightMap& map = result.height;
   WriteMap(args.output, map);
@@ -148,7 +154,7 @@ void RunFocus(const FocusArgs& args) {
 void RegisterFocus(CLI::App& app) {
   auto args = std::make_shared<FocusArgs>();
   CLI::App* sub = app.add_subcommand("focus", "height map from a focus stack");
-  sub->description(
+  AddDetails(sub,
       "Rebuilds a height map from a focus stack: grey images of the same size taken at known z positions. "
       "Per pixel, a focus measure over a small window peaks where the surface is sharp; the peak's z, "
       "interpolated between the images, is the height. Pixels whose peak is weak (quality = peak over mean "
@@ -163,7 +169,8 @@ void RegisterFocus(CLI::App& app) {
   sub->add_option("--fit", args->fit, "sub-step peak interpolation through the best image and its neighbours")
       ->check(CLI::IsMember({"gaussian", "parabolic"}))
       ->default_str("gaussian");
-  sub->add_option("--window", args->window, "focus window, odd number of px (3 to 51)")->default_str("5");
+  sub->add_option("--window-px", args->window, "focus window, odd number of px (3 to 51)")->default_str("5");
+  AddHiddenAlias(sub, "--window", args->window, "--window-px");
   sub->add_option("--min-quality", args->min_quality, "peak over mean focus measure below this: invalid")
       ->default_str("2");
   sub->add_option("--pixel-mm", args->pixel_mm, "pixel size on the object in mm")

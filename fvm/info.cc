@@ -160,7 +160,7 @@ void RunInfo(const InfoArgs& args) {
 void RegisterInfo(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* sub = app.add_subcommand("info", "what a surface or point-cloud file holds");
-  sub->description(
+  AddDetails(sub,
       "Reads a measurement file and tells what it holds: its format, grid (points, pixel size, origin), how many "
       "points are valid and the range of heights. Reads X3P (ISO 25178-72), Alicona AL3D, height-map images "
       "(TIFF, EXR, PNG through OpenImageIO), PCD and PLY point clouds, and XYZ/CSV text (x y z in mm per line). "

@@ -4,7 +4,12 @@
 
 #include <CLI/CLI.hpp>
 #include <exception>
+#include <memory>
+#include <sstream>
+#include <string>
 
+#include "core/exit_codes.h"
+#include "core/input_error.h"
 #include "fvm/commands.h"
 
 namespace fvm::cli {
@@ -18,20 +23,69 @@ void AddNotBuilt(CLI::App& app, const std::string& name, const std::string& summ
     } else {
       fmt::print(stderr, "fvm {}: not built yet (no issue filed for it yet); nothing was done.\n", name);
     }
-    throw CLI::RuntimeError(2);
+    throw CLI::RuntimeError(kExitUsage);
   });
 }
 
+namespace {
+
+// The command list of `fvm --help` shows the first line of each description; a command's own --help shows it all
+// (the summary, a blank line, then the paragraph).
+class SummaryFormatter : public CLI::Formatter {
+ public:
+  std::string make_subcommand(const CLI::App* sub) const override {
+    const std::string& description = sub->get_description();
+    std::stringstream out;
+    CLI::detail::format_help(out, sub->get_display_name(true), description.substr(0, description.find('\n')),
+                             column_width_);
+    return out.str();
+  }
+};
+
+// "fvm tiles plan": the commands the parse reached before it failed, for the message and its --help hint.
+std::string CommandPath(const CLI::App& app) {
+  std::string path = "fvm";
+  const CLI::App* at = &app;
+  while (true) {
+    const auto parsed = at->get_subcommands();
+    if (parsed.empty()) break;
+    at = parsed.front();
+    path += " " + at->get_name();
+  }
+  return path;
+}
+
+constexpr const char* kExitCodeFooter =
+    "Options --threads N and --quiet apply to every command and may follow it.\n"
+    "Run 'fvm <command> --help' for the options of a command.\n"
+    "\n"
+    "Exit codes:\n"
+    "  0  done\n"
+    "  1  bad input: a file, value or combination to fix (the message names it)\n"
+    "  2  usage: unknown command or option, missing argument, or a command not built yet\n"
+    "  3  did not converge: the outputs were written but must not be trusted as they are";
+
+}  // namespace
 }  // namespace fvm::cli
 
 int main(int argc, char** argv) {
   using fvm::cli::AddNotBuilt;
-  CLI::App app{
-      "fvm: calibrate the motion stage of focus-variation microscopes (and machine tools measured with laser\n"
-      "trackers) from measurements of an uncalibrated artefact. Units: mm and rad in files, um and urad in reports."};
+  // Named here, not from argv[0]: messages and usage lines say "fvm", never the binary's full path.
+  CLI::App app{"fvm: calibrate the motion stage of focus-variation microscopes (and machine tools measured with "
+               "laser\ntrackers) from measurements of an uncalibrated artefact. Units: mm and rad in files, um and "
+               "urad in reports.",
+               "fvm"};
+  app.formatter(std::make_shared<fvm::cli::SummaryFormatter>());
   app.set_version_flag("--version", std::string("fvm ") + FVM_VERSION);
   app.require_subcommand(1);
-  app.footer("Run 'fvm <command> --help' for the options of a command.");
+  // Global options may follow the command (fvm stitch ... --threads 2): subcommands inherit this.
+  app.fallthrough();
+  app.footer(fvm::cli::kExitCodeFooter);
+  fvm::cli::CommonOptions& common = fvm::cli::Common();
+  app.add_option("--threads", common.threads,
+                 "threads for identification, registration, mosaics and focus stacks (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("-q,--quiet", common.quiet, "no progress lines on stderr (they appear only on a terminal anyway)");
 
   fvm::cli::RegisterCalibrate(app);
   fvm::cli::RegisterCorrect(app);
@@ -49,11 +103,23 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a command that already said why (not built yet)
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const std::exception& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all, --version
+    const std::string command = fvm::cli::CommandPath(app);
+    fmt::print(stderr, "{}: {}\nRun '{} --help' for its options.\n", command, e.what(), command);
+    return fvm::kExitUsage;
+  } catch (const fvm::InputError& e) {
     fmt::print(stderr, "fvm: error: {}\n", e.what());
-    return 1;
+    return fvm::kExitBadInput;
+  } catch (const fvm::NotConvergedError& e) {
+    fmt::print(stderr, "fvm: did not converge: {}\n", e.what());
+    return fvm::kExitNotConverged;
+  } catch (const std::exception& e) {
+    // Library checks (std::invalid_argument) are bad input reaching a deeper layer; they read the same way.
+    fmt::print(stderr, "fvm: error: {}\n", e.what());
+    return fvm::kExitBadInput;
   }
-  return 0;
+  return fvm::kExitOk;
 }

@@ -56,6 +56,7 @@ void Run(SimulateBatchArgs args) {
 void RegisterSimulate(CLI::App& app) {
   CLI::App* simulate = app.add_subcommand("simulate", "synthetic data with a recorded truth (batches so far)");
   simulate->require_subcommand(1);
+  simulate->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 && fvm calibrate batch --model 27");
   auto args = std::make_shared<SimulateBatchArgs>();
   CLI::App* sub = simulate->add_subcommand(
       "fvm-batch", "17-calotte bar placements on the 200 x 200 mm stage (X, Y, oblique to identify; random to "
@@ -83,6 +84,7 @@ void RegisterSimulate(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--different-starts", args->different_starts,
                 "identification placements do not share their first calotte's spot (needs --anchor first-tile)");
+  sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
   sub->callback([args] { Run(*args); });
 }
 

@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/progress.h"
 #include "fvm/commands.h"
 #include "imaging/io/tile_image.h"
 #include "imaging/io/tile_layout.h"
@@ -35,6 +37,15 @@ struct StitchArgs {
   bool json = false;
 };
 
+// Right and lower neighbours, as RegisterTileGrid pairs them: the total of the progress line.
+int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
+  std::set<std::pair<int, int>> at;
+  for (const auto& t : grid) at.insert({t.row, t.col});
+  int pairs = 0;
+  for (const auto& t : grid) pairs += static_cast<int>(at.count({t.row, t.col + 1}) + at.count({t.row + 1, t.col}));
+  return pairs;
+}
+
 void RunStitch(const StitchArgs& args) {
   const double overlap = imaging::ParseOverlap(args.overlap, "--overlap");
   if (args.pixel_mm < 0.0 || !std::isfinite(args.pixel_mm)) {
@@ -47,7 +58,7 @@ void RunStitch(const StitchArgs& args) {
   }
   options.stage_sigma_px = args.stage_sigma_px;
   if (!(options.stage_sigma_px > 0.0) || !std::isfinite(options.stage_sigma_px)) {
-    throw InputError("--stage-sigma: give the stage's positioning error over the grid in pixels, e.g. 2");
+    throw InputError("--stage-sigma-px: give the stage's positioning error over the grid in pixels, e.g. 2");
   }
   const bool height_map = std::filesystem::path(args.mosaic).extension() == ".x3p";
   if (height_map && !(args.pixel_mm > 0.0)) {
@@ -100,7 +111,11 @@ void RunStitch(const StitchArgs& args) {
     }
     grid.push_back({tile.row, tile.col, nominal});
   }
-  const imaging::RegistrationResult result = imaging::RegisterTileGrid(images, grid, options);
+  imaging::SetImagingThreads(ThreadCount());
+  Progress pair_progress("registering pairs", CountGridPairs(grid), ShowProgress());
+  const imaging::RegistrationResult result =
+      imaging::RegisterTileGrid(images, grid, options, [&](int, int) { pair_progress.Advance(); });
+  pair_progress.Finish();
 
   std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered,u_x,u_y\n" : "file,x,y,registered,u_x,u_y\n";
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
@@ -114,8 +129,10 @@ void RunStitch(const StitchArgs& args) {
   }
   WriteFileAtomically(args.output, csv);
   if (!args.mosaic.empty()) {
-    if (!args.json) fmt::print(stderr, "fusing {} tiles ...\n", images.size());
-    imaging::Mosaic mosaic = imaging::FuseTiles(images, result.positions.positions_px);
+    Progress tile_progress("fusing tiles", static_cast<int>(images.size()), ShowProgress());
+    imaging::Mosaic mosaic =
+        imaging::FuseTiles(images, result.positions.positions_px, [&](int, int) { tile_progress.Advance(); });
+    tile_progress.Finish();
     if (height_map) {
       imaging::WriteX3p(args.mosaic, imaging::MosaicToHeightMap(mosaic, static_cast<int>(width),
                                                                 static_cast<int>(height), args.pixel_mm, origin));
@@ -201,7 +218,7 @@ void RunStitch(const StitchArgs& args) {
 void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
-  sub->description(
+  AddDetails(sub,
       "Registers every tile with its right and lower neighbour by phase correlation of the overlap, refined to "
       "sub-pixel with the pair's uncertainty; solves all positions by least squares weighted by those "
       "uncertainties, and writes file,x,y: each tile's top-left corner in pixels (x right, y down), the first tile "
@@ -209,7 +226,9 @@ void RegisterStitch(CLI::App& app) {
       "their stage (or grid) positions, as the instrument does; along parallel marks, where images cannot tell a "
       "shift, the stage position holds too.");
   sub->add_option("--layout", args->layout, "layout CSV file,row,col[,x,y]; image paths relative to it")->required();
-  sub->add_option("--overlap", args->overlap, "nominal overlap of neighbours: percent (20) or fraction (0.2)")
+  sub->add_option("--overlap", args->overlap,
+                  "nominal overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: "
+                  "0.2 = 20 %)")
       ->required();
   sub->add_option("-o,--output", args->output,
                   "positions CSV file,x,y[,x_mm,y_mm],registered,u_x,u_y (u: standard uncertainty in px against "
@@ -224,10 +243,11 @@ void RegisterStitch(CLI::App& app) {
                   "layout's x,y");
   sub->add_option("--min-quality", args->min_quality, "reject pairs whose aligned correlation is below this")
       ->capture_default_str();
-  sub->add_option("--stage-sigma", args->stage_sigma_px,
+  sub->add_option("--stage-sigma-px", args->stage_sigma_px,
                   "the stage's positioning error over the grid (px, standard deviation): what holds a tile along a "
                   "direction its images do not determine")
       ->capture_default_str();
+  AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"pairs\": [{\"a\", \"b\", \"dx_px\", \"dy_px\", \"sigma_px\", "

@@ -1,16 +1,25 @@
 #include "fvm/surface_read_args.h"
 
+#include "fvm/commands.h"
+
 namespace fvm::cli {
 
 void SurfaceReadArgs::AddOptions(CLI::App& app) {
-  app.add_option("--pixel-size,--dx-mm", pixel_size_mm,
+  // One spelling per concept, with its unit (as --pixel-mm of fvm stitch and fvm focus); the old ones stay
+  // hidden so that scripts keep working.
+  app.add_option("--pixel-mm", pixel_size_mm,
                  "images: pixel size in mm (overrides the file's; required when the image does not say it)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--pixel-size-y,--dy-mm", pixel_size_y_mm, "images: pixel size along y in mm (default: as x)")
+  AddHiddenAlias(&app, "--pixel-size,--dx-mm", pixel_size_mm, "--pixel-mm")->check(CLI::PositiveNumber);
+  app.add_option("--pixel-y-mm", pixel_size_y_mm, "images: pixel size along y in mm (default: as x)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--z-scale", z_scale_mm, "images: mm per grey level (required for integer images that do not say it)")
+  AddHiddenAlias(&app, "--pixel-size-y,--dy-mm", pixel_size_y_mm, "--pixel-y-mm")->check(CLI::PositiveNumber);
+  app.add_option("--z-scale-mm", z_scale_mm,
+                 "images: mm per grey level (required for integer images that do not say it)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--z-offset", z_offset_mm, "images: mm added to every height (with --z-scale)");
+  AddHiddenAlias(&app, "--z-scale", z_scale_mm, "--z-scale-mm")->check(CLI::PositiveNumber);
+  app.add_option("--z-offset-mm", z_offset_mm, "images: mm added to every height (with --z-scale-mm)");
+  AddHiddenAlias(&app, "--z-offset", z_offset_mm, "--z-offset-mm");
   app.add_option("--invalid", invalid, "images: the raw pixel value that marks a missing point, e.g. 0");
   app.add_option("--unit", unit, "point clouds: the unit of the coordinates in the file")
       ->check(CLI::IsMember({"mm", "um", "m"}))

@@ -23,6 +23,7 @@
 #include "artefacts/io/centre_export.h"
 #include "artefacts/simulation/height_tile_synthesis.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "artefacts/simulation/rendered_stitching_strategy.h"
 #include "artefacts/simulation/stitching_strategy.h"
 #include "artefacts/simulation/tile_synthesis.h"
@@ -31,6 +32,7 @@
 #include "imaging/io/tile_image.h"
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_plan.h"
+#include "imaging/tile_registration.h"
 
 namespace fvm::cli {
 namespace {
@@ -59,14 +61,13 @@ std::vector<double> ParseNumbers(const std::string& text, size_t count, const st
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      values.push_back(std::stod(item, &used));
-      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
+    // Locale-independent and whole-field: "1.5" is 1.5 under any LC_NUMERIC, "1.5mm" is refused.
+    const std::optional<double> value = ParseDouble(item);
+    if (!value || !std::isfinite(*value)) {
       values.clear();
       break;
     }
+    values.push_back(*value);
   }
   if (values.size() != count) {
     throw InputError(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count, example));
@@ -87,7 +88,7 @@ std::vector<Feature> LoadFeatures(const PlanArgs& args) {
     for (const auto& c : centres.centres) {
       const double r = args.radius_mm > 0.0 ? args.radius_mm : c.radius_mm.value_or(0.0);
       if (!(r > 0.0)) {
-        throw InputError(fmt::format("{}:{}: calotte {} has no radius; add a radius column or give --radius MM",
+        throw InputError(fmt::format("{}:{}: calotte {} has no radius; add a radius column or give --radius-mm MM",
                                      args.features, c.line, c.id));
       }
       features.push_back({c.id, c.position.head<2>(), r});
@@ -144,7 +145,7 @@ void RunPlan(const PlanArgs& args) {
   {
     const size_t x = args.tile_pixels.find('x');
     const std::string text = x == std::string::npos ? "" : args.tile_pixels.substr(0, x) + "," + args.tile_pixels.substr(x + 1);
-    const auto wh = ParseNumbers(text, 2, "--tile-pixels " + args.tile_pixels, "1024x1024");
+    const auto wh = ParseNumbers(text, 2, "--tile-px " + args.tile_pixels, "1024x1024");
     options.pixels_x = static_cast<int>(wh[0]);
     options.pixels_y = static_cast<int>(wh[1]);
   }
@@ -344,6 +345,7 @@ void WriteRenderedRow(const artefacts::RenderedStrategies& row, const artefacts:
 }
 
 void RunStrategies(const StrategyArgs& args) {
+  imaging::SetImagingThreads(ThreadCount());  // --render registers tiles on OpenCV's pool
   const stage::Calibration cal = stage::ReadCalibration(args.calibration);
   artefacts::RenderedStrategyOptions options;
   options.geometry.fov_mm = imaging::FindLens(args.lens).fov_mm;
@@ -431,6 +433,7 @@ void RunStrategies(const StrategyArgs& args) {
 void RegisterTiles(CLI::App& app) {
   CLI::App* tiles = app.add_subcommand("tiles", "plan tile layouts with and without stitching");
   tiles->require_subcommand(1);
+  tiles->footer("Example:\n  fvm tiles plan --lens 10x --artefact grid6x6 --overlap 13");
 
   auto plan_args = std::make_shared<PlanArgs>();
   CLI::App* plan = tiles->add_subcommand("plan", "the stitched tile grid of a region and the stitching-free tiles "
@@ -438,18 +441,21 @@ void RegisterTiles(CLI::App& app) {
   plan->add_option("--lens", plan_args->lens, "lens: 2.5x (5.63 mm field), 5x (2.82), 10x (1.62), 20x (0.81), "
                                               "50x (0.32), 100x (0.16)")
       ->capture_default_str();
-  plan->add_option("--fov", plan_args->fov_mm, "field of view in mm, instead of the lens table's");
+  plan->add_option("--fov-mm", plan_args->fov_mm, "field of view in mm, instead of the lens table's");
+  AddHiddenAlias(plan, "--fov", plan_args->fov_mm, "--fov-mm");
   plan->add_option("--region", plan_args->region,
                    "x0,y0,x1,y1 in mm (default: the bounding box of the features)");
-  plan->add_option("--overlap", plan_args->overlap, "overlap of neighbouring tiles: fraction (0.2) or percent (20)")
+  plan->add_option("--overlap", plan_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")
       ->capture_default_str();
   plan->add_option("--features", plan_args->features,
                    "centre export (CSV id,x,y,z[,radius], mm) of the features a stitching-free scan must cover");
   plan->add_option("--artefact", plan_args->artefact, "cover the calottes of a known artefact: grid6x6 or bar17, in "
                                                       "its own frame");
-  plan->add_option("--radius", plan_args->radius_mm, "feature radius in mm (overrides the file's or artefact's)");
+  plan->add_option("--radius-mm", plan_args->radius_mm, "feature radius in mm (overrides the file's or artefact's)");
+  AddHiddenAlias(plan, "--radius", plan_args->radius_mm, "--radius-mm");
   plan->add_option("--seconds-per-tile", plan_args->seconds_per_tile, "scan time per tile (s)")->capture_default_str();
-  plan->add_option("--tile-pixels", plan_args->tile_pixels, "pixels per tile, WxH")->capture_default_str();
+  plan->add_option("--tile-px", plan_args->tile_pixels, "pixels per tile, WxH")->capture_default_str();
+  AddHiddenAlias(plan, "--tile-pixels", plan_args->tile_pixels, "--tile-px");
   plan->add_option("--bytes-per-pixel", plan_args->bytes_per_pixel, "stored bytes per pixel (height + colour)")
       ->capture_default_str();
   plan->add_option("-o,--layout", plan_args->output, "write the stitched layout CSV file,row,col,x,y");
@@ -463,7 +469,7 @@ void RegisterTiles(CLI::App& app) {
       "lowest X and highest Y, where the instrument starts; row 0 is the highest Y, column 0 the lowest X. The scan "
       "takes column after column from -X to +X, each from +Y to -Y. A stitching-free scan takes only the grid tiles "
       "that hold each feature whole.\n"
-      "Example (the published 6 x 6 grid, 225 vs 49 tiles): fvm tiles plan --lens 10x --artefact grid6x6 "
+      "Example (the published 6 x 6 grid, 225 vs 49 tiles):\n  fvm tiles plan --lens 10x --artefact grid6x6 "
       "--overlap 13");
   plan->callback([plan_args] { RunPlan(*plan_args); });
 
@@ -474,10 +480,12 @@ void RegisterTiles(CLI::App& app) {
       ->required();
   synth->add_option("--rows", synth_args->rows, "tile rows (default 3; with --artefact, as many as cover it)");
   synth->add_option("--cols", synth_args->cols, "tile columns (default 3; with --artefact, as many as cover it)");
-  synth->add_option("--size", synth_args->size, "tile width and height (px)")->capture_default_str();
-  synth->add_option("--overlap", synth_args->overlap, "overlap: fraction (0.2) or percent (20)")->capture_default_str();
-  synth->add_option("--stage-error", synth_args->sigma_px, "standard deviation of the stage error per axis (px)")
+  synth->add_option("--tile-px", synth_args->size, "tile width and height (px)")->capture_default_str();
+  AddHiddenAlias(synth, "--size", synth_args->size, "--tile-px");
+  synth->add_option("--overlap", synth_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")->capture_default_str();
+  synth->add_option("--stage-sigma-px", synth_args->sigma_px, "standard deviation of the stage error per axis (px)")
       ->capture_default_str();
+  AddHiddenAlias(synth, "--stage-error", synth_args->sigma_px, "--stage-sigma-px");
   synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer, the default) or 32 (float)");
   synth->add_option("--artefact", synth_args->artefact,
                     "height-map tiles of grid6x6 or bar17 instead (float, mm, 10 um pixels, NaN on steep flanks), "
@@ -487,7 +495,8 @@ void RegisterTiles(CLI::App& app) {
                 "true top-left corners, the first tile at 0,0. With --artefact they are cut from one height map of "
                 "the artefact (0.5 um of roughness, 0.1 um of noise per tile) and the layout holds the stage "
                 "positions: fvm tiles synthesize --artefact grid6x6 -o g && cd g && fvm stitch --layout layout.csv "
-                "--overlap 20 --pixel-mm 0.01 -o p.csv --mosaic m.x3p && fvm fit m.x3p --artefact grid6x6 -o c.csv");
+                "--overlap 20 --pixel-mm 0.01 -o p.csv --mosaic m.x3p && fvm fit m.x3p --artefact grid6x6 -o c.csv\n"
+                "Example:\n  fvm tiles synthesize -o demo --rows 3 --cols 4 --tile-px 512 --overlap 20 --seed 1");
   synth->callback([synth_args] { RunSynthesize(*synth_args); });
 
   auto strategy_args = std::make_shared<StrategyArgs>();
@@ -496,7 +505,7 @@ void RegisterTiles(CLI::App& app) {
   strategies->add_option("--calibration", strategy_args->calibration, "stage model: a file written by 'fvm calibrate -o'")
       ->required();
   strategies->add_option("--lens", strategy_args->lens, "lens (field of view from the lens table)")->capture_default_str();
-  strategies->add_option("--overlap", strategy_args->overlap, "overlap: fraction (0.2) or percent (20)")
+  strategies->add_option("--overlap", strategy_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")
       ->capture_default_str();
   strategies->add_option("--from", strategy_args->from, "first calotte x,y,z in mm (default: Table 1, calotte 1)")
       ->delimiter(',')
@@ -520,7 +529,9 @@ void RegisterTiles(CLI::App& app) {
                        "\"diff_um\", \"pairs\", \"accepted_pairs\"}]}][, \"rendered\": {\"tile_px\", "
                        "\"pixel_um\", \"row_tiles\", \"pair_rms_px\", \"rejected_pairs\", \"seed\"}]}");
   strategies->footer("Cases: a all stitched; b only the end tiles; c the tile after the first missing; d a middle "
-                     "tile missing; e the tile before the last missing; f every other tile missing (000:4777).");
+                     "tile missing; e the tile before the last missing; f every other tile missing (000:4777).\n"
+                     "Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm tiles simulate "
+                     "--calibration stage.json --lens 10x --overlap 20 --render");
   strategies->callback([strategy_args] { RunStrategies(*strategy_args); });
 }
 

@@ -24,7 +24,8 @@ cv::Mat FeatherWeights(int width, int height) {
 
 }  // namespace
 
-Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::Vector2d>& positions_px) {
+Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::Vector2d>& positions_px,
+                 const std::function<void(int done, int total)>& on_tile_fused) {
   if (tiles.empty() || tiles.size() != positions_px.size()) {
     throw std::invalid_argument("FuseTiles: one position per tile, and at least one tile");
   }
@@ -66,6 +67,7 @@ Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::V
     sum(roi) += moved_value;
     weight(roi) += moved_weight;
     covered(roi) = cv::max(covered(roi), moved_valid);
+    if (on_tile_fused) on_tile_fused(static_cast<int>(i) + 1, static_cast<int>(tiles.size()));
   }
   out.image.resize(height, width);
   // A tile's corner pixel weighs 4 / (w h); a sum below a four-hundredth of that is the resampling kernel's

@@ -7,6 +7,7 @@
 // Pixel frame as in tile_registration.h: x to the right, y down, positions are the tiles' top-left pixels.
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "imaging/height_map.h"
@@ -20,7 +21,9 @@ struct Mosaic {
 };
 
 // Throws std::invalid_argument when there are no tiles, the counts differ, or a position is not finite.
-Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::Vector2d>& positions_px);
+// `on_tile_fused(done, total)`, when given, is called after each tile (for a progress line; same thread).
+Mosaic FuseTiles(const std::vector<TileImage>& tiles, const std::vector<Eigen::Vector2d>& positions_px,
+                 const std::function<void(int done, int total)>& on_tile_fused = {});
 
 // The mosaic as a height map in the stage frame (+Y up): tile pixels hold heights in mm, `pixel_mm` is their
 // size, and `first_centre_mm` is the stage position of the centre of the tile at position (0, 0).

@@ -3,6 +3,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -108,8 +109,15 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
   return out;
 }
 
+void SetImagingThreads(int threads) {
+  if (threads < 0) throw std::invalid_argument("SetImagingThreads: give 0 (all cores) or a positive count");
+  // OpenCV reads a negative count as "its default", i.e. all cores; 0 would mean no pool at all.
+  cv::setNumThreads(threads > 0 ? threads : -1);
+}
+
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
-                                    const RegistrationOptions& options) {
+                                    const RegistrationOptions& options,
+                                    const std::function<void(int done, int total)>& on_pair_registered) {
   if (images.size() != tiles.size()) throw std::invalid_argument("RegisterTileGrid: one image per tile");
   options.Check();
   std::map<std::pair<int, int>, int> at;
@@ -128,6 +136,8 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     }
   }
   // Pairs are independent: each writes only its own slot, so the result does not depend on the thread count.
+  std::atomic<int> registered{0};
+  const int total = static_cast<int>(result.pairs.size());
   const auto register_range = [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
       PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
@@ -135,6 +145,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       pair = RegisterPair(images[a], images[b], tiles[b].nominal_px - tiles[a].nominal_px, options);
       pair.a = static_cast<int>(a);
       pair.b = static_cast<int>(b);
+      if (on_pair_registered) on_pair_registered(++registered, total);
     }
   };
   const cv::Range all(0, static_cast<int>(result.pairs.size()));

@@ -8,6 +8,7 @@
 // corners in one mosaic frame.
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "imaging/io/tile_image.h"
@@ -41,8 +42,13 @@ struct RegistrationResult {
 };
 
 // Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, then solves. Tiles in
-// scan order: index 0 is the anchor. images[i] belongs to tiles[i].
+// scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
+// given, is called after each pair, from the pool's threads at once: it must be thread-safe.
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
-                                    const RegistrationOptions& options);
+                                    const RegistrationOptions& options,
+                                    const std::function<void(int done, int total)>& on_pair_registered = {});
+
+// Threads of OpenCV's pool, which registration, mosaics and focus stacks run on; 0: all cores. Process-wide.
+void SetImagingThreads(int threads);
 
 }  // namespace fvm::imaging

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <thread>
 
 #include "stage/linear_dependence.h"
 #include "stage/validation.h"
@@ -173,6 +174,7 @@ void IdentificationOptions::Check() const {
   if (loss != "none" && loss != "huber" && loss != "cauchy") {
     throw std::invalid_argument("unknown loss '" + loss + "': use none, huber or cauchy");
   }
+  if (num_threads < 0) throw std::invalid_argument("num_threads must be 0 (all cores) or positive");
   if (!(loss_scale_mm > 0) || !(alias_tolerance > 0) || !(max_relative_uncertainty > 0) || !(noise_floor_mm > 0)) {
     throw std::invalid_argument("identification tolerances must be positive");
   }
@@ -376,7 +378,8 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     // The start is the linearised least-squares solution and the model is nearly linear: begin as Gauss-Newton,
     // or the default damping crawls along the weakly determined directions for a dozen iterations.
     solver.initial_trust_region_radius = 1e12;
-    solver.num_threads = options.num_threads;
+    solver.num_threads =
+        options.num_threads > 0 ? options.num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
     solver.function_tolerance = 1e-10;
     solver.parameter_tolerance = 1e-10;
     solver.gradient_tolerance = 1e-14;

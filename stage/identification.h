@@ -50,7 +50,7 @@ struct IdentificationOptions {
                                             // plausible size: the data cannot determine it
   double noise_floor_mm = 1e-5;             // never assume less noise than 10 nm per coordinate
   int max_iterations = 100;
-  int num_threads = 2;
+  int num_threads = 0;                      // Jacobian evaluation threads; 0: all cores
   void Check() const;  // throws std::invalid_argument
 };
 

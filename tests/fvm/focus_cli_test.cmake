@@ -46,7 +46,8 @@ run(1 focus ${WORK}/missing.csv -o ${WORK}/out.x3p --window 4)
 if(NOT ERR MATCHES "odd number")
   message(FATAL_ERROR "even window: unexpected message\n${ERR}")
 endif()
-run(105 focus ${WORK}/missing.csv -o ${WORK}/out.x3p --measure sharpness)
+# A value outside the option's choices is a usage error (exit 2), found before any file is read.
+run(2 focus ${WORK}/missing.csv -o ${WORK}/out.x3p --measure sharpness)
 
 file(GLOB left ${WORK}/*.x3p ${WORK}/*.txt)
 if(left)

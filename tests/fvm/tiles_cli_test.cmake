@@ -43,6 +43,10 @@ endif()
 # set's RMS is 0.04 px; the bound leaves room for the 8-bit quantisation on other platforms' random streams).
 run(0 tiles synthesize -o ${WORK}/set --rows 3 --cols 3 --size 256 --bits 8 --seed 4)
 run(0 stitch --layout ${WORK}/set/layout.csv --overlap 20 -o ${WORK}/set/positions.csv --pixel-mm 0.001)
+# stderr is a pipe here, not a terminal: no progress line (no carriage returns in logs).
+if(ERR MATCHES "registering pairs|\r")
+  message(FATAL_ERROR "fvm stitch drew progress into a pipe:\n${ERR}")
+endif()
 file(STRINGS ${WORK}/set/positions.csv positions)
 file(STRINGS ${WORK}/set/truth.csv truth)
 list(GET positions 0 header)
