@@ -14,6 +14,7 @@
 
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "fvm/commands.h"
 
 namespace fvm::cli {
@@ -48,7 +49,7 @@ std::string Trimmed(const std::string& s) {
 
 std::optional<int> ParseId(const std::string& s) {
   if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 9) return std::nullopt;
-  return std::stoi(s);
+  return static_cast<int>(*ParseInt(s));  // digits only, at most nine: always an int
 }
 
 std::vector<std::pair<int, int>> ParsePairs(const std::string& text) {

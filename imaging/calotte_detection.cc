@@ -177,7 +177,7 @@ CalotteDetection DetectCalottes(const HeightMap& map, const CalotteDetectionOpti
                             map.z_mm.size()));
   }
   if (!(map.dx_mm > 0) || !(map.dy_mm > 0)) {
-    throw InputError("the height map has no pixel size; give it (e.g. --dx-mm) so that calottes can be measured");
+    throw InputError("the height map has no pixel size; give it (e.g. --pixel-mm) so that calottes can be measured");
   }
   CalotteDetection out;
   out.face = FitFace(map, options.seed);

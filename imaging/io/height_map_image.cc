@@ -145,7 +145,7 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
         described_value("dx_mm") ? described_value("dx_mm") : resolution(spec.x_resolution);
     std::optional<double> file_dy = described_value("dy_mm") ? described_value("dy_mm") : resolution(spec.y_resolution);
     if (!file_dx || !(*file_dx > 0.0)) {
-      Fail(path, "the image does not say its pixel size; give it, e.g. --pixel-size 0.00175 (mm)");
+      Fail(path, "the image does not say its pixel size; give it, e.g. --pixel-mm 0.00175 (mm)");
     }
     dx = *file_dx;
     if (dy == 0.0) dy = file_dy && *file_dy > 0.0 ? *file_dy : dx;
@@ -159,7 +159,7 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
       z_offset = described_value("z_offset_mm").value_or(0.0);
     } else if (integer) {
       Fail(path, "holds " + spec.type_name +
-                     " grey levels but does not say how many mm one level is; give it, e.g. --z-scale 0.0001 (mm)");
+                     " grey levels but does not say how many mm one level is; give it, e.g. --z-scale-mm 0.0001 (mm)");
     } else {
       z_scale = 1.0;  // float images hold mm
     }

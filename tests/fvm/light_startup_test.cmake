@@ -56,7 +56,7 @@ expect_light(simulate simulate fvm-batch -o ${WORK}/sim --seed 1)
 run(0 tiles synthesize -o ${WORK}/tile --rows 1 --cols 1 --size 64 --bits 32 --seed 1)
 file(GLOB tiffs ${WORK}/tile/*.tif)
 list(GET tiffs 0 tiff)
-run_logged(tiff 0 info ${tiff} --pixel-size 0.001 --json)
+run_logged(tiff 0 info ${tiff} --pixel-mm 0.001 --json)
 heavy_in("${LOADED}" found)
 if(NOT LOADED MATCHES "libfvm_image_oiio.so" OR NOT found MATCHES "libOpenImageIO")
   message(FATAL_ERROR "fvm info on a TIFF: the loader log names neither the image plugin nor OpenImageIO; "
@@ -89,7 +89,7 @@ if(NOT code EQUAL 0)
   message(FATAL_ERROR "cannot zip the test X3P")
 endif()
 
-execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${tiff} --pixel-size 0.001
+execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${tiff} --pixel-mm 0.001
                 RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT code EQUAL 1 OR NOT err MATCHES "reading [^\n]*\\.tif needs OpenImageIO: libfvm_image_oiio\\.so could not be loaded"
    OR NOT err MATCHES "install the Debian package libopenimageio")

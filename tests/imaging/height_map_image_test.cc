@@ -73,7 +73,7 @@ TEST(HeightMapImage, SixteenBitCountsNeedScaleAndPixelSize) {
   const auto file = dir / "depth16.tif";
   WriteForeignImage<std::uint16_t>(file, PixelType::kUint16, 1, {0, 1, 2, 1000, 65535, 7});
   EXPECT_THAT(InputErrorOf([&] { ReadHeightMapImage(file); }),
-              AllOf(HasSubstr("depth16.tif"), HasSubstr("--pixel-size")));
+              AllOf(HasSubstr("depth16.tif"), HasSubstr("--pixel-mm")));
   HeightMapImageOptions options;
   options.dx_mm = 0.002;
   EXPECT_THAT(InputErrorOf([&] { ReadHeightMapImage(file, options); }), HasSubstr("--z-scale"));
