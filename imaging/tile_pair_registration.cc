@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -94,7 +96,10 @@ Prepared Blur(const Prepared& in, double sigma) {
 // their slope at the crop's edges into a ridge that sits at the same place of both crops and so pins the shift
 // to the whole-pixel crop, which along a direction without texture is all there is. Last, a Gaussian high-pass
 // removes the rest of the slow changes.
-Prepared HighPass(const cv::Mat& crop, double sigma) {
+//
+// Both crops of a pair must be compared in one domain (MatchingDomain): `log_floor` > 0 takes the logarithm of
+// max(value, log_floor), 0 keeps the values.
+Prepared HighPass(const cv::Mat& crop, double sigma, double log_floor) {
   Prepared out;
   crop.convertTo(out.value, CV_32F);
   const cv::Mat finite = out.value == out.value;  // NaN is the one value unequal to itself
@@ -102,9 +107,7 @@ Prepared HighPass(const cv::Mat& crop, double sigma) {
     finite.convertTo(out.valid, CV_32F, 1.0 / 255.0);
     out.value.setTo(0.0f, ~finite);
   }
-  double lowest = 0.0;
-  cv::minMaxLoc(out.value, &lowest, nullptr, nullptr, nullptr, finite);
-  if (lowest > 0.0) cv::log(cv::max(out.value, lowest), out.value);  // invalid pixels get log(lowest): masked
+  if (log_floor > 0.0) cv::log(cv::max(out.value, log_floor), out.value);  // invalid pixels: log(floor), masked
   SubtractQuadratic(out.value, out.valid);
   if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   if (sigma > 0.0) {
@@ -113,6 +116,30 @@ Prepared HighPass(const cv::Mat& crop, double sigma) {
     if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   }
   return out;
+}
+
+// The domain both crops of a pair are matched in, decided once for the pair: the logarithm when neither crop has
+// a negative valid pixel and some are positive (intensity images), with zeros (pixels the camera clipped to
+// black) raised to the pair's darkest positive value; otherwise the values themselves (height maps). Deciding per
+// crop compared a crop with one black pixel linearly against its partner's logarithm.
+double MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
+  double lowest = std::numeric_limits<double>::infinity(), lowest_positive = lowest;
+  for (const cv::Mat& crop : {crop_a, crop_b}) {
+    cv::Mat values;
+    crop.convertTo(values, CV_32F);
+    const cv::Mat finite = values == values;
+    double low = 0.0;
+    if (cv::countNonZero(finite) == 0) continue;
+    cv::minMaxLoc(values, &low, nullptr, nullptr, nullptr, finite);
+    lowest = std::min(lowest, low);
+    double low_positive = 0.0;
+    const cv::Mat positive = finite & (values > 0.0f);
+    if (cv::countNonZero(positive) == 0) continue;
+    cv::minMaxLoc(values, &low_positive, nullptr, nullptr, nullptr, positive);
+    lowest_positive = std::min(lowest_positive, low_positive);
+  }
+  if (!(lowest >= 0.0) || !std::isfinite(lowest_positive)) return 0.0;
+  return lowest_positive;
 }
 
 // Where two tiles overlap when b's top-left corner sits at `whole` in a's frame, both crops prepared; none when
@@ -131,8 +158,9 @@ std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const
   Overlap out;
   out.in_a = cv::Rect(x0, y0, x1 - x0, y1 - y0);
   out.in_b = cv::Rect(x0 - dx, y0 - dy, out.in_a.width, out.in_a.height);
-  out.a = HighPass(View(a)(out.in_a), sigma);
-  out.b = HighPass(View(b)(out.in_b), sigma);
+  const double log_floor = MatchingDomain(View(a)(out.in_a), View(b)(out.in_b));
+  out.a = HighPass(View(a)(out.in_a), sigma, log_floor);
+  out.b = HighPass(View(b)(out.in_b), sigma, log_floor);
   return out;
 }
 
@@ -223,9 +251,16 @@ cv::Mat Usable(const cv::Mat& a_valid, const cv::Mat& b_valid, const Eigen::Vect
 // Sub-pixel shift by inverse-compositional Gauss-Newton on sum (A(v + e) - B(v))^2 over B's interior: the
 // Jacobian is B's gradient, so it and the 2 x 2 normal matrix are computed once; each step only resamples A.
 // Pixels that are not usable (invalid in either crop) are left out, their set fixed at the start of each
-// interior. Returns false when it does not settle within 4 px of the start, and the phase-correlation estimate
-// stands.
-bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e) {
+// interior. `e` changes only when it settles.
+enum class Refinement {
+  kSettled,     // a step below the tolerance
+  kNoRoom,      // the overlap leaves no interior for the shift
+  kNoTexture,   // B has no gradient energy
+  kWandered,    // moved more than 4 px from the start: another match than the correlation's peak
+  kNotSettled,  // the iterations ran out with steps still above the tolerance
+};
+Refinement RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e,
+                       double* last_step_px = nullptr) {
   // Up to 4 px from the start: on a lay (marks in one direction) the correlation peak is a ridge, and its top
   // can lie a few pixels along it from the truth.
   constexpr double kWander = 4.0;
@@ -237,7 +272,7 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
   while (iteration < kIterations) {
     const double reach = estimate.cwiseAbs().maxCoeff() + 1.0;
     const auto inner = Interior(b.value, 4 + static_cast<int>(std::ceil(reach)));
-    if (!inner) return false;
+    if (!inner) return Refinement::kNoRoom;
     // B's gradient, taken from B's own pixels around the interior.
     cv::Mat gx, gy;
     InterpolationGradient(b.value(*inner), gx, gy);
@@ -258,7 +293,7 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       }
     }
     h(1, 0) = h(0, 1);
-    if (!(h.trace() > 0.0)) return false;
+    if (!(h.trace() > 0.0)) return Refinement::kNoTexture;
     // Damped by a hundredth of the largest gradient energy: along a direction without texture (machining marks)
     // the energy is the noise's, and undamped steps would follow the noise off the match; with texture the
     // damping only slows each step by 1 %.
@@ -280,10 +315,11 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       // A(v + e) = B(v + d) with d = e - e_true; the step solves B(v + d) ~ B(v) + grad B . d for d.
       const Eigen::Vector2d step = solve.solve(g);
       estimate -= step;
-      if ((estimate - e).norm() > kWander) return false;  // wandered off the peak: not the same match
+      if (last_step_px != nullptr) *last_step_px = step.norm();
+      if ((estimate - e).norm() > kWander) return Refinement::kWandered;  // off the peak: not the same match
       if (step.norm() < tolerance_px) {
         e = estimate;
-        return true;
+        return Refinement::kSettled;
       }
       if (estimate.cwiseAbs().maxCoeff() > reach) {
         ++iteration;
@@ -291,8 +327,8 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       }
     }
   }
-  e = estimate;
-  return true;
+  // Still moving by more than the tolerance: the estimate is not a minimum, and no precision can be claimed.
+  return Refinement::kNotSettled;
 }
 
 // How well an aligned overlap matches, and how precisely it fixes the shift.
@@ -383,7 +419,10 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   pair.nominal_px = nominal_px;
   const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
   const std::optional<Overlap> nominal = CropOverlap(a, b, nominal_whole, options.highpass_sigma_px);
-  if (!nominal) return pair;
+  if (!nominal) {
+    pair.rejection = "the nominal overlap is narrower than 8 px";
+    return pair;
+  }
 
   Eigen::Vector2d offset;
   if (options.crop_to_overlap) {
@@ -395,38 +434,62 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     // representative nearest the nominal offset.
     const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
                           static_cast<int>(std::min(a.rows(), b.rows())));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px).value);
+    const double log_floor = MatchingDomain(View(a)(common), View(b)(common));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, log_floor).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px, log_floor).value);
     pair.response = response;
     offset = e;
     offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
     offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
   }
   const double limit = options.max_correction * std::min(nominal->in_a.width, nominal->in_a.height);
-  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) return pair;
+  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) {
+    pair.rejection = "the correlation's shift is farther from the nominal one than max_correction allows";
+    return pair;
+  }
   // Crop again where the images really overlap, to the whole pixel: the shift left to refine is at most half a
   // pixel, so the refinement and the quality lose only a few pixels of a narrow overlap to their margins.
   const Eigen::Vector2i whole = offset.array().round().cast<int>();
   const std::optional<Overlap> overlap =
       whole == nominal_whole ? nominal : CropOverlap(a, b, whole, options.highpass_sigma_px);
-  if (!overlap) return pair;
+  if (!overlap) {
+    pair.rejection = "the measured overlap is narrower than 8 px";
+    return pair;
+  }
   Eigen::Vector2d e = offset - whole.cast<double>();
   if (options.refine) {
     // Coarse to fine: the phase-correlation peak can be a pixel off, outside the basin of Gauss-Newton on fine
     // texture (a quarter period); blurred crops widen the basin, then the full-resolution pass sets the sub-pixel.
     Eigen::Vector2d refined = e;
-    // The coarse pass only needs to land in the fine pass' basin; the fine one stops well below the noise.
-    if (RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, refined) &&
-        RefineShift(overlap->a, overlap->b, 2e-3, refined)) {
-      e = refined;
+    // The coarse pass only needs to land in the fine pass' basin, so its not settling is no verdict (the fine pass
+    // starts from the correlation's estimate then); the fine one stops well below the noise, and a fine pass
+    // that runs out of iterations still moving rejects the pair: its shift is not a minimum of the mismatch.
+    Eigen::Vector2d coarse = e;
+    const Refinement coarse_status = RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, coarse);
+    if (coarse_status == Refinement::kSettled) refined = coarse;
+    double last_step = 0.0;
+    const Refinement fine = coarse_status == Refinement::kSettled || coarse_status == Refinement::kNotSettled
+                                ? RefineShift(overlap->a, overlap->b, 2e-3, refined, &last_step)
+                                : coarse_status;
+    if (fine == Refinement::kSettled) e = refined;
+    if (fine == Refinement::kNotSettled) {
+      pair.rejection = "the sub-pixel refinement did not settle (last step " + std::to_string(last_step) + " px)";
     }
+    // Otherwise (no room, no texture, wandered) the phase-correlation estimate stands, and the quality and the
+    // texture test below decide.
   }
   offset = whole.cast<double>() + e;
   const Alignment alignment = MeasureAlignment(overlap->a, overlap->b, e);
   pair.quality = alignment.quality;
   pair.information = alignment.information;
   pair.offset_px = offset;
-  pair.accepted = pair.quality >= options.min_quality && !pair.information.isZero();
+  if (pair.rejection.empty() && !(pair.quality >= options.min_quality)) {
+    pair.rejection = "quality " + std::to_string(pair.quality) + " is below min_quality " + std::to_string(options.min_quality);
+  }
+  if (pair.rejection.empty() && pair.information.isZero()) {
+    pair.rejection = "the overlap has no texture that stands out of the noise in any direction";
+  }
+  pair.accepted = pair.rejection.empty();
   return pair;
 }
 
