@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <optional>
 #include <opencv2/core.hpp>
@@ -97,17 +96,18 @@ Prepared Blur(const Prepared& in, double sigma) {
 // to the whole-pixel crop, which along a direction without texture is all there is. Last, a Gaussian high-pass
 // removes the rest of the slow changes.
 //
-// Both crops of a pair must be compared in one domain (MatchingDomain): `log_floor` > 0 takes the logarithm of
-// max(value, log_floor), 0 keeps the values.
-Prepared HighPass(const cv::Mat& crop, double sigma, double log_floor) {
+// Both crops of a pair must be compared in one domain (MatchingDomain). In the logarithm a pixel the camera
+// clipped to black (0) has no value: it is left out like an invalid one.
+Prepared HighPass(const cv::Mat& crop, double sigma, bool logarithm) {
   Prepared out;
   crop.convertTo(out.value, CV_32F);
-  const cv::Mat finite = out.value == out.value;  // NaN is the one value unequal to itself
-  if (cv::countNonZero(finite) < static_cast<int>(finite.total())) {
-    finite.convertTo(out.valid, CV_32F, 1.0 / 255.0);
-    out.value.setTo(0.0f, ~finite);
+  cv::Mat usable = out.value == out.value;  // NaN is the one value unequal to itself
+  if (logarithm) usable &= out.value > 0.0f;
+  if (cv::countNonZero(usable) < static_cast<int>(usable.total())) {
+    usable.convertTo(out.valid, CV_32F, 1.0 / 255.0);
+    out.value.setTo(logarithm ? 1.0f : 0.0f, ~usable);  // log(1) = 0, as invalid pixels are elsewhere
   }
-  if (log_floor > 0.0) cv::log(cv::max(out.value, log_floor), out.value);  // invalid pixels: log(floor), masked
+  if (logarithm) cv::log(out.value, out.value);
   SubtractQuadratic(out.value, out.valid);
   if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   if (sigma > 0.0) {
@@ -118,28 +118,21 @@ Prepared HighPass(const cv::Mat& crop, double sigma, double log_floor) {
   return out;
 }
 
-// The domain both crops of a pair are matched in, decided once for the pair: the logarithm when neither crop has
-// a negative valid pixel and some are positive (intensity images), with zeros (pixels the camera clipped to
-// black) raised to the pair's darkest positive value; otherwise the values themselves (height maps). Deciding per
-// crop compared a crop with one black pixel linearly against its partner's logarithm.
-double MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
-  double lowest = std::numeric_limits<double>::infinity(), lowest_positive = lowest;
+// The domain both crops of a pair are matched in, decided once for the pair: the logarithm (true) when neither
+// crop has a negative valid pixel and both have positive ones (intensity images; pixels clipped to black are then
+// left out); otherwise the values themselves (height maps). Deciding per crop compared a crop with one black pixel
+// linearly against its partner's logarithm, and the shading returned as a bias.
+bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
   for (const cv::Mat& crop : {crop_a, crop_b}) {
     cv::Mat values;
     crop.convertTo(values, CV_32F);
     const cv::Mat finite = values == values;
-    double low = 0.0;
-    if (cv::countNonZero(finite) == 0) continue;
-    cv::minMaxLoc(values, &low, nullptr, nullptr, nullptr, finite);
-    lowest = std::min(lowest, low);
-    double low_positive = 0.0;
-    const cv::Mat positive = finite & (values > 0.0f);
-    if (cv::countNonZero(positive) == 0) continue;
-    cv::minMaxLoc(values, &low_positive, nullptr, nullptr, nullptr, positive);
-    lowest_positive = std::min(lowest_positive, low_positive);
+    if (cv::countNonZero(finite) == 0) return false;
+    double low = 0.0, high = 0.0;
+    cv::minMaxLoc(values, &low, &high, nullptr, nullptr, finite);
+    if (!(low >= 0.0 && high > 0.0)) return false;
   }
-  if (!(lowest >= 0.0) || !std::isfinite(lowest_positive)) return 0.0;
-  return lowest_positive;
+  return true;
 }
 
 // Where two tiles overlap when b's top-left corner sits at `whole` in a's frame, both crops prepared; none when
@@ -158,9 +151,9 @@ std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const
   Overlap out;
   out.in_a = cv::Rect(x0, y0, x1 - x0, y1 - y0);
   out.in_b = cv::Rect(x0 - dx, y0 - dy, out.in_a.width, out.in_a.height);
-  const double log_floor = MatchingDomain(View(a)(out.in_a), View(b)(out.in_b));
-  out.a = HighPass(View(a)(out.in_a), sigma, log_floor);
-  out.b = HighPass(View(b)(out.in_b), sigma, log_floor);
+  const bool logarithm = MatchingDomain(View(a)(out.in_a), View(b)(out.in_b));
+  out.a = HighPass(View(a)(out.in_a), sigma, logarithm);
+  out.b = HighPass(View(b)(out.in_b), sigma, logarithm);
   return out;
 }
 
@@ -259,8 +252,9 @@ enum class Refinement {
   kWandered,    // moved more than 4 px from the start: another match than the correlation's peak
   kNotSettled,  // the iterations ran out with steps still above the tolerance
 };
+// When it does not settle, `last_step` (if given) holds the last step and `e` is left alone.
 Refinement RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e,
-                       double* last_step_px = nullptr) {
+                       Eigen::Vector2d* last_step = nullptr, Eigen::Vector2d* last_estimate = nullptr) {
   // Up to 4 px from the start: on a lay (marks in one direction) the correlation peak is a ridge, and its top
   // can lie a few pixels along it from the truth.
   constexpr double kWander = 4.0;
@@ -315,7 +309,8 @@ Refinement RefineShift(const Prepared& a, const Prepared& b, double tolerance_px
       // A(v + e) = B(v + d) with d = e - e_true; the step solves B(v + d) ~ B(v) + grad B . d for d.
       const Eigen::Vector2d step = solve.solve(g);
       estimate -= step;
-      if (last_step_px != nullptr) *last_step_px = step.norm();
+      if (last_step != nullptr) *last_step = step;
+      if (last_estimate != nullptr) *last_estimate = estimate;
       if ((estimate - e).norm() > kWander) return Refinement::kWandered;  // off the peak: not the same match
       if (step.norm() < tolerance_px) {
         e = estimate;
@@ -434,9 +429,9 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     // representative nearest the nominal offset.
     const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
                           static_cast<int>(std::min(a.rows(), b.rows())));
-    const double log_floor = MatchingDomain(View(a)(common), View(b)(common));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, log_floor).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px, log_floor).value);
+    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
     pair.response = response;
     offset = e;
     offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
@@ -467,13 +462,24 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     Eigen::Vector2d coarse = e;
     const Refinement coarse_status = RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, coarse);
     if (coarse_status == Refinement::kSettled) refined = coarse;
-    double last_step = 0.0;
+    Eigen::Vector2d last_step = Eigen::Vector2d::Zero(), last_estimate = refined;
     const Refinement fine = coarse_status == Refinement::kSettled || coarse_status == Refinement::kNotSettled
-                                ? RefineShift(overlap->a, overlap->b, 2e-3, refined, &last_step)
+                                ? RefineShift(overlap->a, overlap->b, 2e-3, refined, &last_step, &last_estimate)
                                 : coarse_status;
     if (fine == Refinement::kSettled) e = refined;
     if (fine == Refinement::kNotSettled) {
-      pair.rejection = "the sub-pixel refinement did not settle (last step " + std::to_string(last_step) + " px)";
+      // Out of iterations while still moving. The pair stands only if the last step is below half a standard
+      // deviation of the offset it will claim (in the directions its texture determines: along machining marks
+      // the steps follow the noise, and the information leaves that direction to the stage); otherwise the
+      // offset is no minimum within its own precision, and the pair is rejected.
+      const Alignment at = MeasureAlignment(overlap->a, overlap->b, last_estimate);
+      const double moving = std::sqrt(last_step.dot(at.information * last_step));
+      if (moving <= 0.5) {
+        e = last_estimate;
+      } else {
+        pair.rejection = "the sub-pixel refinement did not settle (its last step, " + std::to_string(last_step.norm()) +
+                         " px, is " + std::to_string(moving) + " standard deviations of the offset)";
+      }
     }
     // Otherwise (no room, no texture, wandered) the phase-correlation estimate stands, and the quality and the
     // texture test below decide.

@@ -83,8 +83,8 @@ TEST(SphereFit, ShallowCapConvergesFromTheAlgebraicStart) {
 }
 
 // A fit that runs out of iterations must say so, not report the last iterate as the minimum: on a shallow noisy
-// cap the algebraic start is biased by several of the centre's standard deviations, so one iteration cannot
-// reach the 1e-3 sd step criterion (LM's first step is damped), and the status says why it stopped.
+// cap the algebraic start is biased, one iteration (a damped first step) does not reach the converged centre to
+// the 1e-3 sd the criterion asks, and the status says why it stopped.
 TEST(SphereFit, ReportsNonConvergenceAsSuch) {
   const std::vector<Eigen::Vector3d> points = WithHeightNoise(CapPoints(kCentre, 1.0, 0.01, 20.0), 2e-4, 3);
   for (const SphereSolver solver : {SphereSolver::kNormalEquations, SphereSolver::kCeres}) {
@@ -99,10 +99,10 @@ TEST(SphereFit, ReportsNonConvergenceAsSuch) {
     const SphereFit done = FitSphere(points, options);
     EXPECT_TRUE(done.converged) << static_cast<int>(solver);
     EXPECT_THAT(done.stop_reason, ::testing::HasSubstr("at the minimum"));
-    // The stopped fit is really elsewhere: farther from the converged centre than the converged centre's own
-    // standard deviation, which is why it must not pass for a result.
+    // The stopped fit is really elsewhere by the criterion's own measure: more than 1e-3 of the centre's
+    // standard deviation from the converged centre (observed: 4e-3 sd for ours, 0.25 sd for Ceres).
     const double sd = std::sqrt(done.centre_covariance_mm2.trace());
-    EXPECT_GT((stopped.centre_mm - done.centre_mm).norm(), sd) << static_cast<int>(solver);
+    EXPECT_GT((stopped.centre_mm - done.centre_mm).norm(), 1e-3 * sd) << static_cast<int>(solver);
   }
 }
 

@@ -56,7 +56,7 @@ TEST(TileRegistration, GridWithNoiseAndVignettingBelowATenthPixelRms) {
     const auto tiles = artefacts::SynthesizeTiles(options);
     const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
     EXPECT_EQ(result.pairs.size(), 12u);
-    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b;
+    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b << ": " << pair.rejection;
     for (size_t i = 0; i < tiles.tiles.size(); ++i) EXPECT_TRUE(result.positions.registered[i]);
     const double rms = RmsError(result, tiles);
     EXPECT_LT(rms, 0.1) << "overlap " << overlap;
@@ -119,7 +119,7 @@ TEST(TileRegistration, MachiningMarksLeaveTheAxisAlongThemToTheStage) {
     options.camera.wave_spread_deg = spread;
     const auto tiles = artefacts::SynthesizeTiles(options);
     const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
-    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b;
+    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b << ": " << pair.rejection;
     for (size_t i = 1; i < tiles.tiles.size(); ++i) {
       const Eigen::Vector2d& p = result.positions.positions_px[i];
       const Eigen::Vector2d& sigma = result.positions.sigma_px[i];
