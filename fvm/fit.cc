@@ -129,7 +129,10 @@ void RunFit(const FitArgs& args) {
     record.position = c.fit.centre_mm;
     record.radius_mm = c.fit.radius_mm;
     record.form_rms_mm = c.fit.rms_deviation_mm;
+    record.converged = c.fit.converged;
     out.centres.push_back(record);
+    // The column says 0; the comment says why, for the person who opens the file.
+    if (!c.fit.converged) out.comments.push_back(fmt::format("calotte {}: sphere fit NOT converged ({})", c.id, c.fit.stop_reason));
   }
   if (!args.output.empty()) artefacts::WriteCentreExport(args.output, out);
 
@@ -151,6 +154,8 @@ void RunFit(const FitArgs& args) {
            {"max_dev_um", Round(c.fit.max_deviation_mm * 1e3, 1e4)},
            {"mean_dev_um", Round(c.fit.mean_deviation_mm * 1e3, 1e4)},
            {"outliers", c.fit.points - c.fit.inliers},
+           {"converged", c.fit.converged},
+           {"fit_stop", c.fit.stop_reason},
            {"at_border", c.at_border}});
     }
     doc["file"] = args.file;
@@ -188,6 +193,7 @@ void RunFit(const FitArgs& args) {
                c.id, c.fit.centre_mm.x(), c.fit.centre_mm.y(), c.fit.centre_mm.z(), c.fit.radius_mm,
                c.fit.rms_deviation_mm * 1e3, sd.x(), sd.y(), sd.z(), c.fit.inliers,
                c.at_border ? "  cut by the map's border" : "");
+    if (!c.fit.converged) fmt::print("      calotte {}: the sphere fit did NOT converge ({})\n", c.id, c.fit.stop_reason);
   }
   for (const auto& r : detection.rejected) {
     fmt::print("not a calotte at ({:.3f}, {:.3f}) mm: {}\n", r.centre_mm.x(), r.centre_mm.y(), r.reason);

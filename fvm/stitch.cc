@@ -179,7 +179,8 @@ void RunStitch(const StitchArgs& args) {
                               {"dy_px", pair.accepted ? nlohmann::ordered_json(d.y()) : nullptr},
                               {"sigma_px", sigma},
                               {"quality", pair.quality},
-                              {"accepted", pair.accepted}});
+                              {"accepted", pair.accepted},
+                              {"rejection", pair.accepted ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(pair.rejection)}});
     }
     fmt::print("{}\n", out.dump(2));
     return;
@@ -189,8 +190,8 @@ void RunStitch(const StitchArgs& args) {
              options.min_quality, from_stage ? "stage" : "grid and overlap");
   for (const auto& pair : result.pairs) {
     if (!pair.accepted) {
-      fmt::print("  rejected {} - {}: quality {:.3f}\n", layout.tiles[static_cast<size_t>(pair.a)].file,
-                 layout.tiles[static_cast<size_t>(pair.b)].file, pair.quality);
+      fmt::print("  rejected {} - {}: {}\n", layout.tiles[static_cast<size_t>(pair.a)].file,
+                 layout.tiles[static_cast<size_t>(pair.b)].file, pair.rejection);
     }
   }
   const auto list = [](const std::vector<std::string>& files) {

@@ -148,12 +148,17 @@ struct SolveResult {
   NormalEquations normal;                           // at theta
   int iterations = 0;
   bool converged = false;
+  std::string stop_reason;
 };
 
 // Levenberg-Marquardt on the normal equations; one pass over the points per iteration (the pass at the trial
-// point gives both its cost and, when accepted, the next normal equations). It stops when the next step would
-// move no parameter by more than 1e-3 of its standard deviation (or 1e-12 of the cap's size, for noise-free
-// data): further passes would change nothing a user could see, and at a million points each costs ~6 ms.
+// point gives both its cost and, when accepted, the next normal equations). It has converged when the undamped
+// (Gauss-Newton) step, the distance to the minimum of the local quadratic, would move no parameter by more than
+// 1e-3 of its standard deviation (or 1e-12 of the cap's size, for noise-free data): further passes would change
+// nothing a user could see, and at a million points each costs ~6 ms. The test is on the undamped step: a damped
+// step is small because lambda is large, not because the minimum is near. When no damped step lowers the cost,
+// it is at the minimum only if that step is within 1e-2 of a standard deviation (the cost's rounding can hide
+// smaller improvements); otherwise it is stuck, and says so.
 SolveResult SolveNormalEquations(std::span<const Eigen::Vector3d> points, const std::vector<bool>& mask,
                                  const Eigen::Vector3d& origin, const Eigen::Vector4d& start,
                                  const NormalEquations& at_start, double scale, const SphereFitOptions& options) {
@@ -168,8 +173,18 @@ SolveResult SolveNormalEquations(std::span<const Eigen::Vector3d> points, const 
     const Eigen::MatrixXd jtj = current.jtj.topLeftCorner(n, n);
     const Eigen::VectorXd jtr = current.jtr.head(n);
     const double variance = current.cost / std::max(1.0, static_cast<double>(current.count) - n);
-    const Eigen::VectorXd sd =
-        (variance * jtj.ldlt().solve(Eigen::MatrixXd::Identity(n, n)).diagonal()).cwiseAbs().cwiseSqrt();
+    const Eigen::LDLT<Eigen::MatrixXd> undamped(jtj);
+    const Eigen::VectorXd sd = (variance * undamped.solve(Eigen::MatrixXd::Identity(n, n)).diagonal()).cwiseAbs().cwiseSqrt();
+    const Eigen::VectorXd newton = -undamped.solve(jtr);
+    const auto within = [&](double fraction) {
+      return newton.allFinite() && (newton.cwiseAbs().array() <= (fraction * sd.array()).max(1e-12 * scale)).all();
+    };
+    if (within(1e-3)) {
+      out.converged = true;
+      out.stop_reason = "at the minimum";
+      out.normal = current;
+      return out;
+    }
     bool accepted = false;
     while (lambda < 1e16) {
       Eigen::MatrixXd damped = jtj;
@@ -179,35 +194,27 @@ SolveResult SolveNormalEquations(std::span<const Eigen::Vector3d> points, const 
         lambda *= 10;
         continue;
       }
-      if ((step.cwiseAbs().array() <= (1e-3 * sd.array()).max(1e-12 * scale)).all()) {
-        out.converged = true;
-        out.normal = current;
-        return out;
-      }
       Eigen::Vector4d trial = out.theta;
       trial.head(n) += step;
       NormalEquations next = Accumulate(points, mask, origin, trial, options.residual);
       if (next.cost <= current.cost) {
-        const bool tiny = current.cost - next.cost <= 1e-14 * current.cost;
         out.theta = trial;
         current = next;
         lambda = std::max(lambda * 0.1, 1e-12);
         accepted = true;
-        if (tiny) {
-          out.converged = true;
-          out.normal = current;
-          return out;
-        }
         break;
       }
       lambda *= 10;
     }
     if (!accepted) {
-      out.converged = true;  // no step lowers the cost any more: the minimum to machine precision
+      out.converged = within(1e-2);
+      out.stop_reason = out.converged ? "at the minimum (no step lowers the cost further)"
+                                      : "stuck: no step lowers the cost, but the Gauss-Newton step is not small";
       out.normal = current;
       return out;
     }
   }
+  out.stop_reason = "iteration limit (" + std::to_string(options.max_iterations) + ") reached";
   out.normal = current;
   return out;
 }
@@ -240,6 +247,7 @@ SolveResult SolveCeres(std::span<const Eigen::Vector3d> points, const std::vecto
   out.normal = Accumulate(points, mask, origin, out.theta, options.residual);
   out.iterations = static_cast<int>(summary.iterations.size());
   out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.stop_reason = out.converged ? "at the minimum" : "Ceres: " + summary.message;
   return out;
 }
 
@@ -453,6 +461,7 @@ SphereFit FitSphere(std::span<const Eigen::Vector3d> points, const SphereFitOpti
     normal = solved.normal;
     fit.iterations += solved.iterations;
     fit.converged = solved.converged;
+    fit.stop_reason = solved.stop_reason;
     fit.trim_rounds = round;
     if (last || options.outliers == SphereOutliers::kNone || round >= options.max_trim_rounds) break;
     const std::size_t changed = trim(&normal);

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace fvm::imaging {
@@ -82,7 +83,11 @@ struct SphereFit {
   std::vector<bool> inlier;  // per input point
   int iterations = 0;        // Levenberg-Marquardt iterations over all trimming rounds
   int trim_rounds = 0;
+  // Whether the last fit reached the minimum (the Gauss-Newton step below 1e-3 of each parameter's standard
+  // deviation, or Ceres' convergence): false when it ran out of iterations or no step lowered the cost while the
+  // step to the minimum was still large. The centre is then the last iterate, not a least-squares solution.
   bool converged = false;
+  std::string stop_reason;  // for people: "at the minimum", "iteration limit (100) reached", "stuck: ..."
 };
 
 // The sphere minimising sum (|p|^2 - 2 c.p - k)^2 (k = r^2 - |c|^2), in coordinates centred on the points'

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -94,17 +95,19 @@ Prepared Blur(const Prepared& in, double sigma) {
 // their slope at the crop's edges into a ridge that sits at the same place of both crops and so pins the shift
 // to the whole-pixel crop, which along a direction without texture is all there is. Last, a Gaussian high-pass
 // removes the rest of the slow changes.
-Prepared HighPass(const cv::Mat& crop, double sigma) {
+//
+// Both crops of a pair must be compared in one domain (MatchingDomain). In the logarithm a pixel the camera
+// clipped to black (0) has no value: it is left out like an invalid one.
+Prepared HighPass(const cv::Mat& crop, double sigma, bool logarithm) {
   Prepared out;
   crop.convertTo(out.value, CV_32F);
-  const cv::Mat finite = out.value == out.value;  // NaN is the one value unequal to itself
-  if (cv::countNonZero(finite) < static_cast<int>(finite.total())) {
-    finite.convertTo(out.valid, CV_32F, 1.0 / 255.0);
-    out.value.setTo(0.0f, ~finite);
+  cv::Mat usable = out.value == out.value;  // NaN is the one value unequal to itself
+  if (logarithm) usable &= out.value > 0.0f;
+  if (cv::countNonZero(usable) < static_cast<int>(usable.total())) {
+    usable.convertTo(out.valid, CV_32F, 1.0 / 255.0);
+    out.value.setTo(logarithm ? 1.0f : 0.0f, ~usable);  // log(1) = 0, as invalid pixels are elsewhere
   }
-  double lowest = 0.0;
-  cv::minMaxLoc(out.value, &lowest, nullptr, nullptr, nullptr, finite);
-  if (lowest > 0.0) cv::log(cv::max(out.value, lowest), out.value);  // invalid pixels get log(lowest): masked
+  if (logarithm) cv::log(out.value, out.value);
   SubtractQuadratic(out.value, out.valid);
   if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   if (sigma > 0.0) {
@@ -113,6 +116,23 @@ Prepared HighPass(const cv::Mat& crop, double sigma) {
     if (!out.valid.empty()) out.value = out.value.mul(out.valid);
   }
   return out;
+}
+
+// The domain both crops of a pair are matched in, decided once for the pair: the logarithm (true) when neither
+// crop has a negative valid pixel and both have positive ones (intensity images; pixels clipped to black are then
+// left out); otherwise the values themselves (height maps). Deciding per crop compared a crop with one black pixel
+// linearly against its partner's logarithm, and the shading returned as a bias.
+bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
+  for (const cv::Mat& crop : {crop_a, crop_b}) {
+    cv::Mat values;
+    crop.convertTo(values, CV_32F);
+    const cv::Mat finite = values == values;
+    if (cv::countNonZero(finite) == 0) return false;
+    double low = 0.0, high = 0.0;
+    cv::minMaxLoc(values, &low, &high, nullptr, nullptr, finite);
+    if (!(low >= 0.0 && high > 0.0)) return false;
+  }
+  return true;
 }
 
 // Where two tiles overlap when b's top-left corner sits at `whole` in a's frame, both crops prepared; none when
@@ -131,8 +151,9 @@ std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const
   Overlap out;
   out.in_a = cv::Rect(x0, y0, x1 - x0, y1 - y0);
   out.in_b = cv::Rect(x0 - dx, y0 - dy, out.in_a.width, out.in_a.height);
-  out.a = HighPass(View(a)(out.in_a), sigma);
-  out.b = HighPass(View(b)(out.in_b), sigma);
+  const bool logarithm = MatchingDomain(View(a)(out.in_a), View(b)(out.in_b));
+  out.a = HighPass(View(a)(out.in_a), sigma, logarithm);
+  out.b = HighPass(View(b)(out.in_b), sigma, logarithm);
   return out;
 }
 
@@ -223,9 +244,17 @@ cv::Mat Usable(const cv::Mat& a_valid, const cv::Mat& b_valid, const Eigen::Vect
 // Sub-pixel shift by inverse-compositional Gauss-Newton on sum (A(v + e) - B(v))^2 over B's interior: the
 // Jacobian is B's gradient, so it and the 2 x 2 normal matrix are computed once; each step only resamples A.
 // Pixels that are not usable (invalid in either crop) are left out, their set fixed at the start of each
-// interior. Returns false when it does not settle within 4 px of the start, and the phase-correlation estimate
-// stands.
-bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e) {
+// interior. `e` changes only when it settles.
+enum class Refinement {
+  kSettled,     // a step below the tolerance
+  kNoRoom,      // the overlap leaves no interior for the shift
+  kNoTexture,   // B has no gradient energy
+  kWandered,    // moved more than 4 px from the start: another match than the correlation's peak
+  kNotSettled,  // the iterations ran out with steps still above the tolerance
+};
+// When it does not settle, `last_step` (if given) holds the last step and `e` is left alone.
+Refinement RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eigen::Vector2d& e,
+                       Eigen::Vector2d* last_step = nullptr, Eigen::Vector2d* last_estimate = nullptr) {
   // Up to 4 px from the start: on a lay (marks in one direction) the correlation peak is a ridge, and its top
   // can lie a few pixels along it from the truth.
   constexpr double kWander = 4.0;
@@ -237,7 +266,7 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
   while (iteration < kIterations) {
     const double reach = estimate.cwiseAbs().maxCoeff() + 1.0;
     const auto inner = Interior(b.value, 4 + static_cast<int>(std::ceil(reach)));
-    if (!inner) return false;
+    if (!inner) return Refinement::kNoRoom;
     // B's gradient, taken from B's own pixels around the interior.
     cv::Mat gx, gy;
     InterpolationGradient(b.value(*inner), gx, gy);
@@ -258,7 +287,7 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       }
     }
     h(1, 0) = h(0, 1);
-    if (!(h.trace() > 0.0)) return false;
+    if (!(h.trace() > 0.0)) return Refinement::kNoTexture;
     // Damped by a hundredth of the largest gradient energy: along a direction without texture (machining marks)
     // the energy is the noise's, and undamped steps would follow the noise off the match; with texture the
     // damping only slows each step by 1 %.
@@ -280,10 +309,12 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       // A(v + e) = B(v + d) with d = e - e_true; the step solves B(v + d) ~ B(v) + grad B . d for d.
       const Eigen::Vector2d step = solve.solve(g);
       estimate -= step;
-      if ((estimate - e).norm() > kWander) return false;  // wandered off the peak: not the same match
+      if (last_step != nullptr) *last_step = step;
+      if (last_estimate != nullptr) *last_estimate = estimate;
+      if ((estimate - e).norm() > kWander) return Refinement::kWandered;  // off the peak: not the same match
       if (step.norm() < tolerance_px) {
         e = estimate;
-        return true;
+        return Refinement::kSettled;
       }
       if (estimate.cwiseAbs().maxCoeff() > reach) {
         ++iteration;
@@ -291,8 +322,8 @@ bool RefineShift(const Prepared& a, const Prepared& b, double tolerance_px, Eige
       }
     }
   }
-  e = estimate;
-  return true;
+  // Still moving by more than the tolerance: the estimate is not a minimum, and no precision can be claimed.
+  return Refinement::kNotSettled;
 }
 
 // How well an aligned overlap matches, and how precisely it fixes the shift.
@@ -383,7 +414,10 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   pair.nominal_px = nominal_px;
   const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
   const std::optional<Overlap> nominal = CropOverlap(a, b, nominal_whole, options.highpass_sigma_px);
-  if (!nominal) return pair;
+  if (!nominal) {
+    pair.rejection = "the nominal overlap is narrower than 8 px";
+    return pair;
+  }
 
   Eigen::Vector2d offset;
   if (options.crop_to_overlap) {
@@ -395,38 +429,73 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     // representative nearest the nominal offset.
     const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
                           static_cast<int>(std::min(a.rows(), b.rows())));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px).value);
+    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
     pair.response = response;
     offset = e;
     offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
     offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
   }
   const double limit = options.max_correction * std::min(nominal->in_a.width, nominal->in_a.height);
-  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) return pair;
+  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) {
+    pair.rejection = "the correlation's shift is farther from the nominal one than max_correction allows";
+    return pair;
+  }
   // Crop again where the images really overlap, to the whole pixel: the shift left to refine is at most half a
   // pixel, so the refinement and the quality lose only a few pixels of a narrow overlap to their margins.
   const Eigen::Vector2i whole = offset.array().round().cast<int>();
   const std::optional<Overlap> overlap =
       whole == nominal_whole ? nominal : CropOverlap(a, b, whole, options.highpass_sigma_px);
-  if (!overlap) return pair;
+  if (!overlap) {
+    pair.rejection = "the measured overlap is narrower than 8 px";
+    return pair;
+  }
   Eigen::Vector2d e = offset - whole.cast<double>();
   if (options.refine) {
     // Coarse to fine: the phase-correlation peak can be a pixel off, outside the basin of Gauss-Newton on fine
     // texture (a quarter period); blurred crops widen the basin, then the full-resolution pass sets the sub-pixel.
     Eigen::Vector2d refined = e;
-    // The coarse pass only needs to land in the fine pass' basin; the fine one stops well below the noise.
-    if (RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, refined) &&
-        RefineShift(overlap->a, overlap->b, 2e-3, refined)) {
-      e = refined;
+    // The coarse pass only needs to land in the fine pass' basin, so its not settling is no verdict (the fine pass
+    // starts from the correlation's estimate then); the fine one stops well below the noise, and a fine pass
+    // that runs out of iterations still moving rejects the pair: its shift is not a minimum of the mismatch.
+    Eigen::Vector2d coarse = e;
+    const Refinement coarse_status = RefineShift(Blur(overlap->a, 2.5), Blur(overlap->b, 2.5), 0.05, coarse);
+    if (coarse_status == Refinement::kSettled) refined = coarse;
+    Eigen::Vector2d last_step = Eigen::Vector2d::Zero(), last_estimate = refined;
+    const Refinement fine = coarse_status == Refinement::kSettled || coarse_status == Refinement::kNotSettled
+                                ? RefineShift(overlap->a, overlap->b, 2e-3, refined, &last_step, &last_estimate)
+                                : coarse_status;
+    if (fine == Refinement::kSettled) e = refined;
+    if (fine == Refinement::kNotSettled) {
+      // Out of iterations while still moving. The pair stands only if the last step is below half a standard
+      // deviation of the offset it will claim (in the directions its texture determines: along machining marks
+      // the steps follow the noise, and the information leaves that direction to the stage); otherwise the
+      // offset is no minimum within its own precision, and the pair is rejected.
+      const Alignment at = MeasureAlignment(overlap->a, overlap->b, last_estimate);
+      const double moving = std::sqrt(last_step.dot(at.information * last_step));
+      if (moving <= 0.5) {
+        e = last_estimate;
+      } else {
+        pair.rejection = "the sub-pixel refinement did not settle (its last step, " + std::to_string(last_step.norm()) +
+                         " px, is " + std::to_string(moving) + " standard deviations of the offset)";
+      }
     }
+    // Otherwise (no room, no texture, wandered) the phase-correlation estimate stands, and the quality and the
+    // texture test below decide.
   }
   offset = whole.cast<double>() + e;
   const Alignment alignment = MeasureAlignment(overlap->a, overlap->b, e);
   pair.quality = alignment.quality;
   pair.information = alignment.information;
   pair.offset_px = offset;
-  pair.accepted = pair.quality >= options.min_quality && !pair.information.isZero();
+  if (pair.rejection.empty() && !(pair.quality >= options.min_quality)) {
+    pair.rejection = "quality " + std::to_string(pair.quality) + " is below min_quality " + std::to_string(options.min_quality);
+  }
+  if (pair.rejection.empty() && pair.information.isZero()) {
+    pair.rejection = "the overlap has no texture that stands out of the noise in any direction";
+  }
+  pair.accepted = pair.rejection.empty();
   return pair;
 }
 

@@ -7,6 +7,7 @@
 // top-left corner lies in a's frame.
 
 #include <Eigen/Core>
+#include <string>
 
 #include "imaging/io/tile_image.h"
 
@@ -51,11 +52,14 @@ struct PairRegistration {
   // polished face) carries none: the overlap cannot tell a shift along it, and the stage decides it.
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   bool accepted = false;
+  // Why the pair was rejected, for people (empty when accepted): the overlap too small, the shift implausible,
+  // the sub-pixel refinement not settling, the quality below the threshold, or no texture to fix the shift.
+  std::string rejection;
 };
 
-// Where b's top-left corner lies in a's pixel frame. Rejected (accepted = false) when the nominal overlap is
-// smaller than 8 x 8 px, the shift is implausible, the quality is below the threshold, or the texture's gradient
-// energy stands out of the noise's in no direction.
+// Where b's top-left corner lies in a's pixel frame. Rejected (accepted = false, `rejection` says why) when the
+// nominal overlap is smaller than 8 x 8 px, the shift is implausible, the sub-pixel refinement does not settle,
+// the quality is below the threshold, or the texture's gradient energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
 

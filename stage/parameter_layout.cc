@@ -98,13 +98,19 @@ int ParameterLayout::FreeIndexOf(std::string_view name) const {
   return index < 0 ? -1 : free_slot_[static_cast<size_t>(index)];
 }
 
+std::string ParameterLayout::FollowerOf(std::string_view coefficient) const {
+  for (const Coefficient& other : coefficients_) {
+    if (other.state == State::kTied && other.tied_to == coefficient) return other.name;
+  }
+  return {};
+}
+
 void ParameterLayout::Fix(std::string_view coefficient, double value) {
   Coefficient& c = coefficients_[static_cast<size_t>(RequireCoefficient(coefficient))];
-  for (const Coefficient& other : coefficients_) {
-    if (other.state == State::kTied && other.tied_to == c.name) {
-      throw std::invalid_argument("cannot fix " + c.name + ": " + other.name + " is tied to it");
-    }
+  if (const std::string follower = FollowerOf(c.name); !follower.empty()) {
+    throw std::invalid_argument("cannot fix " + c.name + ": " + follower + " is tied to it");
   }
+  if (!std::isfinite(value)) throw std::invalid_argument("cannot fix " + c.name + " at a non-finite value");
   c.state = State::kFixed;
   c.value = value;
   c.tied_to.clear();
@@ -112,15 +118,27 @@ void ParameterLayout::Fix(std::string_view coefficient, double value) {
 }
 
 void ParameterLayout::Tie(std::string_view coefficient, std::string_view free_coefficient, double factor) {
+  // Ties are one level deep: a tied coefficient follows a free one, and nothing follows a tied one. Expand
+  // reads a tied coefficient's value from its target's free slot, so a target that is not free (or a
+  // coefficient that others follow becoming tied) would leave those slots unset.
+  const std::string what = "cannot tie " + std::string(coefficient) + " to " + std::string(free_coefficient) + ": ";
+  const int index = RequireCoefficient(coefficient);
   const int target = RequireCoefficient(free_coefficient);
-  if (coefficients_[static_cast<size_t>(target)].state != State::kFree || coefficient == free_coefficient) {
-    throw std::invalid_argument("cannot tie " + std::string(coefficient) + " to " + std::string(free_coefficient) +
-                                ": the target must be another free coefficient");
+  if (index == target) throw std::invalid_argument(what + "a coefficient cannot follow itself");
+  const Coefficient& t = coefficients_[static_cast<size_t>(target)];
+  if (t.state == State::kTied) {
+    throw std::invalid_argument(what + t.name + " is itself tied to " + t.tied_to + " (tie both to " + t.tied_to + ")");
   }
-  Coefficient& c = coefficients_[static_cast<size_t>(RequireCoefficient(coefficient))];
+  if (t.state != State::kFree) throw std::invalid_argument(what + t.name + " is fixed; the target must be free");
+  if (const std::string follower = FollowerOf(coefficient); !follower.empty()) {
+    throw std::invalid_argument(what + follower + " is tied to " + std::string(coefficient) + " (tie " + follower +
+                                " to " + t.name + " instead)");
+  }
+  if (!std::isfinite(factor)) throw std::invalid_argument(what + "the factor is not finite");
+  Coefficient& c = coefficients_[static_cast<size_t>(index)];
   c.state = State::kTied;
   c.value = factor;
-  c.tied_to = std::string(free_coefficient);
+  c.tied_to = t.name;
   Reindex();
 }
 
@@ -155,6 +173,8 @@ void ParameterLayout::Reindex() {
   for (size_t i = 0; i < coefficients_.size(); ++i) {
     if (coefficients_[i].state == State::kTied) {
       tied_slot_[i] = free_slot_[static_cast<size_t>(RequireCoefficient(coefficients_[i].tied_to))];
+      // Tie and Fix keep every target free; a slot of -1 here would make Expand write out of bounds.
+      if (tied_slot_[i] < 0) throw std::logic_error(coefficients_[i].name + " follows " + coefficients_[i].tied_to + ", which is not free");
     }
   }
 }

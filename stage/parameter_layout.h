@@ -51,6 +51,8 @@ class ParameterLayout {
   void SetTerm(std::string_view term_name, Basis basis, int order);
   void RemoveTerm(std::string_view term_name);
   void Fix(std::string_view coefficient, double value);
+  // Refuses (std::invalid_argument naming both) a target that is not free, a self-tie, a coefficient that others
+  // follow (ties are one level deep) and a non-finite factor.
   void Tie(std::string_view coefficient, std::string_view free_coefficient, double factor);
   void Free(std::string_view coefficient);
   void Drop(std::string_view coefficient);
@@ -93,6 +95,7 @@ class ParameterLayout {
 
  private:
   int RequireCoefficient(std::string_view name) const;
+  std::string FollowerOf(std::string_view coefficient) const;  // a coefficient tied to it, or empty
   void Reindex();
 
   AxisChain chain_;

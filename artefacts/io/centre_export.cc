@@ -111,6 +111,7 @@ void WriteCentreExport(const std::filesystem::path& path, const CentreExport& da
   const bool with_t = any(&CentreRecord::t_s);
   const bool with_radius = any(&CentreRecord::radius_mm);
   const bool with_form = any(&CentreRecord::form_rms_mm);
+  const bool with_converged = any(&CentreRecord::converged);
 
   std::string out;
   for (const std::string& comment : data.comments) {
@@ -128,6 +129,7 @@ void WriteCentreExport(const std::filesystem::path& path, const CentreExport& da
   if (with_t) out += ",t";
   if (with_radius) out += ",radius";
   if (with_form) out += ",form_rms";
+  if (with_converged) out += ",converged";
   out += '\n';
   const auto optional = [](const std::optional<double>& v) { return v ? fmt::format(",{:.6f}", *v) : ","; };
   for (const CentreRecord& c : data.centres) {
@@ -144,6 +146,7 @@ void WriteCentreExport(const std::filesystem::path& path, const CentreExport& da
     if (with_t) out += optional(c.t_s);
     if (with_radius) out += optional(c.radius_mm);
     if (with_form) out += optional(c.form_rms_mm);
+    if (with_converged) out += c.converged ? (*c.converged ? ",1" : ",0") : ",";
     out += '\n';
   }
   WriteFileAtomically(path, out);

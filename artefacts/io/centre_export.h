@@ -17,6 +17,9 @@ struct CentreRecord {
   std::optional<double> t_s;
   std::optional<double> radius_mm;
   std::optional<double> form_rms_mm;
+  // Whether the fit that made the centre reached its minimum (written as a `converged` column of 1 / 0; readers
+  // that do not know the column ignore it, as the contract allows).
+  std::optional<bool> converged;
   int line = 0;  // line of the source file it was read from (for messages); 0 when it was not read from a file
 };
 
@@ -33,7 +36,7 @@ struct CentreExport {
 // micrometres (any |x|, |y|, |z| above 1000 mm: no FVM stage is a metre long).
 CentreExport ReadCentreExport(const std::filesystem::path& path);
 
-// Writes id,x,y,z[,t][,radius][,form_rms] with 6 decimals of mm (1 nm), comments first; atomically.
+// Writes id,x,y,z[,t][,radius][,form_rms][,converged] with 6 decimals of mm (1 nm), comments first; atomically.
 void WriteCentreExport(const std::filesystem::path& path, const CentreExport& data);
 
 }  // namespace fvm::artefacts

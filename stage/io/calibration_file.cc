@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
@@ -140,12 +141,29 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
       if (!listed.contains(name)) layout.Drop(name);
     }
     std::map<std::string, double> free_values;
-    for (const json& p : doc.at("parameters")) {
+    const json& parameters = doc.at("parameters");
+    for (size_t i = 0; i < parameters.size(); ++i) {
+      const json& p = parameters.at(i);
       const std::string name = p.at("name").get<std::string>();
+      // Errors here name the entry, so a hand edit can be found and undone.
+      const std::string key = fmt::format("'parameters'[{}] ({})", i, name);
+      const auto finite = [&](const char* field) {
+        const double v = p.at(field).get<double>();
+        if (!std::isfinite(v)) throw fail(fmt::format("{}: '{}' is not a finite number", key, field));
+        return v;
+      };
       const std::string state = p.at("state").get<std::string>();
-      if (state == "fixed") layout.Fix(name, p.at("value").get<double>());
-      else if (state == "tied") layout.Tie(name, p.at("tied_to").get<std::string>(), p.at("factor").get<double>());
-      else free_values[name] = p.at("value").get<double>();
+      if (layout.FindCoefficient(name) < 0) {
+        throw fail(fmt::format("{}: no such coefficient in the model the 'terms' describe", key));
+      }
+      try {
+        if (state == "fixed") layout.Fix(name, finite("value"));
+        else if (state == "tied") layout.Tie(name, p.at("tied_to").get<std::string>(), finite("factor"));
+        else if (state == "free") free_values[name] = finite("value");
+        else throw fail(fmt::format("{}: 'state' is '{}', not free, fixed or tied", key, state));
+      } catch (const std::invalid_argument& e) {
+        throw fail(fmt::format("{}: {}", key, e.what()));
+      }
     }
     stage::Calibration cal{doc.value("model", ""), layout, {}, {}, doc.value("sigma_mm", 0.0)};
     for (const std::string& name : layout.FreeNames()) cal.values.push_back(free_values.at(name));
@@ -153,6 +171,11 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
     cal.covariance = Eigen::MatrixXd::Zero(n, n);
     const json& cov = doc.at("covariance");
     if (static_cast<int>(cov.size()) != n) throw fail(fmt::format("'covariance' has {} rows for {} free parameters", cov.size(), n));
+    for (int i = 0; i < n; ++i) {
+      if (static_cast<int>(cov.at(static_cast<size_t>(i)).size()) != n) {
+        throw fail(fmt::format("'covariance' row {} has {} entries for {} free parameters", i, cov.at(static_cast<size_t>(i)).size(), n));
+      }
+    }
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) cal.covariance(i, j) = cov.at(static_cast<size_t>(i)).at(static_cast<size_t>(j)).get<double>();
     return cal;

@@ -46,6 +46,27 @@ string(JSON recommendation GET "${OUT}" recommendation)
 if(NOT n EQUAL 4 OR NOT recommendation MATCHES "^Use model 27")
   message(FATAL_ERROR "compare: ${n} models; recommendation: ${recommendation}")
 endif()
+# The sample's truth is first order with 0.5 um noise per coordinate in both measurements (samples/bar17/
+# truth.json): a right model leaves sqrt(6) * 0.5 = 1.22 um rms per centre, less the ~15 fitted of 153 degrees of
+# freedom (1.16 um), +-6 % for the draw (1.25 um observed). The largest of 170 held-out centres is about 3.5
+# standard deviations of a 3-d residual (2.4 um observed); 4 um leaves room for the parameters' own uncertainty.
+string(JSON aic9 GET "${OUT}" models 0 aic)
+string(JSON aic15 GET "${OUT}" models 1 aic)
+string(JSON aic42 GET "${OUT}" models 3 aic)
+string(JSON cond42 GET "${OUT}" models 3 condition)
+if(NOT id_rms GREATER 1.0 OR NOT id_rms LESS 1.5 OR NOT val_max GREATER 1.0 OR NOT val_max LESS 4.0)
+  message(FATAL_ERROR "compare: model 27 leaves ${id_rms} um rms in identification, ${val_max} um at most in validation")
+endif()
+# The information criterion must prefer 27 by a margin the data give: 9 and 15 miss first-order terms worth tens
+# of um (AIC hundreds higher), and 42's extra terms explain only noise (AIC no lower).
+if(NOT aic LESS aic9 OR NOT aic LESS aic15 OR aic GREATER aic42)
+  message(FATAL_ERROR "compare: AIC 9 ${aic9}, 15 ${aic15}, 27 ${aic}, 42 ${aic42}")
+endif()
+# The condition number (Jacobian in units of plausible coefficient sizes) is ~130 for 27 on this layout; an
+# unresolved alias would send it past 1e6, and the second-order terms of 42 must make it worse, not better.
+if(NOT cond GREATER 10 OR NOT cond LESS 1000 OR NOT cond42 GREATER cond)
+  message(FATAL_ERROR "compare: condition number ${cond} for 27, ${cond42} for 42")
+endif()
 
 # 4. The sample batch is exactly what the simulator writes for seed 1 (same seed, same bytes).
 run(0 simulate fvm-batch -o ${WORK}/sim --seed 1)

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -64,6 +65,8 @@ TEST(FitCli, Grid6x6X3pToCentreExport) {
     EXPECT_NEAR(c["radius"].get<double>(), 0.25, 2e-4);
     EXPECT_NEAR(c["form_rms_um"].get<double>(), 0.08, 0.03);  // 0.1 um height noise, cos-weighted
     EXPECT_GT(c["points"].get<int>(), 300);
+    EXPECT_TRUE(c["converged"].get<bool>()) << c["fit_stop"];
+    EXPECT_THAT(c["fit_stop"].get<std::string>(), ::testing::HasSubstr("at the minimum"));
   }
   EXPECT_NEAR(doc["layout"]["rotation_deg"].get<double>(), -0.5, 1e-3);
 
@@ -74,6 +77,22 @@ TEST(FitCli, Grid6x6X3pToCentreExport) {
     EXPECT_LT((c.position - surface.truth[static_cast<std::size_t>(c.id - 1)].centre).norm(), 1e-4 + 1e-6);
     ASSERT_TRUE(c.radius_mm && c.form_rms_mm);
   }
+  // The fit status travels with the centres: a `converged` column, 1 for every calotte here.
+  std::ifstream in(csv);
+  std::string line;
+  int rows = 0;
+  bool header_seen = false;
+  while (std::getline(in, line)) {
+    if (line.starts_with("#")) continue;
+    if (!header_seen) {
+      EXPECT_EQ(line, "id,x,y,z,radius,form_rms,converged");
+      header_seen = true;
+      continue;
+    }
+    EXPECT_TRUE(line.ends_with(",1")) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 36);
 
   // The table names every calotte.
   const FvmRun table = RunFvm(dir, "fit " + map_path.string() + " --artefact grid6x6");

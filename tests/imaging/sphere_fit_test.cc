@@ -82,6 +82,30 @@ TEST(SphereFit, ShallowCapConvergesFromTheAlgebraicStart) {
   for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(fit.centre_mm[k] - kCentre[k]), 4 * std::sqrt(crb(k, k)));
 }
 
+// A fit that runs out of iterations must say so, not report the last iterate as the minimum: on a shallow noisy
+// cap the algebraic start is biased, one iteration (a damped first step) does not reach the converged centre to
+// the 1e-3 sd the criterion asks, and the status says why it stopped.
+TEST(SphereFit, ReportsNonConvergenceAsSuch) {
+  const std::vector<Eigen::Vector3d> points = WithHeightNoise(CapPoints(kCentre, 1.0, 0.01, 20.0), 2e-4, 3);
+  for (const SphereSolver solver : {SphereSolver::kNormalEquations, SphereSolver::kCeres}) {
+    SphereFitOptions options;
+    options.solver = solver;
+    options.outliers = SphereOutliers::kNone;
+    options.max_iterations = 1;
+    const SphereFit stopped = FitSphere(points, options);
+    EXPECT_FALSE(stopped.converged) << static_cast<int>(solver);
+    EXPECT_THAT(stopped.stop_reason, ::testing::Not(::testing::HasSubstr("at the minimum"))) << static_cast<int>(solver);
+    options.max_iterations = 100;
+    const SphereFit done = FitSphere(points, options);
+    EXPECT_TRUE(done.converged) << static_cast<int>(solver);
+    EXPECT_THAT(done.stop_reason, ::testing::HasSubstr("at the minimum"));
+    // The stopped fit is really elsewhere by the criterion's own measure: more than 1e-3 of the centre's
+    // standard deviation from the converged centre (observed: 4e-3 sd for ours, 0.25 sd for Ceres).
+    const double sd = std::sqrt(done.centre_covariance_mm2.trace());
+    EXPECT_GT((stopped.centre_mm - done.centre_mm).norm(), 1e-3 * sd) << static_cast<int>(solver);
+  }
+}
+
 // Target of issue 4: with Gaussian height noise the centre scatters over 100 seeds by no more than 1.2 x the
 // Cramer-Rao bound sigma^2 (J^T J)^-1 at the truth. The height residual is the maximum-likelihood fit for
 // noise in z, so it should reach the bound; with 100 seeds a sample standard deviation is known to 7 %, so

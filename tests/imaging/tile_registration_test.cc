@@ -30,9 +30,16 @@ TEST(TileRegistration, PairRecoversSubPixelOffset) {
   const auto tiles = artefacts::SynthesizeTiles(options);
   const Eigen::Vector2d nominal = tiles.tiles[1].nominal_px - tiles.tiles[0].nominal_px;
   const PairRegistration pair = RegisterPair(tiles.images[0], tiles.images[1], nominal, RegistrationOptions{});
-  ASSERT_TRUE(pair.accepted);
-  EXPECT_GT(pair.quality, 0.1);
+  ASSERT_TRUE(pair.accepted) << pair.rejection;
+  EXPECT_EQ(pair.rejection, "");
+  // The same scene under the default 3 % noise and 30 % vignetting correlates above 0.9 once aligned
+  // (RegistrationOptions::min_quality); acceptance alone only says >= 0.5.
+  EXPECT_GT(pair.quality, 0.9);
+  EXPECT_LE(pair.quality, 1.0);
   const Eigen::Vector2d truth = tiles.truth_px[1] - tiles.truth_px[0];
+  // The information claims a precision; the error must lie within 4 of its standard deviations.
+  const Eigen::Vector2d error = pair.offset_px - truth;
+  EXPECT_LT(std::sqrt(error.dot(pair.information * error)), 4.0) << error.transpose();
   // 0.05 px: a tenth of the error budget's RMS for a single well-textured pair.
   EXPECT_NEAR(pair.offset_px.x(), truth.x(), 0.05);
   EXPECT_NEAR(pair.offset_px.y(), truth.y(), 0.05);
@@ -49,7 +56,7 @@ TEST(TileRegistration, GridWithNoiseAndVignettingBelowATenthPixelRms) {
     const auto tiles = artefacts::SynthesizeTiles(options);
     const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
     EXPECT_EQ(result.pairs.size(), 12u);
-    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b;
+    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b << ": " << pair.rejection;
     for (size_t i = 0; i < tiles.tiles.size(); ++i) EXPECT_TRUE(result.positions.registered[i]);
     const double rms = RmsError(result, tiles);
     EXPECT_LT(rms, 0.1) << "overlap " << overlap;
@@ -66,7 +73,7 @@ TEST(TileRegistration, GridWithNoiseAndVignettingBelowATenthPixelRms) {
 // repeats at every pair of a row and adds up along it, so the mean error over many pairs must vanish, not only
 // the rms. Noise-free pairs: the mean of 20 scatters by ~0.001 px; matching shaded texture without taking the
 // shading out gave -0.010 px.
-TEST(TileRegistration, VignettingDoesNotBiasPairs) {
+Eigen::Vector2d MeanPairErrorUnderVignetting(bool black_pixel_in_b) {
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   const int n = 20;
   for (int seed = 1; seed <= n; ++seed) {
@@ -76,13 +83,28 @@ TEST(TileRegistration, VignettingDoesNotBiasPairs) {
     options.seed = static_cast<std::uint64_t>(seed);
     options.camera.vignetting = 0.3;
     options.camera.noise = 0.0;
-    const auto tiles = artefacts::SynthesizeTiles(options);
+    auto tiles = artefacts::SynthesizeTiles(options);
+    // One pixel the camera clipped to black, in the middle of b's left edge: inside the overlap with a.
+    if (black_pixel_in_b) tiles.images[1](tiles.images[1].rows() / 2, 10) = 0.0f;
     const PairRegistration pair =
         RegisterPair(tiles.images[0], tiles.images[1], tiles.tiles[1].nominal_px - tiles.tiles[0].nominal_px, {});
-    ASSERT_TRUE(pair.accepted) << seed;
+    EXPECT_TRUE(pair.accepted) << seed << ": " << pair.rejection;
     sum += pair.offset_px - (tiles.truth_px[1] - tiles.truth_px[0]);
   }
-  EXPECT_LT((sum / n).cwiseAbs().maxCoeff(), 0.003) << (sum / n).transpose();
+  return sum / n;
+}
+
+TEST(TileRegistration, VignettingDoesNotBiasPairs) {
+  const Eigen::Vector2d mean = MeanPairErrorUnderVignetting(false);
+  EXPECT_LT(mean.cwiseAbs().maxCoeff(), 0.003) << mean.transpose();
+}
+
+// Both crops of a pair are matched in one domain. Deciding per crop compared b, whose one black pixel kept it out
+// of the logarithm, linearly against a's logarithm, and the shading came back as a bias. With the domain decided
+// for the pair, the black pixel is one dark pixel among thousands: the same 0.003 px bound holds.
+TEST(TileRegistration, ABlackPixelInOneCropKeepsThePairInOneDomain) {
+  const Eigen::Vector2d mean = MeanPairErrorUnderVignetting(true);
+  EXPECT_LT(mean.cwiseAbs().maxCoeff(), 0.003) << mean.transpose();
 }
 
 // Machining marks: a texture that changes across the marks only. Along the marks the overlap cannot tell a shift,
@@ -97,7 +119,7 @@ TEST(TileRegistration, MachiningMarksLeaveTheAxisAlongThemToTheStage) {
     options.camera.wave_spread_deg = spread;
     const auto tiles = artefacts::SynthesizeTiles(options);
     const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
-    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b;
+    for (const auto& pair : result.pairs) EXPECT_TRUE(pair.accepted) << pair.a << "-" << pair.b << ": " << pair.rejection;
     for (size_t i = 1; i < tiles.tiles.size(); ++i) {
       const Eigen::Vector2d& p = result.positions.positions_px[i];
       const Eigen::Vector2d& sigma = result.positions.sigma_px[i];

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "tests/stage/test_models.h"
 
 namespace fvm::stage {
@@ -95,6 +97,43 @@ TEST(ParameterLayout, FlatScansAliasTheZCoupledRotations) {
   // Offsets of X and Y add up (yTx0 = xTx0, ...); with z constant the squareness terms become combinations
   // of the rotations and offsets (e.g. xWz x = xRy0 x - xRy0 z + offset).
   EXPECT_THAT(dependent, ElementsAre("yTx0", "yTy0", "yTz0", "yRx0", "yRy0", "xWy", "xWz", "yWz"));
+}
+
+TEST(ParameterLayout, RefusesTiesThatWouldLeaveAFollowerWithoutASlot) {
+  ParameterLayout layout(AxisChain::FvmStage(), testing::FvmTravel());
+  layout.SetTerm("xTx", Basis::kPower, 0);
+  layout.SetTerm("yTx", Basis::kPower, 0);
+  layout.SetTerm("yTy", Basis::kPower, 0);
+  layout.Tie("yTx0", "xTx0", 1.0);
+  const auto refuses = [&](auto action, const std::string& message) {
+    EXPECT_THAT(action, ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr(message))) << message;
+  };
+  // xTx0 is followed by yTx0: tying it would leave yTx0 pointing at a slot that no longer exists (the heap
+  // overflow the review found). The message names both coefficients and the fix.
+  refuses([&] { layout.Tie("xTx0", "yTy0", 2.0); }, "cannot tie xTx0 to yTy0: yTx0 is tied to xTx0");
+  refuses([&] { layout.Tie("yTy0", "yTx0", 1.0); }, "yTx0 is itself tied to xTx0");  // chain
+  refuses([&] { layout.Tie("yTy0", "yTy0", 1.0); }, "cannot follow itself");
+  refuses([&] { layout.Tie("yTy0", "xTx0", std::nan("")); }, "factor is not finite");
+  refuses([&] { layout.Tie("yTy0", "xTx0", INFINITY); }, "factor is not finite");
+  refuses([&] { layout.Fix("xTx0", 0.0); }, "yTx0 is tied to it");
+  refuses([&] { layout.Fix("yTy0", std::nan("")); }, "non-finite");
+  refuses([&] { layout.Tie("yTy0", "nope", 1.0); }, "no coefficient 'nope'");
+  layout.Fix("yTy0", 0.001);
+  refuses([&] { layout.Tie("xTx0", "yTy0", 1.0); }, "yTy0 is fixed");
+
+  // Every refusal left the layout as it was, and Expand fills every coefficient from the one free slot.
+  ASSERT_THAT(layout.FreeNames(), ElementsAre("xTx0"));
+  const double free[1] = {0.25};
+  std::vector<double> all(layout.coefficients().size(), -7.0);
+  layout.Expand(free, all.data());
+  EXPECT_THAT(all, ElementsAre(0.25, 0.25, 0.001));
+
+  // Re-tying to another free coefficient after freeing the follower is fine.
+  layout.Free("yTx0");
+  layout.Tie("xTx0", "yTx0", -1.0);
+  const double free2[1] = {0.5};
+  layout.Expand(free2, all.data());
+  EXPECT_THAT(all, ElementsAre(-0.5, 0.5, 0.001));
 }
 
 }  // namespace

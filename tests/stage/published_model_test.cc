@@ -7,18 +7,16 @@
 #include <random>
 
 #include "stage/parameter_layout.h"
+#include "tests/stage/published_model.h"
 #include "tests/stage/test_models.h"
 
 namespace fvm::stage {
 namespace {
 
 using testing::FullLayout;
+using testing::PublishedEquation1;
+using testing::PublishedErrors;
 using testing::RandomCoefficients;
-
-// The 15 published error functions at one stage position, evaluated independently of the library.
-struct PublishedErrors {
-  double xTx, xTy, xTz, yTx, yTy, yTz, xRx, xRy, xRz, yRx, yRy, yRz, xWy, xWz, yWz;
-};
 
 // Order-1 power polynomials in the layout's normalised coordinate u = q / half-travel (= q / 100 here).
 PublishedErrors ErrorsAt(const ParameterLayout& layout, const std::vector<double>& free, double x, double y) {
@@ -29,23 +27,6 @@ PublishedErrors ErrorsAt(const ParameterLayout& layout, const std::vector<double
   return {poly("xTx", ux), poly("xTy", ux), poly("xTz", ux), poly("yTx", uy), poly("yTy", uy), poly("yTz", uy),
           poly("xRx", ux), poly("xRy", ux), poly("xRz", ux), poly("yRx", uy), poly("yRy", uy), poly("yRz", uy),
           c("xWy"),        c("xWz"),        c("yWz")};
-}
-
-Eigen::Matrix3d PublishedRotation(double rx, double ry, double rz) {  // eq. 2
-  Eigen::Matrix3d r;
-  r << 1, -rz, ry, rz, 1, -rx, -ry, rx, 1;
-  return r;
-}
-
-// Eqs. 1-5 written out literally.
-Eigen::Vector3d PublishedEquation1(const PublishedErrors& e, const Eigen::Vector3d& q) {
-  const double x = q.x(), y = q.y(), z = q.z();
-  const Eigen::Vector3d tx(-x + e.xTx, e.xTy - x * e.xWy, e.xTz - x * e.xWz);
-  const Eigen::Vector3d ty(e.yTx, -y + e.yTy, e.yTz - y * e.yWz);
-  const Eigen::Vector3d tl(0, 0, z);
-  const Eigen::Matrix3d rx = PublishedRotation(e.xRx, e.xRy, e.xRz);
-  const Eigen::Matrix3d ry = PublishedRotation(e.yRx, e.yRy, e.yRz);
-  return rx.inverse() * (ry.inverse() * (tl - ty) - tx);
 }
 
 // Eq. 13, the first-order expansion, with YP = y - xTy - yTy (the printed +yTy is a sign typo).

@@ -1,0 +1,150 @@
+// The calibration JSON: what `fvm calibrate` writes, `fvm correct` reads back exactly, and a hand-edited file
+// that no longer describes a valid model is refused with an InputError naming the file and the key.
+
+#include "stage/io/calibration_file.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <unistd.h>
+
+#include "core/input_error.h"
+#include "tests/stage/test_models.h"
+
+namespace fvm::stage {
+namespace {
+
+using nlohmann::json;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+// A small model with every coefficient state: free, fixed, tied.
+IdentificationResult SmallResult() {
+  ParameterLayout layout(AxisChain::FvmStage(), testing::FvmTravel());
+  layout.SetTerm("xTx", Basis::kPower, 1);
+  layout.SetTerm("yTx", Basis::kLegendre, 0);
+  layout.SetTerm("yRz", Basis::kPower, 0);
+  layout.SetTerm("xWy", Basis::kPower, 0);
+  layout.Fix("xTx1", 0.002);
+  layout.Tie("yTx0", "xTx0", -0.5);
+  // Free: xTx0, yRz0, xWy.
+  Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4};
+  cal.covariance << 4e-8, 1e-12, 0, 1e-12, 9e-12, 2e-13, 0, 2e-13, 1.6e-11;
+  IdentificationResult result(cal);
+  result.rms_mm = 1.25e-3;
+  result.converged = true;
+  return result;
+}
+
+class CalibrationFile : public ::testing::Test {
+ protected:
+  static constexpr const char* kPlaceholder = "12345.5";
+  std::filesystem::path Write(const json& doc) {
+    std::ofstream(path_) << doc.dump(1);
+    return path_;
+  }
+  // Edits the written calibration and expects ReadCalibration to refuse it with a message containing each of
+  // `expected` (the file name and the key).
+  void ExpectRefused(const std::function<void(json&)>& edit, const std::vector<std::string>& expected,
+                     const std::string& infinity_text = "") {
+    json doc = CalibrationToJson(SmallResult());
+    edit(doc);
+    std::string text = doc.dump(1);
+    // JSON has no infinity (nlohmann writes null): a hand edit writes a number that overflows a double.
+    if (!infinity_text.empty()) text.replace(text.find(kPlaceholder), std::string(kPlaceholder).size(), infinity_text);
+    std::ofstream(path_) << text;
+    try {
+      ReadCalibration(path_);
+      ADD_FAILURE() << "accepted: " << doc.dump();
+    } catch (const InputError& e) {
+      for (const std::string& part : expected) EXPECT_THAT(e.what(), HasSubstr(part));
+      EXPECT_THAT(e.what(), HasSubstr(path_.string()));
+    }
+  }
+  json& Parameter(json& doc, const std::string& name) {
+    for (json& p : doc["parameters"]) {
+      if (p["name"] == name) return p;
+    }
+    throw std::logic_error("no parameter " + name);
+  }
+
+  std::filesystem::path path_ = std::filesystem::temp_directory_path() /
+                                ("fvm_calibration_file_test_" + std::to_string(::getpid()) + ".json");
+  void TearDown() override { std::filesystem::remove(path_); }
+};
+
+TEST_F(CalibrationFile, RoundTripsEveryStateValueAndTheCovariance) {
+  const IdentificationResult written = SmallResult();
+  const Calibration read = ReadCalibration(Write(CalibrationToJson(written)));
+  const Calibration& cal = written.calibration;
+  EXPECT_EQ(read.model, "terms:test");
+  EXPECT_EQ(read.layout.FreeNames(), cal.layout.FreeNames());
+  ASSERT_EQ(read.layout.coefficients().size(), cal.layout.coefficients().size());
+  for (size_t i = 0; i < cal.layout.coefficients().size(); ++i) {
+    const auto& a = cal.layout.coefficients()[i];
+    const auto& b = read.layout.coefficients()[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.state, b.state) << a.name;
+    EXPECT_EQ(a.value, b.value) << a.name;  // JSON numbers round-trip doubles exactly
+    EXPECT_EQ(a.tied_to, b.tied_to) << a.name;
+  }
+  EXPECT_EQ(read.layout.term(*FindErrorTerm("yTx")).basis, Basis::kLegendre);
+  EXPECT_EQ(read.values, cal.values);
+  EXPECT_EQ(read.covariance, cal.covariance);
+  EXPECT_EQ(read.sigma_mm, cal.sigma_mm);
+  // The rebuilt model moves a point exactly as the written one.
+  const Eigen::Vector3d q(-120, -35, -50);
+  EXPECT_EQ(Forward(read.layout, read.values, q), Forward(cal.layout, cal.values, q));
+}
+
+TEST_F(CalibrationFile, RefusesAnUnknownCoefficient) {
+  ExpectRefused([&](json& d) { Parameter(d, "yRz0")["name"] = "yRq0"; }, {"'parameters'[", "yRq0", "no such coefficient"});
+  ExpectRefused([&](json& d) { Parameter(d, "xTx1")["name"] = "xTx7"; }, {"xTx7"});
+}
+
+TEST_F(CalibrationFile, RefusesATieToATiedCoefficientInsteadOfOverflowing) {
+  // xTx0 is followed by yTx0; tying xTx0 to yRz0 used to leave yTx0 without a slot (heap overflow in Expand).
+  ExpectRefused(
+      [&](json& d) {
+        json& p = Parameter(d, "xTx0");
+        p["state"] = "tied";
+        p["tied_to"] = "yRz0";
+        p["factor"] = 1.0;
+      },
+      // The file lists xTx0 before its follower yTx0, so the refusal comes at yTx0: a tie to a tied coefficient.
+      {"(yTx0)", "xTx0 is itself tied to yRz0"});
+  // A tie to a tied coefficient (a chain).
+  ExpectRefused(
+      [&](json& d) {
+        json& p = Parameter(d, "xWy");
+        p["state"] = "tied";
+        p["tied_to"] = "yTx0";
+        p["factor"] = 1.0;
+      },
+      {"(xWy)", "yTx0 is itself tied to xTx0"});
+}
+
+TEST_F(CalibrationFile, RefusesAWrongFormatKey) {
+  ExpectRefused([&](json& d) { d["format"] = "fvm-calibration/0"; }, {"'format'", kCalibrationFormat});
+}
+
+TEST_F(CalibrationFile, RefusesValuesThatAreNotFiniteNumbers) {
+  // JSON has no NaN: a NaN written by a tool becomes null, a hand edit may write a string or a number that
+  // overflows (the parser refuses those; ReadCalibration checks finiteness again for other writers).
+  ExpectRefused([&](json& d) { Parameter(d, "yRz0")["value"] = nullptr; }, {"malformed"});
+  ExpectRefused([&](json& d) { Parameter(d, "yRz0")["value"] = "NaN"; }, {"malformed"});
+  ExpectRefused([&](json& d) { Parameter(d, "xTx1")["value"] = 12345.5; }, {"overflow"}, "1e999");
+  ExpectRefused([&](json& d) { Parameter(d, "yTx0")["factor"] = 12345.5; }, {"overflow"}, "-1e999");
+}
+
+TEST_F(CalibrationFile, RefusesACovarianceOfTheWrongSize) {
+  ExpectRefused([&](json& d) { d["covariance"].erase(2); }, {"'covariance' has 2 rows for 3 free parameters"});
+  ExpectRefused([&](json& d) { d["covariance"][1].push_back(0.0); }, {"'covariance' row 1 has 4 entries"});
+  ExpectRefused([&](json& d) { d["covariance"][0].erase(0); }, {"'covariance' row 0 has 2 entries"});
+}
+
+}  // namespace
+}  // namespace fvm::stage

@@ -1,0 +1,161 @@
+#pragma once
+// The published YXFZ stage model written out from the paper, independently of the library (FACTS.md section 1;
+// 000:4890-4935): the truth that stage tests make their data with, so that a mistake in the library's chain,
+// inverse or first tile cannot cancel between the simulator and the identification ("inverse crime").
+//
+//   TP = RX^-1 [ RY^-1 (TL - TY) - TX ],  TX = (-x + xTx, xTy - x xWy, xTz - x xWz),
+//   TY = (yTx, -y + yTy, yTz - y yWz),     TL = (0, 0, z),  Rk = [1 -kRz kRy; kRz 1 -kRx; -kRy kRx 1].
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "stage/identification.h"
+
+namespace fvm::stage::testing {
+
+// The 15 published error functions at one stage position.
+struct PublishedErrors {
+  double xTx, xTy, xTz, yTx, yTy, yTz, xRx, xRy, xRz, yRx, yRy, yRz, xWy, xWz, yWz;
+};
+
+inline Eigen::Matrix3d PublishedRotation(double rx, double ry, double rz) {  // eq. 2
+  Eigen::Matrix3d r;
+  r << 1, -rz, ry, rz, 1, -rx, -ry, rx, 1;
+  return r;
+}
+
+// Eqs. 1-5 written out literally.
+inline Eigen::Vector3d PublishedEquation1(const PublishedErrors& e, const Eigen::Vector3d& q) {
+  const double x = q.x(), y = q.y(), z = q.z();
+  const Eigen::Vector3d tx(-x + e.xTx, e.xTy - x * e.xWy, e.xTz - x * e.xWz);
+  const Eigen::Vector3d ty(e.yTx, -y + e.yTy, e.yTz - y * e.yWz);
+  const Eigen::Vector3d tl(0, 0, z);
+  const Eigen::Matrix3d rx = PublishedRotation(e.xRx, e.xRy, e.xRz);
+  const Eigen::Matrix3d ry = PublishedRotation(e.yRx, e.yRy, e.yRz);
+  return rx.inverse() * (ry.inverse() * (tl - ty) - tx);
+}
+
+// A stage whose error functions are straight lines in their axis' coordinate plus, where `ripple_mm` > 0, a
+// sine on every translation (a lead-screw period the polynomial models cannot take): the truth identification
+// tests fit, drawn with a fixed seed. Magnitudes as in the published work: translations up to ~100 um over the
+// travel, rotations and squareness of ~1e-4 rad.
+struct PublishedStage {
+  // Per term: value at 0 and slope per 100 mm of its axis, in the order xT(x,y,z) xR(x,y,z) yT(x,y,z) yR(x,y,z)
+  // W(xy,xz,yz); the squareness terms are constants.
+  std::array<double, 15> offset{}, slope{};
+  double ripple_mm = 0.0;
+  double ripple_period_mm = 37.0;
+
+  static PublishedStage Draw(unsigned seed, double ripple_mm = 0.0) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    PublishedStage s;
+    s.ripple_mm = ripple_mm;
+    for (int k = 0; k < 15; ++k) {
+      const bool translation = k < 12 && k % 6 < 3;
+      const double size = translation ? 0.04 : 2e-4;  // mm; rad
+      s.offset[static_cast<size_t>(k)] = size * unit(rng);
+      s.slope[static_cast<size_t>(k)] = k < 12 ? size * unit(rng) : 0.0;
+    }
+    return s;
+  }
+
+  PublishedErrors ErrorsAt(double x, double y) const {
+    std::array<double, 15> v{};
+    for (int k = 0; k < 15; ++k) {
+      const double along = k < 6 ? x : y;  // x's terms follow x, y's follow y
+      v[static_cast<size_t>(k)] = offset[static_cast<size_t>(k)] + (k < 12 ? slope[static_cast<size_t>(k)] * along / 100.0 : 0.0);
+    }
+    PublishedErrors e{};
+    const auto wave = [&](double t, double phase) {
+      return ripple_mm * std::sin(2 * std::numbers::pi * t / ripple_period_mm + phase);
+    };
+    e.xTx = v[0] + wave(x, 0.3), e.xTy = v[1] + wave(x, 1.1), e.xTz = v[2] + wave(x, 2.0);
+    e.xRx = v[3], e.xRy = v[4], e.xRz = v[5];
+    e.yTx = v[6] + wave(y, 0.7), e.yTy = v[7] + wave(y, 1.9), e.yTz = v[8] + wave(y, 2.6);
+    e.yRx = v[9], e.yRy = v[10], e.yRz = v[11];
+    e.xWy = v[12], e.xWz = v[13], e.yWz = v[14];
+    return e;
+  }
+
+  // Part coordinates of the commanded point q.
+  Eigen::Vector3d Part(const Eigen::Vector3d& q) const { return PublishedEquation1(ErrorsAt(q.x(), q.y()), q); }
+};
+
+// The first tile of a measurement (000:7264), written out: lowest x, highest y of the positions, at the height
+// of the position nearest that corner.
+inline Eigen::Vector3d PublishedFirstTile(const std::vector<Eigen::Vector3d>& positions) {
+  Eigen::Vector2d corner(positions[0].x(), positions[0].y());
+  for (const Eigen::Vector3d& p : positions) corner = {std::min(corner.x(), p.x()), std::max(corner.y(), p.y())};
+  double best = INFINITY, z = 0.0;
+  for (const Eigen::Vector3d& p : positions) {
+    const double d = (p.head<2>() - corner).norm();
+    if (d < best) best = d, z = p.z();
+  }
+  return {corner.x(), corner.y(), z};
+}
+
+// A bar of 17 calottes at 10 mm pitch laid on the stage from `start` in direction `angle_rad`, slightly tilted
+// (it never lies flat: +-1.5 mrad along it, as in the paper's set-up) at z = -50 mm: the commanded centres.
+inline std::vector<Eigen::Vector3d> BarPlacement(const Eigen::Vector2d& start, double angle_rad, double tilt) {
+  std::vector<Eigen::Vector3d> q;
+  for (int i = 0; i < 17; ++i) {
+    const double along = 10.0 * i;
+    q.emplace_back(start.x() + std::cos(angle_rad) * along, start.y() + std::sin(angle_rad) * along, -50.0 + tilt * along);
+  }
+  return q;
+}
+
+struct PublishedMeasurements {
+  MeasurementSet identify, validate;
+};
+
+// The three identification placements of the paper (along x, along y, oblique, from the corner at lowest x and
+// highest y) and `validation` random placements, measured on `stage`: the stitching-free centre is the command
+// plus noise, the stitched one the part coordinates (eq. 1) relative to the measurement's first tile, plus noise
+// (`noise_mm` per coordinate in both). `apart`: the identification placements start up to 30 mm apart.
+inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage, unsigned seed, double noise_mm,
+                                                      int validation = 10, bool apart = false) {
+  std::mt19937_64 rng(seed * 7919u + 1u);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> tilt(-1.5e-3, 1.5e-3), shift(0.0, 30.0), angle(-std::numbers::pi, std::numbers::pi),
+      coordinate(-195.0, -5.0);
+  const auto noisy = [&](const Eigen::Vector3d& v) {
+    return Eigen::Vector3d(v.x() + noise_mm * noise(rng), v.y() + noise_mm * noise(rng), v.z() + noise_mm * noise(rng));
+  };
+  PublishedMeasurements out;
+  const auto measure = [&](MeasurementSet& set, const std::vector<Eigen::Vector3d>& commands) {
+    const int group = static_cast<int>(set.anchors.size());
+    const Eigen::Vector3d anchor = PublishedFirstTile(commands);
+    // The stitched coordinates start at the first tile, where the stage's own error is not seen.
+    const Eigen::Vector3d anchor_error = stage.Part(anchor) - anchor;
+    std::vector<Eigen::Vector3d> free;
+    for (const Eigen::Vector3d& q : commands) {
+      free.push_back(noisy(q));
+      set.observations.push_back({free.back(), noisy(stage.Part(q) - anchor_error), group});
+    }
+    set.anchors.push_back(PublishedFirstTile(free));
+    set.groups.push_back("placement " + std::to_string(group));
+  };
+  const Eigen::Vector2d corner(-185.0, -15.0);
+  for (const double a : {0.0, -std::numbers::pi / 2, -std::numbers::pi / 4}) {
+    const Eigen::Vector2d start = apart ? Eigen::Vector2d(corner + Eigen::Vector2d(shift(rng), -shift(rng))) : corner;
+    measure(out.identify, BarPlacement(start, a, tilt(rng)));
+  }
+  while (static_cast<int>(out.validate.anchors.size()) < validation) {
+    const Eigen::Vector2d start(coordinate(rng), coordinate(rng));
+    const double a = angle(rng);
+    const Eigen::Vector2d end = start + 160.0 * Eigen::Vector2d(std::cos(a), std::sin(a));
+    if (end.x() < -200.0 || end.x() > 0.0 || end.y() < -200.0 || end.y() > 0.0) continue;  // off the travel
+    measure(out.validate, BarPlacement(start, a, tilt(rng)));
+  }
+  return out;
+}
+
+}  // namespace fvm::stage::testing
