@@ -38,8 +38,9 @@ build_release() {
 # The whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer: any report fails the test that
 # made it (UBSan aborts instead of printing and going on). Benchmarks are not built here.
 sanitize() {
-  local flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g1"
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DFVM_BENCH=OFF \
+  # -O1: the sanitizers need no more, and Ceres' templates compile in about half the time of -O3.
+  local flags="-O1 -DNDEBUG -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=None -DFVM_BENCH=OFF \
     -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_C_FLAGS="$flags" \
     -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
     -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \

@@ -102,6 +102,10 @@ void ReadRoles(const std::filesystem::path& path, Batch& batch) {
     throw InputError(fmt::format("{}:{}: not valid JSON ({}); write {{\"identify\": [...], \"validate\": [...], "
                                  "\"lens\": \"5x\"}}",
                                  where, line, e.what()));
+  } catch (const nlohmann::json::exception& e) {  // a number beyond double is out_of_range, not parse_error
+    throw InputError(fmt::format("{}: not valid JSON ({}); write {{\"identify\": [...], \"validate\": [...], "
+                                 "\"lens\": \"5x\"}}",
+                                 where, e.what()));
   }
   if (!roles.is_object()) {
     throw InputError(fmt::format("{}: expected an object {{\"identify\": [...], \"validate\": [...], \"lens\": "

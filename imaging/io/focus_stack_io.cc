@@ -66,11 +66,12 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
 }
 
 StackImage ReadStackImage(const std::filesystem::path& path) {
-  CheckReadableFile(path);
+  const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
   const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) throw InputError(path.string() + ": cannot read the image (" + error + ")");
   const ImageHeader& spec = input->Header();
+  CheckPixelsFitFile(path, spec, file_bytes);
   if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.channels < 1) {
     throw InputError(path.string() + ": not a 2D image");
   }

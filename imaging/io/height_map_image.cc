@@ -107,13 +107,14 @@ void HeightMapImageOptions::Check() const {
 
 HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapImageOptions& options) {
   options.Check();
-  CheckReadableFile(path);
+  const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
   const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) {
     Fail(path, "cannot read it as an image (" + error + "); height-map images are single-channel TIFF, EXR or PNG files");
   }
   const ImageHeader& spec = input->Header();
+  CheckPixelsFitFile(path, spec, file_bytes);
   if (spec.width < 1 || spec.height < 1 || spec.depth > 1 ||
       static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxPoints) {
     Fail(path, "is a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +

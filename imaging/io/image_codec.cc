@@ -1,5 +1,10 @@
 #include "imaging/io/image_codec.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <string>
+
+#include "core/input_error.h"
 #include "imaging/io/plugin_loader.h"
 
 namespace fvm::imaging {
@@ -8,6 +13,38 @@ const ImageCodec& LoadImageCodec(std::string_view action) {
   static constexpr PluginSpec kPlugin{"libfvm_image_oiio.so", "fvm_image_codec_v1", "OpenImageIO",
                                       "libopenimageio2.4"};
   return *static_cast<const ImageCodec*>(LoadPlugin(kPlugin, action));
+}
+
+namespace {
+
+std::uint64_t BytesPerValue(PixelType type) {
+  switch (type) {
+    case PixelType::kUint8:
+    case PixelType::kInt8: return 1;
+    case PixelType::kUint16:
+    case PixelType::kInt16: return 2;
+    case PixelType::kDouble: return 8;
+    default: return 4;
+  }
+}
+
+}  // namespace
+
+void CheckPixelsFitFile(const std::filesystem::path& path, const ImageHeader& header, std::size_t file_bytes) {
+  constexpr std::uint64_t kMaxCompression = 4096;
+  constexpr std::uint64_t kAlwaysAllowed = std::uint64_t{64} << 20;
+  constexpr std::uint64_t kDimensionLimit = std::uint64_t{1} << 20;  // no image is a million pixels wide
+  const auto dimension = [](int v) { return static_cast<std::uint64_t>(v < 1 ? 1 : v); };
+  const std::uint64_t w = dimension(header.width), h = dimension(header.height), d = dimension(header.depth),
+                      c = dimension(header.channels);
+  if (w > kDimensionLimit || h > kDimensionLimit || d > kDimensionLimit || c > 4096 ||
+      w * h * d * c * BytesPerValue(header.type) >
+          std::max(kAlwaysAllowed, kMaxCompression * static_cast<std::uint64_t>(file_bytes))) {
+    throw InputError(path.string() + ": its header declares a " + std::to_string(header.width) + " x " +
+                     std::to_string(header.height) + " x " + std::to_string(header.depth) + " image of " +
+                     std::to_string(header.channels) + " channels, more than a file of " +
+                     std::to_string(file_bytes) + " bytes can hold; the file is damaged");
+  }
 }
 
 }  // namespace fvm::imaging

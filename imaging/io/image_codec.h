@@ -7,6 +7,7 @@
 // The plugin never throws: it reports failures as text, and the callers (height_map_image.cc, tile_image.cc,
 // focus_stack_io.cc) turn them into InputError naming the file and what to do.
 
+#include <cstddef>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -72,5 +73,10 @@ struct ImageCodec {
 // plugin cannot be loaded, throws InputError "<action> needs OpenImageIO: ... could not be loaded (...);
 // install the Debian package ...".
 const ImageCodec& LoadImageCodec(std::string_view action);
+
+// Throws InputError naming `path` when its header claims more pixel bytes than a file of `file_bytes` could hold
+// decompressed (deflate and LZW stay under about 1:1000; we allow 1:4096, and never refuse below 64 MiB): a
+// damaged header must not make a reader allocate gigabytes.
+void CheckPixelsFitFile(const std::filesystem::path& path, const ImageHeader& header, std::size_t file_bytes);
 
 }  // namespace fvm::imaging

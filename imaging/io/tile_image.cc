@@ -14,7 +14,7 @@
 namespace fvm::imaging {
 
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
-  CheckReadableFile(path);
+  const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
   const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) {
@@ -22,6 +22,7 @@ TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) 
                      "); tiles are grey or colour TIFF, PNG or EXR files");
   }
   const ImageHeader& spec = input->Header();
+  CheckPixelsFitFile(path, spec, file_bytes);
   // 2^28 pixels is 1 GB of floats: beyond any microscope camera, so a corrupt header, not a tile.
   if (spec.width < 1 || spec.height < 1 || spec.depth > 1 ||
       static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > (std::uint64_t{1} << 28)) {
