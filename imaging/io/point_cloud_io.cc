@@ -19,6 +19,8 @@
 #include "core/input_error.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
+#include "imaging/io/pcd_file.h"
+#include "imaging/io/ply_file.h"
 
 namespace fvm::imaging {
 namespace {
@@ -261,7 +263,7 @@ PointCloud ExtractXyz(const pcl::PCLPointCloud2& blob, const std::string& name, 
   return cloud;
 }
 
-PointCloud ReadWithPcl(const std::filesystem::path& path, PointCloudFormat format,
+[[maybe_unused]] PointCloud ReadWithPcl(const std::filesystem::path& path, PointCloudFormat format,
                        const PointCloudReadOptions& options) {
   const std::string name = path.string();
   const std::size_t size = CheckReadableFile(path);
@@ -414,7 +416,10 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, PointCloudFormat fo
     CheckReadableFile(path);
     return ParseXyz(ReadFileBytes(path), path.string(), options);
   }
-  return ReadWithPcl(path, format, options);
+  CheckReadableFile(path);
+  const std::string bytes = ReadFileBytes(path);
+  return format == PointCloudFormat::kPcd ? ParsePcd(bytes, path.string(), options.mm_per_unit)
+                                          : ParsePly(bytes, path.string(), options.mm_per_unit);
 }
 
 PointCloud ReadPointCloud(const std::filesystem::path& path, const PointCloudReadOptions& options) {
