@@ -63,7 +63,7 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
     if (!z || !std::isfinite(*z)) {
       throw InputError(At(list, line_number) + ": z_mm '" + std::string(fields[z_column]) + "' is not a number");
     }
-    std::filesystem::path file(std::string(fields[file_column]));
+    std::filesystem::path file{std::string(fields[file_column])};  // braces: clang reads () as a declaration
     if (file.is_relative()) file = list.parent_path() / file;
     if (!entries.empty()) {
       const double step = *z - entries.back().z_mm;
@@ -144,7 +144,8 @@ void WriteStackImage(const std::filesystem::path& path, const StackImage& image)
     throw InputError(path.string() + ": the image is empty or its pixel count does not match its size");
   }
   const OIIO::ImageSpec spec(image.width, image.height, 1, type);
-  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
+  // Structured bindings copied into the lambda by name: clang 14 cannot capture them implicitly.
+  WriteThroughTemporary(path, [&, type = type, data = data](const std::filesystem::path& temporary) {
     std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(temporary.string());
     if (!output) throw InputError(path.string() + ": cannot write this image type (" + OIIO::geterror() + ")");
     if (!output->open(temporary.string(), spec) || !output->write_image(type, data) || !output->close()) {

@@ -302,7 +302,11 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
       const size_t field = xyz[static_cast<size_t>(axis)];
       double value = *ParseDouble(words[first[field]]);
       // The file's precision, as a binary file of the same fields would hold it.
-      if (header.fields[field].type == 'F' && header.fields[field].size == 4) value = static_cast<float>(value);
+      // (Beyond float's range the value stays as written: the conversion would be undefined.)
+      if (header.fields[field].type == 'F' && header.fields[field].size == 4 &&
+          std::abs(value) <= std::numeric_limits<float>::max()) {
+        value = static_cast<float>(value);
+      }
       p[axis] = value;
     }
     points.push_back(p);

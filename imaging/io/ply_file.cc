@@ -225,7 +225,9 @@ class Body {
       const std::optional<double> value = ParseDouble(word);
       if (!value) Fail(where_, Quoted(word) + " is not a number" + kRewrite);
       if (IsInteger(type) && *value != std::floor(*value)) Fail(where_, Quoted(word) + " is not an integer" + kRewrite);
-      return type == Scalar::kFloat32 ? static_cast<float>(*value) : *value;
+      // A float property holds the float nearest the text; beyond float's range the conversion would be undefined.
+      const bool to_float = type == Scalar::kFloat32 && std::abs(*value) <= std::numeric_limits<float>::max();
+      return to_float ? static_cast<float>(*value) : *value;
     }
     const std::size_t size = SizeOf(type);
     if (size > bytes_.size() - at_) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
