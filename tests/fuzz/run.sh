@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fuzzes every file reader of fvm with libFuzzer, AddressSanitizer and UBSan (Debian's clang 14).
 #
-#   tests/fuzz/run.sh [EXECUTIONS]      default 20000 inputs per reader: all twelve readers in a few minutes on 2 cores
+#   tests/fuzz/run.sh [EXECUTIONS]      default 20000 inputs per reader (a tenth for the two image readers):
+#                                       all twelve readers in about 10 minutes on 2 cores
 #
 # Configures build-fuzz/ (clang, Ninja, -DFVM_FUZZ=ON; set FVM_FUZZ_BUILD for another directory), builds only the
 # fuzz targets, replays the regression inputs of each reader (tests/fuzz/regressions/<reader>/), then runs it for
@@ -29,7 +30,6 @@ cmake --build "$build" --target fuzz_targets
 
 readers=${FVM_FUZZ_READERS:-$(cd "$build/tests/fuzz" && ls -- *_fuzz | sed 's/_fuzz$//')}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
-export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$fuzz_dir/lsan.supp:print_suppressions=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 failed=()
 for reader in $readers; do
@@ -38,24 +38,29 @@ for reader in $readers; do
   corpus=$build/fuzz-corpus/$reader
   mkdir -p "$findings" "$corpus"
   options=(-timeout=10 -rss_limit_mb=2048 -artifact_prefix="$findings/" -print_final_stats=1)
-  # Image decoders are uninstrumented libraries: full stacks for their allocations, so that lsan.supp can name
-  # the one known third-party leak (slower, but these readers spend their time in the decoders anyway).
+  runs=$executions
+  leak_options=()
   case $reader in
-    height_map_image | tile_image) leak_options=(env ASAN_OPTIONS="$ASAN_OPTIONS:fast_unwind_on_malloc=0") ;;
-    *) leak_options=() ;;
+    height_map_image | tile_image)
+      # OpenImageIO opens a few dozen files a second under the sanitizers: a tenth of the executions. And its PNG
+      # reader leaks by design (PNGInput::PngReadCallback formats an error into a std::string, then libpng
+      # longjmps past its destructor); only the slow unwinder (12 inputs/s) could suppress that leak by name, so
+      # leaks are not checked for these two readers. Crashes, overflows and UB still are.
+      runs=$((executions / 10))
+      leak_options=(env ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0")
+      ;;
   esac
   if [[ -d $fuzz_dir/regressions/$reader ]]; then
     echo "== $reader: regression inputs"
     if ! "${leak_options[@]}" "$target" "${options[@]}" "$fuzz_dir"/regressions/"$reader"/*; then
       failed+=("$reader (a regression input)")
-      continue
     fi
   fi
   seeds=()
   [[ -d $fuzz_dir/corpus/$reader ]] && seeds=("$fuzz_dir/corpus/$reader")
-  echo "== $reader: $executions executions"
+  echo "== $reader: $runs executions"
   start=$(date +%s)
-  if ! "${leak_options[@]}" "$target" "${options[@]}" -runs="$executions" "$corpus" "${seeds[@]}" 2>"$build/fuzz-findings/$reader.log"; then
+  if ! "${leak_options[@]}" "$target" "${options[@]}" -runs="$runs" "$corpus" "${seeds[@]}" 2>"$build/fuzz-findings/$reader.log"; then
     tail -n 40 "$build/fuzz-findings/$reader.log"
     failed+=("$reader")
   fi
