@@ -1,7 +1,7 @@
 #pragma once
-// PCD and PLY files behind a small std-typed interface, so that fvm_imaging does not link PCL (and VTK behind it):
-// the codec lives in the plugin libfvm_cloud_pcl.so (imaging/io/plugins/pcl_cloud_codec.cc), loaded the first
-// time a command reads or writes a PCD or PLY file. XYZ/CSV text never loads it.
+// Writing PCD and PLY files behind a small std-typed interface, so that fvm_imaging does not link PCL (and VTK
+// behind it): the codec lives in the plugin libfvm_cloud_pcl.so (imaging/io/plugins/pcl_cloud_codec.cc), loaded
+// the first time a command writes a PCD or PLY file. Reading them, and XYZ/CSV text, never loads it.
 //
 // The plugin never throws: failures come back as text, and point_cloud_io.cc turns them into InputError.
 
@@ -47,14 +47,14 @@ struct CloudBlob {
 
 enum class CloudFileType { kPcd, kPly };
 
-// The plugin's function table (entry point "fvm_cloud_codec_v1"). Both return false and set `error` on failure.
+// The plugin's function table (entry point "fvm_cloud_codec_v1"). Reading is fvm's own (pcd_file.h, ply_file.h),
+// which checks a damaged file whole where PCL's reader crashes. Returns false and sets `error` on failure.
 struct CloudCodec {
-  bool (*read)(const std::filesystem::path& path, CloudFileType type, CloudBlob* blob, std::string* error);
   // Binary, without viewpoint.
   bool (*write)(const std::filesystem::path& path, CloudFileType type, const CloudBlob& blob, std::string* error);
 };
 
-// The codec, loading the plugin on first use; `action` says what needed it ("reading scan.pcd"). Throws
+// The codec, loading the plugin on first use; `action` says what needed it ("writing scan.pcd"). Throws
 // InputError "<action> needs PCL: ... could not be loaded (...); install the Debian package ..." when it cannot.
 const CloudCodec& LoadCloudCodec(std::string_view action);
 

@@ -15,6 +15,8 @@
 #include "core/file_io.h"
 #include "core/number_text.h"
 #include "imaging/io/cloud_codec.h"
+#include "imaging/io/pcd_file.h"
+#include "imaging/io/ply_file.h"
 
 namespace fvm::imaging {
 namespace {
@@ -40,232 +42,6 @@ std::vector<std::string_view> Words(std::string_view line) {
     start = end;
   }
   return words;
-}
-
-// PCL trusts the header: a damaged one can make it allocate terabytes or crash (empty FIELDS, say). So the
-// header is checked here, as strictly as the format allows, before PCL sees the file.
-struct HeaderLines {
-  std::vector<std::vector<std::string_view>> lines;  // words of each line, comments and blank lines left out
-  std::size_t data_offset = 0;                       // first byte after the header
-};
-
-// Lines up to and including the one whose first word is `last` (case-insensitive).
-HeaderLines SplitHeader(const std::string& name, std::string_view head, const std::string& last,
-                        const std::string& format) {
-  HeaderLines header;
-  size_t start = 0;
-  while (start < head.size()) {
-    const size_t newline = head.find('\n', start);
-    if (newline == std::string_view::npos) break;
-    const std::string_view line = head.substr(start, newline - start);
-    start = newline + 1;
-    const std::vector<std::string_view> words = Words(line);
-    if (words.empty() || words[0].front() == '#') continue;
-    header.lines.push_back(words);
-    if (Lower(words[0]) == last) {
-      header.data_offset = start;
-      return header;
-    }
-  }
-  Fail(name, "its " + format + " header does not end (no '" + last + "' line in the first " +
-                 std::to_string(head.size()) + " bytes); the file is damaged or not " + format);
-}
-
-std::optional<std::uint64_t> Count(std::string_view word) {
-  const std::optional<std::int64_t> value = ParseInt(word);
-  if (!value || *value < 0) return std::nullopt;
-  return static_cast<std::uint64_t>(*value);
-}
-
-void CheckPcdHeader(const std::string& name, std::string_view head, std::size_t file_size) {
-  const std::string bad = "; the file is damaged: write it again";
-  const HeaderLines header = SplitHeader(name, head, "data", "PCD");
-  std::vector<std::string_view> fields, sizes, types, counts;
-  std::optional<std::uint64_t> width, height, points;
-  std::string data;
-  for (const std::vector<std::string_view>& words : header.lines) {
-    const std::string key = Lower(words[0]);
-    const std::vector<std::string_view> values(words.begin() + 1, words.end());
-    if (key == "version" || key == "viewpoint") continue;
-    if (key == "fields")
-      fields = values;
-    else if (key == "size")
-      sizes = values;
-    else if (key == "type")
-      types = values;
-    else if (key == "count")
-      counts = values;
-    else if (key == "width" && values.size() == 1)
-      width = Count(values[0]);
-    else if (key == "height" && values.size() == 1)
-      height = Count(values[0]);
-    else if (key == "points" && values.size() == 1)
-      points = Count(values[0]);
-    else if (key == "data" && values.size() == 1)
-      data = Lower(values[0]);
-    else
-      Fail(name, "unexpected PCD header line '" + key + "'" + bad);
-  }
-  if (counts.empty()) counts.assign(fields.size(), "1");
-  if (fields.empty() || sizes.size() != fields.size() || types.size() != fields.size() ||
-      counts.size() != fields.size()) {
-    Fail(name, "its PCD header does not give SIZE, TYPE and COUNT for each of its FIELDS" + bad);
-  }
-  std::uint64_t point_step = 0;
-  for (size_t i = 0; i < fields.size(); ++i) {
-    const std::optional<std::uint64_t> size = Count(sizes[i]), count = Count(counts[i]);
-    const std::string type = Lower(types[i]);
-    const bool valid_type = (type == "i" || type == "u") ? (size == 1u || size == 2u || size == 4u || size == 8u)
-                                                         : type == "f" && (size == 4u || size == 8u);
-    if (!valid_type || !count || *count < 1 || *count > 1000000) {
-      Fail(name, "its PCD field '" + std::string(fields[i]) + "' has no valid SIZE, TYPE and COUNT" + bad);
-    }
-    point_step += *size * *count;
-  }
-  if (!width || !height) Fail(name, "its PCD header has no valid WIDTH and HEIGHT" + bad);
-  if (*width > kMaxPoints || *height > kMaxPoints || *width * *height > kMaxPoints ||
-      (points && *points != *width * *height)) {
-    Fail(name, "its PCD header's WIDTH x HEIGHT and POINTS disagree or are beyond what fvm can hold" + bad);
-  }
-  const std::uint64_t n = *width * *height;
-  const std::uint64_t room = file_size - header.data_offset;
-  std::uint64_t needed = 0;
-  if (data == "ascii") {
-    needed = n;  // each point takes at least a digit or a line
-  } else if (data == "binary") {
-    needed = n * point_step;
-  } else if (data == "binary_compressed") {
-    needed = n * point_step / 1000;  // LZF compresses no better than that
-  } else {
-    Fail(name, "its PCD DATA is '" + data + "', not ascii, binary or binary_compressed" + bad);
-  }
-  if (needed > room) {
-    Fail(name, "the header declares " + std::to_string(n) + " points, more than the file's " +
-                   std::to_string(file_size) + " bytes can hold; the file is damaged or incomplete: write it again");
-  }
-}
-
-void CheckPlyHeader(const std::string& name, std::string_view head, std::size_t file_size) {
-  const std::string bad = "; the file is damaged: write it again";
-  const HeaderLines header = SplitHeader(name, head, "end_header", "PLY");
-  if (header.lines.empty() || header.lines[0][0] != "ply") Fail(name, "does not start with 'ply'" + bad);
-  std::uint64_t total = 0;
-  bool vertex = false;
-  for (const std::vector<std::string_view>& words : header.lines) {
-    const std::string key = Lower(words[0]);
-    if (key == "element") {
-      const std::optional<std::uint64_t> count = words.size() == 3 ? Count(words[2]) : std::nullopt;
-      if (!count || *count > kMaxPoints) Fail(name, "has a PLY element without a valid count" + bad);
-      total += *count;
-      vertex = vertex || words[1] == "vertex";
-    } else if (key == "format") {
-      if (words.size() != 3 ||
-          (words[1] != "ascii" && words[1] != "binary_little_endian" && words[1] != "binary_big_endian")) {
-        Fail(name, "has an unknown PLY format line" + bad);
-      }
-    } else if (key == "property") {
-      const bool list = words.size() == 5 && words[1] == "list";
-      if (words.size() != 3 && !list) Fail(name, "has a malformed PLY property line" + bad);
-    } else if (key != "ply" && key != "comment" && key != "obj_info" && key != "end_header") {
-      Fail(name, "unexpected PLY header line '" + key + "'" + bad);
-    }
-  }
-  if (!vertex) Fail(name, "has no vertex element: not a point cloud");
-  // Every element takes at least a byte of the file.
-  if (total > file_size - header.data_offset) {
-    Fail(name, "the header declares " + std::to_string(total) + " elements, more than the file's " +
-                   std::to_string(file_size) + " bytes can hold; the file is damaged or incomplete: write it again");
-  }
-}
-
-double ReadValue(const std::uint8_t* p, CloudFieldType datatype) {
-  const auto load = [p](auto value) {
-    std::memcpy(&value, p, sizeof value);
-    return static_cast<double>(value);
-  };
-  switch (datatype) {
-    case CloudFieldType::kInt8:
-      return load(std::int8_t{});
-    case CloudFieldType::kUint8:
-      return load(std::uint8_t{});
-    case CloudFieldType::kInt16:
-      return load(std::int16_t{});
-    case CloudFieldType::kUint16:
-      return load(std::uint16_t{});
-    case CloudFieldType::kInt32:
-      return load(std::int32_t{});
-    case CloudFieldType::kUint32:
-      return load(std::uint32_t{});
-    case CloudFieldType::kFloat32:
-      return load(float{});
-    default:
-      return load(double{});
-  }
-}
-
-PointCloud ExtractXyz(const CloudBlob& blob, const std::string& name, const PointCloudReadOptions& options) {
-  const CloudField* fields[3] = {nullptr, nullptr, nullptr};
-  for (const CloudField& field : blob.fields) {
-    for (int axis = 0; axis < 3; ++axis) {
-      if (field.name == std::string(1, static_cast<char>('x' + axis)) && fields[axis] == nullptr) fields[axis] = &field;
-    }
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    const CloudField* field = fields[axis];
-    if (field == nullptr) {
-      Fail(name,
-           std::string("has no '") + static_cast<char>('x' + axis) + "' field; fvm reads clouds of x, y, z points");
-    }
-    const std::size_t size = CloudFieldSize(field->type);
-    if (size == 0 || field->count < 1 || field->offset + size > blob.point_step) {
-      Fail(name, "its '" + field->name + "' field does not fit the point record; the file is damaged: write it again");
-    }
-  }
-  const std::uint64_t width = blob.width, height = blob.height;
-  const std::uint64_t n = width * height;
-  if (n == 0) Fail(name, "holds no points; export the cloud again");
-  if (n > kMaxPoints || blob.row_step < width * blob.point_step ||
-      blob.data.size() < (height - 1) * blob.row_step + width * blob.point_step) {
-    Fail(name, "its header and data disagree on the number of points; the file is damaged: write it again");
-  }
-  PointCloud cloud;
-  cloud.width = static_cast<int>(width);
-  cloud.height = static_cast<int>(height);
-  cloud.points.reserve(static_cast<std::size_t>(n));
-  for (std::uint64_t row = 0; row < height; ++row) {
-    for (std::uint64_t col = 0; col < width; ++col) {
-      const std::uint8_t* point = blob.data.data() + row * blob.row_step + col * blob.point_step;
-      Eigen::Vector3d p;
-      for (int axis = 0; axis < 3; ++axis) {
-        p[axis] = ReadValue(point + fields[axis]->offset, fields[axis]->type) * options.mm_per_unit;
-      }
-      cloud.points.push_back(p);
-    }
-  }
-  return cloud;
-}
-
-PointCloud ReadWithPcl(const std::filesystem::path& path, PointCloudFormat format,
-                       const PointCloudReadOptions& options) {
-  const std::string name = path.string();
-  const std::size_t size = CheckReadableFile(path);
-  const bool pcd = format == PointCloudFormat::kPcd;
-  const std::string head = ReadFileHead(path, 65536);
-  if (pcd) {
-    CheckPcdHeader(name, head, size);
-  } else {
-    CheckPlyHeader(name, head, size);
-  }
-  const CloudCodec& codec = LoadCloudCodec("reading " + name);
-  CloudBlob blob;
-  std::string why;
-  if (!codec.read(path, pcd ? CloudFileType::kPcd : CloudFileType::kPly, &blob, &why)) {
-    Fail(name, std::string("PCL cannot read it as ") + (pcd ? "PCD" : "PLY") + (why.empty() ? "" : " (" + why + ")") +
-                   "; the file is damaged, or not a point cloud of this format");
-  }
-  PointCloud cloud = ExtractXyz(blob, name, options);
-  cloud.source = pcd ? "PCD" : "PLY";
-  return cloud;
 }
 
 // Fields of a line: split at commas or semicolons when there are any, else at blanks.
@@ -380,7 +156,10 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, PointCloudFormat fo
     CheckReadableFile(path);
     return ParseXyz(ReadFileBytes(path), path.string(), options);
   }
-  return ReadWithPcl(path, format, options);
+  CheckReadableFile(path);
+  const std::string bytes = ReadFileBytes(path);
+  return format == PointCloudFormat::kPcd ? ParsePcd(bytes, path.string(), options.mm_per_unit)
+                                          : ParsePly(bytes, path.string(), options.mm_per_unit);
 }
 
 PointCloud ReadPointCloud(const std::filesystem::path& path, const PointCloudReadOptions& options) {

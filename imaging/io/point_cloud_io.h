@@ -1,7 +1,7 @@
 #pragma once
-// Point clouds in files: PCD and PLY through PCL (any numeric x, y, z fields; other fields ignored), and plain
-// XYZ/CSV text (x y z per line, separated by blanks, commas or semicolons; '#' comments; an optional header
-// line naming the columns; more columns ignored). Coordinates are mm unless the options say otherwise.
+// Point clouds in files: PCD and PLY (read by fvm's own strict readers, written through PCL; any numeric x, y, z
+// fields, other fields ignored), and plain XYZ/CSV text (x y z per line, separated by blanks, commas or
+// semicolons; '#' comments; an optional header line naming the columns; more columns ignored). Coordinates are mm unless the options say otherwise.
 
 #include <filesystem>
 #include <string>

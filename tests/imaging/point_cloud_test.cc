@@ -3,10 +3,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
+#include "imaging/io/pcd_file.h"
+#include "imaging/io/ply_file.h"
 #include "imaging/io/point_cloud_io.h"
 #include "tests/artefacts/test_support.h"
 #include "tests/imaging/surface_samples.h"
@@ -117,6 +122,125 @@ TEST(PointCloudIo, BadPcdAndPlyAreInputErrors) {
   EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "junk.ply"); }), HasSubstr("junk.ply"));
   dir.Write("empty.pcd", "");
   EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "empty.pcd"); }), HasSubstr("empty"));
+}
+
+// The bytes of a value as a little-endian machine stores it (PCD binary bodies, binary_little_endian PLY).
+template <typename T>
+std::string BytesOf(T value) {
+  std::string bytes(sizeof value, '\0');
+  std::memcpy(bytes.data(), &value, sizeof value);
+  return bytes;
+}
+
+std::string PcdHeader(const std::string& count, int points, const std::string& data) {
+  return "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT " + count + "\nWIDTH " + std::to_string(points) +
+         "\nHEIGHT 1\nPOINTS " + std::to_string(points) + "\nDATA " + data + "\n";
+}
+
+// Issue 19: each of these crashed PCL's reader or read as zeros. Each must now name the file and the fault.
+TEST(PointCloudIo, Issue19PcdInputsAreInputErrors) {
+  TempDir dir;
+  const std::string ascii = PcdHeader("1 1 1", 1, "ascii") + "1 2 3\n";
+  const std::string blank_first_line = std::string(" ") + ascii.substr(ascii.find('\n'));
+  dir.Write("blank.pcd", blank_first_line);
+  EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "blank.pcd"); }),
+              AllOf(HasSubstr("blank.pcd:2"), HasSubstr("starts with VERSION")));
+  dir.Write("zero.pcd", PcdHeader("1 1 1", 1, "binary_compressed") + std::string(12, '\0'));
+  EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "zero.pcd"); }),
+              AllOf(HasSubstr("zero.pcd"), HasSubstr("expands to 0 bytes, but the header's FIELDS, SIZE, COUNT and POINTS need 12")));
+  std::string million = PcdHeader("1000000 1 1", 1000, "ascii");
+  for (int i = 0; i < 1000; ++i) million += "1 2 3\n";
+  dir.Write("million.pcd", million);
+  EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "million.pcd"); }),
+              AllOf(HasSubstr("million.pcd"), HasSubstr("'x' has COUNT 1000000")));
+  dir.Write("two.pcd", PcdHeader("2 1 1", 2, "ascii") + "1 2 3\n4 5 6\n");
+  EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "two.pcd"); }), AllOf(HasSubstr("two.pcd"), HasSubstr("COUNT 2")));
+  // The same row fault on a field that is not a coordinate: the row, and how many values it should hold.
+  dir.Write("rgb.pcd",
+            "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 2\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
+            "DATA ascii\n1 2 3 4\n");
+  EXPECT_THAT(InputErrorOf([&] { ReadPointCloud(dir / "rgb.pcd"); }),
+              AllOf(HasSubstr("rgb.pcd:10"), HasSubstr("4 values where the header's FIELDS and COUNT declare 5")));
+}
+
+TEST(PointCloudIo, PcdBodiesMustMatchTheHeader) {
+  const std::string body = BytesOf(1.0f) + BytesOf(2.0f) + BytesOf(3.0f);
+  EXPECT_EQ(ParsePcd(PcdHeader("1 1 1", 1, "binary") + body, "ok.pcd").points[0], Eigen::Vector3d(1, 2, 3));
+  // PCL pads its binary files with zeros; anything else after the points means header and body disagree.
+  EXPECT_EQ(ParsePcd(PcdHeader("1 1 1", 1, "binary") + body + std::string(100, '\0'), "pad.pcd").points.size(), 1u);
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(PcdHeader("1 1 1", 1, "binary") + body + "x", "long.pcd"); }),
+              HasSubstr("long.pcd: its binary body holds 13 bytes, but the header's FIELDS, SIZE, COUNT and POINTS "
+                        "need 12 (and zeros after them)"));
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(PcdHeader("1 1 1", 2, "binary") + body, "short.pcd"); }),
+              HasSubstr("short.pcd: the header declares 2 points of 12 bytes, but the binary body holds 12 bytes"));
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(PcdHeader("1 1 1", 2, "ascii") + "1 2 3\n", "few.pcd"); }),
+              HasSubstr("few.pcd: holds 1 data rows where the header declares POINTS 2"));
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(PcdHeader("1 1 1", 1, "ascii") + "1 2 3\n4 5 6\n", "more.pcd"); }),
+              HasSubstr("more.pcd:11: more rows"));
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(PcdHeader("1 1 1", 1, "ascii") + "1 two 3\n", "word.pcd"); }),
+              HasSubstr("word.pcd:10: 'two' is not a number"));
+}
+
+// A binary_compressed body built by hand: the x block as a literal run, the y block as a back reference to it
+// (LZF's overlapping copy), the z block as a literal run. PCD stores compressed points field after field.
+TEST(PointCloudIo, PcdBinaryCompressedWithBackReference) {
+  const std::string x = BytesOf(1.0f) + BytesOf(-2.5f), z = BytesOf(5.0f) + BytesOf(6.0f);
+  const std::string lzf = std::string(1, '\x07') + x + "\xC0\x07" + std::string(1, '\x07') + z;
+  const std::string file = PcdHeader("1 1 1", 2, "binary_compressed") + BytesOf(std::uint32_t(lzf.size())) +
+                           BytesOf(std::uint32_t(24)) + lzf;
+  const PointCloud cloud = ParsePcd(file, "c.pcd", 1000.0);
+  ASSERT_EQ(cloud.points.size(), 2u);
+  EXPECT_EQ(cloud.points[0], Eigen::Vector3d(1000, 1000, 5000));
+  EXPECT_EQ(cloud.points[1], Eigen::Vector3d(-2500, -2500, 6000));
+  std::string reaching_back = file;
+  reaching_back[reaching_back.size() - 10] = '\x08';  // the back reference now points before the first byte
+  EXPECT_THAT(InputErrorOf([&] { ParsePcd(reaching_back, "back.pcd"); }), HasSubstr("back.pcd: its LZF-compressed"));
+}
+
+TEST(PointCloudIo, PlyAsciiAndBigEndianWithOtherElements) {
+  const PointCloud ascii = ParsePly(
+      "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 3\nproperty uchar red\nproperty float z\n"
+      "property double x\nproperty int y\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "255 3.5 1 2\n0 -1 0.25 -7\n\n9 0 0 0\n3 0 1 2\n",
+      "a.ply");
+  ASSERT_EQ(ascii.points.size(), 3u);
+  EXPECT_EQ(ascii.points[0], Eigen::Vector3d(1, 2, 3.5));
+  EXPECT_EQ(ascii.points[1], Eigen::Vector3d(0.25, -7, -1));
+  EXPECT_FALSE(ascii.IsOrganised());
+  std::string big = BytesOf(std::int16_t{-3}) + BytesOf(0.5f) + BytesOf(4.0f);
+  std::reverse(big.begin(), big.begin() + 2);
+  std::reverse(big.begin() + 2, big.begin() + 6);
+  std::reverse(big.begin() + 6, big.end());
+  const PointCloud binary = ParsePly(
+      "ply\nformat binary_big_endian 1.0\nelement vertex 1\nproperty short x\nproperty float y\nproperty float z\n"
+      "end_header\n" + big,
+      "b.ply");
+  EXPECT_EQ(binary.points[0], Eigen::Vector3d(-3, 0.5, 4));
+}
+
+// PCL's writer keeps an organised cloud's grid in obj_info and a range_grid element: empty lists are missing
+// points, read as NaN in their place.
+TEST(PointCloudIo, PlyRangeGridRestoresMissingPoints) {
+  const std::string header =
+      "ply\nformat binary_little_endian 1.0\nobj_info num_cols 2\nobj_info num_rows 2\nelement vertex 2\n"
+      "property double x\nproperty double y\nproperty double z\nelement range_grid 4\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  const std::string vertices = BytesOf(1.0) + BytesOf(2.0) + BytesOf(3.0) + BytesOf(4.0) + BytesOf(5.0) + BytesOf(6.0);
+  std::string grid(1, '\x01');  // built by appending: GCC 12 warns falsely (-Wrestrict) on "\x01" + string
+  grid += BytesOf(std::int32_t{1});
+  grid += std::string(2, '\0');
+  grid += '\x01';
+  grid += BytesOf(std::int32_t{0});
+  const PointCloud cloud = ParsePly(header + vertices + grid, "g.ply");
+  ASSERT_EQ(cloud.width, 2);
+  ASSERT_EQ(cloud.height, 2);
+  EXPECT_EQ(cloud.points[0], Eigen::Vector3d(4, 5, 6));
+  EXPECT_TRUE(std::isnan(cloud.points[1].x()) && std::isnan(cloud.points[2].z()));
+  EXPECT_EQ(cloud.points[3], Eigen::Vector3d(1, 2, 3));
+  EXPECT_THAT(InputErrorOf([&] { ParsePly(header + vertices + grid.substr(0, grid.size() - 2), "cut.ply"); }),
+              AllOf(HasSubstr("cut.ply: element 'range_grid' row 4"), HasSubstr("ends early")));
+  EXPECT_THAT(InputErrorOf([&] { ParsePly(header + vertices + grid + "\n", "tail.ply"); }),
+              HasSubstr("tail.ply: 1 bytes follow the last element"));
 }
 
 TEST(PointCloudIo, XyzTextVariants) {

@@ -1,6 +1,6 @@
-// The PCD/PLY codec on PCL, built as the plugin libfvm_cloud_pcl.so (see imaging/io/cloud_codec.h). The header
-// checks and the messages stay in point_cloud_io.cc; every failure here, exceptions included, comes back as
-// text, so that no exception has to cross the plugin boundary.
+// The PCD/PLY writer on PCL, built as the plugin libfvm_cloud_pcl.so (see imaging/io/cloud_codec.h). Reading is
+// fvm's own (pcd_file.h, ply_file.h: PCL crashes on damaged headers). Every failure here, exceptions included,
+// comes back as text, so that no exception has to cross the plugin boundary.
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
@@ -26,41 +26,6 @@ class QuietPcl {
  private:
   pcl::console::VERBOSITY_LEVEL previous_;
 };
-
-CloudFieldType FromPcl(std::uint8_t datatype) {
-  return datatype >= 1 && datatype <= 8 ? static_cast<CloudFieldType>(datatype) : CloudFieldType::kUnknown;
-}
-
-bool Read(const std::filesystem::path& path, CloudFileType type, CloudBlob* blob, std::string* error) {
-  const QuietPcl quiet;
-  try {
-    pcl::PCLPointCloud2 cloud;
-    Eigen::Vector4f origin;
-    Eigen::Quaternionf orientation;
-    int version = 0;
-    const int result = type == CloudFileType::kPcd
-                           ? pcl::PCDReader().read(path.string(), cloud, origin, orientation, version, 0)
-                           : pcl::PLYReader().read(path.string(), cloud, origin, orientation, version, 0);
-    if (result < 0) {
-      error->clear();
-      return false;
-    }
-    blob->width = cloud.width;
-    blob->height = cloud.height;
-    blob->point_step = cloud.point_step;
-    blob->row_step = cloud.row_step;
-    blob->is_dense = cloud.is_dense;
-    blob->fields.clear();
-    for (const pcl::PCLPointField& field : cloud.fields) {
-      blob->fields.push_back({field.name, field.offset, FromPcl(field.datatype), field.count});
-    }
-    blob->data = std::move(cloud.data);
-    return true;
-  } catch (const std::exception& e) {
-    *error = e.what();
-    return false;
-  }
-}
 
 bool Write(const std::filesystem::path& path, CloudFileType type, const CloudBlob& blob, std::string* error) {
   const QuietPcl quiet;
@@ -92,7 +57,7 @@ bool Write(const std::filesystem::path& path, CloudFileType type, const CloudBlo
   }
 }
 
-constexpr CloudCodec kCodec{&Read, &Write};
+constexpr CloudCodec kCodec{&Write};
 
 }  // namespace
 }  // namespace fvm::imaging

@@ -1,0 +1,378 @@
+#include "imaging/io/ply_file.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "core/input_error.h"
+#include "core/number_text.h"
+
+namespace fvm::imaging {
+namespace {
+
+constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
+const char* const kRewrite = "; the file is damaged or not PLY: export it again";
+
+[[noreturn]] void Fail(const std::string& where, const std::string& problem) {
+  throw InputError(where + ": " + problem);
+}
+
+std::vector<std::string_view> Words(std::string_view line) {
+  std::vector<std::string_view> words;
+  size_t start = 0;
+  while (true) {
+    start = line.find_first_not_of(" \t\r", start);
+    if (start == std::string_view::npos) break;
+    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
+    words.push_back(line.substr(start, end - start));
+    start = end;
+  }
+  return words;
+}
+
+std::string Quoted(std::string_view text) {
+  std::string quoted(1, '\'');  // appended, not added: GCC 12 warns falsely (-Wrestrict) on "'" + string
+  quoted.append(text.substr(0, 40));
+  return quoted + '\'';
+}
+
+enum class Scalar { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+
+std::optional<Scalar> ScalarOf(std::string_view word) {
+  static const std::pair<const char*, Scalar> kNames[] = {
+      {"char", Scalar::kInt8},     {"int8", Scalar::kInt8},       {"uchar", Scalar::kUint8},
+      {"uint8", Scalar::kUint8},   {"short", Scalar::kInt16},     {"int16", Scalar::kInt16},
+      {"ushort", Scalar::kUint16}, {"uint16", Scalar::kUint16},   {"int", Scalar::kInt32},
+      {"int32", Scalar::kInt32},   {"uint", Scalar::kUint32},     {"uint32", Scalar::kUint32},
+      {"float", Scalar::kFloat32}, {"float32", Scalar::kFloat32}, {"double", Scalar::kFloat64},
+      {"float64", Scalar::kFloat64}};
+  for (const auto& [text, scalar] : kNames) {
+    if (word == text) return scalar;
+  }
+  return std::nullopt;
+}
+
+std::size_t SizeOf(Scalar scalar) {
+  switch (scalar) {
+    case Scalar::kInt8:
+    case Scalar::kUint8:
+      return 1;
+    case Scalar::kInt16:
+    case Scalar::kUint16:
+      return 2;
+    case Scalar::kFloat64:
+      return 8;
+    default:
+      return 4;
+  }
+}
+
+bool IsInteger(Scalar scalar) { return scalar != Scalar::kFloat32 && scalar != Scalar::kFloat64; }
+
+struct Property {
+  std::string name;
+  Scalar type = Scalar::kFloat32;
+  std::optional<Scalar> list_count;  // set for list properties: the type of the length before the items
+};
+
+struct Element {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<Property> properties;
+};
+
+enum class Encoding { kAscii, kLittle, kBig };
+
+struct Header {
+  Encoding encoding = Encoding::kAscii;
+  std::vector<Element> elements;
+  std::optional<std::uint64_t> columns, rows;  // obj_info num_cols / num_rows (PCL's organised clouds)
+  std::size_t body = 0;
+  std::size_t body_line = 0;
+};
+
+Header ReadHeader(std::string_view bytes, const std::string& name) {
+  Header header;
+  bool format = false;
+  std::size_t start = 0, line_number = 0;
+  while (true) {
+    const size_t newline = bytes.find('\n', start);
+    if (newline == std::string_view::npos) Fail(name, "its PLY header does not end with end_header" + std::string(kRewrite));
+    const std::string_view line = bytes.substr(start, newline - start);
+    start = newline + 1;
+    ++line_number;
+    const std::string where = name + ":" + std::to_string(line_number);
+    const std::vector<std::string_view> words = Words(line);
+    if (line_number == 1) {
+      if (words.size() != 1 || words[0] != "ply") Fail(name, "does not start with a 'ply' line" + std::string(kRewrite));
+      continue;
+    }
+    if (words.empty()) Fail(where, "a blank line in the PLY header" + std::string(kRewrite));
+    const std::string_view key = words[0];
+    if (key == "comment") continue;
+    if (key == "obj_info") {
+      if (words.size() == 3 && (words[1] == "num_cols" || words[1] == "num_rows")) {
+        const std::optional<std::int64_t> value = ParseInt(words[2]);
+        if (value && *value > 0) (words[1] == "num_cols" ? header.columns : header.rows) = *value;
+      }
+      continue;
+    }
+    if (key == "format") {
+      if (format || words.size() != 3 || words[2] != "1.0") Fail(where, "a malformed format line" + std::string(kRewrite));
+      if (words[1] == "ascii") {
+        header.encoding = Encoding::kAscii;
+      } else if (words[1] == "binary_little_endian") {
+        header.encoding = Encoding::kLittle;
+      } else if (words[1] == "binary_big_endian") {
+        header.encoding = Encoding::kBig;
+      } else {
+        Fail(where, "unknown PLY format " + Quoted(words[1]) + kRewrite);
+      }
+      format = true;
+    } else if (key == "element") {
+      const std::optional<std::int64_t> count = words.size() == 3 ? ParseInt(words[2]) : std::nullopt;
+      if (!count || *count < 0) Fail(where, "an element line needs a name and a count" + std::string(kRewrite));
+      for (const Element& element : header.elements) {
+        if (element.name == words[1]) Fail(where, "a second element " + Quoted(words[1]) + kRewrite);
+      }
+      header.elements.push_back({std::string(words[1]), static_cast<std::uint64_t>(*count), {}});
+    } else if (key == "property") {
+      if (header.elements.empty()) Fail(where, "a property before any element" + std::string(kRewrite));
+      Property property;
+      std::optional<Scalar> type;
+      if (words.size() == 3) {
+        type = ScalarOf(words[1]);
+        property.name = std::string(words[2]);
+      } else if (words.size() == 5 && words[1] == "list") {
+        property.list_count = ScalarOf(words[2]);
+        if (!property.list_count || !IsInteger(*property.list_count)) {
+          Fail(where, "a list length must be of an integer type" + std::string(kRewrite));
+        }
+        type = ScalarOf(words[3]);
+        property.name = std::string(words[4]);
+      }
+      if (!type) Fail(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kRewrite));
+      property.type = *type;
+      for (const Property& other : header.elements.back().properties) {
+        if (other.name == property.name) Fail(where, "a second property " + Quoted(property.name) + kRewrite);
+      }
+      header.elements.back().properties.push_back(property);
+    } else if (key == "end_header") {
+      if (words.size() != 1) Fail(where, "a malformed end_header line" + std::string(kRewrite));
+      header.body = start;
+      header.body_line = line_number + 1;
+      break;
+    } else {
+      Fail(where, "unknown PLY header line " + Quoted(key) + kRewrite);
+    }
+  }
+  if (!format) Fail(name, "its PLY header has no format line" + std::string(kRewrite));
+  for (const Element& element : header.elements) {
+    if (element.properties.empty() && element.count > 0) {
+      Fail(name, "its PLY element " + Quoted(element.name) + " has rows but no properties" + kRewrite);
+    }
+    // Every row takes at least a byte (binary) or a line (ascii).
+    if (element.count > bytes.size() - header.body) {
+      Fail(name, "its PLY element " + Quoted(element.name) + " declares " + std::to_string(element.count) +
+                     " rows, more than the file's " + std::to_string(bytes.size()) +
+                     " bytes can hold; the file is incomplete or damaged: export it again");
+    }
+  }
+  return header;
+}
+
+// Reads the body value by value, in either encoding, and says where it stopped when something is missing.
+class Body {
+ public:
+  Body(std::string_view bytes, const Header& header, const std::string& name)
+      : bytes_(bytes), encoding_(header.encoding), name_(name), at_(header.body), line_number_(header.body_line - 1) {}
+
+  // Starts a row of `element` (ascii: the next non-blank line).
+  void StartRow(const Element& element, std::uint64_t row) {
+    where_ = name_ + ": element '" + element.name + "' row " + std::to_string(row + 1);
+    if (encoding_ != Encoding::kAscii) return;
+    words_.clear();
+    next_word_ = 0;
+    while (words_.empty()) {
+      if (at_ >= bytes_.size()) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
+      const size_t end = std::min(bytes_.find('\n', at_), bytes_.size());
+      words_ = Words(bytes_.substr(at_, end - at_));
+      at_ = end + 1;
+      ++line_number_;
+    }
+    where_ = name_ + ":" + std::to_string(line_number_) + " (element '" + element.name + "' row " +
+             std::to_string(row + 1) + ")";
+  }
+
+  void EndRow() {
+    if (encoding_ == Encoding::kAscii && next_word_ != words_.size()) {
+      Fail(where_, std::to_string(words_.size()) + " values, more than the header's properties declare" + kRewrite);
+    }
+  }
+
+  double Next(Scalar type) {
+    if (encoding_ == Encoding::kAscii) {
+      if (next_word_ == words_.size()) {
+        Fail(where_, std::to_string(words_.size()) + " values, fewer than the header's properties declare" + kRewrite);
+      }
+      const std::string_view word = words_[next_word_++];
+      const std::optional<double> value = ParseDouble(word);
+      if (!value) Fail(where_, Quoted(word) + " is not a number" + kRewrite);
+      if (IsInteger(type) && *value != std::floor(*value)) Fail(where_, Quoted(word) + " is not an integer" + kRewrite);
+      // A float property holds the float nearest the text; beyond float's range the conversion would be undefined.
+      const bool to_float = type == Scalar::kFloat32 && std::abs(*value) <= std::numeric_limits<float>::max();
+      return to_float ? static_cast<float>(*value) : *value;
+    }
+    const std::size_t size = SizeOf(type);
+    if (size > bytes_.size() - at_) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
+    unsigned char raw[8];
+    std::memcpy(raw, bytes_.data() + at_, size);
+    at_ += size;
+    if (encoding_ == Encoding::kBig) std::reverse(raw, raw + size);
+    const auto load = [&raw](auto value) {
+      std::memcpy(&value, raw, sizeof value);
+      return static_cast<double>(value);
+    };
+    switch (type) {
+      case Scalar::kInt8:
+        return load(std::int8_t{});
+      case Scalar::kUint8:
+        return load(std::uint8_t{});
+      case Scalar::kInt16:
+        return load(std::int16_t{});
+      case Scalar::kUint16:
+        return load(std::uint16_t{});
+      case Scalar::kInt32:
+        return load(std::int32_t{});
+      case Scalar::kUint32:
+        return load(std::uint32_t{});
+      case Scalar::kFloat32:
+        return load(float{});
+      default:
+        return load(double{});
+    }
+  }
+
+  // The length of a list: a non-negative integer, no longer than the rest of the file could hold.
+  std::uint64_t ListLength(Scalar type) {
+    const double length = Next(type);
+    const double room = encoding_ == Encoding::kAscii ? static_cast<double>(words_.size() - next_word_)
+                                                       : static_cast<double>(bytes_.size() - at_);
+    if (length < 0 || length > room) Fail(where_, "a list length of " + FormatShortest(length) + kRewrite);
+    return static_cast<std::uint64_t>(length);
+  }
+
+  void CheckEnd() const {
+    const std::string_view rest = at_ < bytes_.size() ? bytes_.substr(at_) : std::string_view();
+    const bool clean = encoding_ == Encoding::kAscii ? rest.find_first_not_of(" \t\r\n") == std::string_view::npos
+                                                     : rest.empty();
+    if (!clean) {
+      Fail(name_, std::to_string(rest.size()) + " bytes follow the last element the header declares" + kRewrite);
+    }
+  }
+
+ private:
+  std::string_view bytes_;
+  Encoding encoding_;
+  std::string name_;
+  std::size_t at_;
+  std::size_t line_number_;
+  std::string where_;
+  std::vector<std::string_view> words_;
+  std::size_t next_word_ = 0;
+};
+
+}  // namespace
+
+PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_per_unit) {
+  const Header header = ReadHeader(bytes, name);
+  const auto vertex_element =
+      std::find_if(header.elements.begin(), header.elements.end(), [](const Element& e) { return e.name == "vertex"; });
+  if (vertex_element == header.elements.end()) Fail(name, "has no vertex element: it is not a point cloud");
+  std::array<int, 3> xyz{-1, -1, -1};
+  for (size_t i = 0; i < vertex_element->properties.size(); ++i) {
+    const Property& property = vertex_element->properties[i];
+    for (int axis = 0; axis < 3; ++axis) {
+      if (property.name != std::string(1, static_cast<char>('x' + axis))) continue;
+      if (property.list_count) Fail(name, "its vertex property '" + property.name + "' is a list, not a coordinate" + kRewrite);
+      xyz[static_cast<size_t>(axis)] = static_cast<int>(i);
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    if (xyz[static_cast<size_t>(axis)] < 0) {
+      Fail(name, std::string("its vertices have no '") + static_cast<char>('x' + axis) +
+                     "' property; fvm reads clouds of x, y, z points");
+    }
+  }
+  if (vertex_element->count == 0) Fail(name, "holds no points; export the cloud again");
+  if (vertex_element->count > kMaxPoints) Fail(name, "holds more points than fvm can hold");
+
+  std::vector<Eigen::Vector3d> vertices;
+  std::optional<std::vector<std::int64_t>> grid;  // range_grid: the vertex at each grid point, -1 for none
+  Body body(bytes, header, name);
+  for (const Element& element : header.elements) {
+    const bool is_vertex = &element == &*vertex_element;
+    const bool is_grid = element.name == "range_grid";
+    if (is_vertex) vertices.reserve(static_cast<size_t>(element.count));
+    if (is_grid) grid.emplace().reserve(static_cast<size_t>(element.count));
+    for (std::uint64_t row = 0; row < element.count; ++row) {
+      body.StartRow(element, row);
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      std::int64_t grid_vertex = -1;
+      for (size_t i = 0; i < element.properties.size(); ++i) {
+        const Property& property = element.properties[i];
+        if (property.list_count) {
+          const std::uint64_t length = body.ListLength(*property.list_count);
+          for (std::uint64_t k = 0; k < length; ++k) {
+            const double item = body.Next(property.type);
+            if (is_grid && k == 0) {
+              if (!(item >= 0 && item < static_cast<double>(vertex_element->count))) {
+                Fail(name, "its range_grid row " + std::to_string(row + 1) + " names vertex " + FormatShortest(item) +
+                               ", which does not exist" + kRewrite);
+              }
+              grid_vertex = static_cast<std::int64_t>(item);
+            }
+          }
+        } else {
+          const double value = body.Next(property.type);
+          for (int axis = 0; axis < 3; ++axis) {
+            if (is_vertex && xyz[static_cast<size_t>(axis)] == static_cast<int>(i)) p[axis] = value * mm_per_unit;
+          }
+        }
+      }
+      body.EndRow();
+      if (is_vertex) vertices.push_back(p);
+      if (is_grid) grid->push_back(grid_vertex);
+    }
+  }
+  body.CheckEnd();
+
+  PointCloud cloud;
+  if (grid) {
+    const Eigen::Vector3d missing = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    if (grid->empty()) Fail(name, "its range_grid element is empty" + std::string(kRewrite));
+    if (grid->size() > kMaxPoints) Fail(name, "holds more points than fvm can hold");
+    for (const std::int64_t index : *grid) cloud.points.push_back(index < 0 ? missing : vertices[static_cast<size_t>(index)]);
+  } else {
+    cloud.points = std::move(vertices);
+  }
+  const std::uint64_t n = cloud.points.size();
+  if (header.columns && header.rows && *header.rows > 1 && *header.columns <= n && *header.rows <= n &&
+      *header.columns * *header.rows == n) {
+    cloud.width = static_cast<int>(*header.columns);
+    cloud.height = static_cast<int>(*header.rows);
+  } else {
+    cloud.width = static_cast<int>(n);
+    cloud.height = 1;
+  }
+  cloud.source = "PLY";
+  return cloud;
+}
+
+}  // namespace fvm::imaging
