@@ -23,13 +23,6 @@ namespace {
 
 constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 
-[[noreturn]] void Fail(const std::string& name, const std::string& problem) { throw InputError(name + ": " + problem); }
-
-std::string Lower(std::string_view text) {
-  std::string out(text);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
 
 std::vector<std::string_view> Words(std::string_view line) {
   std::vector<std::string_view> words;
@@ -76,7 +69,7 @@ void PointCloudReadOptions::Check() const {
 }
 
 PointCloudFormat PointCloudFormatOf(const std::filesystem::path& path) {
-  const std::string extension = Lower(path.extension().string());
+  const std::string extension = AsciiLower(path.extension().string());
   if (extension == ".pcd") return PointCloudFormat::kPcd;
   if (extension == ".ply") return PointCloudFormat::kPly;
   return PointCloudFormat::kXyz;
@@ -108,7 +101,7 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
         for (int axis = 0; axis < 3; ++axis) {
           const std::string wanted(1, static_cast<char>('x' + axis));
           for (size_t i = 0; i < fields.size(); ++i) {
-            const std::string field = Lower(fields[i]);
+            const std::string field = AsciiLower(fields[i]);
             if (field == wanted || field.rfind(wanted + "_", 0) == 0 || field.rfind(wanted + " ", 0) == 0 ||
                 field.rfind(wanted + "(", 0) == 0) {
               columns[axis] = static_cast<int>(i);

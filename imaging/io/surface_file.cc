@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "imaging/io/al3d.h"
 #include "core/file_io.h"
 #include "imaging/io/x3p.h"
@@ -13,10 +14,6 @@ namespace {
 
 bool StartsWith(std::string_view text, std::string_view prefix) { return text.substr(0, prefix.size()) == prefix; }
 
-std::string Lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
 
 std::optional<SurfaceFormat> FromContent(std::string_view head) {
   using namespace std::string_view_literals;
@@ -34,7 +31,7 @@ std::optional<SurfaceFormat> FromContent(std::string_view head) {
 }
 
 std::optional<SurfaceFormat> FromExtension(const std::filesystem::path& path) {
-  const std::string extension = Lower(path.extension().string());
+  const std::string extension = AsciiLower(path.extension().string());
   if (extension == ".x3p") return SurfaceFormat::kX3p;
   if (extension == ".al3d") return SurfaceFormat::kAl3d;
   if (extension == ".tif" || extension == ".tiff" || extension == ".exr" || extension == ".png") {

@@ -136,11 +136,6 @@ std::size_t TypeSize(char data_type) {
   }
 }
 
-std::string Lower(std::string_view text) {
-  std::string out(text);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
 
 bool IsMd5(std::string_view text) {
   return text.size() == 32 && text.find_first_not_of("0123456789abcdefABCDEF") == std::string_view::npos;
@@ -155,8 +150,8 @@ void VerifyMd5(const std::string& name, std::string_view content, std::string_vi
                    kReexport);
   }
   const std::string actual = Md5Hex(content);
-  if (Lower(expected) != actual) {
-    Fail(name, what + " does not match its MD5 checksum (" + where + " says " + Lower(expected) + ", the content has " +
+  if (AsciiLower(expected) != actual) {
+    Fail(name, what + " does not match its MD5 checksum (" + where + " says " + AsciiLower(expected) + ", the content has " +
                    actual + "); " + kReexport);
   }
 }

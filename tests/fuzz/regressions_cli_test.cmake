@@ -30,10 +30,17 @@ endfunction()
 
 refuses_all(pcd "" info @FILE@)
 refuses_all(ply "" info @FILE@)
-# tile_layout/issue19-col-overflow.csv (issue 19.1) is fixed on another branch: add
-#   refuses_all(tile_layout ${WORK}/positions.csv stitch --layout @FILE@ --overlap 20 -o ${WORK}/positions.csv)
-# here when that fix is merged; until then fvm stitch crashes on it.
-# batch/number-overflow.json (found by batch_fuzz): nlohmann::json throws out_of_range, not parse_error, for
-# 11E15555555; artefacts/io/batch.cc catches parse_error only, so fvm prints the library's message without the
-# file. Once batch.cc catches nlohmann::json::exception, add (the input copied as batch.json of a batch dir)
-#   a check that fvm calibrate on that directory exits 1 naming batch.json.
+refuses_all(tile_layout ${WORK}/positions.csv stitch --layout @FILE@ --overlap 20 -o ${WORK}/positions.csv)
+refuses_all(height_map_image "" info @FILE@ --pixel-mm 0.001)
+refuses_all(tile_image "" info @FILE@ --pixel-mm 0.001)
+
+# batch/number-overflow.json as the batch.json of a batch: nlohmann's out_of_range, not parse_error.
+file(MAKE_DIRECTORY ${WORK}/batch)
+file(COPY ${REGRESSIONS}/batch/number-overflow.json DESTINATION ${WORK}/batch)
+file(RENAME ${WORK}/batch/number-overflow.json ${WORK}/batch/batch.json)
+file(WRITE ${WORK}/batch/a.stitched.csv "id,x,y,z\n1,0,0,0\n2,1,0,0\n")
+file(WRITE ${WORK}/batch/a.free.csv "id,x,y,z\n1,0,0,0\n2,1,0,0\n")
+run(1 calibrate ${WORK}/batch --model 9 -o ${WORK}/cal.json)
+if(NOT ERR MATCHES "batch.json" OR EXISTS ${WORK}/cal.json)
+  message(FATAL_ERROR "fvm calibrate on a batch.json with a number beyond double:\n${ERR}")
+endif()
