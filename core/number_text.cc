@@ -1,5 +1,6 @@
 #include "core/number_text.h"
 
+#include <algorithm>
 #include <charconv>
 #include <system_error>
 
@@ -39,6 +40,25 @@ std::string AsciiLower(std::string_view text) {
     if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
   }
   return out;
+}
+
+std::vector<std::string_view> SplitWords(std::string_view line) {
+  std::vector<std::string_view> words;
+  size_t start = 0;
+  while (true) {
+    start = line.find_first_not_of(" \t\r", start);
+    if (start == std::string_view::npos) break;
+    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
+    words.push_back(line.substr(start, end - start));
+    start = end;
+  }
+  return words;
+}
+
+std::string QuotedForMessage(std::string_view text) {
+  std::string quoted(1, '\'');  // appended, not added: GCC 12 warns falsely (-Wrestrict) on "'" + string
+  quoted.append(text.substr(0, 40));
+  return quoted + '\'';
 }
 
 std::optional<double> ParseDouble(std::string_view text) { return ParseWhole<double>(text); }

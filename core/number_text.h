@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace fvm {
 
@@ -17,6 +18,12 @@ std::string_view TrimBlanks(std::string_view text);
 
 // 'A'..'Z' to 'a'..'z' and nothing else, whatever the locale: for matching names (header columns, extensions).
 std::string AsciiLower(std::string_view text);
+
+// The words of a line separated by spaces, tabs or CR (header lines of PCD, PLY, XYZ).
+std::vector<std::string_view> SplitWords(std::string_view line);
+
+// At most the first 40 characters of `text` in single quotes, for quoting a bad field in a message.
+std::string QuotedForMessage(std::string_view text);
 
 // Round-trip exact: ParseDouble(FormatShortest(v)) == v.
 std::string FormatShortest(double value);

@@ -275,7 +275,13 @@ void RunSynthesizeHeights(const SynthArgs& args) {
   artefacts::CentreExport calottes;
   calottes.comments.push_back(fmt::format("fvm tiles synthesize --artefact {} --seed {}: the true calottes (mm)",
                                           args.artefact, args.seed));
-  for (const auto& c : tiles.surface.truth) calottes.centres.push_back({c.id, c.centre, std::nullopt, c.radius_mm});
+  for (const auto& c : tiles.surface.truth) {
+    artefacts::CentreRecord record;
+    record.id = c.id;
+    record.position = c.centre;
+    record.radius_mm = c.radius_mm;
+    calottes.centres.push_back(record);
+  }
   artefacts::WriteCentreExport(dir / "calottes.csv", calottes);
   WriteFileAtomically(dir / "truth.csv", truth);
   fmt::print("{} height tiles of {} ({} x {} px, {} mm per px), layout.csv, truth.csv (true positions) and "

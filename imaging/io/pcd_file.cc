@@ -27,31 +27,6 @@ const char* const kRewrite = "; the file is damaged or not PCD: export it again"
   throw InputError(where + ": " + problem);
 }
 
-std::string Lower(std::string_view text) {
-  std::string out(text);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::vector<std::string_view> Words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t start = 0;
-  while (true) {
-    start = line.find_first_not_of(" \t\r", start);
-    if (start == std::string_view::npos) break;
-    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
-    words.push_back(line.substr(start, end - start));
-    start = end;
-  }
-  return words;
-}
-
-std::string Quoted(std::string_view text) {
-  std::string quoted(1, '\'');  // appended, not added: GCC 12 warns falsely (-Wrestrict) on "'" + string
-  quoted.append(text.substr(0, 40));
-  return quoted + '\'';
-}
-
 struct Field {
   std::string name;
   char type = 'F';  // F, I or U
@@ -69,7 +44,7 @@ struct Header {
 
 std::uint64_t CountOf(std::string_view word, const std::string& where, const std::string& what) {
   const std::optional<std::int64_t> value = ParseInt(word);
-  if (!value || *value < 0) Fail(where, what + " is " + Quoted(word) + ", not a count" + kRewrite);
+  if (!value || *value < 0) Fail(where, what + " is " + QuotedForMessage(word) + ", not a count" + kRewrite);
   return static_cast<std::uint64_t>(*value);
 }
 
@@ -88,12 +63,12 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     start = newline + 1;
     ++line_number;
     const std::string where = name + ":" + std::to_string(line_number);
-    const std::vector<std::string_view> words = Words(line);
+    const std::vector<std::string_view> words = SplitWords(line);
     if (words.empty() || words[0].front() == '#') continue;
-    const std::string key = Lower(words[0]);
+    const std::string key = AsciiLower(words[0]);
     const std::vector<std::string_view> values(words.begin() + 1, words.end());
     if (!version && key != "version") {
-      Fail(where, "a PCD header starts with VERSION, not " + Quoted(words[0]) + kRewrite);
+      Fail(where, "a PCD header starts with VERSION, not " + QuotedForMessage(words[0]) + kRewrite);
     }
     const auto one = [&]() {
       if (values.size() != 1) Fail(where, key + " takes one value, not " + std::to_string(values.size()) + kRewrite);
@@ -131,15 +106,15 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     } else if (key == "viewpoint") {
       if (values.size() != 7) Fail(where, "VIEWPOINT takes 7 numbers" + std::string(kRewrite));
     } else if (key == "data") {
-      header.data = Lower(one());
+      header.data = AsciiLower(one());
       if (header.data != "ascii" && header.data != "binary" && header.data != "binary_compressed") {
-        Fail(where, "DATA is " + Quoted(values[0]) + ", not ascii, binary or binary_compressed" + kRewrite);
+        Fail(where, "DATA is " + QuotedForMessage(values[0]) + ", not ascii, binary or binary_compressed" + kRewrite);
       }
       header.body = start;
       header.body_line = line_number + 1;
       break;
     } else {
-      Fail(where, "unknown PCD header line " + Quoted(words[0]) + kRewrite);
+      Fail(where, "unknown PCD header line " + QuotedForMessage(words[0]) + kRewrite);
     }
   }
   const std::string where = name + ": its PCD header";
@@ -155,7 +130,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
   for (size_t i = 0; i < fields.size(); ++i) {
     Field field;
     field.name = std::string(fields[i]);
-    const std::string type = Lower(types[i]);
+    const std::string type = AsciiLower(types[i]);
     field.type = type.size() == 1 ? static_cast<char>(std::toupper(static_cast<unsigned char>(type[0]))) : '?';
     field.size = CountOf(sizes[i], where, "the SIZE of field '" + field.name + "'");
     field.count = CountOf(counts[i], where, "the COUNT of field '" + field.name + "'");
@@ -163,11 +138,11 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     const bool valid = integer ? (field.size == 1 || field.size == 2 || field.size == 4 || field.size == 8)
                                : field.type == 'F' && (field.size == 4 || field.size == 8);
     if (!valid) {
-      Fail(where, "'s field '" + field.name + "' has TYPE " + Quoted(types[i]) + " and SIZE " + Quoted(sizes[i]) +
+      Fail(where, "'s field '" + field.name + "' has TYPE " + QuotedForMessage(types[i]) + " and SIZE " + QuotedForMessage(sizes[i]) +
                       "; PCD knows F 4, F 8 and I or U 1, 2, 4, 8" + kRewrite);
     }
     if (field.count < 1 || field.count > 1000000) {
-      Fail(where, "'s field '" + field.name + "' has COUNT " + Quoted(counts[i]) + kRewrite);
+      Fail(where, "'s field '" + field.name + "' has COUNT " + QuotedForMessage(counts[i]) + kRewrite);
     }
     header.fields.push_back(field);
   }
@@ -284,7 +259,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
     const std::string_view line = bytes.substr(start, end - start);
     start = end + 1;
     ++line_number;
-    const std::vector<std::string_view> words = Words(line);
+    const std::vector<std::string_view> words = SplitWords(line);
     if (words.empty()) continue;
     const std::string where = name + ":" + std::to_string(line_number);
     if (points.size() == n) {
@@ -295,7 +270,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
                       std::to_string(values_per_row) + kRewrite);
     }
     for (const std::string_view word : words) {
-      if (!ParseDouble(word)) Fail(where, Quoted(word) + " is not a number" + kRewrite);
+      if (!ParseDouble(word)) Fail(where, QuotedForMessage(word) + " is not a number" + kRewrite);
     }
     Eigen::Vector3d p;
     for (int axis = 0; axis < 3; ++axis) {

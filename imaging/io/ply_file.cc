@@ -23,25 +23,6 @@ const char* const kRewrite = "; the file is damaged or not PLY: export it again"
   throw InputError(where + ": " + problem);
 }
 
-std::vector<std::string_view> Words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t start = 0;
-  while (true) {
-    start = line.find_first_not_of(" \t\r", start);
-    if (start == std::string_view::npos) break;
-    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
-    words.push_back(line.substr(start, end - start));
-    start = end;
-  }
-  return words;
-}
-
-std::string Quoted(std::string_view text) {
-  std::string quoted(1, '\'');  // appended, not added: GCC 12 warns falsely (-Wrestrict) on "'" + string
-  quoted.append(text.substr(0, 40));
-  return quoted + '\'';
-}
-
 enum class Scalar { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
 
 std::optional<Scalar> ScalarOf(std::string_view word) {
@@ -108,7 +89,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     start = newline + 1;
     ++line_number;
     const std::string where = name + ":" + std::to_string(line_number);
-    const std::vector<std::string_view> words = Words(line);
+    const std::vector<std::string_view> words = SplitWords(line);
     if (line_number == 1) {
       if (words.size() != 1 || words[0] != "ply") Fail(name, "does not start with a 'ply' line" + std::string(kRewrite));
       continue;
@@ -132,14 +113,14 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       } else if (words[1] == "binary_big_endian") {
         header.encoding = Encoding::kBig;
       } else {
-        Fail(where, "unknown PLY format " + Quoted(words[1]) + kRewrite);
+        Fail(where, "unknown PLY format " + QuotedForMessage(words[1]) + kRewrite);
       }
       format = true;
     } else if (key == "element") {
       const std::optional<std::int64_t> count = words.size() == 3 ? ParseInt(words[2]) : std::nullopt;
       if (!count || *count < 0) Fail(where, "an element line needs a name and a count" + std::string(kRewrite));
       for (const Element& element : header.elements) {
-        if (element.name == words[1]) Fail(where, "a second element " + Quoted(words[1]) + kRewrite);
+        if (element.name == words[1]) Fail(where, "a second element " + QuotedForMessage(words[1]) + kRewrite);
       }
       header.elements.push_back({std::string(words[1]), static_cast<std::uint64_t>(*count), {}});
     } else if (key == "property") {
@@ -160,7 +141,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       if (!type) Fail(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kRewrite));
       property.type = *type;
       for (const Property& other : header.elements.back().properties) {
-        if (other.name == property.name) Fail(where, "a second property " + Quoted(property.name) + kRewrite);
+        if (other.name == property.name) Fail(where, "a second property " + QuotedForMessage(property.name) + kRewrite);
       }
       header.elements.back().properties.push_back(property);
     } else if (key == "end_header") {
@@ -169,17 +150,17 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       header.body_line = line_number + 1;
       break;
     } else {
-      Fail(where, "unknown PLY header line " + Quoted(key) + kRewrite);
+      Fail(where, "unknown PLY header line " + QuotedForMessage(key) + kRewrite);
     }
   }
   if (!format) Fail(name, "its PLY header has no format line" + std::string(kRewrite));
   for (const Element& element : header.elements) {
     if (element.properties.empty() && element.count > 0) {
-      Fail(name, "its PLY element " + Quoted(element.name) + " has rows but no properties" + kRewrite);
+      Fail(name, "its PLY element " + QuotedForMessage(element.name) + " has rows but no properties" + kRewrite);
     }
     // Every row takes at least a byte (binary) or a line (ascii).
     if (element.count > bytes.size() - header.body) {
-      Fail(name, "its PLY element " + Quoted(element.name) + " declares " + std::to_string(element.count) +
+      Fail(name, "its PLY element " + QuotedForMessage(element.name) + " declares " + std::to_string(element.count) +
                      " rows, more than the file's " + std::to_string(bytes.size()) +
                      " bytes can hold; the file is incomplete or damaged: export it again");
     }
@@ -202,7 +183,7 @@ class Body {
     while (words_.empty()) {
       if (at_ >= bytes_.size()) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
       const size_t end = std::min(bytes_.find('\n', at_), bytes_.size());
-      words_ = Words(bytes_.substr(at_, end - at_));
+      words_ = SplitWords(bytes_.substr(at_, end - at_));
       at_ = end + 1;
       ++line_number_;
     }
@@ -223,8 +204,8 @@ class Body {
       }
       const std::string_view word = words_[next_word_++];
       const std::optional<double> value = ParseDouble(word);
-      if (!value) Fail(where_, Quoted(word) + " is not a number" + kRewrite);
-      if (IsInteger(type) && *value != std::floor(*value)) Fail(where_, Quoted(word) + " is not an integer" + kRewrite);
+      if (!value) Fail(where_, QuotedForMessage(word) + " is not a number" + kRewrite);
+      if (IsInteger(type) && *value != std::floor(*value)) Fail(where_, QuotedForMessage(word) + " is not an integer" + kRewrite);
       // A float property holds the float nearest the text; beyond float's range the conversion would be undefined.
       const bool to_float = type == Scalar::kFloat32 && std::abs(*value) <= std::numeric_limits<float>::max();
       return to_float ? static_cast<float>(*value) : *value;

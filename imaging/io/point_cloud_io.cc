@@ -23,23 +23,9 @@ namespace {
 
 constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 
-
-std::vector<std::string_view> Words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t start = 0;
-  while (true) {
-    start = line.find_first_not_of(" \t\r", start);
-    if (start == std::string_view::npos) break;
-    const size_t end = std::min(line.find_first_of(" \t\r", start), line.size());
-    words.push_back(line.substr(start, end - start));
-    start = end;
-  }
-  return words;
-}
-
 // Fields of a line: split at commas or semicolons when there are any, else at blanks.
 std::vector<std::string_view> Fields(std::string_view line) {
-  if (line.find_first_of(",;") == std::string_view::npos) return Words(line);
+  if (line.find_first_of(",;") == std::string_view::npos) return SplitWords(line);
   std::vector<std::string_view> fields;
   size_t start = 0;
   while (true) {
@@ -53,7 +39,7 @@ std::vector<std::string_view> Fields(std::string_view line) {
 }
 
 std::optional<std::pair<int, int>> GridComment(std::string_view comment) {
-  const std::vector<std::string_view> words = Words(comment);
+  const std::vector<std::string_view> words = SplitWords(comment);
   if (words.size() != 4 || words[0] != "grid" || words[2] != "x") return std::nullopt;
   const std::optional<std::int64_t> w = ParseInt(words[1]), h = ParseInt(words[3]);
   if (!w || !h || *w < 1 || *h < 1 || *w > INT32_MAX || *h > INT32_MAX) return std::nullopt;
