@@ -128,9 +128,10 @@ void WriteStackImage(const std::filesystem::path& path, const StackImage& image)
   spec.height = image.height;
   spec.type = type;
   const ImageCodec& codec = LoadImageCodec("writing " + path.string());
+  const void* pixels = data;  // a plain variable: C++20 lambdas may not capture structured bindings (clang 14)
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
     std::string error;
-    switch (codec.write(temporary, spec, type, data, &error)) {
+    switch (codec.write(temporary, spec, spec.type, pixels, &error)) {
       case ImageWriteResult::kWritten:
         return;
       case ImageWriteResult::kUnknownFormat:
