@@ -127,20 +127,7 @@ void WriteStackImage(const std::filesystem::path& path, const StackImage& image)
   spec.width = image.width;
   spec.height = image.height;
   spec.type = type;
-  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
-  const void* pixels = data;  // a plain variable: C++20 lambdas may not capture structured bindings (clang 14)
-  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::string error;
-    switch (codec.write(temporary, spec, spec.type, pixels, &error)) {
-      case ImageWriteResult::kWritten:
-        return;
-      case ImageWriteResult::kUnknownFormat:
-        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
-      case ImageWriteResult::kFailed:
-        throw InputError(path.string() + ": cannot write (" + error +
-                         "); check that the directory exists, is writable and has free space");
-    }
-  });
+  WriteImageFile(path, spec, type, data);
 }
 
 }  // namespace fvm::imaging

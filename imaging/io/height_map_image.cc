@@ -210,19 +210,7 @@ void WriteHeightMapImage(const std::filesystem::path& path, const HeightMap& map
   spec.x_resolution = static_cast<float>(10.0 / map.dx_mm);
   spec.y_resolution = static_cast<float>(10.0 / map.dy_mm);
   spec.resolution_unit = "cm";
-  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
-  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::string error;
-    switch (codec.write(temporary, spec, PixelType::kFloat, map.z_mm.data(), &error)) {
-      case ImageWriteResult::kWritten:
-        return;
-      case ImageWriteResult::kUnknownFormat:
-        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
-      case ImageWriteResult::kFailed:
-        throw InputError(path.string() + ": cannot write (" + error +
-                         "); check that the directory exists, is writable and has free space");
-    }
-  });
+  WriteImageFile(path, spec, PixelType::kFloat, map.z_mm.data());
 }
 
 }  // namespace fvm::imaging

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/file_io.h"
 #include "core/input_error.h"
 #include "imaging/io/plugin_loader.h"
 
@@ -13,6 +14,23 @@ const ImageCodec& LoadImageCodec(std::string_view action) {
   static constexpr PluginSpec kPlugin{"libfvm_image_oiio.so", "fvm_image_codec_v1", "OpenImageIO",
                                       "libopenimageio2.4"};
   return *static_cast<const ImageCodec*>(LoadPlugin(kPlugin, action));
+}
+
+void WriteImageFile(const std::filesystem::path& path, const ImageWriteSpec& spec, PixelType data_type,
+                    const void* data) {
+  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
+  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
+    std::string error;
+    switch (codec.write(temporary, spec, data_type, data, &error)) {
+      case ImageWriteResult::kWritten:
+        return;
+      case ImageWriteResult::kUnknownFormat:
+        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
+      case ImageWriteResult::kFailed:
+        throw InputError(path.string() + ": cannot write (" + error +
+                         "); check that the directory exists, is writable and has free space");
+    }
+  });
 }
 
 namespace {

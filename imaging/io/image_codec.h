@@ -74,6 +74,11 @@ struct ImageCodec {
 // install the Debian package ...".
 const ImageCodec& LoadImageCodec(std::string_view action);
 
+// Writes `data` (in `data_type`, interleaved) to `path` through the codec, atomically (a temporary file renamed
+// over it). Throws InputError naming `path` when the format is unknown or the write fails.
+void WriteImageFile(const std::filesystem::path& path, const ImageWriteSpec& spec, PixelType data_type,
+                    const void* data);
+
 // Throws InputError naming `path` when its header claims more pixel bytes than a file of `file_bytes` could hold
 // decompressed (deflate and LZW stay under about 1:1000; we allow 1:4096, and never refuse below 64 MiB): a
 // damaged header must not make a reader allocate gigabytes.

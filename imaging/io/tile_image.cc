@@ -80,18 +80,7 @@ void WriteTileImage(const std::filesystem::path& path, const TileImage& image, T
   spec.width = static_cast<int>(image.cols());
   spec.height = static_cast<int>(image.rows());
   spec.type = format;
-  const ImageCodec& codec = LoadImageCodec("writing " + path.string());
-  WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {
-    std::string error;
-    switch (codec.write(temporary, spec, PixelType::kFloat, data.data(), &error)) {
-      case ImageWriteResult::kWritten:
-        return;
-      case ImageWriteResult::kUnknownFormat:
-        throw InputError(path.string() + ": cannot write this image type (" + error + ")");
-      case ImageWriteResult::kFailed:
-        throw InputError(path.string() + ": cannot write (" + error + "); check that the directory exists and is writable");
-    }
-  });
+  WriteImageFile(path, spec, PixelType::kFloat, data.data());
 }
 
 }  // namespace fvm::imaging
