@@ -72,7 +72,7 @@ ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResu
   for (double e : stage::DistanceErrors(nullptr, shown.observations)) data.distance_errors_before_um.push_back(e * 1e3);
   for (double e : stage::DistanceErrors(&r.calibration, shown.observations)) data.distance_errors_after_um.push_back(e * 1e3);
   for (size_t i = 0; i < shown.observations.size(); ++i) {
-    const Eigen::Vector3d& q = shown.observations[i].free;
+    const Eigen::Vector3d& q = shown.observations[i].command;
     data.errors_before.push_back({q.x(), q.y(), -before.residuals[i].x() * 1e3, -before.residuals[i].y() * 1e3});
     data.errors_after.push_back({q.x(), q.y(), -after.residuals[i].x() * 1e3, -after.residuals[i].y() * 1e3});
   }

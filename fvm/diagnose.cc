@@ -36,7 +36,7 @@ std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const auto [it, inserted] = first.emplace(set.observations[i].group, i);
     if (inserted) continue;
-    const Eigen::Vector3d d = set.observations[i].reference - set.observations[it->second].reference;
+    const Eigen::Vector3d d = set.observations[i].measured - set.observations[it->second].measured;
     if (d.norm() > 0) errors.push_back(d.normalized().dot(residuals[i] - residuals[it->second]) * 1e3);
   }
   return errors;
@@ -59,7 +59,7 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
   data.distance_errors_before_um = DistanceErrorsUm(identify, d.residuals_before);
   data.distance_errors_after_um = DistanceErrorsUm(identify, d.residuals_after);
   for (size_t i = 0; i < identify.observations.size() && i < d.residuals_after.size(); ++i) {
-    const Eigen::Vector3d& q = identify.observations[i].free;
+    const Eigen::Vector3d& q = identify.observations[i].command;
     data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
     data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
   }

@@ -30,7 +30,7 @@ Eigen::MatrixXd CoefficientColumns(const ParameterLayout& layout, const std::vec
   std::vector<Eigen::MatrixXd> anchor_jacobians;
   for (const Eigen::Vector3d& a : set.anchors) anchor_jacobians.push_back(ForwardJacobian(layout, values.data(), a));
   for (size_t i = 0; i < set.observations.size(); ++i) {
-    Eigen::MatrixXd j = ForwardJacobian(layout, values.data(), set.observations[i].free);
+    Eigen::MatrixXd j = ForwardJacobian(layout, values.data(), set.observations[i].command);
     if (anchored) j -= anchor_jacobians[static_cast<size_t>(set.observations[i].group)];
     for (size_t c = 0; c < names.size(); ++c) {
       columns.block<3, 1>(3 * static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(c)) = j.col(layout.FreeIndexOf(names[c]));
@@ -139,9 +139,9 @@ std::vector<std::string> Findings(const std::vector<Eigen::Vector3d>& residuals,
   std::map<int, int> index_in_group;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const Observation& o = set.observations[i];
-    covariates["x"].push_back(o.free.x());
-    covariates["y"].push_back(o.free.y());
-    covariates["height z"].push_back(o.free.z());
+    covariates["x"].push_back(o.command.x());
+    covariates["y"].push_back(o.command.y());
+    covariates["height z"].push_back(o.command.z());
     covariates["calotte index"].push_back(index_in_group[o.group]++);
     if (!set.t_s.empty()) covariates["time"].push_back(set.t_s[i]);
   }
@@ -297,7 +297,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     for (size_t i = 0; i < identify.observations.size(); ++i) {
       const Observation& o = identify.observations[i];
       const Eigen::Vector3d a = identify.anchors[static_cast<size_t>(o.group)];
-      columns.block<2, 1>(3 * static_cast<Eigen::Index>(i), 0) = -(o.reference - a).head<2>();
+      columns.block<2, 1>(3 * static_cast<Eigen::Index>(i), 0) = -(o.measured - a).head<2>();
     }
     column_candidate("scale", "xy", columns);
   }
@@ -402,7 +402,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     Eigen::Index axis = 0;
     v.cwiseAbs().maxCoeff(&axis);
     const auto undrift = [&](const MeasurementSet& set) {
-      return Changed(set, [&](Observation& o, size_t i) { o.free -= v * set.t_s[i]; });
+      return Changed(set, [&](Observation& o, size_t i) { o.command -= v * set.t_s[i]; });
     };
     improved = identify_with(layout, undrift(identify), base_options.anchor);
     if (!validate.t_s.empty()) validate_corrected = undrift(validate);
@@ -419,7 +419,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     const auto unscale = [&](const MeasurementSet& set) {
       return Changed(set, [&](Observation& o, size_t) {
         const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
-        o.reference.head<2>() = a.head<2>() + (o.reference - a).head<2>() / (1.0 + kappa);
+        o.measured.head<2>() = a.head<2>() + (o.measured - a).head<2>() / (1.0 + kappa);
       });
     };
     improved = identify_with(layout, unscale(identify), base_options.anchor);

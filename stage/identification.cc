@@ -22,26 +22,66 @@ namespace {
 
 using SparseTermDerivative = std::vector<ParameterLayout::TermDerivativeEntry>;
 
-// Forward model and, optionally, its Jacobian w.r.t. the free coefficients (3 x n, column-major) at one
-// command: Jets through the chain for the 21 term values, then the exact linear map to the coefficients.
+// Plausible sizes of the instrument pose's corrections: 1 mm of translation, 1 mrad of rotation. They scale the
+// solver's pose parameters as PlausibleSizes does the coefficients.
+constexpr double kPoseTranslationSize = 1.0;
+constexpr double kPoseRotationSize = 1e-3;
+constexpr int kPoseParameters = 6;
+
+// Machine-frame point of the tool at one command and, optionally, its Jacobian w.r.t. the free coefficients
+// (3 x n): Jets through the chain for the 21 term values, then the exact linear map to the coefficients.
 // `all` holds every coefficient's value (ParameterLayout::Expand), expanded once per evaluation, not per point.
-Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const double* all, const Eigen::Vector3d& q,
-                              const SparseTermDerivative& derivative, Eigen::Matrix3Xd* jacobian) {
+Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const AxisChain& chain, const double* all,
+                              const Eigen::Vector3d& q, const SparseTermDerivative& derivative, Eigen::Matrix3Xd* jacobian) {
   double e[kNumErrorTerms];
   layout.TermValues(all, q, e);
-  if (jacobian == nullptr) return ChainForward(layout.chain(), e, q);
+  if (jacobian == nullptr) return ChainForward(chain, e, q);
   Eigen::Vector3d p;
-  const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(layout.chain(), e, q, &p, layout.AxesWithErrors());
+  const Eigen::Matrix<double, 3, kNumErrorTerms> term_jacobian = TermJacobian(chain, e, q, &p, layout.AxesWithErrors());
   jacobian->setZero(3, layout.NumFree());
   for (const ParameterLayout::TermDerivativeEntry& d : derivative) jacobian->col(d.slot) += term_jacobian.col(d.term) * d.value;
   return p;
 }
 
+// The map from the part frame into the instrument's: identity, or R^T (p - t) at a pose.
+class InstrumentMap {
+ public:
+  InstrumentMap() = default;
+  explicit InstrumentMap(const double* pose6) : active_(true) {
+    std::copy(pose6, pose6 + kPoseParameters, pose6_.begin());
+    rotation_transposed_ = Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])}
+                               .Rotation()
+                               .transpose();
+  }
+  Eigen::Vector3d Apply(const Eigen::Vector3d& p) const {
+    return active_ ? Eigen::Vector3d(rotation_transposed_ * (p - Eigen::Vector3d(pose6_[0], pose6_[1], pose6_[2]))) : p;
+  }
+  // d(instrument coordinates) / d(part coordinates).
+  Eigen::Matrix3d Linear() const { return active_ ? rotation_transposed_ : Eigen::Matrix3d::Identity(); }
+  // d(instrument coordinates) / d(pose6) at part-frame point p (automatic differentiation of ToPosedFrame).
+  Eigen::Matrix<double, 3, kPoseParameters> PoseJacobian(const Eigen::Vector3d& p) const {
+    using Jet = ceres::Jet<double, kPoseParameters>;
+    Jet pose[kPoseParameters];
+    for (int i = 0; i < kPoseParameters; ++i) pose[i] = Jet(pose6_[static_cast<size_t>(i)], i);
+    const Eigen::Matrix<Jet, 3, 1> out = ToPosedFrame(pose, Eigen::Matrix<Jet, 3, 1>(Jet(p[0]), Jet(p[1]), Jet(p[2])));
+    Eigen::Matrix<double, 3, kPoseParameters> j;
+    for (int r = 0; r < 3; ++r) j.row(r) = out[r].v.transpose();
+    return j;
+  }
+
+ private:
+  bool active_ = false;
+  std::array<double, kPoseParameters> pose6_{};
+  Eigen::Matrix3d rotation_transposed_ = Eigen::Matrix3d::Identity();
+};
+
 struct PreparedObservation {
-  Eigen::Vector3d free;
-  Eigen::Vector3d reference;
+  Eigen::Vector3d command;
+  Eigen::Vector3d measured;
   SparseTermDerivative derivative;
-  int anchor = -1;  // index into the prepared anchors, or -1
+  int anchor = -1;                  // index into the prepared anchors, or -1
+  const AxisChain* chain = nullptr;  // the layout's chain with this observation's tool offset
+  Eigen::Matrix3d whiten = Eigen::Matrix3d::Identity();  // L^-1 of its covariance L L^T; identity: equal weights
 };
 
 struct PreparedAnchor {
@@ -49,16 +89,46 @@ struct PreparedAnchor {
   SparseTermDerivative derivative;
 };
 
+struct Prepared {
+  std::vector<AxisChain> chains;  // one per tool offset
+  std::vector<PreparedObservation> observations;
+  std::vector<PreparedAnchor> anchors;
+  bool weighted = false;
+  bool estimate_pose = false;
+  std::array<double, kPoseParameters> pose6{};  // held pose, or where the estimated one starts
+  bool has_pose = false;
+  Eigen::Matrix<double, kPoseParameters, 1> pose_scale;
+};
+
+// The residual of one observation, whitened, and its Jacobians w.r.t. the free coefficients (unscaled) and the
+// pose (unscaled, when estimated). anchor_shift / anchor_jacobian: F(a) - a of its placement and its Jacobian.
+Eigen::Vector3d ObservationResidual(const ParameterLayout& layout, const double* all, const InstrumentMap& instrument,
+                                    const PreparedObservation& o, const Eigen::Vector3d& anchor_shift,
+                                    const Eigen::Matrix3Xd* anchor_jacobian, Eigen::Matrix3Xd* jacobian,
+                                    Eigen::Matrix<double, 3, kPoseParameters>* pose_jacobian) {
+  Eigen::Matrix3Xd j;
+  const Eigen::Vector3d part =
+      EvaluatePoint(layout, *o.chain, all, o.command, o.derivative, jacobian ? &j : nullptr) - anchor_shift;
+  if (jacobian) {
+    if (anchor_jacobian) j -= *anchor_jacobian;
+    *jacobian = o.whiten * instrument.Linear() * j;
+  }
+  if (pose_jacobian) *pose_jacobian = o.whiten * instrument.PoseJacobian(part);
+  return o.whiten * (instrument.Apply(part) - o.measured);
+}
+
 // Observations as one Ceres residual block over the coefficients in units of their plausible size (coefficient =
-// scale * parameter, so every parameter is of order one). A block holds one placement, whose first tile is then
-// evaluated once, or a single observation when a robust loss must see each centre's error on its own.
+// scale * parameter, so every parameter is of order one) and, when estimated, the pose correction in the same
+// kind of units. A block holds one placement, whose first tile is then evaluated once, or a single observation
+// when a robust loss must see each centre's error on its own.
 class BlockCost final : public ceres::CostFunction {
  public:
   BlockCost(const ParameterLayout& layout, const Eigen::VectorXd& scale, std::vector<const PreparedObservation*> block,
-            const std::vector<PreparedAnchor>& anchors)
-      : layout_(layout), scale_(scale), block_(std::move(block)), anchors_(anchors) {
+            const Prepared& prepared)
+      : layout_(layout), scale_(scale), block_(std::move(block)), prepared_(prepared) {
     set_num_residuals(3 * static_cast<int>(block_.size()));
-    mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(scale.size()));
+    if (scale.size() > 0) mutable_parameter_block_sizes()->push_back(static_cast<int32_t>(scale.size()));
+    if (prepared.estimate_pose) mutable_parameter_block_sizes()->push_back(kPoseParameters);
   }
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
@@ -66,23 +136,43 @@ class BlockCost final : public ceres::CostFunction {
     std::array<double, kMaxCoefficients> free{}, all{};
     for (Eigen::Index i = 0; i < n; ++i) free[static_cast<size_t>(i)] = scale_[i] * parameters[0][i];
     layout_.Expand(free.data(), all.data());
-    const bool want_jacobian = jacobians != nullptr && jacobians[0] != nullptr;
+    const int pose_block = n > 0 ? 1 : 0;
+    InstrumentMap instrument;
+    if (prepared_.estimate_pose) {
+      double pose6[kPoseParameters];
+      for (int i = 0; i < kPoseParameters; ++i) {
+        pose6[i] = prepared_.pose6[static_cast<size_t>(i)] + prepared_.pose_scale[i] * parameters[pose_block][i];
+      }
+      instrument = InstrumentMap(pose6);
+    } else if (prepared_.has_pose) {
+      instrument = InstrumentMap(prepared_.pose6.data());
+    }
+    const bool want_coefficients = jacobians != nullptr && n > 0 && jacobians[0] != nullptr;
+    const bool want_pose = jacobians != nullptr && prepared_.estimate_pose && jacobians[pose_block] != nullptr;
     // The anchor term F(a) - a is common to the block (every observation of a block shares its anchor).
     Eigen::Vector3d anchor_shift = Eigen::Vector3d::Zero();
     Eigen::Matrix3Xd anchor_jacobian = Eigen::Matrix3Xd::Zero(3, n);
-    if (block_.front()->anchor >= 0) {
-      const PreparedAnchor& a = anchors_[static_cast<size_t>(block_.front()->anchor)];
-      anchor_shift = EvaluatePoint(layout_, all.data(), a.position, a.derivative, want_jacobian ? &anchor_jacobian : nullptr) - a.position;
+    const bool anchored = block_.front()->anchor >= 0;
+    if (anchored) {
+      const PreparedAnchor& a = prepared_.anchors[static_cast<size_t>(block_.front()->anchor)];
+      anchor_shift = EvaluatePoint(layout_, *block_.front()->chain, all.data(), a.position, a.derivative,
+                                   want_coefficients ? &anchor_jacobian : nullptr) -
+                     a.position;
     }
     Eigen::Matrix3Xd jacobian;
+    Eigen::Matrix<double, 3, kPoseParameters> pose_jacobian;
     for (size_t k = 0; k < block_.size(); ++k) {
-      const PreparedObservation& o = *block_[k];
       const Eigen::Vector3d r =
-          EvaluatePoint(layout_, all.data(), o.free, o.derivative, want_jacobian ? &jacobian : nullptr) - anchor_shift - o.reference;
+          ObservationResidual(layout_, all.data(), instrument, *block_[k], anchor_shift, anchored ? &anchor_jacobian : nullptr,
+                              want_coefficients ? &jacobian : nullptr, want_pose ? &pose_jacobian : nullptr);
       for (int c = 0; c < 3; ++c) residuals[3 * k + static_cast<size_t>(c)] = r[c];
-      if (want_jacobian) {
+      if (want_coefficients) {
         Eigen::Map<Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>> out(jacobians[0] + 3 * k * static_cast<size_t>(n), 3, n);
-        out = (jacobian - anchor_jacobian) * scale_.asDiagonal();
+        out = jacobian * scale_.asDiagonal();
+      }
+      if (want_pose) {
+        Eigen::Map<Eigen::Matrix<double, 3, kPoseParameters, Eigen::RowMajor>> out(jacobians[pose_block] + 3 * k * kPoseParameters);
+        out = pose_jacobian * prepared_.pose_scale.asDiagonal();
       }
     }
     return true;
@@ -92,7 +182,7 @@ class BlockCost final : public ceres::CostFunction {
   const ParameterLayout& layout_;
   const Eigen::VectorXd& scale_;
   std::vector<const PreparedObservation*> block_;
-  const std::vector<PreparedAnchor>& anchors_;
+  const Prepared& prepared_;
 };
 
 // Order in which coefficients are kept when the data cannot tell some apart: lower powers first; within a
@@ -123,48 +213,79 @@ std::string FormatValue(const ParameterLayout::Coefficient& c, double si) {
   return fmt::format("{:.3g} {}", si * unit.per_si, unit.name);
 }
 
-struct Prepared {
-  std::vector<PreparedObservation> observations;
-  std::vector<PreparedAnchor> anchors;
-};
+// L^-1 of a covariance L L^T, so that |L^-1 r|^2 is the Mahalanobis distance of r.
+Eigen::Matrix3d Whitening(const Eigen::Matrix3d& covariance, int index) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
+  if (llt.info() != Eigen::Success || !covariance.allFinite()) {
+    throw std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
+  }
+  return llt.matrixL().solve(Eigen::Matrix3d::Identity());
+}
 
 Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& observations,
                  const IdentificationOptions& options) {
   Prepared p;
+  if (options.tool_offsets.empty()) {
+    p.chains.push_back(layout.chain());
+  } else {
+    for (const Eigen::Vector3d& tool : options.tool_offsets) {
+      p.chains.push_back(layout.chain());
+      p.chains.back().tool_offset = tool;
+    }
+  }
   if (options.anchor == Anchor::kFirstTile) {
     for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, layout.TermDerivativeEntries(a)});
   }
-  for (const Observation& o : observations) {
-    PreparedObservation po{o.free, o.reference, layout.TermDerivativeEntries(o.free), -1};
+  for (const Observation& o : observations) p.weighted = p.weighted || !o.covariance.isZero(0.0);
+  for (size_t i = 0; i < observations.size(); ++i) {
+    const Observation& o = observations[i];
+    PreparedObservation po{o.command, o.measured, layout.TermDerivativeEntries(o.command), -1,
+                           &p.chains[static_cast<size_t>(o.tool)], Eigen::Matrix3d::Identity()};
     if (options.anchor == Anchor::kFirstTile) po.anchor = o.group;
+    if (p.weighted) po.whiten = Whitening(o.covariance, static_cast<int>(i));
     p.observations.push_back(std::move(po));
   }
+  p.has_pose = options.instrument != InstrumentPose::kNone;
+  p.estimate_pose = options.instrument == InstrumentPose::kEstimated;
+  const Eigen::Vector3d& t = options.pose.translation;
+  const Eigen::Vector3d& r = options.pose.rotation;
+  p.pose6 = {t[0], t[1], t[2], r[0], r[1], r[2]};
+  p.pose_scale << kPoseTranslationSize, kPoseTranslationSize, kPoseTranslationSize, kPoseRotationSize, kPoseRotationSize,
+      kPoseRotationSize;
   return p;
 }
 
-// Stacked residuals and, unless `jacobian` is null, their Jacobian (unscaled) at the given coefficients.
-void Linearise(const ParameterLayout& layout, const std::vector<double>& free, const Prepared& p,
+// Stacked (whitened) residuals and, unless `jacobian` is null, their Jacobian (unscaled) at the given
+// coefficients and pose: the free coefficients' columns, then the pose's six when it is estimated.
+void Linearise(const ParameterLayout& layout, const std::vector<double>& free, const double* pose6, const Prepared& p,
                Eigen::VectorXd* residual, Eigen::MatrixXd* jacobian) {
   const Eigen::Index m = static_cast<Eigen::Index>(p.observations.size());
+  const Eigen::Index n = layout.NumFree();
   std::array<double, kMaxCoefficients> all{};
   layout.Expand(free.data(), all.data());
+  const InstrumentMap instrument = p.has_pose ? InstrumentMap(pose6) : InstrumentMap();
   residual->resize(3 * m);
-  if (jacobian) jacobian->resize(3 * m, layout.NumFree());
+  if (jacobian) jacobian->resize(3 * m, n + (p.estimate_pose ? kPoseParameters : 0));
   std::vector<Eigen::Vector3d> anchor_shift;
   std::vector<Eigen::Matrix3Xd> anchor_jacobian(p.anchors.size());
   for (size_t a = 0; a < p.anchors.size(); ++a) {
-    anchor_shift.push_back(EvaluatePoint(layout, all.data(), p.anchors[a].position, p.anchors[a].derivative,
+    anchor_shift.push_back(EvaluatePoint(layout, p.chains.front(), all.data(), p.anchors[a].position, p.anchors[a].derivative,
                                          jacobian ? &anchor_jacobian[a] : nullptr) -
                            p.anchors[a].position);
   }
   Eigen::Matrix3Xd j;
+  Eigen::Matrix<double, 3, kPoseParameters> pose_j;
   for (Eigen::Index i = 0; i < m; ++i) {
     const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
-    residual->segment<3>(3 * i) = EvaluatePoint(layout, all.data(), o.free, o.derivative, jacobian ? &j : nullptr) - o.reference;
-    if (o.anchor >= 0) residual->segment<3>(3 * i) -= anchor_shift[static_cast<size_t>(o.anchor)];
+    const bool anchored = o.anchor >= 0;
+    const size_t a = static_cast<size_t>(std::max(o.anchor, 0));
+    residual->segment<3>(3 * i) = ObservationResidual(
+        layout, all.data(), instrument, o, anchored ? anchor_shift[a] : Eigen::Vector3d::Zero(),
+        anchored && jacobian ? &anchor_jacobian[a] : nullptr, jacobian ? &j : nullptr,
+        jacobian && p.estimate_pose ? &pose_j : nullptr);
     if (!jacobian) continue;
-    if (o.anchor >= 0) j -= anchor_jacobian[static_cast<size_t>(o.anchor)];
-    jacobian->middleRows<3>(3 * i) = j;
+    jacobian->block(3 * i, 0, 3, n) = j;
+    if (p.estimate_pose) jacobian->block<3, kPoseParameters>(3 * i, n) = pose_j;
   }
 }
 
@@ -215,55 +336,87 @@ Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout) {
 
 Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
                               const Eigen::Vector3d* anchor) {
-  Eigen::Vector3d r = Forward(layout, free, Eigen::Vector3d(observation.free)) - observation.reference;
+  Eigen::Vector3d r = Forward(layout, free, Eigen::Vector3d(observation.command)) - observation.measured;
   if (anchor) r -= Forward(layout, free, Eigen::Vector3d(*anchor)) - *anchor;
   return r;
+}
+
+const std::vector<std::string>& PoseParameterNames() {
+  static const std::vector<std::string> names{"pose_tx", "pose_ty", "pose_tz", "pose_rx", "pose_ry", "pose_rz"};
+  return names;
 }
 
 IdentificationResult Identify(const ParameterLayout& input_layout, const std::vector<Observation>& observations,
                               const IdentificationOptions& options) {
   options.Check();
   const int m = static_cast<int>(observations.size());
-  if (3 * m < input_layout.NumFree()) {
+  const bool estimate_pose = options.instrument == InstrumentPose::kEstimated;
+  const int pose_count = estimate_pose ? kPoseParameters : 0;
+  if (3 * m < input_layout.NumFree() + pose_count) {
     throw std::invalid_argument(fmt::format(
-        "{} centres give {} equations, fewer than the {} coefficients of the model: measure more placements or "
-        "choose a smaller model", m, 3 * m, input_layout.NumFree()));
+        "{} points give {} equations, fewer than the {} coefficients of the model{}: measure more points or choose a "
+        "smaller model", m, 3 * m, input_layout.NumFree(), estimate_pose ? " and the 6 of the instrument pose" : ""));
   }
-  if (options.anchor == Anchor::kFirstTile) {
-    for (const Observation& o : observations) {
-      if (o.group < 0 || o.group >= static_cast<int>(options.anchors.size())) {
-        throw std::invalid_argument("anchoring at the first tile needs a first tile for every measurement");
-      }
+  if (options.instrument != InstrumentPose::kNone && input_layout.chain().instrument) {
+    throw std::invalid_argument("the chain already carries an instrument pose: give it as the identification's pose instead");
+  }
+  const size_t tools = std::max<size_t>(1, options.tool_offsets.size());
+  for (const Observation& o : observations) {
+    if (o.tool < 0 || static_cast<size_t>(o.tool) >= tools) {
+      throw std::invalid_argument(fmt::format("an observation refers to tool {}, but {} tool offset(s) were given", o.tool + 1, tools));
+    }
+    if (options.anchor == Anchor::kFirstTile && (o.group < 0 || o.group >= static_cast<int>(options.anchors.size()))) {
+      throw std::invalid_argument("anchoring at the first tile needs a first tile for every measurement");
     }
   }
 
   IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0});
   ParameterLayout& layout = result.calibration.layout;
   Prepared prepared = Prepare(layout, observations, options);
+  const double* start_pose = prepared.pose6.data();
 
-  std::vector<double> start_parameters;  // in units of the plausible sizes, for the kept coefficients
-  Eigen::MatrixXd kept_normal;           // J^T J of the kept coefficients in those units, at zero error
+  std::vector<double> start_parameters;  // in units of the plausible sizes: the kept coefficients, then the pose
+  Eigen::MatrixXd kept_normal;           // J^T J of the kept parameters in those units, at zero error
+  // The variance factor: residuals per coordinate in mm (equal weights), or chi^2 per degree of freedom
+  // (weighted; never below 1, since the readings cannot be better than their covariances say).
+  const auto variance_factor = [&](double rss, double dof) {
+    const double s = std::sqrt(rss / dof);
+    return prepared.weighted ? std::max(s, 1.0) : std::max(s, options.noise_floor_mm);
+  };
   // Rank treatment on the Jacobian at zero error (the model is linear in its coefficients to first order).
   {
     const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
     Eigen::VectorXd r0;
     Eigen::MatrixXd j;
-    Linearise(layout, zeros, prepared, &r0, &j);
-    const Eigen::VectorXd tau = PlausibleSizes(layout);
+    Linearise(layout, zeros, start_pose, prepared, &r0, &j);
+    const Eigen::Index n_coefficients = layout.NumFree();
+    Eigen::VectorXd tau(n_coefficients + pose_count);
+    tau << PlausibleSizes(layout), prepared.pose_scale.head(pose_count);
     j.array().rowwise() *= tau.transpose().array();  // columns in units of the plausible sizes
     const Eigen::VectorXd gradient = j.transpose() * r0;
     // R of j = QR has the column geometry of j in n x n: search dependences and form normal equations there.
-    // (In place: j is large, 3 rows per centre.)
+    // (In place: j is large, 3 rows per point.)
     const Eigen::Index n_all = j.cols();
     const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(j);
-    const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(n_all).triangularView<Eigen::Upper>();
-    const std::vector<std::string> names = layout.FreeNames();
+    const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(std::min(n_all, j.rows())).triangularView<Eigen::Upper>();
+    std::vector<std::string> names = layout.FreeNames();
+    for (int i = 0; i < pose_count; ++i) names.push_back(PoseParameterNames()[static_cast<size_t>(i)]);
     std::vector<bool> fixed(names.size(), false);
 
-    const std::vector<int> keeping_order = KeepingOrder(layout);
+    // The pose comes first: it is never fixed, and coefficients that only move the whole point set (constant
+    // terms next to the tracker) are named as aliases of it.
+    std::vector<int> keeping_order;
+    for (int i = 0; i < pose_count; ++i) keeping_order.push_back(static_cast<int>(n_coefficients) + i);
+    for (int c : KeepingOrder(layout)) keeping_order.push_back(c);
     std::vector<int> rank_of(names.size());
     for (size_t i = 0; i < keeping_order.size(); ++i) rank_of[static_cast<size_t>(keeping_order[i])] = static_cast<int>(i);
+    const auto is_pose = [&](int column) { return column >= n_coefficients; };
     for (const ColumnDependence& d : FindDependentColumns(r_factor, keeping_order, options.alias_tolerance)) {
+      if (is_pose(d.column)) {
+        throw std::invalid_argument(fmt::format(
+            "the points do not determine the instrument pose ({} has no effect of its own): measure points that span "
+            "the workspace in all three axes, or hold the pose", names[static_cast<size_t>(d.column)]));
+      }
       fixed[static_cast<size_t>(d.column)] = true;
       std::string why;
       if (d.on.empty()) {
@@ -278,6 +431,9 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
                              names[static_cast<size_t>(other)]);
         }
         why += " on these data";
+        if (std::any_of(d.on.begin(), d.on.end(), [&](const auto& o) { return is_pose(o.first); })) {
+          why += " (the instrument pose absorbs it: error functions are only known up to their value at the origin)";
+        }
       }
       result.fixed.push_back({names[static_cast<size_t>(d.column)], why});
     }
@@ -304,12 +460,13 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       start = -ldlt.solve(gk);  // the linearised least-squares solution: where LM starts
       const double rss = std::max(0.0, r0_squared - gk.dot(ldlt.solve(gk)));
       const double dof = std::max(1.0, 3.0 * m - static_cast<double>(k));
-      const double sigma = std::max(std::sqrt(rss / dof), options.noise_floor_mm);
+      const double sigma = variance_factor(rss, dof);
       const Eigen::MatrixXd covariance = sigma * sigma * ldlt.solve(Eigen::MatrixXd::Identity(k, k));
       // Of the coefficients the data cannot determine, fix the one we would keep last (KeepingOrder): when
-      // pitch and a squareness term explain the same thing, the squareness stays.
+      // pitch and a squareness term explain the same thing, the squareness stays. The pose is never fixed.
       Eigen::Index worst = -1;
       for (Eigen::Index a = 0; a < k; ++a) {
+        if (is_pose(kept[static_cast<size_t>(a)])) continue;
         const double u = std::sqrt(std::max(0.0, covariance(a, a)));
         if (!(u <= options.max_relative_uncertainty)) {
           if (worst < 0 || rank_of[static_cast<size_t>(kept[static_cast<size_t>(a)])] >
@@ -325,7 +482,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       }
       const double u = std::sqrt(std::max(0.0, covariance(worst, worst)));
       const int column = kept[static_cast<size_t>(worst)];
-      Eigen::Index partner = worst == 0 ? 1 : 0;  // the kept coefficient it is most correlated with
+      Eigen::Index partner = worst == 0 ? 1 : 0;  // the kept parameter it is most correlated with
       for (Eigen::Index a = 0; a < k; ++a) {
         if (a == worst) continue;
         const double rho = std::abs(covariance(worst, a)) / std::sqrt(covariance(a, a) * covariance(worst, worst));
@@ -349,11 +506,13 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
   prepared = Prepare(layout, observations, options);
 
-  // Levenberg-Marquardt over the coefficients in units of their plausible size.
+  // Levenberg-Marquardt over the coefficients (and the pose correction) in units of their plausible size.
   const Eigen::VectorXd scale = PlausibleSizes(layout);
   const int n = layout.NumFree();
-  std::vector<double> parameters = start_parameters;
+  std::vector<double> parameters(start_parameters.begin(), start_parameters.end() - pose_count);
   parameters.resize(static_cast<size_t>(n), 0.0);
+  std::vector<double> pose_parameters(start_parameters.end() - pose_count, start_parameters.end());
+  pose_parameters.resize(static_cast<size_t>(pose_count), 0.0);
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -363,13 +522,20 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     const int key = options.loss == "none" ? observations[i].group : static_cast<int>(i);
     blocks[key].push_back(&prepared.observations[i]);
   }
+  std::vector<double*> blocks_of_parameters;
+  if (n > 0) blocks_of_parameters.push_back(parameters.data());
+  if (estimate_pose) blocks_of_parameters.push_back(pose_parameters.data());
   for (auto& [key, block] : blocks) {
     ceres::LossFunction* loss = nullptr;
     if (options.loss == "huber") loss = new ceres::HuberLoss(options.loss_scale_mm);
     if (options.loss == "cauchy") loss = new ceres::CauchyLoss(options.loss_scale_mm);
-    if (n > 0) problem.AddResidualBlock(new BlockCost(layout, scale, std::move(block), prepared.anchors), loss, parameters.data());
+    if (!blocks_of_parameters.empty()) {
+      problem.AddResidualBlock(new BlockCost(layout, scale, std::move(block), prepared), loss, blocks_of_parameters);
+    } else {
+      delete loss;
+    }
   }
-  if (n > 0) {
+  if (!blocks_of_parameters.empty()) {
     ceres::Solver::Options solver;
     solver.minimizer_type = ceres::TRUST_REGION;
     solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -395,26 +561,43 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   std::vector<double>& values = result.calibration.values;
   values.resize(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) values[static_cast<size_t>(i)] = scale[i] * parameters[static_cast<size_t>(i)];
+  std::array<double, kPoseParameters> pose6 = prepared.pose6;
+  for (int i = 0; i < pose_count; ++i) pose6[static_cast<size_t>(i)] += prepared.pose_scale[i] * pose_parameters[static_cast<size_t>(i)];
+  result.pose = options.instrument == InstrumentPose::kNone
+                    ? Pose{}
+                    : Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])};
 
   // Residual statistics and noise at the solution. The covariance uses the Jacobian of the rank analysis (at
   // zero error): the model is linear in its coefficients to first order, and stage errors of 1e-3 change it by
   // about 0.1 %, far below what a covariance estimated from tens of centres can resolve.
-  Eigen::VectorXd r;
-  Linearise(layout, values, prepared, &r, nullptr);
-  for (int i = 0; i < m; ++i) result.residuals.push_back(r.segment<3>(3 * i));
+  Eigen::VectorXd whitened;
+  Linearise(layout, values, pose6.data(), prepared, &whitened, nullptr);
+  for (int i = 0; i < m; ++i) {
+    const PreparedObservation& o = prepared.observations[static_cast<size_t>(i)];
+    result.residuals.push_back(prepared.weighted ? Eigen::Vector3d(o.whiten.triangularView<Eigen::Lower>().solve(whitened.segment<3>(3 * i)))
+                                                 : Eigen::Vector3d(whitened.segment<3>(3 * i)));
+  }
   const ResidualSummary summary = Summarize(result.residuals);
   result.mean_mm = summary.mean_mm;
   result.rms_mm = summary.rms_mm;
   result.max_mm = summary.max_mm;
-  const double dof = std::max(1.0, 3.0 * m - n);
-  result.calibration.sigma_mm = std::max(std::sqrt(r.squaredNorm() / dof), options.noise_floor_mm);
-  if (n > 0) {
+  const double dof = std::max(1.0, 3.0 * m - n - pose_count);
+  double plain_squared = 0.0;
+  for (const Eigen::Vector3d& r : result.residuals) plain_squared += r.squaredNorm();
+  result.calibration.sigma_mm = std::max(std::sqrt(plain_squared / dof), options.noise_floor_mm);
+  result.weighted_rms = prepared.weighted ? std::sqrt(whitened.squaredNorm() / dof) : 0.0;
+  const double factor = variance_factor(whitened.squaredNorm(), dof);
+  if (n + pose_count > 0) {
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(kept_normal);
     const double lo = std::max(eigen.eigenvalues().minCoeff(), 0.0);
     result.condition_number = lo > 0 ? std::sqrt(eigen.eigenvalues().maxCoeff() / lo) : INFINITY;
-    const Eigen::MatrixXd scaled_cov = kept_normal.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-    result.calibration.covariance = result.calibration.sigma_mm * result.calibration.sigma_mm *
-                                    (scale.asDiagonal() * scaled_cov * scale.asDiagonal());
+    Eigen::VectorXd all_scale(n + pose_count);
+    all_scale << scale, prepared.pose_scale.head(pose_count);
+    const Eigen::MatrixXd covariance = factor * factor * (all_scale.asDiagonal() *
+                                                          kept_normal.ldlt().solve(Eigen::MatrixXd::Identity(n + pose_count, n + pose_count)) *
+                                                          all_scale.asDiagonal());
+    result.calibration.covariance = covariance.topLeftCorner(n, n);
+    if (estimate_pose) result.pose_covariance = covariance.bottomRightCorner<kPoseParameters, kPoseParameters>();
   }
   return result;
 }

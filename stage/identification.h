@@ -1,8 +1,12 @@
 #pragma once
-// Identification of a stage error model from pairs of measurements of an uncalibrated artefact: stitching-free
-// centres (stage error included) and stitched centres (reference) of the same calottes.
+// Identification of a three-axis error model from what a measuring instrument saw at commanded axis positions.
+// One estimator serves every client:
+// - the microscope stage: commands are the stitching-free centres of an uncalibrated artefact, measurements its
+//   stitched centres (optionally referenced to each placement's first tile);
+// - a machine tool: commands are the nominal machine coordinates, measurements the laser tracker's readings in
+//   its own frame, each weighted by its 3x3 covariance, with the tracker pose estimated jointly (or held).
 //
-// Levenberg-Marquardt (Ceres) on the Euclidean point error of eq. 6, with automatic derivatives through the
+// Levenberg-Marquardt (Ceres) on the (whitened) point error of eq. 6, with automatic derivatives through the
 // kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is
 // examined on the Jacobian: coefficients the data cannot tell apart from others (exact aliases such as xTy1 and
 // xWy, offsets that cancel under anchoring, pitch and roll when z barely varies) are fixed at zero, named, and
@@ -14,13 +18,20 @@
 
 #include "stage/calibration.h"
 #include "stage/parameter_layout.h"
+#include "stage/pose.h"
 
 namespace fvm::stage {
 
 struct Observation {
-  Eigen::Vector3d free = Eigen::Vector3d::Zero();       // stitching-free centre, stage coordinates, mm
-  Eigen::Vector3d reference = Eigen::Vector3d::Zero();  // stitched centre of the same calotte, mm
-  int group = 0;                                        // which measurement (placement) it belongs to
+  Eigen::Vector3d command = Eigen::Vector3d::Zero();   // commanded axis positions, mm (microscope: the
+                                                       // stitching-free centre, i.e. the encoder reading)
+  Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // what the instrument read, in its frame, mm (microscope:
+                                                       // the stitched centre; machine tool: the tracker reading)
+  int group = 0;                                       // which measurement (placement) it belongs to
+  // Covariance of `measured`, mm^2. All zero (the default) for every observation: equal weights. Otherwise every
+  // observation needs a positive-definite one and the fit minimises the Mahalanobis distances.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  int tool = 0;  // which tool offset (IdentificationOptions::tool_offsets) it was measured with
 };
 
 // Observations with what identification, validation and diagnosis need to know about them.
@@ -40,8 +51,20 @@ enum class Anchor {
   kFirstTile,  // stitched = F(q) - F(a) + a with a the measurement's first tile
 };
 
+// Where the instrument's frame sits in the part frame of the chain (a tracker on the table).
+enum class InstrumentPose {
+  kNone,       // measurements are in the part frame (or the layout's chain carries a fixed instrument pose)
+  kHeld,       // measurements are in the frame of `IdentificationOptions::pose`, taken as known
+  kEstimated,  // the same, with the pose estimated jointly with the error model, starting at `pose`
+};
+
 struct IdentificationOptions {
   Anchor anchor = Anchor::kNone;
+  InstrumentPose instrument = InstrumentPose::kNone;
+  Pose pose;                                 // kHeld / kEstimated: the (starting) instrument pose
+  // Tool offsets (mm, last tool axis' frame) that observations refer to by `tool`; empty: the chain's own. With
+  // two or more, the rank analysis sees the lever arms they add.
+  std::vector<Eigen::Vector3d> tool_offsets;
   std::vector<Eigen::Vector3d> anchors;     // kFirstTile: first-tile stage coordinates of each group
   std::string loss = "none";                // "none", "huber" or "cauchy" on each point's Euclidean error
   double loss_scale_mm = 0.005;             // where the robust loss starts to bend
@@ -63,8 +86,12 @@ struct IdentificationResult {
   explicit IdentificationResult(Calibration c) : calibration(std::move(c)) {}
   Calibration calibration;
   std::vector<FixedCoefficient> fixed;     // what the rank treatment fixed at zero, and why
-  std::vector<Eigen::Vector3d> residuals;  // model - reference for each observation, mm
+  std::vector<Eigen::Vector3d> residuals;  // model - measured for each observation (instrument frame), mm
   double mean_mm = 0, rms_mm = 0, max_mm = 0;  // of the Euclidean residuals
+  // Weighted fits: sqrt(chi^2 / degrees of freedom), 1 when the residuals are as large as the covariances say.
+  double weighted_rms = 0;
+  Pose pose;                               // the instrument pose used (estimated or held)
+  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();  // translation mm, rotation rad
   double condition_number = 0;             // of the Jacobian with coefficients in units of their plausible size
   int iterations = 0;
   bool converged = false;
@@ -76,7 +103,10 @@ struct IdentificationResult {
 IdentificationResult Identify(const ParameterLayout& layout, const std::vector<Observation>& observations,
                               const IdentificationOptions& options = {});
 
-// The residual of one observation under a model (model - reference), with the anchor when given.
+// Names of the six instrument-pose parameters, as the rank treatment and reports name them.
+const std::vector<std::string>& PoseParameterNames();
+
+// The residual of one observation under a model (model - measured), with the anchor when given.
 Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
                               const Eigen::Vector3d* anchor = nullptr);
 

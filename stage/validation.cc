@@ -38,7 +38,7 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
   double predicted_sq = 0;
   for (const Observation& o : observations) {
     Eigen::MatrixXd jq, ja;
-    Eigen::Vector3d r = Compensated(calibration, o.free, &jq) - o.reference;
+    Eigen::Vector3d r = Compensated(calibration, o.command, &jq) - o.measured;
     if (!anchors.empty()) {
       const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
       r -= Compensated(calibration, a, &ja) - a;
@@ -61,8 +61,8 @@ std::vector<double> DistanceErrors(const Calibration* calibration, const std::ve
     const auto [it, inserted] = first.emplace(o.group, &o);
     if (inserted) continue;
     const Observation& f = *it->second;
-    const double compensated = (Compensated(calibration, o.free, nullptr) - Compensated(calibration, f.free, nullptr)).norm();
-    errors.push_back(compensated - (o.reference - f.reference).norm());
+    const double compensated = (Compensated(calibration, o.command, nullptr) - Compensated(calibration, f.command, nullptr)).norm();
+    errors.push_back(compensated - (o.measured - f.measured).norm());
   }
   return errors;
 }

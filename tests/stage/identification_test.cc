@@ -69,13 +69,13 @@ std::vector<double> IndependentLeastSquares(const ParameterLayout& layout, const
     Eigen::MatrixXd j(3 * obs.size(), layout.NumFree());
     Eigen::VectorXd r(3 * obs.size());
     for (size_t i = 0; i < obs.size(); ++i) {
-      r.segment<3>(3 * static_cast<Eigen::Index>(i)) = Forward(layout, x, obs[i].free) - obs[i].reference;
+      r.segment<3>(3 * static_cast<Eigen::Index>(i)) = Forward(layout, x, obs[i].command) - obs[i].measured;
       for (int c = 0; c < layout.NumFree(); ++c) {
         std::vector<double> up = x, down = x;
         const double h = 1e-4 * tau[c];
         up[static_cast<size_t>(c)] += h;
         down[static_cast<size_t>(c)] -= h;
-        j.block<3, 1>(3 * static_cast<Eigen::Index>(i), c) = (Forward(layout, up, obs[i].free) - Forward(layout, down, obs[i].free)) / (2 * h);
+        j.block<3, 1>(3 * static_cast<Eigen::Index>(i), c) = (Forward(layout, up, obs[i].command) - Forward(layout, down, obs[i].command)) / (2 * h);
       }
     }
     const Eigen::MatrixXd js = j * tau.asDiagonal();
@@ -171,7 +171,7 @@ TEST(Identification, TooFewCentresForTheModelIsAClearError) {
 
 TEST(Identification, RobustLossResistsAFailedSphereFit) {
   Experiment e = Simulate(2);
-  e.identify.observations[20].free += Eigen::Vector3d(0.05, -0.03, 0.02);  // a 60 um blunder
+  e.identify.observations[20].command += Eigen::Vector3d(0.05, -0.03, 0.02);  // a 60 um blunder
   const double clean = ValidationMean(Identify(FvmModelLayout("27"), Simulate(2).identify.observations), e);
   const double plain = ValidationMean(Identify(FvmModelLayout("27"), e.identify.observations), e);
   IdentificationOptions robust;
