@@ -1,0 +1,48 @@
+#pragma once
+// Volumetric verification of a machine tool from laser-tracker readings (seeds 000, 001, 003/004): identify the
+// 21 error functions and the tracker pose from the readings at commanded points, and say how far the machine is
+// from where it should be before and after.
+//
+// Volumetric error = distance between a tracker reading and the model's prediction of the ideal machine (before)
+// or of the identified machine (after), in the tracker frame. Before, the pose is that of the ideal machine's best
+// fit to the readings (or the held pose); after, the jointly estimated one. Error functions vanish at the origin of
+// their axis only up to what the pose absorbs: a rigid best fit alone cannot supply the pose, so it is estimated
+// jointly with the errors by default, and the rank treatment names the constant terms it absorbs.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "stage/identification.h"
+
+namespace fvm::stage {
+
+// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the seeds quote them.
+struct VolumetricError {
+  int points = 0;
+  double mean_um = 0, max_um = 0, min_um = 0;
+};
+VolumetricError SummarizeVolumetric(const std::vector<Eigen::Vector3d>& residuals_mm);
+
+struct VerificationResult {
+  explicit VerificationResult(IdentificationResult r) : identified(std::move(r)) {}
+  IdentificationResult identified;  // the error model and the final pose (identified.pose)
+  Pose initial_pose;                // the pose the initial error is stated in
+  VolumetricError initial, final;
+};
+
+// The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, Umeyama):
+// a start for the joint estimate. Throws std::invalid_argument when the points do not span three dimensions.
+Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& readings,
+                    const std::vector<Eigen::Vector3d>& tool_offsets = {});
+
+// Identifies `layout` from the readings. options.instrument must be kHeld or kEstimated; with kEstimated,
+// options.pose is only where the search starts (RigidStartPose when left at zero).
+VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vector<Observation>& readings,
+                                 IdentificationOptions options);
+
+// Model - reading in the tracker frame for each reading: the ideal machine when `calibration` is null.
+std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, const std::vector<double>* values,
+                                                 const Pose& pose, const std::vector<Observation>& readings,
+                                                 const std::vector<Eigen::Vector3d>& tool_offsets = {});
+
+}  // namespace fvm::stage
