@@ -162,7 +162,8 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
     if (TrimBlanks(p.id).empty()) refuse("the id is empty");
     if (TrimBlanks(p.id).size() != p.id.size()) refuse("the id has blanks at its ends, which a reader trims");
     if (!p.nominal.allFinite() || !p.measured.allFinite()) refuse("a coordinate is not finite");
-    if (p.nominal.cwiseAbs().maxCoeff() > kMaxCoordinateMm || p.measured.norm() > kMaxCoordinateMm) {
+    if (p.nominal.cwiseAbs().maxCoeff() > kMaxCoordinateMm || p.measured.cwiseAbs().maxCoeff() > kMaxCoordinateMm ||
+        (data.spherical && p.measured.norm() > kMaxCoordinateMm)) {
       refuse("a coordinate is beyond 100 m");
     }
     if (!seen.emplace(p.id, i).second) refuse("the id appears twice");

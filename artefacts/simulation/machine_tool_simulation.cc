@@ -314,10 +314,13 @@ MachineTruth RandomMachineTruth(const Workspace& ws, std::uint64_t seed, double 
   return RandomMachineTruth(chain, ws, seed, mean_error_um);
 }
 
-std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readings, const TrackerLimits& limits) {
+std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readings, const stage::Pose& tracker,
+                                                   const TrackerLimits& limits) {
+  const Eigen::Matrix3d to_machine = tracker.Rotation();
   std::vector<std::string> out;
   for (const TrackerReading& r : readings.points) {
-    const stage::Spherical s = stage::ToSpherical(r.measured);
+    // The beam in machine axes (z up): the levelled head's range and elevation.
+    const stage::Spherical s = stage::ToSpherical(to_machine * r.measured);
     const double elevation_deg = s.elevation_rad * 180.0 / kPi;
     if (s.range_mm > limits.max_range_mm) {
       out.push_back(fmt::format("{}: range {:.0f} mm beyond the tracker's {:.0f} mm", r.id, s.range_mm,
