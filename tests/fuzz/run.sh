@@ -2,7 +2,7 @@
 # Fuzzes every file reader of fvm with libFuzzer, AddressSanitizer and UBSan (Debian's clang 14).
 #
 #   tests/fuzz/run.sh [EXECUTIONS]      default 20000 inputs per reader (a tenth for the two image readers):
-#                                       all twelve readers in about 10 minutes on 2 cores
+#                                       all thirteen readers in about 11 minutes on 2 cores
 #
 # Configures build-fuzz/ (clang, Ninja, -DFVM_FUZZ=ON; set FVM_FUZZ_BUILD for another directory), builds only the
 # fuzz targets, replays the regression inputs of each reader (tests/fuzz/regressions/<reader>/), then runs it for
