@@ -1,13 +1,29 @@
 // fvm simulate fvm-batch -o DIR: a synthetic calibration batch with its recorded truth.
+// fvm simulate tracker -o DIR: a machine-tool verification plan (points, G-code) and, with a truth, its simulated
+// laser-tracker readings.
 
 #include <fmt/core.h>
 
+#include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
 
-#include "core/file_io.h"
+#include "artefacts/io/machine_truth_file.h"
+#include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
+#include "artefacts/simulation/machine_tool_simulation.h"
+#include "core/csv.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
+#include "core/number_text.h"
 #include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"
+#include "stage/pose.h"
+#include "stage/tracker.h"
 
 namespace fvm::cli {
 namespace {
@@ -51,12 +67,345 @@ void Run(SimulateBatchArgs args) {
              sim.truth.max_error_um, args.options.noise_um, args.options.seed);
 }
 
+
+// ---- fvm simulate tracker ------------------------------------------------------------------------------------
+
+// "a,b,c": exactly `count` finite numbers, locale-independent. Throws std::invalid_argument with an example.
+std::vector<double> Numbers(std::string_view text, size_t count, const std::string& what, const std::string& example) {
+  std::vector<double> values;
+  size_t start = 0;
+  while (true) {
+    const size_t end = text.find(',', start);
+    const std::optional<double> v = ParseDouble(text.substr(start, end == std::string_view::npos ? end : end - start));
+    if (!v || !std::isfinite(*v)) {
+      values.clear();
+      break;
+    }
+    values.push_back(*v);
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+  if (values.size() != count) {
+    throw std::invalid_argument(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count,
+                                            example));
+  }
+  return values;
+}
+
+// "LXxLYxLZ" or "LXxLYxLZ@X0,Y0,Z0" (mm).
+artefacts::Workspace ParseMachine(std::string_view text) {
+  const size_t at = text.find('@');
+  std::string sizes(text.substr(0, at));
+  for (char& c : sizes) c = c == 'x' || c == 'X' ? ',' : c;
+  std::vector<double> size;
+  try {
+    size = Numbers(sizes, 3, "--machine", "");
+  } catch (const std::invalid_argument&) {
+    throw std::invalid_argument(fmt::format("--machine '{}': give the three travels LXxLYxLZ in mm, e.g. 2500x1500x1200, "
+                                            "optionally with the origin: 2500x1500x1200@0,0,0",
+                                            text));
+  }
+  artefacts::Workspace ws;
+  if (at != std::string_view::npos) {
+    const auto origin = Numbers(text.substr(at + 1), 3, "--machine origin", "2500x1500x1200@0,-750,0");
+    ws.min = Eigen::Vector3d(origin[0], origin[1], origin[2]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(size[static_cast<size_t>(k)] > 0.0) || size[static_cast<size_t>(k)] > 100'000.0) {
+      throw std::invalid_argument(fmt::format("--machine '{}': the {} travel must be > 0 and at most 100000 mm", text,
+                                              "xyz"[k]));
+    }
+    ws.max[k] = ws.min[k] + size[static_cast<size_t>(k)];
+  }
+  return ws;
+}
+
+// mesh:SX,SY,SZ | cloud:SX,SY,SZ | diagonals:N
+struct PointSpec {
+  std::string kind;
+  Eigen::Vector3d step = Eigen::Vector3d::Zero();
+  int per_diagonal = 0;
+};
+
+PointSpec ParsePointSpec(std::string_view text, const std::string& flag) {
+  const size_t colon = text.find(':');
+  PointSpec spec;
+  spec.kind = std::string(text.substr(0, colon));
+  const std::string_view rest = colon == std::string_view::npos ? std::string_view() : text.substr(colon + 1);
+  if (spec.kind == "mesh" || spec.kind == "cloud") {
+    const auto s = Numbers(rest, 3, flag + " " + spec.kind, spec.kind + ":500,500,400 (steps in mm)");
+    spec.step = Eigen::Vector3d(s[0], s[1], s[2]);
+    if (!(spec.step.minCoeff() > 0.0)) throw std::invalid_argument(flag + " '" + std::string(text) + "': steps must be > 0 mm");
+    return spec;
+  }
+  if (spec.kind == "diagonals") {
+    const std::optional<std::int64_t> n = ParseInt(rest);
+    if (!n || *n < 2 || *n > 100'000) {
+      throw std::invalid_argument(flag + " '" + std::string(text) + "': diagonals:N with N = 2 .. 100000 points per body diagonal");
+    }
+    spec.per_diagonal = static_cast<int>(*n);
+    return spec;
+  }
+  throw std::invalid_argument(flag + " '" + std::string(text) + "': use mesh:SX,SY,SZ, cloud:SX,SY,SZ (steps in mm) or diagonals:N");
+}
+
+std::vector<artefacts::PlannedPoint> Plan(const PointSpec& spec, const artefacts::Workspace& ws, std::uint64_t seed) {
+  if (spec.kind == "mesh") return artefacts::PlanMesh(ws, spec.step);
+  if (spec.kind == "cloud") return artefacts::PlanCloud(ws, spec.step, seed);
+  return artefacts::PlanDiagonals(ws, spec.per_diagonal);
+}
+
+// An option check that runs one of the parsers above: its message becomes a usage error (exit 2).
+template <typename Parse>
+CLI::Validator Parses(Parse parse, const std::string& name) {
+  return CLI::Validator(
+      [parse](std::string& text) -> std::string {
+        try {
+          parse(text);
+        } catch (const std::exception& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "", name);
+}
+
+// Independent streams from one --seed (SplitMix64): the truth, the cloud, the noise and the validation cloud
+// never share draws.
+std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t stream) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (stream + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+struct SimulateTrackerArgs {
+  std::string output;
+  std::string machine = "2500x1500x1200";
+  std::string chain = "XFYZ";
+  std::string points = "mesh:500,500,400";
+  std::string tool = "0,0,100";
+  std::string pose = "1100,-1000,600,63,14,35";
+  std::string errors;
+  std::uint64_t seed = 1;
+  bool seed_given = false;
+  double mean_error_um = 35.0;
+  std::string tracker = "published";
+  double dwell_s = 6.0;
+  double feed_mm_min = 2000.0;
+  std::string validation;
+};
+
+std::string PointsCsv(const std::vector<artefacts::PlannedPoint>& points, const std::string& comment) {
+  std::string out = "# " + comment + "\n" + CsvLine({"id", "x", "y", "z", "approach"});
+  for (const auto& p : points) {
+    out += CsvLine({p.id, FormatShortest(p.nominal.x()), FormatShortest(p.nominal.y()), FormatShortest(p.nominal.z()),
+                    p.approach});
+  }
+  return out;
+}
+
+std::string JoinNumbers(const Eigen::Vector3d& v) {
+  return FormatShortest(v.x()) + "," + FormatShortest(v.y()) + "," + FormatShortest(v.z());
+}
+
+// A clear error when the tracker cannot see some points from its pose.
+void CheckSight(const artefacts::TrackerReadings& readings, const stage::Pose& pose, const std::string& what,
+                const std::string& pose_text) {
+  const std::vector<std::string> beyond = artefacts::PointsBeyondTrackerLimits(readings, pose);
+  if (beyond.empty()) return;
+  const artefacts::TrackerLimits limits;
+  std::string list;
+  for (size_t i = 0; i < beyond.size() && i < 5; ++i) list += "\n  " + beyond[i];
+  if (beyond.size() > 5) list += fmt::format("\n  ... and {} more", beyond.size() - 5);
+  throw InputError(fmt::format("{} of {} {} are out of the tracker's sight from --pose {} (elevation {:+.0f} .. "
+                               "{:+.0f} deg against the horizontal, range up to {:.0f} m):{}\nmove the tracker "
+                               "(--pose) or plan other points",
+                               beyond.size(), readings.points.size(), what, pose_text, limits.min_elevation_deg,
+                               limits.max_elevation_deg, limits.max_range_mm / 1000.0, list));
+}
+
+void RunTracker(const SimulateTrackerArgs& args) {
+  // The validators have checked every text; parsing again cannot fail.
+  const artefacts::Workspace ws = ParseMachine(args.machine);
+  const PointSpec spec = ParsePointSpec(args.points, "--points");
+  const auto tool = Numbers(args.tool, 3, "--tool", "0,0,100");
+  const auto pose6 = Numbers(args.pose, 6, "--pose", "1100,-1000,600,63,14,35");
+  const bool with_truth = args.seed_given || !args.errors.empty();
+  if (!args.validation.empty() && !with_truth) {
+    throw CLI::ValidationError("--validation", "needs a machine truth to simulate: give --seed N or --errors FILE.json");
+  }
+  stage::AxisChain chain = stage::AxisChain::Parse(args.chain);
+  chain.tool_offset = Eigen::Vector3d(tool[0], tool[1], tool[2]);
+  const Eigen::Vector3d euler_deg(pose6[3], pose6[4], pose6[5]);
+  chain.instrument = stage::Pose::FromEulerXyzDegrees(Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), euler_deg);
+  const stage::TrackerNoise noise = stage::TrackerNoise::Preset(args.tracker);
+
+  const auto points = Plan(spec, ws, StreamSeed(args.seed, 1));
+  const std::filesystem::path dir(args.output);
+  const std::string where = fmt::format("{} on {} x {} x {} mm from ({}) mm", args.points, ws.max.x() - ws.min.x(),
+                                        ws.max.y() - ws.min.y(), ws.max.z() - ws.min.z(), JoinNumbers(ws.min));
+  if (!with_truth) {
+    std::filesystem::create_directories(dir);
+    WriteFileAtomically(dir / "points.csv", PointsCsv(points, "fvm simulate tracker: " + where));
+    WriteFileAtomically(dir / "program.nc", artefacts::GCodeProgram(points, args.dwell_s, args.feed_mm_min));
+    fmt::print("planned {} points ({}) into {}: points.csv, program.nc ({:.0f} min of dwell); no readings without a "
+               "machine truth: give --seed N or --errors FILE.json\n",
+               points.size(), where, args.output, points.size() * args.dwell_s / 60.0);
+    return;
+  }
+
+  // The truth, the readings and their checks, all before anything is written.
+  const artefacts::MachineTruth truth = args.errors.empty()
+                                            ? artefacts::RandomMachineTruth(chain, ws, StreamSeed(args.seed, 0), args.mean_error_um)
+                                            : artefacts::ReadMachineTruth(args.errors, ws);
+  artefacts::TrackerReadings noise_free;
+  artefacts::TrackerReadings readings =
+      artefacts::SimulateTrackerReadings(chain, truth, points, noise, StreamSeed(args.seed, 2), &noise_free);
+  CheckSight(noise_free, *chain.instrument, "points", args.pose);
+  const artefacts::ErrorSummary error = artefacts::VolumetricErrorSummary(chain, truth, points);
+
+  std::vector<std::string> comments = {
+      "fvm simulate tracker: laser-tracker readings of a simulated machine tool",
+      fmt::format("chain {}, tool offset {} mm, points {}", args.chain, args.tool, where),
+      fmt::format("tracker {} (range sigma {} mm + {} mm/mm, azimuth {} rad, elevation {} rad) at pose {} (mm, XYZ "
+                  "Euler deg)",
+                  noise.name, FormatShortest(noise.range_sigma_mm), FormatShortest(noise.range_sigma_per_mm),
+                  FormatShortest(noise.azimuth_sigma_rad), FormatShortest(noise.elevation_sigma_rad), args.pose),
+      args.errors.empty() ? fmt::format("truth: random, seed {}, mean volumetric error {} um over an 11 x 11 x 11 workspace grid",
+                                        args.seed, FormatShortest(args.mean_error_um))
+                          : fmt::format("truth: {}, noise seed {}", args.errors, args.seed),
+      "x,y,z: commanded machine coordinates (mm); xt,yt,zt: tracker frame (mm)"};
+  readings.comments = comments;
+
+  std::optional<artefacts::TrackerReadings> validation;
+  std::optional<artefacts::ErrorSummary> validation_error;
+  if (!args.validation.empty()) {
+    auto others = Plan(ParsePointSpec(args.validation, "--validation"), ws, StreamSeed(args.seed, 3));
+    for (auto& p : others) p.id[0] = 'V';  // V0001...: never mistaken for an identification point
+    validation = artefacts::SimulateTrackerReadings(chain, truth, others, stage::TrackerNoise::Preset("none"), 0);
+    CheckSight(*validation, *chain.instrument, "validation points", args.pose);
+    validation->comments = comments;
+    validation->comments[0] = "fvm simulate tracker: noise-free validation points of the same machine (tracker none)";
+    validation->comments[1] = fmt::format("chain {}, tool offset {} mm, points {}", args.chain, args.tool, args.validation);
+    validation_error = artefacts::VolumetricErrorSummary(chain, truth, others);
+  }
+
+  nlohmann::json json = nlohmann::json::parse(artefacts::MachineTruthJson(truth));
+  json["what"] = "machine-tool truth of fvm simulate tracker: the 21 error terms (mm, rad) as functions of q - "
+                 "workspace min (mm); give this file back as --errors to simulate the same machine";
+  json["chain"] = args.chain;
+  json["tool_offset_mm"] = tool;
+  const Eigen::Vector3d rotation = chain.instrument->rotation;
+  json["tracker_pose"] = {{"translation_mm", {pose6[0], pose6[1], pose6[2]}},
+                          {"euler_xyz_deg", {pose6[3], pose6[4], pose6[5]}},
+                          {"rotation_vector_rad", {rotation.x(), rotation.y(), rotation.z()}}};
+  json["tracker"] = {{"name", noise.name},
+                     {"range_sigma_mm", noise.range_sigma_mm},
+                     {"range_sigma_per_mm", noise.range_sigma_per_mm},
+                     {"azimuth_sigma_rad", noise.azimuth_sigma_rad},
+                     {"elevation_sigma_rad", noise.elevation_sigma_rad}};
+  json["points"] = {{"spec", args.points}, {"count", points.size()}, {"mean_error_um", error.mean_um},
+                    {"max_error_um", error.max_um}};
+  json["seed"] = args.seed;
+  json["errors_file"] = args.errors.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.errors);
+  if (args.errors.empty()) json["requested_mean_error_um"] = args.mean_error_um;
+  json["mean_error_um"] = error.mean_um;
+  json["max_error_um"] = error.max_um;
+  if (validation) {
+    json["validation"] = {{"spec", args.validation}, {"count", validation->points.size()},
+                          {"mean_error_um", validation_error->mean_um}, {"max_error_um", validation_error->max_um}};
+  }
+
+  std::filesystem::create_directories(dir);
+  WriteFileAtomically(dir / "points.csv", PointsCsv(points, "fvm simulate tracker: " + where));
+  WriteFileAtomically(dir / "program.nc", artefacts::GCodeProgram(points, args.dwell_s, args.feed_mm_min));
+  artefacts::WriteTrackerReadings(dir / "readings.csv", readings);
+  if (validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *validation);
+  WriteFileAtomically(dir / "truth.json", json.dump(2) + "\n");
+  // The random machine is scaled on a fixed workspace grid, not on these points, so that a mesh and a cloud of
+  // the same seed measure the same machine (001 Tables II and III); corners weigh more in a coarse mesh.
+  const std::string scaled =
+      args.errors.empty() ? fmt::format(" (machine scaled to {} um mean over an 11 x 11 x 11 workspace grid)",
+                                        FormatShortest(args.mean_error_um))
+                          : std::string();
+  fmt::print("simulated {} points ({}, {}) into {}: initial volumetric error mean {:.1f} um, max {:.1f} um{}; "
+             "tracker {}, seed {}{}\n",
+             points.size(), where, args.chain, args.output, error.mean_um, error.max_um, scaled, noise.name, args.seed,
+             validation ? fmt::format("; {} validation points (mean {:.1f} um)", validation->points.size(),
+                                      validation_error->mean_um)
+                        : std::string());
+}
+
+void RegisterSimulateTracker(CLI::App* simulate) {
+  auto args = std::make_shared<SimulateTrackerArgs>();
+  CLI::App* sub = simulate->add_subcommand(
+      "tracker", "machine-tool verification: point plan, G-code and simulated laser-tracker readings with their truth");
+  AddDetails(sub,
+             "Plans the points of a volumetric verification (mesh, cloud of eq. 18 or body diagonals; X fastest, "
+             "serpentine) and writes points.csv and program.nc (ISO G-code with a dwell per point). With --seed N (a "
+             "random machine, its errors cubics plus ball-screw and long-wave sines that no cubic represents, scaled "
+             "to --mean-error-um) or --errors FILE.json (your own truth) it also writes readings.csv (the tracker "
+             "readings with the tracker's noise: --tracker), truth.json (the machine, the tracker and the errors; it "
+             "can be given back as --errors) and, with --validation, validation.csv: noise-free readings of other "
+             "points for checking an identification where it was not fitted. The tracker pose defaults to 001 "
+             "Table I position 4. Points the tracker cannot see (elevation -60..+77 deg, range 40 m) stop the run.");
+  sub->add_option("-o,--output", args->output, "directory to write (created if needed)")->required();
+  sub->add_option("--machine", args->machine, "axis travels LXxLYxLZ in mm, optionally @X0,Y0,Z0 (the origin, default 0)")
+      ->check(Parses(ParseMachine, "LXxLYxLZ[@X0,Y0,Z0]"))
+      ->capture_default_str();
+  sub->add_option("--chain", args->chain, "axis chain in F notation (part axes left of F, tool axes right): XFYZ, YXFZ, ...")
+      ->check(Parses([](const std::string& t) { stage::AxisChain::Parse(t); }, "CHAIN"))
+      ->capture_default_str();
+  sub->add_option("--points", args->points, "mesh:SX,SY,SZ | cloud:SX,SY,SZ (steps in mm; cloud seeded by --seed) | diagonals:N")
+      ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--points"); }, "SPEC"))
+      ->capture_default_str();
+  sub->add_option("--tool", args->tool, "tool (reflector) offset X,Y,Z in mm, in the last tool axis' frame")
+      ->check(Parses([](const std::string& t) { Numbers(t, 3, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->capture_default_str();
+  sub->add_option("--pose", args->pose,
+                  "tracker pose in the machine frame: X,Y,Z (mm) and intrinsic XYZ Euler angles A,B,C (deg); default "
+                  "001 Table I position 4")
+      ->check(Parses([](const std::string& t) { Numbers(t, 6, "--pose", "1100,-1000,600,63,14,35"); }, "X,Y,Z,A,B,C"))
+      ->capture_default_str();
+  CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: README, Machine tools)")
+                            ->check(CLI::ExistingFile);
+  CLI::Option* seed = sub->add_option("--seed", args->seed,
+                                      "random machine, cloud and tracker noise (same seed, same bytes); with --errors: "
+                                      "the cloud and noise only")
+                          ->capture_default_str();
+  sub->add_option("--mean-error-um", args->mean_error_um, "mean volumetric error of the random machine (um)")
+      ->check(CLI::Range(1e-3, 1e5))
+      ->capture_default_str()
+      ->excludes(errors);
+  sub->add_option("--tracker", args->tracker, "tracker noise preset (README, Machine tools)")
+      ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
+      ->capture_default_str();
+  sub->add_option("--dwell-s", args->dwell_s, "dwell at each point in the program (s)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  sub->add_option("--feed-mm-min", args->feed_mm_min, "feed between points in the program (mm/min; 0: rapid moves)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  sub->add_option("--validation", args->validation, "noise-free readings of other points, same SPEC forms as --points")
+      ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--validation"); }, "SPEC"));
+  sub->footer("Example:\n  fvm simulate tracker --machine 2500x1500x1200 --chain XFYZ --points mesh:500,500,400 "
+              "--tool 0,0,100 -o plan --seed 1 --validation mesh:100,100,100");
+  sub->callback([args, seed] {
+    SimulateTrackerArgs a = *args;
+    a.seed_given = seed->count() > 0;
+    RunTracker(a);
+  });
+}
+
 }  // namespace
 
 void RegisterSimulate(CLI::App& app) {
-  CLI::App* simulate = app.add_subcommand("simulate", "synthetic data with a recorded truth (batches so far)");
+  CLI::App* simulate =
+      app.add_subcommand("simulate", "synthetic data with a recorded truth (FVM batches, machine-tool tracker readings)");
   simulate->require_subcommand(1);
-  simulate->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 && fvm calibrate batch --model 27");
+  simulate->footer("Examples:\n  fvm simulate fvm-batch -o batch --seed 7 && fvm calibrate batch --model 27\n"
+                   "  fvm simulate tracker -o plan --seed 1 --validation mesh:100,100,100");
   auto args = std::make_shared<SimulateBatchArgs>();
   CLI::App* sub = simulate->add_subcommand(
       "fvm-batch", "17-calotte bar placements on the 200 x 200 mm stage (X, Y, oblique to identify; random to "
@@ -86,6 +435,7 @@ void RegisterSimulate(CLI::App& app) {
                 "identification placements do not share their first calotte's spot (needs --anchor first-tile)");
   sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
   sub->callback([args] { Run(*args); });
+  RegisterSimulateTracker(simulate);
 }
 
 }  // namespace fvm::cli

@@ -51,6 +51,7 @@ expect_light(compare compare ${SAMPLES}/bar17 --json)
 expect_light(diff diff ${SAMPLES}/stitching-strategies/x/a.csv ${SAMPLES}/stitching-strategies/x/b.csv)
 expect_light(diagnose diagnose ${SAMPLES}/bar17 --model 27 --json)
 expect_light(simulate simulate fvm-batch -o ${WORK}/sim --seed 1)
+expect_light(simulate_tracker simulate tracker -o ${WORK}/tracker --seed 1)
 
 # Positive control: a TIFF loads the image plugin and OpenImageIO behind it, so the check above can fail.
 run(0 tiles synthesize -o ${WORK}/tile --rows 1 --cols 1 --size 64 --bits 32 --seed 1)

@@ -1,0 +1,142 @@
+#pragma once
+// Volumetric verification of a three-axis machine tool with a laser tracker, simulated (001:330-600): the
+// point plan (mesh, cloud of eq. 18, body diagonals), the CNC program that visits it, a machine whose geometric
+// errors are known but are NOT the polynomials an identification fits, and the tracker readings of that machine
+// with the published noise (eq. 22-24).
+//
+// Randomness: every draw comes from std::mt19937_64 seeded with the caller's seed, turned into uniform doubles
+// (53 bits) and normal ones (Box-Muller) by this file's own code, not by std::*_distribution, whose algorithms the
+// standard leaves to each library. The same seed therefore gives the same bits with any standard library on the
+// same platform; only std::sin/cos/log/sqrt could differ in the last bit on another libm.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "artefacts/io/tracker_readings.h"
+#include "stage/axis_chain.h"
+#include "stage/error_terms.h"
+#include "stage/pose.h"
+#include "stage/tracker.h"
+
+namespace fvm::artefacts {
+
+// The travel of the three axes (mm): axis k runs from min[k] (its origin, where every error term is zero) to max[k].
+struct Workspace {
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max = Eigen::Vector3d(2500.0, 1500.0, 1200.0);
+  void Check() const;  // throws std::invalid_argument unless min < max on each axis, all finite
+};
+
+struct PlannedPoint {
+  std::string id;                                     // P0001, P0002, ... in visiting order
+  Eigen::Vector3d nominal = Eigen::Vector3d::Zero();  // commanded machine coordinates, mm (rounded to 1 um)
+  std::string approach;                               // "+x" or "-x": the sign of X's last motion before the point
+};
+
+// A mesh with steps `step` (mm) per axis: nodes at min + i * step and always at max (a last, shorter step when
+// the travel is no multiple of it). Order: X fastest, then Y, then Z, serpentine (boustrophedon): each row of X
+// runs opposite to the previous one, each layer of Y rows too, so the machine never jumps back. Approach: the
+// sign of the last X motion before the point (the first point counts as +x, approached from below). 2500 x
+// 1500 x 1200 with steps 500, 500, 400 gives 6 * 4 * 4 = 96 points (001 Table I); steps of 100 give 5408.
+std::vector<PlannedPoint> PlanMesh(const Workspace& ws, const Eigen::Vector3d& step);
+// The mesh, each coordinate strictly inside the travel moved by a uniform random amount in [-step/2, +step/2]
+// of its axis (eq. 18: x_cloud = x_mesh +- rand(interval(x)) if x_min < x < x_max), rounded to 1 um; coordinates
+// on the boundary stay there. Same order and approach rule as the mesh (approach from the actual motions).
+std::vector<PlannedPoint> PlanCloud(const Workspace& ws, const Eigen::Vector3d& step, std::uint64_t seed);
+// The 4 body diagonals, `points_per_diagonal` (>= 2) equally spaced points each, corners included, rounded to
+// 1 um: (min,min,min)->(max,max,max), (max,min,min)->(min,max,max), (min,max,min)->(max,min,max),
+// (max,max,min)->(min,min,max). The centre appears on each diagonal when points_per_diagonal is odd.
+std::vector<PlannedPoint> PlanDiagonals(const Workspace& ws, int points_per_diagonal);
+
+// An ISO 6983 program (plain G-code, no controller-specific cycles) that visits the points:
+//   %
+//   (FVM VOLUMETRIC VERIFICATION: 96 POINTS, DWELL 6 S, FEED 2000 MM/MIN)
+//   G90 G21 G17 G94          absolute, mm, XY plane, feed per minute
+//   G0 X0.000 Y0.000 Z0.000 (P0001 +x)    rapid to the first point
+//   G4 P6                    dwell in SECONDS (LinuxCNC, Siemens, Heidenhain; a Fanuc control reads P as ms:
+//                            change P to X there)
+//   G1 X500.000 Y0.000 Z0.000 F2000 (P0002 +x)   linear moves at the feed to the next points, each with its dwell
+//   ...
+//   M30
+//   %
+// Coordinates with 3 decimals (the plans are rounded to 1 um, so the program and points.csv agree). Comments
+// carry the point id and approach. feed_mm_min <= 0 writes G0 moves throughout. Throws std::invalid_argument on
+// a negative or non-finite dwell.
+std::string GCodeProgram(const std::vector<PlannedPoint>& points, double dwell_s, double feed_mm_min = 2000.0);
+
+// One geometric error term as a function of its axis coordinate q, with u = q - origin (mm):
+//   value(u) = poly[0] + poly[1] u + poly[2] u^2 + poly[3] u^3 + sine_amplitude sin(2 pi u / sine_pitch_mm + sine_phase_rad)
+// in mm (translation terms) or rad (rotation and squareness terms). sine_pitch_mm 0: no sine. A squareness term
+// is one angle: poly[0] only.
+struct TermTruth {
+  std::array<double, 4> poly{};
+  double sine_amplitude = 0.0;
+  double sine_pitch_mm = 0.0;
+  double sine_phase_rad = 0.0;
+  double Value(double u) const;
+};
+
+// The machine's true errors: the 21 terms of stage/error_terms.h, each over the travel of its own axis
+// (u = q_k - workspace.min[k]). Random truths vanish at each axis' origin (poly[0] = -A sin(phase)); the effect of
+// a squareness term, -q W, vanishes there when the origin is 0.
+struct MachineTruth {
+  Workspace workspace;
+  std::array<TermTruth, stage::kNumErrorTerms> terms{};
+};
+
+// The values e[0..20] of the 21 terms at command q (what stage::ChainForward takes).
+void TermValuesAt(const MachineTruth& truth, const Eigen::Vector3d& q, double e[stage::kNumErrorTerms]);
+
+// A random machine for `chain` (tool offset included; its instrument pose plays no part), seeded. Per term a
+// cubic with random coefficients plus a sine:
+//   positioning xTx, yTy, zTz: a ball-screw-like periodic error, pitch 10-40 mm, amplitude 8 % of the term's size;
+//   straightness and rotation: one long wave, wavelength 0.3-0.8 of the travel, amplitude 25 % of the size;
+//   squareness: a constant.
+// Neither a cubic can represent: the screw period is far below the travel, the long wave has at least 1.25
+// periods. Sizes per kind (positioning 20 um/m, straightness 10 um/m, rotation 20 urad, squareness 20 urad) are
+// scaled together so that the mean volumetric error (|tool point displaced by the errors|) over an 11 x 11 x 11
+// mesh of the workspace is `mean_error_um` (001 Table I: 35.3 um).
+MachineTruth RandomMachineTruth(const stage::AxisChain& chain, const Workspace& ws, std::uint64_t seed,
+                                double mean_error_um = 35.0);
+// The same for the published machine of 001: chain XFYZ, tool offset (0, 0, 100) mm.
+MachineTruth RandomMachineTruth(const Workspace& ws, std::uint64_t seed, double mean_error_um = 35.0);
+
+// Volumetric error (mm) of the tool point commanded to q: |ChainForward(e(q), q) - ChainForward(0, q)| in the
+// machine frame (the chain's instrument pose is ignored).
+double VolumetricErrorMm(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q);
+struct ErrorSummary {
+  double mean_um = 0.0;
+  double max_um = 0.0;
+};
+ErrorSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
+                                    const std::vector<PlannedPoint>& points);
+
+// What a tracker can see. Defaults: elevation -60..+77 deg (a typical tracker head's vertical travel) and range
+// up to 40 m. The elevation is taken against the horizontal (the machine's xy plane, z up) at the tracker's
+// position, not in the frame its readings are expressed in: a tracker head stands levelled, while the frame of a
+// pose such as 001 Table I (rotations of up to 65 deg) is a coordinate frame, not a tilt of the head. In the
+// tracker's own frame position 4 would put 24 of the 96 mesh points below -60 deg.
+struct TrackerLimits {
+  double min_elevation_deg = -60.0;
+  double max_elevation_deg = 77.0;
+  double max_range_mm = 40'000.0;
+};
+// One message per point out of the limits ("P0007: elevation 81.2 deg above the tracker's +77 deg"), empty when
+// all are in. `readings` are in the frame of `tracker` (its pose in the machine frame).
+std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readings, const stage::Pose& tracker,
+                                                   const TrackerLimits& limits = {});
+
+// The tracker readings of the machine `truth` at `points`: the tool point ChainForward(chain, e(q), q) in the
+// tracker frame (chain.instrument must be set: throws std::invalid_argument otherwise), converted to spherical
+// coordinates, given normal noise (range sigma a + b * range, azimuth and elevation sigmas: noise.Covariance is
+// the resulting Cartesian covariance) and converted back. Reproducible bit for bit for the same seed (see the
+// top of this file). `noise_free`, when given, receives the same readings without noise (the truth). The readings
+// are Cartesian; ids, nominal coordinates and approach come from the points.
+TrackerReadings SimulateTrackerReadings(const stage::AxisChain& chain, const MachineTruth& truth,
+                                        const std::vector<PlannedPoint>& points, const stage::TrackerNoise& noise,
+                                        std::uint64_t seed, TrackerReadings* noise_free = nullptr);
+
+}  // namespace fvm::artefacts

@@ -1,0 +1,167 @@
+#include "artefacts/io/tracker_readings.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/input_error.h"
+#include "tests/artefacts/test_support.h"
+
+namespace fvm::artefacts {
+namespace {
+
+using fvm::testing::InputErrorOf;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+TrackerReading Reading(const std::string& id, Eigen::Vector3d nominal, Eigen::Vector3d measured,
+                       const std::string& approach = "") {
+  TrackerReading r;
+  r.id = id;
+  r.nominal = nominal;
+  r.measured = measured;
+  r.approach = approach;
+  return r;
+}
+
+TEST(TrackerReadings, CartesianRoundTripIsBitExact) {
+  testing::TempDir dir;
+  TrackerReadings data;
+  data.comments = {"chain XFYZ, tool 0,0,100 mm", "tracker published, seed 1"};
+  // Values with all 17 significant digits, a tiny one, a negative zero's neighbour and the 100 m bound.
+  data.points = {Reading("P0001", {0, 0, 0}, {-1234.5678901234567, 2345.0000000000005, -1e-12}, "+x"),
+                 Reading("P0002", {2500, 1500, 1200}, {0.1 + 0.2, 1.0 / 3.0, 99'999.5}, "-x"),
+                 Reading("odd, id", {-0.001, 1e-7, 99'999.0}, {5e-324, -7.0, 1.0})};
+  const auto path = dir / "readings.csv";
+  WriteTrackerReadings(path, data);
+  const TrackerReadings back = ReadTrackerReadings(path);
+  EXPECT_EQ(back.source, path.string());
+  EXPECT_FALSE(back.spherical);
+  EXPECT_THAT(back.comments, ElementsAre(data.comments[0], data.comments[1]));
+  ASSERT_EQ(back.points.size(), data.points.size());
+  for (size_t i = 0; i < data.points.size(); ++i) {
+    EXPECT_EQ(back.points[i].id, data.points[i].id);
+    EXPECT_EQ(back.points[i].approach, data.points[i].approach);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(back.points[i].nominal[k], data.points[i].nominal[k]) << i << " " << k;  // bit for bit
+      EXPECT_EQ(back.points[i].measured[k], data.points[i].measured[k]) << i << " " << k;
+    }
+  }
+  EXPECT_EQ(back.points[0].line, 4);  // two comments and the header first
+  // Written again, the same bytes.
+  const auto again = dir / "again.csv";
+  WriteTrackerReadings(again, back);
+  EXPECT_EQ(testing::ReadText(again), testing::ReadText(path));
+}
+
+TEST(TrackerReadings, SphericalInputIsConvertedAsComputedByHand) {
+  testing::TempDir dir;
+  // range 1000 mm, azimuth 30 deg, elevation 45 deg: x = 1000 cos45 cos30 = 612.3724357, y = 1000 cos45 sin30 =
+  // 353.5533906, z = 1000 sin45 = 707.1067812.
+  const auto path = dir.Write("sph.csv",
+                              "# spherical\n"
+                              "ID,X,Y,Z,Range,Azimuth,Elevation,temperature\n"
+                              "A1,10,20,30,1000,0.5235987755982988,0.7853981633974483,20.1\n"
+                              "A2,0,0,0,0,0,0,20.2\n");
+  const TrackerReadings r = ReadTrackerReadings(path);
+  EXPECT_TRUE(r.spherical);
+  ASSERT_EQ(r.points.size(), 2u);
+  EXPECT_EQ(r.points[0].nominal, Eigen::Vector3d(10, 20, 30));
+  EXPECT_NEAR(r.points[0].measured.x(), 612.3724357, 1e-7);
+  EXPECT_NEAR(r.points[0].measured.y(), 353.5533906, 1e-7);
+  EXPECT_NEAR(r.points[0].measured.z(), 707.1067812, 1e-7);
+  EXPECT_EQ(r.points[1].measured, Eigen::Vector3d::Zero());
+  EXPECT_EQ(r.points[0].approach, "");
+
+  // Written spherical and read back: within 1 nm (the conversion costs ~1e-13 relative).
+  const auto out = dir / "sph_out.csv";
+  WriteTrackerReadings(out, r);
+  EXPECT_THAT(testing::ReadText(out), HasSubstr("id,x,y,z,range,azimuth,elevation\n"));
+  const TrackerReadings back = ReadTrackerReadings(out);
+  EXPECT_TRUE(back.spherical);
+  for (size_t i = 0; i < 2; ++i) EXPECT_LT((back.points[i].measured - r.points[i].measured).norm(), 1e-9);
+}
+
+TEST(TrackerReadings, ApproachAndExtraColumnsAndSemicolons) {
+  testing::TempDir dir;
+  const auto path = dir.Write("semi.csv", "id;x;y;z;xt;yt;zt;approach;note\nP1;1;2;3;4;5;6; +x ;a\nP2;1;2;3;4;5;6;;b\n");
+  const TrackerReadings r = ReadTrackerReadings(path);
+  ASSERT_EQ(r.points.size(), 2u);
+  EXPECT_EQ(r.points[0].approach, "+x");
+  EXPECT_EQ(r.points[1].approach, "");
+  EXPECT_EQ(r.points[1].measured, Eigen::Vector3d(4, 5, 6));
+  EXPECT_EQ(r.points[1].line, 3);
+}
+
+// Every refusal names the file and line, and the point when a row is at fault.
+struct BadCase {
+  const char* name;
+  const char* text;
+  int line;
+  const char* point;  // "" for header problems
+  const char* says;
+};
+
+class TrackerReadingsBadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(TrackerReadingsBadInput, NamesFileLineAndPoint) {
+  testing::TempDir dir;
+  const BadCase& c = GetParam();
+  const auto path = dir.Write("bad.csv", c.text);
+  const std::string message = InputErrorOf([&] { ReadTrackerReadings(path); });
+  EXPECT_THAT(message, HasSubstr(path.string() + ":" + std::to_string(c.line) + ":"));
+  if (*c.point != '\0') {
+    EXPECT_THAT(message, HasSubstr(std::string("point ") + c.point));
+  }
+  EXPECT_THAT(message, HasSubstr(c.says));
+}
+
+constexpr const char* kHeader = "id,x,y,z,xt,yt,zt\n";
+
+INSTANTIATE_TEST_SUITE_P(
+    All, TrackerReadingsBadInput,
+    ::testing::Values(
+        BadCase{"mixed", "# c\nid,x,y,z,xt,yt,zt,range\nP1,0,0,0,1,2,3,4\n", 2, "", "both Cartesian"},
+        BadCase{"neither", "id,x,y,z\nP1,0,0,0\n", 1, "", "no tracker coordinates"},
+        BadCase{"half_a_set", "id,x,y,z,range,azimuth\nP1,0,0,0,1,0\n", 1, "", "'elevation'"},
+        BadCase{"no_z", "id,x,y,xt,yt,zt\nP1,0,0,1,2,3\n", 1, "", "'z'"},
+        BadCase{"no_rows", "# only\nid,x,y,z,xt,yt,zt\n", 2, "", "no point rows"},
+        BadCase{"text", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,abc,0,1,2,3\n", 3, "P2", "not a number"},
+        BadCase{"nan", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP7,0,0,0,nan,2,3\n", 3, "P7", "xt"},
+        BadCase{"inf", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP8,0,0,0,1,inf,3\n", 3, "P8", "yt"},
+        BadCase{"empty_cell", "id,x,y,z,xt,yt,zt\nP9,0,0,0,1,2,\n", 2, "P9", "zt"},
+        BadCase{"duplicate", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,0,0,1,2,3\nP1,1,1,1,1,2,3\n", 4, "P1",
+                "first at line 2"},
+        BadCase{"empty_id", "id,x,y,z,xt,yt,zt\n,0,0,0,1,2,3\n", 2, "", "id is empty"},
+        BadCase{"negative_range", "id,x,y,z,range,azimuth,elevation\nP1,0,0,0,1000,0,0\nP2,0,0,0,-5,0,0\n", 3, "P2",
+                "negative"},
+        BadCase{"elevation", "id,x,y,z,range,azimuth,elevation\nP3,0,0,0,1000,0,1.5708\n", 2, "P3", "pi/2"},
+        BadCase{"azimuth_degrees", "id,x,y,z,range,azimuth,elevation\nP4,0,0,0,1000,45,0.1\n", 2, "P4", "2 pi"},
+        BadCase{"range_um", "id,x,y,z,range,azimuth,elevation\nP5,0,0,0,1.5e8,0,0\n", 2, "P5", "100 m"},
+        BadCase{"nominal_um", "id,x,y,z,xt,yt,zt\nP6,2500000,0,0,1,2,3\n", 2, "P6", "100 m"},
+        BadCase{"measured_um", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP6,0,0,0,1,-100001,3\n", 3, "P6", "100 m"}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(TrackerReadings, MissingFileNamesIt) {
+  testing::TempDir dir;
+  EXPECT_THAT(InputErrorOf([&] { ReadTrackerReadings(dir / "absent.csv"); }), HasSubstr("absent.csv"));
+}
+
+TEST(TrackerReadings, WriterRefusesWhatTheReaderWouldAndWritesNothing) {
+  testing::TempDir dir;
+  const auto path = dir / "out.csv";
+  TrackerReadings nan_data;
+  nan_data.points = {Reading("P1", {0, 0, 0}, {std::numeric_limits<double>::quiet_NaN(), 0, 0})};
+  EXPECT_THAT(InputErrorOf([&] { WriteTrackerReadings(path, nan_data); }), HasSubstr("point P1"));
+  TrackerReadings duplicate;
+  duplicate.points = {Reading("P1", {0, 0, 0}, {1, 0, 0}), Reading("P1", {1, 0, 0}, {2, 0, 0})};
+  EXPECT_THAT(InputErrorOf([&] { WriteTrackerReadings(path, duplicate); }), HasSubstr("twice"));
+  TrackerReadings empty;
+  EXPECT_THAT(InputErrorOf([&] { WriteTrackerReadings(path, empty); }), HasSubstr("no points"));
+  EXPECT_TRUE(dir.Entries().empty());
+}
+
+}  // namespace
+}  // namespace fvm::artefacts
