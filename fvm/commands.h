@@ -53,6 +53,9 @@ void RegisterStitch(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
 void RegisterSimulate(CLI::App& app);
 
+// fvm verify DATA.csv --chain XFYZ --order N --tool X,Y,Z [-o MACHINE.json] (fvm/verify.cc).
+void RegisterVerify(CLI::App& app);
+
 // fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
 void RegisterDiff(CLI::App& app);
 

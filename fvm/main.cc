@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterFocus(app);
   fvm::cli::RegisterTiles(app);
   fvm::cli::RegisterStitch(app);
-  AddNotBuilt(app, "verify", "machine-tool volumetric verification with a laser tracker", 0);
+  fvm::cli::RegisterVerify(app);
   AddNotBuilt(app, "uncertainty", "Monte Carlo uncertainty of a verification or calibration", 0);
 
   try {

@@ -21,6 +21,7 @@
 #include "core/input_error.h"
 #include "core/number_text.h"
 #include "fvm/commands.h"
+#include "fvm/option_parsing.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/pose.h"
 #include "stage/tracker.h"
@@ -70,56 +71,6 @@ void Run(SimulateBatchArgs args) {
 
 // ---- fvm simulate tracker ------------------------------------------------------------------------------------
 
-// "a,b,c": exactly `count` finite numbers, locale-independent. Throws std::invalid_argument with an example.
-std::vector<double> Numbers(std::string_view text, size_t count, const std::string& what, const std::string& example) {
-  std::vector<double> values;
-  size_t start = 0;
-  while (true) {
-    const size_t end = text.find(',', start);
-    const std::optional<double> v = ParseDouble(text.substr(start, end == std::string_view::npos ? end : end - start));
-    if (!v || !std::isfinite(*v)) {
-      values.clear();
-      break;
-    }
-    values.push_back(*v);
-    if (end == std::string_view::npos) break;
-    start = end + 1;
-  }
-  if (values.size() != count) {
-    throw std::invalid_argument(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count,
-                                            example));
-  }
-  return values;
-}
-
-// "LXxLYxLZ" or "LXxLYxLZ@X0,Y0,Z0" (mm).
-artefacts::Workspace ParseMachine(std::string_view text) {
-  const size_t at = text.find('@');
-  std::string sizes(text.substr(0, at));
-  for (char& c : sizes) c = c == 'x' || c == 'X' ? ',' : c;
-  std::vector<double> size;
-  try {
-    size = Numbers(sizes, 3, "--machine", "");
-  } catch (const std::invalid_argument&) {
-    throw std::invalid_argument(fmt::format("--machine '{}': give the three travels LXxLYxLZ in mm, e.g. 2500x1500x1200, "
-                                            "optionally with the origin: 2500x1500x1200@0,0,0",
-                                            text));
-  }
-  artefacts::Workspace ws;
-  if (at != std::string_view::npos) {
-    const auto origin = Numbers(text.substr(at + 1), 3, "--machine origin", "2500x1500x1200@0,-750,0");
-    ws.min = Eigen::Vector3d(origin[0], origin[1], origin[2]);
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (!(size[static_cast<size_t>(k)] > 0.0) || size[static_cast<size_t>(k)] > 100'000.0) {
-      throw std::invalid_argument(fmt::format("--machine '{}': the {} travel must be > 0 and at most 100000 mm", text,
-                                              "xyz"[k]));
-    }
-    ws.max[k] = ws.min[k] + size[static_cast<size_t>(k)];
-  }
-  return ws;
-}
-
 // mesh:SX,SY,SZ | cloud:SX,SY,SZ | diagonals:N
 struct PointSpec {
   std::string kind;
@@ -133,7 +84,7 @@ PointSpec ParsePointSpec(std::string_view text, const std::string& flag) {
   spec.kind = std::string(text.substr(0, colon));
   const std::string_view rest = colon == std::string_view::npos ? std::string_view() : text.substr(colon + 1);
   if (spec.kind == "mesh" || spec.kind == "cloud") {
-    const auto s = Numbers(rest, 3, flag + " " + spec.kind, spec.kind + ":500,500,400 (steps in mm)");
+    const auto s = ParseNumbers(rest, 3, flag + " " + spec.kind, spec.kind + ":500,500,400 (steps in mm)");
     spec.step = Eigen::Vector3d(s[0], s[1], s[2]);
     if (!(spec.step.minCoeff() > 0.0)) throw std::invalid_argument(flag + " '" + std::string(text) + "': steps must be > 0 mm");
     return spec;
@@ -153,21 +104,6 @@ std::vector<artefacts::PlannedPoint> Plan(const PointSpec& spec, const artefacts
   if (spec.kind == "mesh") return artefacts::PlanMesh(ws, spec.step);
   if (spec.kind == "cloud") return artefacts::PlanCloud(ws, spec.step, seed);
   return artefacts::PlanDiagonals(ws, spec.per_diagonal);
-}
-
-// An option check that runs one of the parsers above: its message becomes a usage error (exit 2).
-template <typename Parse>
-CLI::Validator Parses(Parse parse, const std::string& name) {
-  return CLI::Validator(
-      [parse](std::string& text) -> std::string {
-        try {
-          parse(text);
-        } catch (const std::exception& e) {
-          return e.what();
-        }
-        return {};
-      },
-      "", name);
 }
 
 // Independent streams from one --seed (SplitMix64): the truth, the cloud, the noise and the validation cloud
@@ -229,8 +165,8 @@ void RunTracker(const SimulateTrackerArgs& args) {
   // The validators have checked every text; parsing again cannot fail.
   const artefacts::Workspace ws = ParseMachine(args.machine);
   const PointSpec spec = ParsePointSpec(args.points, "--points");
-  const auto tool = Numbers(args.tool, 3, "--tool", "0,0,100");
-  const auto pose6 = Numbers(args.pose, 6, "--pose", "1100,-1000,600,63,14,35");
+  const auto tool = ParseNumbers(args.tool, 3, "--tool", "0,0,100");
+  const auto pose6 = ParseNumbers(args.pose, 6, "--pose", "1100,-1000,600,63,14,35");
   const bool with_truth = args.seed_given || !args.errors.empty();
   if (!args.validation.empty() && !with_truth) {
     throw CLI::ValidationError("--validation", "needs a machine truth to simulate: give --seed N or --errors FILE.json");
@@ -361,12 +297,12 @@ void RegisterSimulateTracker(CLI::App* simulate) {
       ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--points"); }, "SPEC"))
       ->capture_default_str();
   sub->add_option("--tool", args->tool, "tool (reflector) offset X,Y,Z in mm, in the last tool axis' frame")
-      ->check(Parses([](const std::string& t) { Numbers(t, 3, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
       ->capture_default_str();
   sub->add_option("--pose", args->pose,
                   "tracker pose in the machine frame: X,Y,Z (mm) and intrinsic XYZ Euler angles A,B,C (deg); default "
                   "001 Table I position 4")
-      ->check(Parses([](const std::string& t) { Numbers(t, 6, "--pose", "1100,-1000,600,63,14,35"); }, "X,Y,Z,A,B,C"))
+      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
       ->capture_default_str();
   CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: README, Machine tools)")
                             ->check(CLI::ExistingFile);

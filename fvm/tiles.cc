@@ -29,6 +29,7 @@
 #include "artefacts/simulation/tile_synthesis.h"
 #include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
+#include "fvm/option_parsing.h"
 #include "imaging/io/tile_image.h"
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_plan.h"
@@ -54,26 +55,6 @@ struct PlanArgs {
   std::string free_output;
   bool json = false;
 };
-
-std::vector<double> ParseNumbers(const std::string& text, size_t count, const std::string& what,
-                                 const std::string& example) {
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    // Locale-independent and whole-field: "1.5" is 1.5 under any LC_NUMERIC, "1.5mm" is refused.
-    const std::optional<double> value = ParseDouble(item);
-    if (!value || !std::isfinite(*value)) {
-      values.clear();
-      break;
-    }
-    values.push_back(*value);
-  }
-  if (values.size() != count) {
-    throw InputError(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count, example));
-  }
-  return values;
-}
 
 std::vector<Feature> LoadFeatures(const PlanArgs& args) {
   std::vector<Feature> features;

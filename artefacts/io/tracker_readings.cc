@@ -30,6 +30,7 @@ struct Columns {
   int measured[3] = {-1, -1, -1};
   bool spherical = false;
   int approach = -1;
+  int tool = -1;
 };
 
 // Which of three columns the header names, as "xt, yt" for messages.
@@ -72,6 +73,7 @@ Columns FindColumns(const CsvTable& table) {
     }
   }
   c.approach = table.Optional("approach");
+  c.tool = table.Optional("tool");
   return c;
 }
 
@@ -117,6 +119,7 @@ TrackerReading ReadRow(const CsvTable& table, const CsvRow& row, const Columns& 
     reading.measured = stage::FromSpherical({m[0], m[1], m[2]});
   }
   if (c.approach >= 0) reading.approach = std::string(TrimBlanks(table.Text(row, c.approach)));
+  if (c.tool >= 0) reading.tool = static_cast<int>(table.Int(row, c.tool, 1, kMaxTools, point)) - 1;
   return reading;
 }
 
@@ -152,6 +155,7 @@ TrackerReadings ReadTrackerReadings(const std::filesystem::path& path) {
 
 void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadings& data) {
   bool with_approach = false;
+  bool with_tool = false;
   std::map<std::string, size_t, std::less<>> seen;
   for (size_t i = 0; i < data.points.size(); ++i) {
     const TrackerReading& p = data.points[i];
@@ -167,7 +171,9 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
       refuse("a coordinate is beyond 100 m");
     }
     if (!seen.emplace(p.id, i).second) refuse("the id appears twice");
+    if (p.tool < 0 || p.tool >= kMaxTools) refuse(fmt::format("tool {} is not 1 .. {}", p.tool + 1, kMaxTools));
     with_approach = with_approach || !p.approach.empty();
+    with_tool = with_tool || p.tool != 0;
   }
   if (data.points.empty()) {
     throw InputError(fmt::format("{}: no points to write; nothing was written", path.string()));
@@ -188,6 +194,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
   std::vector<std::string> header = {"id", "x", "y", "z"};
   for (const char* name : data.spherical ? kSpherical : kCartesian) header.emplace_back(name);
   if (with_approach) header.emplace_back("approach");
+  if (with_tool) header.emplace_back("tool");
   out += CsvLine(header);
   for (const TrackerReading& p : data.points) {
     std::vector<std::string> fields = {p.id, FormatShortest(p.nominal.x()), FormatShortest(p.nominal.y()),
@@ -199,6 +206,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
       for (int i = 0; i < 3; ++i) fields.push_back(FormatShortest(p.measured[i]));
     }
     if (with_approach) fields.push_back(p.approach);
+    if (with_tool) fields.push_back(std::to_string(p.tool + 1));
     out += CsvLine(fields);
   }
   WriteFileAtomically(path, out);

@@ -7,7 +7,8 @@
 //   xt,yt,zt                   what the tracker read, Cartesian in the tracker's frame, mm
 //   or range,azimuth,elevation the same in the tracker's spherical coordinates, mm and rad (stage/tracker.h:
 //                              azimuth from +x towards +y, elevation from the xy plane towards +z)
-// and optionally `approach` (text: the direction the fastest axis last moved in, e.g. +x). Other columns are
+// and optionally `approach` (text: the direction the fastest axis last moved in, e.g. +x) and `tool` (1, 2, ...:
+// which of the tool offsets given to `fvm verify --tool` the point was measured with; 1 when absent). Other columns are
 // ignored. Ids are text (P0001); each appears once. Column names match without regard to case; the CSV dialect
 // is core/csv.h's.
 
@@ -18,11 +19,14 @@
 
 namespace fvm::artefacts {
 
+inline constexpr int kMaxTools = 16;
+
 struct TrackerReading {
   std::string id;
   Eigen::Vector3d nominal = Eigen::Vector3d::Zero();   // commanded machine coordinates, mm
   Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // tracker frame, Cartesian, mm (spherical input converted)
   std::string approach;                                // "" when not given
+  int tool = 0;                                        // 0-based index of the tool offset (the file says 1, 2, ...)
   int line = 0;                                        // line of the source file; 0 when not read from a file
 };
 

@@ -1,0 +1,301 @@
+// fvm verify DATA.csv --chain XFYZ --order N --tool X,Y,Z [--fit-pose | --pose ...] -o MACHINE.json: volumetric
+// verification of a machine tool from laser-tracker readings.
+
+#include <fmt/core.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "artefacts/io/tracker_readings.h"
+#include "artefacts/simulation/machine_tool_simulation.h"
+#include "core/exit_codes.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
+#include "fvm/commands.h"
+#include "fvm/option_parsing.h"
+#include "stage/io/calibration_file.h"
+#include "stage/machine_verification.h"
+#include "stage/tracker.h"
+
+namespace fvm::cli {
+namespace {
+
+struct VerifyArgs {
+  std::string data;
+  std::string chain = "XFYZ";
+  std::string order = "3";
+  std::string basis = "legendre";
+  std::vector<std::string> tools{"0,0,0"};
+  bool fit_pose = false;
+  std::string pose;
+  std::string machine;
+  std::string tracker = "published";
+  bool unweighted = false;
+  std::string validate;
+  std::string output;
+  bool json = false;
+};
+
+// The readings of one file as observations: commanded point, tracker reading, its covariance under the tracker's
+// noise model (zero: equal weights), and which tool (a `tool` column, 1-based, when the file has one).
+std::vector<stage::Observation> Observations(const artefacts::TrackerReadings& readings, const stage::TrackerNoise* noise) {
+  std::vector<stage::Observation> out;
+  for (const artefacts::TrackerReading& r : readings.points) {
+    stage::Observation o;
+    o.command = r.nominal;
+    o.measured = r.measured;
+    if (noise != nullptr) o.covariance = noise->Covariance(r.measured);
+    o.tool = r.tool;
+    out.push_back(o);
+  }
+  return out;
+}
+
+stage::ParameterLayout MachineLayout(const stage::AxisChain& chain, const artefacts::Workspace& ws, stage::Basis basis, int order) {
+  std::array<stage::Travel, 3> travel;
+  for (int k = 0; k < 3; ++k) travel[static_cast<size_t>(k)] = stage::Travel{ws.min[k], ws.max[k]};
+  stage::ParameterLayout layout(chain, travel);
+  for (const char* axis : {"x", "y", "z"}) {
+    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, basis, order);
+  }
+  for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, basis, 0);
+  return layout;
+}
+
+// The workspace the error functions are defined on: --machine, or the span of the commanded points.
+artefacts::Workspace WorkspaceOf(const VerifyArgs& args, const artefacts::TrackerReadings& readings) {
+  if (!args.machine.empty()) return ParseMachine(args.machine);
+  artefacts::Workspace ws;
+  ws.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  ws.max = -ws.min;
+  for (const artefacts::TrackerReading& r : readings.points) {
+    ws.min = ws.min.cwiseMin(r.nominal);
+    ws.max = ws.max.cwiseMax(r.nominal);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(ws.max[k] > ws.min[k])) {
+      throw InputError(fmt::format("{}: every point has {} = {} mm: the {} axis never moves, so its errors cannot be "
+                                   "identified; measure points along all three axes",
+                                   readings.source, "xyz"[k], ws.min[k], "XYZ"[k]));
+    }
+  }
+  return ws;
+}
+
+nlohmann::json ErrorJson(const stage::VolumetricError& e) {
+  return {{"mean_um", e.mean_um}, {"max_um", e.max_um}, {"min_um", e.min_um}};
+}
+
+nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance) {
+  const Eigen::Vector3d euler = pose.Rotation().eulerAngles(0, 1, 2) * 180.0 / M_PI;
+  nlohmann::json j{{"translation_mm", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
+                   {"rotation_vector_rad", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z()}},
+                   {"euler_xyz_deg", {euler.x(), euler.y(), euler.z()}}};
+  if (covariance != nullptr) {
+    const Eigen::Matrix<double, 6, 1> u = covariance->diagonal().cwiseMax(0.0).cwiseSqrt();
+    j["u_translation_um"] = {u[0] * 1e3, u[1] * 1e3, u[2] * 1e3};
+    j["u_rotation_urad"] = {u[3] * 1e6, u[4] * 1e6, u[5] * 1e6};
+  }
+  return j;
+}
+
+struct OrderFit {
+  int order = 0;
+  std::optional<stage::VerificationResult> result;
+  double bic = 0;
+  std::optional<stage::VolumetricError> validation_before, validation_after;
+};
+
+void Run(const VerifyArgs& args) {
+  const artefacts::TrackerReadings readings = artefacts::ReadTrackerReadings(args.data);
+  std::optional<artefacts::TrackerReadings> validation;
+  if (!args.validate.empty()) validation = artefacts::ReadTrackerReadings(args.validate);
+
+  stage::AxisChain chain;
+  try {
+    chain = stage::AxisChain::Parse(args.chain);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("--chain {}: {}", args.chain, e.what()));
+  }
+  stage::IdentificationOptions options;
+  for (const std::string& t : args.tools) options.tool_offsets.push_back(ParseVector3(t, "--tool", "0,0,100"));
+  chain.tool_offset = options.tool_offsets.front();
+  const std::vector<const artefacts::TrackerReadings*> files{&readings, validation ? &*validation : nullptr};
+  for (const artefacts::TrackerReadings* file : files) {
+    if (file == nullptr) continue;
+    for (const artefacts::TrackerReading& r : file->points) {
+      if (r.tool >= static_cast<int>(options.tool_offsets.size())) {
+        throw InputError(fmt::format("{}:{}: point {} was measured with tool {}, but only {} --tool offset(s) were given",
+                                     file->source, r.line, r.id, r.tool + 1, options.tool_offsets.size()));
+      }
+    }
+  }
+  const stage::TrackerNoise noise = stage::TrackerNoise::Preset(args.tracker);
+  const bool weighted = !args.unweighted && !noise.IsNoiseFree();
+  const std::vector<stage::Observation> observations = Observations(readings, weighted ? &noise : nullptr);
+  const artefacts::Workspace ws = WorkspaceOf(args, readings);
+  const stage::Basis basis = *stage::ParseBasis(args.basis);
+  options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
+  if (!args.pose.empty()) options.pose = ParsePose(args.pose, "--pose");
+  options.num_threads = ThreadCount();
+
+  std::vector<int> orders;
+  if (args.order == "auto") {
+    orders = {1, 2, 3};
+  } else {
+    orders = {args.order[0] - '0'};  // 1, 2 or 3: the option's check allows no other
+  }
+  std::vector<OrderFit> fits;
+  for (int order : orders) {
+    OrderFit fit;
+    fit.order = order;
+    try {
+      fit.result = stage::VerifyMachine(MachineLayout(chain, ws, basis, order), observations, options);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fmt::format("{}: {}", args.data, e.what()));
+    }
+    const stage::IdentificationResult& r = fit.result->identified;
+    // BIC on the (weighted) residuals: chi^2 + k ln(N), or N ln(RSS / N) + k ln(N) with equal weights.
+    const double n_eq = 3.0 * static_cast<double>(observations.size());
+    const double k = static_cast<double>(r.calibration.layout.NumFree() + (args.pose.empty() ? 6 : 0));
+    const double dof = std::max(1.0, n_eq - k);
+    const double fit_term = weighted ? r.weighted_rms * r.weighted_rms * dof
+                                     : n_eq * std::log(std::max(r.rms_mm * r.rms_mm, 1e-30));
+    fit.bic = fit_term + k * std::log(n_eq);
+    if (validation) {
+      const std::vector<stage::Observation> others = Observations(*validation, nullptr);
+      fit.validation_before = stage::SummarizeVolumetric(stage::VolumetricResiduals(
+          r.calibration.layout, nullptr, fit.result->initial_pose, others, options.tool_offsets));
+      fit.validation_after = stage::SummarizeVolumetric(stage::VolumetricResiduals(
+          r.calibration.layout, &r.calibration.values, r.pose, others, options.tool_offsets));
+    }
+    fits.push_back(std::move(fit));
+  }
+  // --order auto: the order that predicts the held-out points best, or the lowest BIC without them.
+  size_t best = 0;
+  for (size_t i = 1; i < fits.size(); ++i) {
+    const bool better = validation ? fits[i].validation_after->mean_um < fits[best].validation_after->mean_um
+                                   : fits[i].bic < fits[best].bic;
+    if (better) best = i;
+  }
+  const OrderFit& chosen = fits[best];
+  const stage::VerificationResult& v = *chosen.result;
+  const stage::IdentificationResult& r = v.identified;
+
+  // Points the tracker could not have seen from the pose found: a reading there is a mistake in the file.
+  const std::vector<std::string> beyond = artefacts::PointsBeyondTrackerLimits(readings, r.pose);
+  if (!beyond.empty()) {
+    throw InputError(fmt::format("{}: {} of {} readings lie outside the tracker's range or angle limits from the pose "
+                                 "found (first: {}); check the file's units and columns",
+                                 args.data, beyond.size(), readings.points.size(), beyond.front()));
+  }
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["chain"] = chain.code;
+  doc["basis"] = args.basis;
+  doc["order"] = chosen.order;
+  doc["points"] = readings.points.size();
+  doc["weights"] = weighted ? "tracker " + noise.name : std::string("equal");
+  doc["initial"] = ErrorJson(v.initial);
+  doc["final"] = ErrorJson(v.final);
+  doc["final"]["rms_um"] = r.rms_mm * 1e3;
+  if (weighted) doc["final"]["weighted_rms"] = r.weighted_rms;
+  if (validation) {
+    doc["validation"] = {{"points", validation->points.size()},
+                         {"initial", ErrorJson(*chosen.validation_before)},
+                         {"final", ErrorJson(*chosen.validation_after)}};
+  }
+  doc["pose"] = PoseJson(r.pose, args.pose.empty() ? &r.pose_covariance : nullptr);
+  doc["pose"]["estimated"] = args.pose.empty();
+  doc["pose"]["initial"] = PoseJson(v.initial_pose, nullptr);
+  const nlohmann::json calibration = stage::CalibrationToJson(r);
+  doc["fixed"] = calibration["fixed"];
+  doc["parameters"] = calibration["parameters"];
+  doc["converged"] = r.converged;
+  if (fits.size() > 1) {
+    for (const OrderFit& f : fits) {
+      nlohmann::json o{{"order", f.order}, {"bic", f.bic}, {"final", ErrorJson(f.result->final)},
+                       {"free", f.result->identified.calibration.layout.NumFree()}};
+      if (f.validation_after) o["validation_final"] = ErrorJson(*f.validation_after);
+      doc["orders"].push_back(o);
+    }
+    doc["order_chosen_by"] = validation ? "validation mean" : "BIC";
+  }
+
+  if (!args.output.empty()) {
+    nlohmann::json model = calibration;
+    model["model"] = fmt::format("machine {} {} order {}", chain.code, args.basis, chosen.order);
+    model["instrument_pose"] = doc["pose"];
+    model["verification"] = {{"data", args.data}, {"initial", doc["initial"]}, {"final", doc["final"]}};
+    WriteFileAtomically(args.output, model.dump(2) + "\n");
+  }
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+  } else {
+    fmt::print("verified {} {} points ({} weights), order {} {}{}:\n", readings.points.size(), chain.code,
+               weighted ? "tracker " + noise.name : std::string("equal"), chosen.order, args.basis,
+               fits.size() > 1 ? fmt::format(" (chosen by {})", validation ? "validation mean" : "BIC") : "");
+    fmt::print("  volumetric error   initial max {:.1f} / mean {:.1f} / min {:.1f} um   final max {:.1f} / mean {:.1f} / min {:.1f} um\n",
+               v.initial.max_um, v.initial.mean_um, v.initial.min_um, v.final.max_um, v.final.mean_um, v.final.min_um);
+    if (validation) {
+      fmt::print("  validation ({} points) initial mean {:.1f} um, final mean {:.1f} um (max {:.1f})\n", validation->points.size(),
+                 chosen.validation_before->mean_um, chosen.validation_after->mean_um, chosen.validation_after->max_um);
+    }
+    const nlohmann::json& p = doc["pose"];
+    fmt::print("  tracker pose ({}): {:.3f}, {:.3f}, {:.3f} mm; XYZ Euler {:.4f}, {:.4f}, {:.4f} deg\n",
+               args.pose.empty() ? "estimated" : "held", p["translation_mm"][0].get<double>(), p["translation_mm"][1].get<double>(),
+               p["translation_mm"][2].get<double>(), p["euler_xyz_deg"][0].get<double>(), p["euler_xyz_deg"][1].get<double>(),
+               p["euler_xyz_deg"][2].get<double>());
+    fmt::print("  {} coefficients free, {} fixed (see --json 'fixed' for each reason){}\n", r.calibration.layout.NumFree(),
+               r.fixed.size(), args.output.empty() ? "" : "; model written to " + args.output);
+  }
+  if (!r.converged) throw NotConvergedError("the identification did not converge: " + r.solver_report);
+}
+
+}  // namespace
+
+void RegisterVerify(CLI::App& app) {
+  auto args = std::make_shared<VerifyArgs>();
+  CLI::App* sub = app.add_subcommand("verify", "machine-tool volumetric verification from laser-tracker readings");
+  AddDetails(sub,
+             "Identifies the 21 geometric error functions of a three-axis machine (polynomials of --order in --basis) "
+             "and the tracker pose from readings at commanded points, each weighted by the tracker's noise model "
+             "(a 3x3 covariance per point). Volumetric error: distance between a reading and the model's prediction "
+             "of the ideal machine (initial) or of the identified one (final), in the tracker frame. Error functions "
+             "only matter up to their value at each axis' origin, which the tracker pose absorbs: the pose is "
+             "estimated jointly unless --pose holds it, and terms the data cannot separate are fixed and named.");
+  sub->add_option("DATA", args->data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad)")
+      ->required();
+  sub->add_option("--chain", args->chain, "F-notation chain: letters left of F move the part (e.g. XFYZ, FXYZ, XYFZ)")
+      ->capture_default_str();
+  sub->add_option("--order", args->order, "polynomial order of each error function, 1-3, or auto (held-out points or BIC)")
+      ->check(CLI::IsMember({"1", "2", "3", "auto"}))
+      ->capture_default_str();
+  sub->add_option("--basis", args->basis, "polynomial basis")->check(CLI::IsMember({"power", "legendre", "chebyshev"}))
+      ->capture_default_str();
+  sub->add_option("--tool", args->tools, "tool offset X,Y,Z in mm (give it twice for two tools: a `tool` column says which)")
+      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->capture_default_str();
+  auto* fit = sub->add_flag("--fit-pose", args->fit_pose, "estimate the tracker pose jointly (the default)");
+  sub->add_option("--pose", args->pose, "hold the tracker pose: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
+      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
+      ->excludes(fit);
+  sub->add_option("--machine", args->machine, "axis travels LXxLYxLZ[@X0,Y0,Z0] in mm (default: the span of the points)")
+      ->check(Parses([](const std::string& t) { ParseMachine(t); }, "LXxLYxLZ"));
+  sub->add_option("--tracker", args->tracker, "tracker noise model for the weights")
+      ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
+      ->capture_default_str();
+  sub->add_flag("--unweighted", args->unweighted, "equal weights instead of the tracker's covariances");
+  sub->add_option("--validate", args->validate, "other readings to judge the model on (never fitted)");
+  sub->add_option("-o,--output", args->output, "write the identified machine (calibration JSON with the tracker pose)");
+  sub->add_flag("--json", args->json, "print the result as JSON");
+  sub->footer(
+      "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"
+      "  fvm verify plan/readings.csv --chain XFYZ --order 3 --tool 0,0,100 --validate plan/validation.csv -o machine.json");
+  sub->callback([args] { Run(*args); });
+}
+
+}  // namespace fvm::cli

@@ -1,0 +1,71 @@
+# fvm verify as a user runs it on a simulated machine: the published 96-point mesh with tracker noise, a noise-free
+# validation mesh, the JSON contract, the model file, --order auto, a held pose, and bad input that writes nothing.
+# Variables: FVM (the executable), WORK (a scratch directory).
+
+include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
+
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+run(0 simulate tracker --seed 1 --tool 0,0,100 --validation mesh:250,250,200 -o ${WORK}/plan)
+run(0 verify ${WORK}/plan/readings.csv --chain XFYZ --order 2 --tool 0,0,100 --validate ${WORK}/plan/validation.csv
+    --json -o ${WORK}/machine.json)
+foreach(key points initial final validation pose fixed parameters)
+  string(JSON ignored ERROR_VARIABLE missing GET "${OUT}" ${key})
+  if(missing)
+    message(FATAL_ERROR "fvm verify --json has no '${key}':\n${OUT}")
+  endif()
+endforeach()
+string(JSON before GET "${OUT}" validation initial mean_um)
+string(JSON after GET "${OUT}" validation final mean_um)
+# The machine errs by 36 um on the validation points (truth.json); with 24 urad of angle noise on 96 readings an
+# order-2 model must still take away a third of it.
+scaled("${before}" 1 b)
+scaled("${after}" 1 a)
+math(EXPR limit "${b} * 2 / 3")
+if(NOT a LESS limit)
+  message(FATAL_ERROR "validation mean ${before} um -> ${after} um: the model learnt too little")
+endif()
+# The tracker pose: simulated at 1100,-1000,600 mm (001 Table I, position 4); 96 noisy readings find it to tens of um.
+string(JSON tx GET "${OUT}" pose translation_mm 0)
+string(JSON tz GET "${OUT}" pose translation_mm 2)
+expect_near("pose x (mm)" "${tx}" 1100 0.1)
+expect_near("pose z (mm)" "${tz}" 600 0.1)
+string(JSON first_fixed GET "${OUT}" fixed 0 reason)
+if(NOT first_fixed MATCHES "pose")
+  message(FATAL_ERROR "the first fixed term should be named as absorbed by the pose: ${first_fixed}")
+endif()
+file(READ ${WORK}/machine.json model)
+string(JSON chain GET "${model}" chain)
+string(JSON pose_x GET "${model}" instrument_pose translation_mm 0)
+if(NOT chain STREQUAL "XFYZ" OR NOT pose_x MATCHES "^1(099|100)\\.")
+  message(FATAL_ERROR "machine.json: chain ${chain}, pose x ${pose_x}")
+endif()
+
+# --order auto chooses on the held-out points and lists every order it tried.
+run(0 verify ${WORK}/plan/readings.csv --order auto --tool 0,0,100 --validate ${WORK}/plan/validation.csv --json)
+string(JSON tried LENGTH "${OUT}" orders)
+string(JSON by GET "${OUT}" order_chosen_by)
+if(NOT tried EQUAL 3 OR NOT by STREQUAL "validation mean")
+  message(FATAL_ERROR "--order auto: ${tried} orders, chosen by '${by}'")
+endif()
+
+# The pose held at the simulated one gives the same fit in the same frame.
+run(0 verify ${WORK}/plan/readings.csv --order 1 --tool 0,0,100 --pose 1100,-1000,600,63,14,35)
+if(NOT OUT MATCHES "tracker pose \\(held\\): 1100.000, -1000.000, 600.000 mm")
+  message(FATAL_ERROR "held pose not reported:\n${OUT}")
+endif()
+
+# Bad input: a clear error naming the file (and line, point), exit 1, nothing written.
+file(WRITE ${WORK}/mixed.csv "id,x,y,z,xt,yt,zt,range\nP1,0,0,0,1,2,3,4\n")
+fails_naming("mixed.csv:1: the header names tracker coordinates both Cartesian" verify ${WORK}/mixed.csv -o ${WORK}/no.json)
+file(WRITE ${WORK}/few.csv "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,100,0,0,1,2,4\nP3,0,100,0,3,2,3\nP4,0,0,100,1,5,3\n")
+fails_naming("few.csv: 4 points give 12 equations, fewer than" verify ${WORK}/few.csv --order 3 -o ${WORK}/no.json)
+fails_naming("--chain XYZFZ: axis chain" verify ${WORK}/plan/readings.csv --chain XYZFZ -o ${WORK}/no.json)
+file(READ ${WORK}/plan/readings.csv text)
+string(REGEX REPLACE "\nP0001,0,0,0,[^,]+," "\nP0001,0,0,0,45000," text "${text}")  # 45 m: beyond any tracker here
+file(WRITE ${WORK}/far.csv "${text}")
+fails_naming("far.csv: 1 of 96 readings lie outside the tracker.s range" verify ${WORK}/far.csv --tool 0,0,100 -o ${WORK}/no.json)
+if(EXISTS ${WORK}/no.json)
+  message(FATAL_ERROR "a refused verification wrote its output")
+endif()
