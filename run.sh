@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The one entry script: installs what is missing (Debian packages, as root), configures and builds fvm, then
 #   bash run.sh sample     calibrates the bundled sample batch and prints the result
-#   bash run.sh test       the test suite of the Release build (what CI runs), with the fuzzers' regression inputs
+#   bash run.sh test       what CI runs: the Release suite, then the sanitizer suite, then 2000 fuzzing executions
+#                          per reader (about an hour from scratch on 2 cores)
+#   bash run.sh quick      the Release suite only (build/), with the fuzzers' regression inputs through the CLI
 #   bash run.sh sanitize   the same tests built with AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)
 #   bash run.sh fuzz [N]   every reader's libFuzzer target, N executions each (build-fuzz/, clang)
 #   bash run.sh build      only builds
@@ -62,9 +64,21 @@ case "$what" in
     ;;
   sanitize) sanitize ;;
   fuzz) shift; fuzz "$@" ;;
-  test)
+  quick)
     build_release
     ctest --test-dir build --output-on-failure -j2
     ;;
-  *) echo "run.sh: unknown target '$what' (use sample, test, sanitize, fuzz or build)" >&2; exit 2 ;;
+  test)
+    start=$SECONDS
+    step() { echo "run.sh test: $1 ($(((SECONDS - start) / 60)) min so far)" >&2; }
+    step "Release build and tests"
+    build_release
+    ctest --test-dir build --output-on-failure -j2
+    step "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+    sanitize
+    step "fuzzing every reader, 2000 executions each"
+    fuzz 2000
+    step "all suites passed"
+    ;;
+  *) echo "run.sh: unknown target '$what' (use sample, test, quick, sanitize, fuzz or build)" >&2; exit 2 ;;
 esac
