@@ -276,6 +276,21 @@ std::string CsvField(std::string_view text) {
   return out;
 }
 
+std::string CsvComments(const std::vector<std::string>& comments) {
+  std::string out;
+  for (const std::string& comment : comments) {
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t end = comment.find('\n', start);
+      const std::string_view part = std::string_view(comment).substr(start, end - start);
+      out += part.empty() ? "#\n" : "# " + std::string(part) + "\n";
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+  }
+  return out;
+}
+
 std::string CsvLine(const std::vector<std::string>& fields, char separator) {
   std::string out;
   for (std::size_t i = 0; i < fields.size(); ++i) {

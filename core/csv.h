@@ -100,5 +100,7 @@ CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& opt
 std::string CsvField(std::string_view text);
 // The fields joined by `separator`, each through CsvField, and a '\n'.
 std::string CsvLine(const std::vector<std::string>& fields, char separator = ',');
+// Comment lines "# text", one per line of each comment: a line break inside a comment must not start a row.
+std::string CsvComments(const std::vector<std::string>& comments);
 
 }  // namespace fvm

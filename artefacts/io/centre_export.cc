@@ -113,18 +113,7 @@ void WriteCentreExport(const std::filesystem::path& path, const CentreExport& da
   const bool with_form = any(&CentreRecord::form_rms_mm);
   const bool with_converged = any(&CentreRecord::converged);
 
-  std::string out;
-  for (const std::string& comment : data.comments) {
-    // A comment holding a line break would end the comment and start a bogus row.
-    size_t start = 0;
-    while (true) {
-      const size_t end = comment.find('\n', start);
-      const std::string_view part = std::string_view(comment).substr(start, end - start);
-      out += part.empty() ? "#\n" : fmt::format("# {}\n", part);
-      if (end == std::string::npos) break;
-      start = end + 1;
-    }
-  }
+  std::string out = CsvComments(data.comments);
   out += "id,x,y,z";
   if (with_t) out += ",t";
   if (with_radius) out += ",radius";

@@ -179,18 +179,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
     throw InputError(fmt::format("{}: no points to write; nothing was written", path.string()));
   }
 
-  std::string out;
-  for (const std::string& comment : data.comments) {
-    // A comment holding a line break would end the comment and start a bogus row.
-    size_t start = 0;
-    while (true) {
-      const size_t end = comment.find('\n', start);
-      const std::string_view part = std::string_view(comment).substr(start, end - start);
-      out += part.empty() ? "#\n" : fmt::format("# {}\n", part);
-      if (end == std::string::npos) break;
-      start = end + 1;
-    }
-  }
+  std::string out = CsvComments(data.comments);
   std::vector<std::string> header = {"id", "x", "y", "z"};
   for (const char* name : data.spherical ? kSpherical : kCartesian) header.emplace_back(name);
   if (with_approach) header.emplace_back("approach");
