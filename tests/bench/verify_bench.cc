@@ -62,7 +62,8 @@ ParameterLayout Order3Legendre() {
   const Readings& r = FiveThousandReadings();
   ParameterLayout layout(r.chain, r.travel);
   for (const char* axis : {"x", "y", "z"}) {
-    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, Basis::kLegendre, 3);
+    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"})
+      layout.SetTerm(std::string(axis) + kind, Basis::kLegendre, 3);
   }
   for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, Basis::kLegendre, 0);
   return layout;
@@ -77,7 +78,8 @@ IdentificationOptions Estimated() {
 }
 
 const VerificationResult& Ours() {
-  static const VerificationResult result = VerifyMachine(Order3Legendre(), FiveThousandReadings().observations, Estimated());
+  static const VerificationResult result =
+      VerifyMachine(Order3Legendre(), FiveThousandReadings().observations, Estimated());
   return result;
 }
 
