@@ -197,6 +197,45 @@ TEST(MachineVerification, ASecondToolOffsetMakesMoreTermsIdentifiable) {
   EXPECT_TRUE(zrx_named);
 }
 
+// Any three-axis F-notation chain: FXYZ (all axes move the tool) and XYFZ (two move the part), simulated with the
+// library's chain (the XFYZ tests above check that chain against the seed's equation) and a polynomial truth.
+TEST(MachineVerification, OtherChainsRecoverTheirMachineWithoutNoise) {
+  for (const char* code : {"FXYZ", "XYFZ"}) {
+    AxisChain chain = AxisChain::Parse(code);
+    chain.tool_offset = kTool;
+    ParameterLayout layout(chain, {Travel{0, kWorkspace.x()}, Travel{0, kWorkspace.y()}, Travel{0, kWorkspace.z()}});
+    for (const char* axis : {"x", "y", "z"}) {
+      for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, Basis::kLegendre, 2);
+    }
+    for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, Basis::kLegendre, 0);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::vector<double> truth;
+    for (const std::string& name : layout.FreeNames()) {
+      const bool translation = name[1] == 'T';
+      truth.push_back(unit(rng) * (translation ? 0.01 : 2e-5));
+    }
+    const Tracker tracker;
+    const Eigen::AngleAxisd angle_axis(tracker.rotation);
+    double posed[6];  // translation, rotation vector
+    for (int k = 0; k < 3; ++k) {
+      posed[k] = tracker.translation[k];
+      posed[3 + k] = angle_axis.angle() * angle_axis.axis()[k];
+    }
+    std::vector<Observation> readings;
+    for (const Eigen::Vector3d& q : Mesh({500, 500, 400})) {
+      Observation o;
+      o.command = q;
+      o.measured = Forward(layout, truth.data(), q, posed);
+      readings.push_back(o);
+    }
+    const VerificationResult r = VerifyMachine(layout, readings, Estimated());
+    EXPECT_GT(r.initial.mean_um, 5.0) << code;
+    EXPECT_LT(r.final.max_um, 1e-3) << code;
+    EXPECT_NEAR(r.identified.pose.translation.x(), tracker.translation.x(), 1.0) << code;
+  }
+}
+
 // Independent reference: Gauss-Newton with central differences on the seed equation, same weights, same free
 // coefficients (power basis, evaluated here by hand), the pose as translation + rotation vector.
 struct ReferenceFit {
