@@ -34,6 +34,7 @@ struct ImageHeader {
   std::string resolution_unit;     // "cm", "in", ... empty when absent
   float x_resolution = 0.0f;       // pixels per resolution unit, 0 when absent
   float y_resolution = 0.0f;
+  int rows_per_strip = 0;          // TIFF in strips: rows per strip (as the file says); 0 otherwise
 };
 
 // One open image file.

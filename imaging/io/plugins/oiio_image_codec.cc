@@ -56,6 +56,7 @@ class OiioReader final : public ImageFileReader {
     header_.resolution_unit = spec.get_string_attribute("ResolutionUnit");
     header_.x_resolution = spec.get_float_attribute("XResolution", 0.0f);
     header_.y_resolution = spec.get_float_attribute("YResolution", 0.0f);
+    header_.rows_per_strip = spec.get_int_attribute("tiff:RowsPerStrip", 0);
   }
   ~OiioReader() override { input_->close(); }
 
