@@ -1,5 +1,7 @@
 #include "stage/calibration.h"
 
+#include <vector>
+
 namespace fvm::stage {
 
 Eigen::MatrixXd Calibration::Correlation() const {
@@ -9,6 +11,26 @@ Eigen::MatrixXd Calibration::Correlation() const {
     for (Eigen::Index j = 0; j < r.cols(); ++j) r(i, j) = (u[i] > 0 && u[j] > 0) ? r(i, j) / (u[i] * u[j]) : 0.0;
   }
   return r;
+}
+
+TermValuesWithUncertainty TermValuesAt(const Calibration& calibration, const Eigen::Vector3d& q,
+                                       const Eigen::Vector3d* reference) {
+  const ParameterLayout& layout = calibration.layout;
+  std::vector<double> all(layout.coefficients().size());
+  layout.Expand(calibration.values.data(), all.data());
+  TermValuesWithUncertainty out;
+  layout.TermValues(all.data(), q, out.value.data());
+  Eigen::MatrixXd d = layout.TermDerivative(q);
+  if (reference != nullptr) {
+    Eigen::Matrix<double, kNumErrorTerms, 1> at_reference;
+    layout.TermValues(all.data(), *reference, at_reference.data());
+    out.value -= at_reference;
+    d -= layout.TermDerivative(*reference);
+  }
+  if (calibration.covariance.rows() == d.cols() && calibration.covariance.cols() == d.cols()) {
+    out.u = (d * calibration.covariance * d.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
+  return out;
 }
 
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point) {

@@ -26,6 +26,18 @@ struct CorrectedPoint {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // from the model's parameter covariance only, mm^2
 };
 
+// The 21 term values at command q (mm, rad), each with its standard uncertainty from the coefficient covariance:
+// u^2 = d^T Cov d with d = d(term value)/d(free coefficients) (ParameterLayout::TermDerivative). With a reference
+// command, values and uncertainties are those of value(q) - value(reference), d = TermDerivative(q) -
+// TermDerivative(reference): an error function relative to its value at the axis' origin, whose constant the
+// instrument pose absorbs. Terms the layout does not hold are zero with zero uncertainty.
+struct TermValuesWithUncertainty {
+  Eigen::Matrix<double, kNumErrorTerms, 1> value = Eigen::Matrix<double, kNumErrorTerms, 1>::Zero();
+  Eigen::Matrix<double, kNumErrorTerms, 1> u = Eigen::Matrix<double, kNumErrorTerms, 1>::Zero();
+};
+TermValuesWithUncertainty TermValuesAt(const Calibration& calibration, const Eigen::Vector3d& q,
+                                       const Eigen::Vector3d* reference = nullptr);
+
 // Compensates one stitching-free point: the forward model, eq. 1.
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point);
 
