@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "stage/inverse_model.h"
+
 namespace fvm::stage {
 
 Eigen::MatrixXd Calibration::Correlation() const {
@@ -30,6 +32,20 @@ TermValuesWithUncertainty TermValuesAt(const Calibration& calibration, const Eig
   if (calibration.covariance.rows() == d.cols() && calibration.covariance.cols() == d.cols()) {
     out.u = (d * calibration.covariance * d.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
   }
+  return out;
+}
+
+Compensation CompensateCommand(const Calibration& calibration, const Eigen::Vector3d& nominal) {
+  const ParameterLayout& layout = calibration.layout;
+  const Eigen::Vector3d tool = layout.chain().tool_offset;
+  Eigen::Vector3d origin;
+  for (int k = 0; k < 3; ++k) origin[k] = layout.travel()[static_cast<size_t>(k)].min;
+  const Eigen::Vector3d error_at_origin = Forward(layout, calibration.values, origin) - origin - tool;
+  Compensation out;
+  out.target = nominal + tool + error_at_origin;
+  const InverseResult inverse = Inverse(layout, calibration.values.data(), out.target);
+  out.command = inverse.command;
+  out.converged = inverse.converged;
   return out;
 }
 
