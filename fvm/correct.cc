@@ -69,8 +69,8 @@ std::vector<NominalPoint> ReadPointList(const std::string& path) {
 }
 
 // The compensation table: per nominal point the command that puts the tool point where the error-free machine
-// would (stage::CompensateCommand) and the correction command - nominal. Commands are written as the shortest text
-// that reads back to the same double, so the table reproduces the model's inverse exactly.
+// would (stage::CompensateCommand) and the correction command - nominal. Commands are written to 1 nm (6 decimals),
+// corrections to 1 nm in um (3 decimals); no "-0".
 void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
   const std::vector<NominalPoint> points = ReadPointList(args.input);
   std::string csv = fmt::format(
@@ -92,8 +92,12 @@ void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
     largest = std::max(largest, d_um.norm());
     std::vector<std::string> fields{p.id};
     for (int k = 0; k < 3; ++k) fields.push_back(FormatShortest(p.position[k]));
-    for (int k = 0; k < 3; ++k) fields.push_back(FormatShortest(c.command[k]));
-    for (int k = 0; k < 3; ++k) fields.push_back(FormatFixed(d_um[k], 4));
+    const auto fixed = [](double v, int decimals) {
+      const double scale = std::pow(10.0, decimals);
+      return FormatFixed(std::round(v * scale) / scale + 0.0, decimals);  // + 0.0: -0 becomes 0
+    };
+    for (int k = 0; k < 3; ++k) fields.push_back(fixed(c.command[k], 6));
+    for (int k = 0; k < 3; ++k) fields.push_back(fixed(d_um[k], 3));
     csv += CsvLine(fields);
     doc["points"].push_back({{"id", p.id}, {"command", {c.command.x(), c.command.y(), c.command.z()}},
                              {"correction_um", {d_um.x(), d_um.y(), d_um.z()}}});
