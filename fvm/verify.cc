@@ -10,6 +10,7 @@
 
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
+#include "artefacts/tracker_observations.h"
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
@@ -42,30 +43,10 @@ struct VerifyArgs {
   bool json = false;
 };
 
-// The readings of one file as observations: commanded point, tracker reading, its covariance under the tracker's
-// noise model (zero: equal weights), and which tool (a `tool` column, 1-based, when the file has one).
-std::vector<stage::Observation> Observations(const artefacts::TrackerReadings& readings, const stage::TrackerNoise* noise) {
-  std::vector<stage::Observation> out;
-  for (const artefacts::TrackerReading& r : readings.points) {
-    stage::Observation o;
-    o.command = r.nominal;
-    o.measured = r.measured;
-    if (noise != nullptr) o.covariance = noise->Covariance(r.measured);
-    o.tool = r.tool;
-    out.push_back(o);
-  }
-  return out;
-}
-
 stage::ParameterLayout MachineLayout(const stage::AxisChain& chain, const artefacts::Workspace& ws, stage::Basis basis, int order) {
   std::array<stage::Travel, 3> travel;
   for (int k = 0; k < 3; ++k) travel[static_cast<size_t>(k)] = stage::Travel{ws.min[k], ws.max[k]};
-  stage::ParameterLayout layout(chain, travel);
-  for (const char* axis : {"x", "y", "z"}) {
-    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, basis, order);
-  }
-  for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, basis, 0);
-  return layout;
+  return stage::MachineLayout(chain, travel, basis, order);
 }
 
 // The workspace the error functions are defined on: --machine, or the span of the commanded points.
@@ -247,7 +228,7 @@ void Run(const VerifyArgs& args) {
   }
   const stage::TrackerNoise noise = stage::TrackerNoise::Preset(args.tracker);
   const bool weighted = !args.unweighted && !noise.IsNoiseFree();
-  const std::vector<stage::Observation> observations = Observations(readings, weighted ? &noise : nullptr);
+  const std::vector<stage::Observation> observations = artefacts::TrackerObservations(readings, weighted ? &noise : nullptr);
   const artefacts::Workspace ws = WorkspaceOf(args, readings);
   const stage::Basis basis = *stage::ParseBasis(args.basis);
   options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
@@ -278,7 +259,7 @@ void Run(const VerifyArgs& args) {
                                      : n_eq * std::log(std::max(r.rms_mm * r.rms_mm, 1e-30));
     fit.bic = fit_term + k * std::log(n_eq);
     if (validation) {
-      const std::vector<stage::Observation> others = Observations(*validation, nullptr);
+      const std::vector<stage::Observation> others = artefacts::TrackerObservations(*validation, nullptr);
       fit.validation_before = stage::SummarizeVolumetric(stage::VolumetricResiduals(
           r.calibration.layout, nullptr, fit.result->initial_pose, others, options.tool_offsets));
       fit.validation_after = stage::SummarizeVolumetric(stage::VolumetricResiduals(
@@ -339,7 +320,7 @@ void Run(const VerifyArgs& args) {
   }
 
   if (!args.report.empty()) {
-    const std::vector<stage::Observation> others = validation ? Observations(*validation, nullptr) : std::vector<stage::Observation>{};
+    const std::vector<stage::Observation> others = validation ? artefacts::TrackerObservations(*validation, nullptr) : std::vector<stage::Observation>{};
     WriteMachineReport(args.report, ReportOf(args, doc, v, observations, validation ? &others : nullptr, options.tool_offsets));
   }
   if (!args.output.empty()) {

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "artefacts/simulation/machine_tool_simulation.h"
+#include "artefacts/tracker_observations.h"
 #include "stage/calibration.h"
 #include "stage/io/calibration_file.h"
 #include "stage/machine_verification.h"
@@ -32,24 +33,8 @@ stage::AxisChain Chain() {
 stage::ParameterLayout Layout(int order) {
   stage::AxisChain chain = Chain();
   chain.instrument.reset();
-  stage::ParameterLayout layout(chain, {stage::Travel{0, 2500}, stage::Travel{0, 1500}, stage::Travel{0, 1200}});
-  for (const char* axis : {"x", "y", "z"}) {
-    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, stage::Basis::kLegendre, order);
-  }
-  for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, stage::Basis::kLegendre, 0);
-  return layout;
-}
-
-std::vector<stage::Observation> Observations(const TrackerReadings& readings, const stage::TrackerNoise* noise) {
-  std::vector<stage::Observation> out;
-  for (const TrackerReading& r : readings.points) {
-    stage::Observation o;
-    o.command = r.nominal;
-    o.measured = r.measured;
-    if (noise != nullptr) o.covariance = noise->Covariance(r.measured);
-    out.push_back(o);
-  }
-  return out;
+  return stage::MachineLayout(chain, {stage::Travel{0, 2500}, stage::Travel{0, 1500}, stage::Travel{0, 1200}},
+                              stage::Basis::kLegendre, order);
 }
 
 // Where the true machine puts the tool point commanded to q (machine frame).
@@ -84,7 +69,7 @@ class MachineCompensation : public ::testing::Test {
     stage::IdentificationOptions options;
     options.instrument = stage::InstrumentPose::kEstimated;
     options.num_threads = 1;
-    const stage::VerificationResult v = stage::VerifyMachine(Layout(3), Observations(readings, &noise), options);
+    const stage::VerificationResult v = stage::VerifyMachine(Layout(3), TrackerObservations(readings, &noise), options);
     // Through the file, as fvm verify -o and fvm correct do.
     const std::filesystem::path path =
         std::filesystem::temp_directory_path() / ("fvm_machine_compensation_" + std::to_string(::getpid()) + ".json");
