@@ -10,8 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <sstream>
 
+#include "core/file_io.h"
 #include "core/input_error.h"
 
 namespace fvm::cli {
@@ -19,12 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string Read(const fs::path& path) { return ReadFileBytes(path); }
 
 MachineReportData Sample() {
   MachineReportData data;
