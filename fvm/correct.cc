@@ -1,10 +1,14 @@
-// fvm correct --calibration CAL.json IN -o OUT: compensate a stitching-free export.
+// fvm correct --calibration CAL.json IN -o OUT: compensate a stitching-free export (a microscope stage model from
+// `fvm calibrate`), or turn a list of nominal points into a compensation table (a machine model from `fvm verify`).
 
 #include <fmt/core.h>
 
 #include <cmath>
+#include <set>
 
+#include "core/csv.h"
 #include "core/file_io.h"
+#include "core/number_text.h"
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
 #include "stage/io/calibration_file.h"
@@ -20,7 +24,100 @@ struct CorrectArgs {
   bool json = false;
 };
 
+// A machine model is what `fvm verify -o` writes: it names the tracker pose (instrument_pose) or a tool offset. A
+// stage model of `fvm calibrate` has neither and compensates centre exports.
+bool IsMachineModel(const std::string& path) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(ReadFileBytes(path, std::size_t{1} << 28));
+  } catch (const nlohmann::json::exception&) {
+    return false;  // ReadCalibration says what is wrong with it
+  }
+  return doc.is_object() && (doc.contains("instrument_pose") || doc.contains("tool_offset_mm"));
+}
+
+struct NominalPoint {
+  std::string id;
+  Eigen::Vector3d position;
+};
+
+// id,x,y,z (ids as text, mm; other columns ignored): the points.csv of `fvm simulate tracker`, or any point list.
+std::vector<NominalPoint> ReadPointList(const std::string& path) {
+  CsvOptions options;
+  options.expected_header = "id,x,y,z";
+  const CsvTable table = ReadCsv(path, options);
+  const int id_column = table.Require("id");
+  const std::array<int, 3> columns = {table.Require("x"), table.Require("y"), table.Require("z")};
+  std::vector<NominalPoint> points;
+  std::set<std::string, std::less<>> seen;
+  for (const CsvRow& row : table.rows()) {
+    const std::string id(table.Text(row, id_column));
+    if (id.empty()) table.Fail(row, "the point has no id; give every point a text id such as P0001");
+    if (!seen.insert(id).second) table.Fail(row, fmt::format("point {}: the id appears twice; ids must be unique", id));
+    NominalPoint p{id, Eigen::Vector3d::Zero()};
+    for (int k = 0; k < 3; ++k) {
+      p.position[k] = table.Double(row, columns[static_cast<size_t>(k)], "point " + id);
+      if (std::abs(p.position[k]) > 1e5) {
+        table.Fail(row, fmt::format("point {}: {} = {} mm lies beyond 100 m; the list must be in mm", id, "xyz"[k],
+                                    FormatShortest(p.position[k])));
+      }
+    }
+    points.push_back(std::move(p));
+  }
+  if (points.empty()) throw InputError(fmt::format("{}: no points; write a header id,x,y,z and one row per point", path));
+  return points;
+}
+
+// The compensation table: per nominal point the command that puts the tool point where the error-free machine
+// would (stage::CompensateCommand) and the correction command - nominal. Commands are written to 1 nm (6 decimals),
+// corrections to 1 nm in um (3 decimals); no "-0".
+void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
+  const std::vector<NominalPoint> points = ReadPointList(args.input);
+  std::string csv = fmt::format(
+      "# compensation table by fvm {} with {} (model {}, tool offset {}, {}, {} mm): command xc,yc,zc puts the tool "
+      "point where the error-free machine puts it for x,y,z; d = command - nominal\n",
+      FVM_VERSION, args.calibration, cal.model, FormatShortest(cal.layout.chain().tool_offset.x()),
+      FormatShortest(cal.layout.chain().tool_offset.y()), FormatShortest(cal.layout.chain().tool_offset.z()));
+  csv += "id,x,y,z,xc,yc,zc,dx_um,dy_um,dz_um\n";
+  nlohmann::json doc;
+  double largest = 0.0;
+  for (const NominalPoint& p : points) {
+    const stage::Compensation c = stage::CompensateCommand(cal, p.position);
+    if (!c.converged || !c.command.allFinite()) {
+      throw InputError(fmt::format("{}: point {}: the model's inverse did not converge at {}, {}, {} mm; is the point "
+                                   "inside the travel the model was identified on?",
+                                   args.input, p.id, p.position.x(), p.position.y(), p.position.z()));
+    }
+    const Eigen::Vector3d d_um = (c.command - p.position) * 1e3;
+    largest = std::max(largest, d_um.norm());
+    std::vector<std::string> fields{p.id};
+    for (int k = 0; k < 3; ++k) fields.push_back(FormatShortest(p.position[k]));
+    const auto fixed = [](double v, int decimals) {
+      const double scale = std::pow(10.0, decimals);
+      return FormatFixed(std::round(v * scale) / scale + 0.0, decimals);  // + 0.0: -0 becomes 0
+    };
+    for (int k = 0; k < 3; ++k) fields.push_back(fixed(c.command[k], 6));
+    for (int k = 0; k < 3; ++k) fields.push_back(fixed(d_um[k], 3));
+    csv += CsvLine(fields);
+    doc["points"].push_back({{"id", p.id}, {"command", {c.command.x(), c.command.y(), c.command.z()}},
+                             {"correction_um", {d_um.x(), d_um.y(), d_um.z()}}});
+  }
+  WriteFileAtomically(args.output, csv);
+  if (args.json) {
+    doc["output"] = args.output;
+    doc["largest_correction_um"] = largest;
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("compensated {} points of {} with machine model {}; largest correction {:.1f} um; written to {}\n",
+             points.size(), args.input, cal.model, largest, args.output);
+}
+
 void Run(const CorrectArgs& args) {
+  if (IsMachineModel(args.calibration)) {
+    RunMachine(args, stage::ReadCalibration(args.calibration));
+    return;
+  }
   const std::filesystem::path in(args.input);
   if (in.extension() != ".csv") {
     throw InputError(fmt::format("{}: only centre exports (.csv) can be corrected so far; point clouds and height "
@@ -64,13 +161,23 @@ void Run(const CorrectArgs& args) {
 
 void RegisterCorrect(CLI::App& app) {
   auto args = std::make_shared<CorrectArgs>();
-  CLI::App* sub = app.add_subcommand("correct", "compensate a stitching-free export with a calibration");
-  sub->add_option("--calibration", args->calibration, "calibration file written by 'fvm calibrate -o'")->required();
-  sub->add_option("IN", args->input, "stitching-free centre export (CSV: id,x,y,z in mm)")->required();
-  sub->add_option("-o,--output", args->output, "corrected export (CSV: id,x,y,z,u_x,u_y,u_z in mm)")->required();
-  sub->add_flag("--json", args->json, "print the corrected centres as JSON");
+  CLI::App* sub = app.add_subcommand("correct", "compensate a stitching-free export, or make a machine's compensation table");
+  AddDetails(sub,
+             "With a stage model ('fvm calibrate -o'), IN is a stitching-free centre export and OUT the same centres "
+             "compensated. With a machine model ('fvm verify -o': the file names instrument_pose or tool_offset_mm), "
+             "IN is a list of nominal points id,x,y,z (mm; points.csv of 'fvm simulate tracker' is one) and OUT the "
+             "compensation table id,x,y,z,xc,yc,zc,dx_um,dy_um,dz_um: the command xc,yc,zc puts the tool point where "
+             "the error-free machine puts it for x,y,z (the model's inverse), d = command - nominal. The model's "
+             "errors are known up to the tracker pose, so the table is zero at the axes' origin (travel minimum).");
+  sub->add_option("--calibration", args->calibration, "model file written by 'fvm calibrate -o' or 'fvm verify -o'")->required();
+  sub->add_option("IN", args->input, "stitching-free centre export, or nominal machine points (CSV: id,x,y,z in mm)")->required();
+  sub->add_option("-o,--output", args->output, "corrected export (id,x,y,z,u_x,u_y,u_z) or compensation table (CSV, mm)")
+      ->required();
+  sub->add_flag("--json", args->json, "print the corrected centres (or commands) as JSON");
   sub->footer("Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm correct --calibration stage.json "
-              "samples/bar17/val-01.free.csv -o val-01.corrected.csv");
+              "samples/bar17/val-01.free.csv -o val-01.corrected.csv\n"
+              "  fvm verify plan/readings.csv --tool 0,0,100 -o machine.json && fvm correct --calibration machine.json "
+              "plan/points.csv -o compensation.csv");
   sub->callback([args] { Run(*args); });
 }
 

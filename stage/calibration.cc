@@ -1,5 +1,9 @@
 #include "stage/calibration.h"
 
+#include <vector>
+
+#include "stage/inverse_model.h"
+
 namespace fvm::stage {
 
 Eigen::MatrixXd Calibration::Correlation() const {
@@ -9,6 +13,40 @@ Eigen::MatrixXd Calibration::Correlation() const {
     for (Eigen::Index j = 0; j < r.cols(); ++j) r(i, j) = (u[i] > 0 && u[j] > 0) ? r(i, j) / (u[i] * u[j]) : 0.0;
   }
   return r;
+}
+
+TermValuesWithUncertainty TermValuesAt(const Calibration& calibration, const Eigen::Vector3d& q,
+                                       const Eigen::Vector3d* reference) {
+  const ParameterLayout& layout = calibration.layout;
+  std::vector<double> all(layout.coefficients().size());
+  layout.Expand(calibration.values.data(), all.data());
+  TermValuesWithUncertainty out;
+  layout.TermValues(all.data(), q, out.value.data());
+  Eigen::MatrixXd d = layout.TermDerivative(q);
+  if (reference != nullptr) {
+    Eigen::Matrix<double, kNumErrorTerms, 1> at_reference;
+    layout.TermValues(all.data(), *reference, at_reference.data());
+    out.value -= at_reference;
+    d -= layout.TermDerivative(*reference);
+  }
+  if (calibration.covariance.rows() == d.cols() && calibration.covariance.cols() == d.cols()) {
+    out.u = (d * calibration.covariance * d.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
+  return out;
+}
+
+Compensation CompensateCommand(const Calibration& calibration, const Eigen::Vector3d& nominal) {
+  const ParameterLayout& layout = calibration.layout;
+  const Eigen::Vector3d tool = layout.chain().tool_offset;
+  Eigen::Vector3d origin;
+  for (int k = 0; k < 3; ++k) origin[k] = layout.travel()[static_cast<size_t>(k)].min;
+  const Eigen::Vector3d error_at_origin = Forward(layout, calibration.values, origin) - origin - tool;
+  Compensation out;
+  out.target = nominal + tool + error_at_origin;
+  const InverseResult inverse = Inverse(layout, calibration.values.data(), out.target);
+  out.command = inverse.command;
+  out.converged = inverse.converged;
+  return out;
 }
 
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point) {

@@ -26,6 +26,31 @@ struct CorrectedPoint {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // from the model's parameter covariance only, mm^2
 };
 
+// The 21 term values at command q (mm, rad), each with its standard uncertainty from the coefficient covariance:
+// u^2 = d^T Cov d with d = d(term value)/d(free coefficients) (ParameterLayout::TermDerivative). With a reference
+// command, values and uncertainties are those of value(q) - value(reference), d = TermDerivative(q) -
+// TermDerivative(reference): an error function relative to its value at the axis' origin, whose constant the
+// instrument pose absorbs. Terms the layout does not hold are zero with zero uncertainty.
+struct TermValuesWithUncertainty {
+  Eigen::Matrix<double, kNumErrorTerms, 1> value = Eigen::Matrix<double, kNumErrorTerms, 1>::Zero();
+  Eigen::Matrix<double, kNumErrorTerms, 1> u = Eigen::Matrix<double, kNumErrorTerms, 1>::Zero();
+};
+TermValuesWithUncertainty TermValuesAt(const Calibration& calibration, const Eigen::Vector3d& q,
+                                       const Eigen::Vector3d* reference = nullptr);
+
+// Machine tools: the command that puts the tool point (the chain's tool offset) where the error-free machine puts
+// it for the nominal command p, i.e. on p + tool offset, under the identified model: stage::Inverse. Error
+// functions are known only up to what the instrument pose absorbs (constants, and the rigid motion of the whole
+// point set that no tracker reading can see), so the target is taken in the model's own gauge: its error at the
+// axes' origin (the travel minimum) is subtracted, which makes the correction zero there. Forward(command) - tool
+// offset - that error equals p to the solver's tolerance.
+struct Compensation {
+  Eigen::Vector3d command = Eigen::Vector3d::Zero();
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();  // what Forward(command) reaches, mm
+  bool converged = false;
+};
+Compensation CompensateCommand(const Calibration& calibration, const Eigen::Vector3d& nominal);
+
 // Compensates one stitching-free point: the forward model, eq. 1.
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point);
 

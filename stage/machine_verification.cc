@@ -100,4 +100,13 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
   return result;
 }
 
+ParameterLayout MachineLayout(const AxisChain& chain, const std::array<Travel, 3>& travel, Basis basis, int order) {
+  ParameterLayout layout(chain, travel);
+  for (const char* axis : {"x", "y", "z"}) {
+    for (const char* kind : {"Tx", "Ty", "Tz", "Rx", "Ry", "Rz"}) layout.SetTerm(std::string(axis) + kind, basis, order);
+  }
+  for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, basis, 0);
+  return layout;
+}
+
 }  // namespace fvm::stage

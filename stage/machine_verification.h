@@ -10,6 +10,7 @@
 // jointly with the errors by default, and the rank treatment names the constant terms it absorbs.
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "stage/identification.h"
@@ -29,6 +30,10 @@ struct VerificationResult {
   Pose initial_pose;                // the pose the initial error is stated in
   VolumetricError initial, final;
 };
+
+// The layout `fvm verify` identifies: the 18 translation and rotation terms of `chain` as polynomials of `order` in
+// `basis` over `travel`, and the three squareness terms as constants.
+ParameterLayout MachineLayout(const AxisChain& chain, const std::array<Travel, 3>& travel, Basis basis, int order);
 
 // The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, Umeyama):
 // a start for the joint estimate. Throws std::invalid_argument when the points do not span three dimensions.

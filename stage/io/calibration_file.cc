@@ -43,6 +43,9 @@ json CalibrationToJson(const stage::IdentificationResult& result) {
   for (stage::Axis a : chain.squareness_carrier) carriers += stage::AxisLetter(a);
   doc["squareness_carrier"] = carriers;  // axis that carries xWy, xWz, yWz
   doc["rotation_model"] = RotationModelName(chain.rotation_model);
+  // The tool point's offset from the last tool axis (machine tools): written when there is one, so that a
+  // compensation (fvm correct) aims the same point the identification saw.
+  if (!chain.tool_offset.isZero(0.0)) doc["tool_offset_mm"] = {chain.tool_offset.x(), chain.tool_offset.y(), chain.tool_offset.z()};
   for (int k = 0; k < 3; ++k) {
     doc["travel_mm"][std::string(1, "xyz"[k])] = {layout.travel()[static_cast<size_t>(k)].min, layout.travel()[static_cast<size_t>(k)].max};
   }
@@ -121,6 +124,16 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
     }
     chain.rotation_model = doc.value("rotation_model", "small-angle") == "exact" ? stage::RotationModel::kExact
                                                                                   : stage::RotationModel::kSmallAngle;
+    if (doc.contains("tool_offset_mm")) {
+      const json& t = doc["tool_offset_mm"];
+      if (!t.is_array() || t.size() != 3) throw fail("'tool_offset_mm' must be three numbers [x, y, z] in mm");
+      for (size_t k = 0; k < 3; ++k) {
+        if (!t[k].is_number() || !std::isfinite(t[k].get<double>()) || std::abs(t[k].get<double>()) > 1e5) {
+          throw fail(fmt::format("'tool_offset_mm'[{}] must be a finite number of mm (at most 100 m)", k));
+        }
+        chain.tool_offset[static_cast<Eigen::Index>(k)] = t[k].get<double>();
+      }
+    }
     std::array<stage::Travel, 3> travel;
     for (int k = 0; k < 3; ++k) {
       const json& t = doc.at("travel_mm").at(std::string(1, "xyz"[k]));

@@ -146,5 +146,30 @@ TEST_F(CalibrationFile, RefusesACovarianceOfTheWrongSize) {
   ExpectRefused([&](json& d) { d["covariance"][0].erase(0); }, {"'covariance' row 0 has 2 entries"});
 }
 
+TEST_F(CalibrationFile, WritesAndReadsTheToolOffsetOfAMachineModel) {
+  // A stage model has none, and its file does not name one (files written before the key read as they did).
+  EXPECT_FALSE(CalibrationToJson(SmallResult()).contains("tool_offset_mm"));
+  AxisChain chain = AxisChain::Parse("XFYZ");
+  chain.tool_offset = Eigen::Vector3d(12.5, -3.25, 100);
+  ParameterLayout layout(chain, {Travel{0, 2500}, Travel{0, 1500}, Travel{0, 1200}});
+  layout.SetTerm("zRx", Basis::kLegendre, 1);
+  IdentificationResult machine(Calibration{"machine", layout, {0, 2e-5}, Eigen::MatrixXd::Identity(2, 2) * 1e-12, 0});
+  const json doc = CalibrationToJson(machine);
+  EXPECT_EQ(doc.at("tool_offset_mm"), json({12.5, -3.25, 100.0}));
+  const Calibration read = ReadCalibration(Write(doc));
+  EXPECT_EQ(read.layout.chain().tool_offset, chain.tool_offset);
+  // zRx acts on the tool offset: the rebuilt model moves the tool point as the written one.
+  const Eigen::Vector3d q(100, 200, 900);
+  EXPECT_EQ(Forward(read.layout, read.values, q), Forward(layout, machine.calibration.values, q));
+}
+
+TEST_F(CalibrationFile, RefusesABadToolOffset) {
+  ExpectRefused([&](json& d) { d["tool_offset_mm"] = {0, 0}; }, {"'tool_offset_mm' must be three numbers"});
+  ExpectRefused([&](json& d) { d["tool_offset_mm"] = "0,0,100"; }, {"'tool_offset_mm' must be three numbers"});
+  ExpectRefused([&](json& d) { d["tool_offset_mm"] = {0, "x", 100}; }, {"'tool_offset_mm'[1]"});
+  ExpectRefused([&](json& d) { d["tool_offset_mm"] = {0, 0, 12345.5}; }, {"overflow"}, "1e999");
+  ExpectRefused([&](json& d) { d["tool_offset_mm"] = {0, 0, 2e5}; }, {"'tool_offset_mm'[2]", "100 m"});
+}
+
 }  // namespace
 }  // namespace fvm::stage

@@ -1,0 +1,260 @@
+// The machine-tool report of `fvm verify --report`: drawn with the shared PLplot and HTML parts of
+// fvm/report_support.h.
+
+#include "fvm/machine_report.h"
+
+#include <fmt/format.h>
+#include <plplot.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "fvm/report_support.h"
+
+namespace fvm::cli {
+namespace {
+
+using namespace report;  // NOLINT: the report helpers
+
+// ---- error functions: a row per axis, translations left, rotations right ---------------------------------------
+
+void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::vector<MachineReportData::Curve>& curves,
+                       const char* unit, double vx0, double vx1, double vy0, double vy1) {
+  const std::vector<double>& x = axis.position_mm;
+  double y_min = 0, y_max = 0;
+  for (const auto& c : curves) {
+    for (std::size_t i = 0; i < c.value.size() && i < c.u.size(); ++i) {
+      if (!std::isfinite(c.value[i]) || !std::isfinite(c.u[i])) continue;
+      y_min = std::min(y_min, c.value[i] - 2 * c.u[i]);
+      y_max = std::max(y_max, c.value[i] + 2 * c.u[i]);
+    }
+  }
+  if (!(y_max > y_min)) y_min = -1, y_max = 1;
+  const double pad = 0.08 * (y_max - y_min);
+  y_min -= pad, y_max += pad;
+  const double x0 = x.empty() ? 0.0 : x.front(), x1 = x.empty() ? 1.0 : x.back();
+
+  plvpor(vx0, vx1, vy0, vy1);
+  plwind(x0, x1 > x0 ? x1 : x0 + 1, y_min, y_max);
+  Frame("", 0, 0, "", 0, 0);
+  plcol0(kMuted);
+  pljoin(x0, 0, x1, 0);
+  for (std::size_t s = 0; s < curves.size() && s < kSeriesCount; ++s) {
+    const MachineReportData::Curve& c = curves[s];
+    const std::size_t n = std::min({x.size(), c.value.size(), c.u.size()});
+    if (n < 2) continue;
+    // The band: the upper edge forwards, the lower edge back.
+    std::vector<PLFLT> bx, by;
+    for (std::size_t i = 0; i < n; ++i) bx.push_back(x[i]), by.push_back(c.value[i] + 2 * c.u[i]);
+    for (std::size_t i = n; i-- > 0;) bx.push_back(x[i]), by.push_back(c.value[i] - 2 * c.u[i]);
+    plcol0(static_cast<PLINT>(kSeriesFill0 + static_cast<int>(s)));
+    plfill(static_cast<PLINT>(bx.size()), bx.data(), by.data());
+    plcol0(static_cast<PLINT>(kSeries0 + static_cast<int>(s)));
+    plwidth(1.8);
+    plline(static_cast<PLINT>(n), x.data(), c.value.data());
+    plwidth(1.0);
+    plmtex("t", 0.6, 0.02 + 0.16 * static_cast<double>(s), 0, PlText(c.name).c_str());
+  }
+  plcol0(kInk);
+  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
+  plschr(0, 0.85);
+  pllab(fmt::format("{} (mm)", axis.axis).c_str(), UnitLabel(unit).c_str(), "");
+  plmtex("t", 0.6, 1.0, 1.0, fmt::format("{} {}", axis.axis, std::string(unit) == "um" ? "translations" : "rotations").c_str());
+  plschr(0, 1.0);
+}
+
+std::string RenderErrorFunctions(const MachineReportData& data) {
+  constexpr int kWidth = 1100, kRowPx = 330, kTopPx = 50;
+  const int height = kTopPx + 3 * kRowPx;
+  SvgPlot plot(kWidth, height);
+  plvpor(0, 1, 0, 1);
+  plwind(0, 1, 0, 1);
+  plmtex("t", -1.5, 0.5, 0.5, "Error functions relative to the axis origin, with 95 % bands (k = 2)");
+  for (int row = 0; row < 3; ++row) {
+    const double top = 1.0 - static_cast<double>(kTopPx + row * kRowPx + 35) / height;
+    const double bottom = 1.0 - static_cast<double>(kTopPx + (row + 1) * kRowPx - 45) / height;
+    const auto& axis = data.functions[static_cast<std::size_t>(row)];
+    DrawFunctionPanel(axis, axis.translations, "um", 0.08, 0.47, bottom, top);
+    DrawFunctionPanel(axis, axis.rotations, "urad", 0.58, 0.97, bottom, top);
+  }
+  return plot.Finish();
+}
+
+// ---- volumetric errors, sorted --------------------------------------------------------------------------------
+
+std::vector<double> Sorted(const std::vector<MachineReportData::PointError>& points, bool after) {
+  std::vector<double> out;
+  for (const auto& p : points) out.push_back(after ? p.after_um : p.before_um);
+  out = Finite(out);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string RenderVolumetricErrors(const MachineReportData& data) {
+  struct Series {
+    std::vector<double> values;
+    PLINT colour, style;
+    std::string label;
+  };
+  std::vector<Series> series;
+  const auto add = [&](const std::vector<MachineReportData::PointError>& points, const char* what, PLINT style) {
+    if (points.empty()) return;
+    series.push_back({Sorted(points, false), kBefore, style, fmt::format("{}, before", what)});
+    series.push_back({Sorted(points, true), kAfter, style, fmt::format("{}, after", what)});
+  };
+  add(data.readings, "readings", 1);
+  add(data.validation, "validation", 2);
+  double y_max = 0;
+  for (const auto& s : series) {
+    if (!s.values.empty()) y_max = std::max(y_max, s.values.back());
+  }
+  y_max = y_max > 0 ? NiceCeil(1.1 * y_max) : 1.0;
+
+  SvgPlot plot(900, 560);
+  plvpor(0.1, 0.96, 0.12, 0.9);
+  plwind(0, 100, 0, y_max);
+  Frame("", 0, 0, "", 0, 0);
+  for (const auto& s : series) {
+    const std::size_t n = s.values.size();
+    if (n == 0) continue;
+    // Each point at the share of points with a smaller error: sets of different sizes share the axis.
+    std::vector<PLFLT> x;
+    for (std::size_t i = 0; i < n; ++i) x.push_back(n == 1 ? 50.0 : 100.0 * static_cast<double>(i) / static_cast<double>(n - 1));
+    plcol0(s.colour);
+    pllsty(s.style);
+    plwidth(1.8);
+    plline(static_cast<PLINT>(n), x.data(), s.values.data());
+    plwidth(1.0);
+    pllsty(1);
+  }
+  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
+  pllab("share of points (%), sorted by error", "volumetric error (µm)",
+        "Volumetric error of every point before and after the identification");
+  plschr(0, 0.8);
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    const Series& s = series[i];
+    plcol0(s.colour);
+    const double y = y_max * (0.94 - 0.065 * static_cast<double>(i));
+    pllsty(s.style);
+    plwidth(1.8);
+    pljoin(3, y, 9, y);
+    plwidth(1.0);
+    pllsty(1);
+    plcol0(kInk);
+    const double max = s.values.empty() ? 0.0 : s.values.back();
+    double mean = 0;
+    for (const double v : s.values) mean += v / static_cast<double>(s.values.size());
+    plptex(11, y, 1, 0, 0, fmt::format("{}: n = {}, mean {:.3g} µm, max {:.3g} µm", s.label, s.values.size(), mean, max).c_str());
+  }
+  plschr(0, 1.0);
+  return plot.Finish();
+}
+
+// ---- error map: XY and XZ views, discs sized by the error -------------------------------------------------------
+
+void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int vertical, double mm_per_um,
+                  double vx0, double vx1, double vy0, double vy1) {
+  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  bool first = true;
+  const auto coordinate = [](const MachineReportData::PointError& p, int k) { return k == 0 ? p.x_mm : k == 1 ? p.y_mm : p.z_mm; };
+  for (const auto& p : points) {
+    const double x = p.x_mm, y = coordinate(p, vertical);
+    if (first) x0 = x1 = x, y0 = y1 = y, first = false;
+    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  }
+  const double span = std::max({x1 - x0, y1 - y0, 1.0});
+  const double margin = 0.08 * span;
+  plvpas(vx0, vx1, vy0, vy1, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
+  plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
+  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
+  // Before, translucent and under; after, solid on top; the largest errors drawn first so small ones stay visible.
+  for (const bool after : {false, true}) {
+    std::vector<const MachineReportData::PointError*> order;
+    for (const auto& p : points) order.push_back(&p);
+    std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) {
+      return (after ? a->after_um : a->before_um) > (after ? b->after_um : b->before_um);
+    });
+    plcol0(after ? kAfter : kBeforeFill);
+    for (const auto* p : order) {
+      const double e = after ? p->after_um : p->before_um;
+      if (std::isfinite(e) && e > 0) Disc(p->x_mm, coordinate(*p, vertical), e * mm_per_um);
+    }
+  }
+  plcol0(kInk);
+  pllab("machine x (mm)", fmt::format("machine {} (mm)", "xyz"[vertical]).c_str(),
+        fmt::format("{} view", vertical == 1 ? "XY" : "XZ").c_str());
+}
+
+std::string RenderErrorMap(const MachineReportData& data) {
+  const bool held_out = !data.validation.empty();
+  const std::vector<MachineReportData::PointError>& points = held_out ? data.validation : data.readings;
+  double largest = 0, x0 = 0, x1 = 0;
+  for (const auto& p : points) {
+    for (const double e : {p.before_um, p.after_um}) {
+      if (std::isfinite(e)) largest = std::max(largest, e);
+    }
+    x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm);
+  }
+  // The largest disc has a radius of 6 % of the x span, on a round scale.
+  const double span = std::max(x1 - x0, 1.0);
+  const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
+
+  SvgPlot plot(1000, 1000);
+  DrawMapPanel(points, 1, mm_per_um, 0.1, 0.95, 0.56, 0.93);
+  DrawMapPanel(points, 2, mm_per_um, 0.1, 0.95, 0.1, 0.47);
+  plvpor(0, 1, 0, 1);
+  plwind(0, 1, 0, 1);
+  plcol0(kInk);
+  plmtex("t", -1.5, 0.5, 0.5,
+         fmt::format("Volumetric error at the {} points: disc radius {:g} mm per µm", held_out ? "validation" : "fitted",
+                     mm_per_um)
+             .c_str());
+  plschr(0, 0.8);
+  plcol0(kBefore);
+  plptex(0.1, 0.02, 1, 0, 0, "before: translucent vermilion");
+  plcol0(kAfter);
+  plptex(0.5, 0.02, 1, 0, 0, "after: blue");
+  plschr(0, 1.0);
+  return plot.Finish();
+}
+
+// ---- the page -------------------------------------------------------------------------------------------------
+
+std::string RenderPage(const MachineReportData& data) {
+  std::string html = HtmlHead(data.title.empty() ? "fvm verify" : data.title) + HtmlKeyValueTable(data.summary);
+  for (const MachineReportData::Table& t : data.tables) {
+    html += "<h2>" + HtmlEscape(t.heading) + "</h2>\n";
+    if (!t.note.empty()) html += "<p>" + HtmlEscape(t.note) + "</p>\n";
+    html += HtmlTable(t.header, t.rows);
+  }
+  html += HtmlFigure("error_functions.svg", "Error functions",
+                     "The 18 translation and rotation error functions, one row per axis, with 95 % bands",
+                     "Each axis' translation (µm, left) and rotation (µrad, right) error functions over its travel, "
+                     "relative to their value at the axis origin (the tracker pose absorbs constants), with bands of "
+                     "two standard uncertainties from the coefficient covariance (k = 2, about 95 %). Squareness is in "
+                     "the table above.");
+  html += HtmlFigure("volumetric_errors.svg", "Volumetric errors",
+                     "Volumetric errors of the points before and after the identification, sorted",
+                     "The volumetric error (distance between a reading and the model's prediction) of every point, "
+                     "sorted: the ideal machine (before, vermilion) and the identified one (after, blue); readings "
+                     "solid, validation points dashed.");
+  html += HtmlFigure("error_map.svg", "Error map", "Volumetric errors over the workspace, seen from above and from the front",
+                     "Discs at the points, radius proportional to the volumetric error, before (translucent vermilion) "
+                     "and after (blue) the identification, in an XY and an XZ view of the workspace.");
+  return html + HtmlTail();
+}
+
+}  // namespace
+
+void WriteMachineReport(const std::filesystem::path& dir, const MachineReportData& data) {
+  WriteReportFiles(dir, {
+                            {"error_functions.svg", RenderErrorFunctions(data)},
+                            {"volumetric_errors.svg", RenderVolumetricErrors(data)},
+                            {"error_map.svg", RenderErrorMap(data)},
+                            {"index.html", RenderPage(data)},
+                        });
+}
+
+}  // namespace fvm::cli

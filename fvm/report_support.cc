@@ -1,0 +1,376 @@
+// The shared parts of the reports: PLplot's C API into SVG, one PLplot stream per plot, and a plain HTML page that
+// shows the plots with <img>, so the directory can be copied, mailed or archived as it is.
+
+#include "fvm/report_support.h"
+
+#include <fmt/format.h>
+#include <stdlib.h>  // mkstemps
+#include <unistd.h>  // close
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "core/file_io.h"
+#include "core/input_error.h"
+
+namespace fvm::cli::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+void SetPalette() {
+  plscmap0n(kColourCount);
+  plscol0a(kBackground, 255, 255, 255, 1.0);
+  plscol0a(kInk, 0, 0, 0, 1.0);
+  plscol0a(kGrid, 225, 225, 225, 1.0);
+  plscol0a(kMuted, 120, 120, 120, 1.0);
+  plscol0a(kBefore, 213, 94, 0, 1.0);
+  plscol0a(kAfter, 0, 114, 178, 1.0);
+  plscol0a(kBeforeFill, 213, 94, 0, 0.35);
+  plscol0a(kAfterFill, 0, 114, 178, 0.35);
+  const std::array<std::array<int, 3>, kSeriesCount> series = {{{0, 158, 115}, {230, 159, 0}, {204, 121, 167}}};
+  for (int i = 0; i < kSeriesCount; ++i) {
+    const auto& [r, g, b] = series[static_cast<std::size_t>(i)];
+    plscol0a(kSeries0 + i, r, g, b, 1.0);
+    plscol0a(kSeriesFill0 + i, r, g, b, 0.2);
+  }
+}
+
+bool XmlDecodable(std::uint32_t c) {
+  return c >= 0x20 && c != '<' && c != '>' && c != '&' && c != '"' && c != '\'' && (c < 0xD800 || c > 0xDFFF) &&
+         c != 0xFFFE && c != 0xFFFF && c <= 0x10FFFF;
+}
+
+void AppendUtf8(std::string& out, std::uint32_t c) {
+  if (c < 0x80) {
+    out += static_cast<char>(c);
+  } else if (c < 0x800) {
+    out += static_cast<char>(0xC0 | (c >> 6));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else if (c < 0x10000) {
+    out += static_cast<char>(0xE0 | (c >> 12));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else {
+    out += static_cast<char>(0xF0 | (c >> 18));
+    out += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  }
+}
+
+// PLplot's svg driver writes every character of a text as a reference (&#x4d;). Decoding them, all but XML's
+// special characters, makes the labels searchable in the file (and by tests) and the file smaller; it stays UTF-8.
+std::string DecodeCharacterReferences(std::string_view svg) {
+  std::string out;
+  out.reserve(svg.size());
+  std::size_t i = 0;
+  while (i < svg.size()) {
+    if (svg.compare(i, 3, "&#x") == 0) {
+      const std::size_t end = svg.find(';', i + 3);
+      std::uint32_t c = 0;
+      if (end != std::string_view::npos && end > i + 3 && end - i - 3 <= 6) {
+        const auto [ptr, ec] = std::from_chars(svg.data() + i + 3, svg.data() + end, c, 16);
+        if (ec == std::errc() && ptr == svg.data() + end && XmlDecodable(c)) {
+          AppendUtf8(out, c);
+          i = end + 1;
+          continue;
+        }
+      }
+    }
+    out += svg[i++];
+  }
+  return out;
+}
+
+// A PLplot installation without its svg driver would make plinit() ask for a device on stdin; fail clearly instead.
+void RequireSvgDriver() {
+  static const bool available = [] {
+    std::array<const char*, 128> menu{}, names{};
+    const char** menu_ptr = menu.data();
+    const char** names_ptr = names.data();
+    int count = static_cast<int>(names.size());
+    plgDevs(&menu_ptr, &names_ptr, &count);
+    return std::any_of(names.begin(), names.begin() + std::clamp(count, 0, static_cast<int>(names.size())),
+                       [](const char* name) { return name != nullptr && std::string_view(name) == "svg"; });
+  }();
+  if (!available) {
+    throw std::runtime_error(
+        "PLplot has no svg driver: install the Debian package 'libplplot17' (it holds plplot5.15.0/drivers/svg.so), "
+        "or point PLPLOT_DRV_DIR at the folder that holds svg.so");
+  }
+}
+
+fs::path MakeTempFile() {
+  std::string name = (fs::temp_directory_path() / "fvm-plot-XXXXXX.svg").string();
+  const int fd = mkstemps(name.data(), 4);
+  if (fd < 0) {
+    throw std::system_error(errno, std::generic_category(), "cannot create a temporary file for a plot: " + name);
+  }
+  close(fd);
+  return name;
+}
+
+}  // namespace
+
+namespace fs = std::filesystem;
+
+// PLplot reads '#' as the start of an escape sequence; text from the caller (parameter names) is shown literally.
+std::string PlText(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    out += c;
+    if (c == '#') out += '#';
+  }
+  return out;
+}
+
+std::string UnitLabel(std::string_view unit) {
+  if (unit == "um") return "µm";
+  if (unit == "urad") return "µrad";
+  return PlText(unit);
+}
+
+// 1, 2 or 5 times a power of ten: the steps and scales people read at a glance.
+double NiceCeil(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {1.0, 2.0, 5.0}) {
+    if (m * power >= x * (1 - 1e-12)) return m * power;
+  }
+  return 10 * power;
+}
+
+double NiceFloor(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {5.0, 2.0}) {
+    if (m * power <= x * (1 + 1e-12)) return m * power;
+  }
+  return power;
+}
+
+std::vector<double> Finite(const std::vector<double>& values) {
+  std::vector<double> out;
+  std::copy_if(values.begin(), values.end(), std::back_inserter(out), [](double v) { return std::isfinite(v); });
+  return out;
+}
+
+double Rms(const std::vector<double>& values) {
+  double sum = 0;
+  for (const double v : values) sum += v * v;
+  return values.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(values.size()));
+}
+
+SvgPlot::SvgPlot(PLINT width_px, PLINT height_px) : width_px_(width_px), height_px_(height_px) {
+  RequireSvgDriver();
+  temp_ = MakeTempFile();
+  plgstrm(&caller_stream_);
+  plmkstrm(&stream_);
+  if (stream_ < 0) {
+    plsstrm(caller_stream_);
+    RemoveTemp();
+    throw std::runtime_error("PLplot has no free plot stream left for the report");
+  }
+  plsdev("svg");
+  plsfnam(temp_.c_str());
+  plspage(0, 0, width_px, height_px, 0, 0);
+  SetPalette();
+  plinit();
+  pladv(0);
+  plcol0(kInk);
+}
+
+SvgPlot::~SvgPlot() {
+  End();
+  RemoveTemp();
+}
+
+std::string SvgPlot::Finish() {
+  End();
+  std::ifstream in(temp_, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in || text.str().find("</svg>") == std::string::npos) {
+    throw std::runtime_error("PLplot did not finish the plot in " + temp_.string());
+  }
+  return DecodeCharacterReferences(text.str());
+}
+
+void SvgPlot::End() {
+  if (stream_ < 0) return;
+  plsstrm(stream_);
+  plend1();  // frees the stream and closes the file
+  stream_ = -1;
+  plsstrm(caller_stream_);
+}
+
+void SvgPlot::RemoveTemp() {
+  std::error_code ignored;
+  fs::remove(temp_, ignored);
+}
+
+// Grid lines under the data, then the frame with ticks and numbers.
+void Frame(const char* x_options, PLFLT x_tick, PLINT x_sub, const char* y_options, PLFLT y_tick, PLINT y_sub,
+           bool grid) {
+  if (grid) {
+    plcol0(kGrid);
+    plwidth(0.8);
+    plbox("g", x_tick, x_sub, "g", y_tick, y_sub);
+  }
+  plcol0(kInk);
+  plwidth(1.0);
+  plbox(x_options, x_tick, x_sub, y_options, y_tick, y_sub);
+}
+
+// An arrow from (x, y) to (x + dx, y + dy) in world coordinates with equal scales on both axes.
+void Arrow(PLFLT x, PLFLT y, PLFLT dx, PLFLT dy, PLFLT max_head) {
+  const PLFLT length = std::hypot(dx, dy);
+  if (!(length > 0)) return;
+  const PLFLT head = std::min(0.35 * length, max_head);
+  const PLFLT ux = dx / length, uy = dy / length;
+  const PLFLT bx = x + dx - ux * head, by = y + dy - uy * head;
+  pljoin(x, y, bx, by);
+  std::array<PLFLT, 3> hx = {x + dx, bx - uy * 0.4 * head, bx + uy * 0.4 * head};
+  std::array<PLFLT, 3> hy = {y + dy, by + ux * 0.4 * head, by - ux * 0.4 * head};
+  plfill(3, hx.data(), hy.data());
+}
+
+void Disc(PLFLT x, PLFLT y, PLFLT radius) {
+  constexpr int kSides = 16;
+  std::array<PLFLT, kSides> px, py;
+  for (int i = 0; i < kSides; ++i) {
+    const double angle = 2 * std::numbers::pi * i / kSides;
+    px[i] = x + radius * std::cos(angle);
+    py[i] = y + radius * std::sin(angle);
+  }
+  plfill(kSides, px.data(), py.data());
+}
+
+std::string HtmlEscape(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string HtmlHead(std::string_view title) {
+  return fmt::format(
+      "<!DOCTYPE html>\n"
+      "<html lang=\"en\">\n"
+      "<head>\n"
+      "<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<title>{0}</title>\n"
+      "<style>\n"
+      "body {{ font-family: sans-serif; color: #222; max-width: 1000px; margin: 2em auto; padding: 0 1em; }}\n"
+      "h1 {{ font-size: 1.5em; }}\n"
+      "h2 {{ font-size: 1.2em; margin-top: 2em; }}\n"
+      "table {{ border-collapse: collapse; }}\n"
+      "th, td {{ text-align: left; padding: 0.25em 1em 0.25em 0; border-bottom: 1px solid #ddd; "
+      "vertical-align: top; }}\n"
+      "th {{ font-weight: normal; color: #555; }}\n"
+      "td {{ font-variant-numeric: tabular-nums; }}\n"
+      "figure {{ margin: 0; }}\n"
+      "img {{ max-width: 100%; height: auto; }}\n"
+      "figcaption {{ color: #444; margin-top: 0.5em; }}\n"
+      "</style>\n"
+      "</head>\n"
+      "<body>\n"
+      "<h1>{0}</h1>\n",
+      HtmlEscape(title));
+}
+
+std::string HtmlTail() { return "</body>\n</html>\n"; }
+
+std::string HtmlKeyValueTable(const std::vector<std::pair<std::string, std::string>>& rows) {
+  if (rows.empty()) return "";
+  std::string html = "<table>\n";
+  for (const auto& [key, value] : rows) {
+    html += fmt::format("<tr><th scope=\"row\">{}</th><td>{}</td></tr>\n", HtmlEscape(key), HtmlEscape(value));
+  }
+  return html + "</table>\n";
+}
+
+std::string HtmlTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  std::string html = "<table>\n<tr>";
+  for (const std::string& h : header) html += fmt::format("<th scope=\"col\">{}</th>", HtmlEscape(h));
+  html += "</tr>\n";
+  for (const auto& row : rows) {
+    html += "<tr>";
+    for (const std::string& cell : row) html += fmt::format("<td>{}</td>", HtmlEscape(cell));
+    html += "</tr>\n";
+  }
+  return html + "</table>\n";
+}
+
+std::string HtmlFigure(std::string_view file, std::string_view heading, std::string_view alt, std::string_view caption) {
+  return fmt::format("<h2>{}</h2>\n<figure>\n<img src=\"{}\" alt=\"{}\">\n<figcaption>{}</figcaption>\n</figure>\n",
+                     HtmlEscape(heading), HtmlEscape(file), HtmlEscape(alt), HtmlEscape(caption));
+}
+
+void WriteReportFiles(const fs::path& dir, const std::vector<std::pair<std::string, std::string>>& files) {
+  const auto error = [&dir](const std::string& why) {
+    return InputError(
+        fmt::format("cannot write the report to '{}': {}; choose a directory you can write", dir.string(), why));
+  };
+
+  // The outermost directory this call creates, so a failure can take back exactly what it made.
+  std::error_code ec;
+  fs::path target = dir.lexically_normal();
+  if (!target.has_filename()) target = target.parent_path();  // "out/" names "out"
+  fs::path first_created;
+  for (fs::path p = target; !p.empty() && !fs::exists(p, ec) && !ec; p = p.parent_path()) {
+    first_created = p;
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw error(ec.message());
+  if (!fs::is_directory(dir, ec)) throw error("it exists and is not a directory");
+
+  std::vector<fs::path> created;
+  try {
+    for (const auto& [name, content] : files) {
+      const fs::path path = dir / name;
+      const bool is_new = !fs::exists(path, ec);
+      WriteFileAtomically(path, content);
+      if (is_new) created.push_back(path);
+    }
+  } catch (const std::exception& e) {
+    for (const fs::path& path : created) fs::remove(path, ec);
+    if (!first_created.empty()) {
+      for (fs::path p = target; fs::remove(p, ec) && p != first_created; p = p.parent_path()) {
+      }
+    }
+    throw error(e.what());
+  }
+}
+
+}  // namespace fvm::cli::report
