@@ -21,6 +21,13 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+}  // namespace
+// The closed-form start; `mirror` (when not null) receives the mirror image across the stations' plane when the
+// ranges cannot tell the two apart (three stations, or all in one plane), else the same point.
+Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges,
+                            Eigen::Vector3d* mirror);
+namespace {
+
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
@@ -256,6 +263,33 @@ std::string StationList(const MultilaterationProblem& p, const std::vector<int>&
   return out;
 }
 
+// The best rotation of each station taking its Cartesian readings onto the directions to `points`, and what is
+// left: the sum of squared misfits (mm^2) over all stations.
+double RotationMisfit(const MultilaterationProblem& p, const std::vector<Eigen::Vector3d>& stations,
+                      const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Matrix3d>* rotations = nullptr) {
+  double misfit = 0;
+  if (rotations != nullptr) rotations->assign(stations.size(), Eigen::Matrix3d::Identity());
+  for (size_t i = 0; i < stations.size(); ++i) {
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+    for (const StationReading& r : p.readings) {
+      if (static_cast<size_t>(r.station) != i) continue;
+      const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
+      h += local * (points[static_cast<size_t>(r.point)] - stations[i]).transpose();
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d fix = Eigen::Matrix3d::Identity();
+    fix(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d rotation = svd.matrixV() * fix * svd.matrixU().transpose();
+    if (rotations != nullptr) (*rotations)[i] = rotation;
+    for (const StationReading& r : p.readings) {
+      if (static_cast<size_t>(r.station) != i) continue;
+      const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
+      misfit += (rotation * local - (points[static_cast<size_t>(r.point)] - stations[i])).squaredNorm();
+    }
+  }
+  return misfit;
+}
+
 struct Prepared {
   Problem pr;
   State state;
@@ -317,7 +351,8 @@ Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& 
 
   State& st = out.state;
   if (p.stations.empty()) {
-    if (!o.self_calibrate || !o.use_angles) {
+    const bool angles = std::all_of(p.readings.begin(), p.readings.end(), [](const StationReading& r) { return r.has_angles; });
+    if (!o.self_calibrate || !angles) {
       throw std::invalid_argument("no station positions: give them (known) or, for a self-calibration, starting values");
     }
     st.stations = StartStationsFromAngles(p);
@@ -333,9 +368,13 @@ Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& 
     Eigen::Vector3d t;
     ThreeTwoOneFrame(st.stations, &r, &t);
     for (Eigen::Vector3d& s : st.stations) s = r * s + t;
+    st.stations[0].setZero();  // exactly the frame, not its rounding
+    st.stations[1].tail<2>().setZero();
+    st.stations[2].z() = 0.0;
   }
   st.rotations.assign(m, Eigen::Matrix3d::Identity());
   st.points.resize(np);
+  std::vector<Eigen::Vector3d> mirrors(np);
   for (size_t j = 0; j < np; ++j) {
     std::vector<Eigen::Vector3d> s;
     std::vector<double> ranges;
@@ -344,23 +383,23 @@ Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& 
       s.push_back(st.stations[static_cast<size_t>(r.station)]);
       ranges.push_back(r.range_mm);
     }
-    st.points[j] = TrilaterateClosedForm(s, ranges);
+    st.points[j] = Trilaterate(s, ranges, &mirrors[j]);
   }
-  if (o.use_angles) {
-    // Each station's rotation: the rotation that best takes its readings onto the directions to the start points.
-    for (size_t i = 0; i < m; ++i) {
-      Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-      for (const StationReading& r : p.readings) {
-        if (static_cast<size_t>(r.station) != i) continue;
-        const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
-        h += local * (st.points[static_cast<size_t>(r.point)] - st.stations[i]).transpose();
+  // Readings with angles settle the side of points that ranges alone leave mirrored: the side whose directions a
+  // rotation of each station matches best.
+  const bool all_angles = std::all_of(p.readings.begin(), p.readings.end(), [](const StationReading& r) { return r.has_angles; });
+  if (all_angles) {
+    std::vector<Eigen::Vector3d> other = st.points;
+    bool any = false;
+    for (size_t j = 0; j < np; ++j) {
+      if ((mirrors[j] - st.points[j]).norm() > 1e-9) {
+        other[j] = mirrors[j];
+        any = true;
       }
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d fix = Eigen::Matrix3d::Identity();
-      fix(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-      st.rotations[i] = svd.matrixV() * fix * svd.matrixU().transpose();
     }
+    if (any && RotationMisfit(p, st.stations, other) < RotationMisfit(p, st.stations, st.points)) st.points = other;
   }
+  if (o.use_angles) RotationMisfit(p, st.stations, st.points, &st.rotations);
   return out;
 }
 
@@ -480,6 +519,11 @@ void ThreeTwoOneFrame(const std::vector<Eigen::Vector3d>& stations, Eigen::Matri
 }
 
 Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges) {
+  return Trilaterate(stations, ranges, nullptr);
+}
+
+Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges,
+                            Eigen::Vector3d* mirror) {
   const size_t n = stations.size();
   if (n < 3 || ranges.size() != n) throw std::invalid_argument("trilateration needs three or more stations with a range each");
   const Eigen::Index rows = static_cast<Eigen::Index>(n - 1);
@@ -492,7 +536,11 @@ Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& statio
   }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV | Eigen::ComputeThinU);
   const Eigen::VectorXd sv = svd.singularValues();
-  if (n >= 4 && sv.size() == 3 && sv[2] > 1e-6 * sv[0]) return stations[0] + svd.solve(b);
+  if (n >= 4 && sv.size() == 3 && sv[2] > 1e-6 * sv[0]) {
+    const Eigen::Vector3d p = stations[0] + svd.solve(b);
+    if (mirror != nullptr) *mirror = p;
+    return p;
+  }
   // In the stations' plane, then the height above it.
   const Eigen::Matrix<double, 3, 2> plane = svd.matrixV().leftCols(2);
   Eigen::Vector3d normal = svd.matrixV().col(2);
@@ -504,12 +552,18 @@ Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& statio
     h2 += ranges[i] * ranges[i] - (x - d).squaredNorm();
   }
   h2 /= static_cast<double>(n);
+  // The side: where (s2 - s1) x (s3 - s1) of the first three stations points (they appear counter-clockwise from
+  // the point); with those on one line, towards +z, +y or +x.
+  const Eigen::Vector3d n0 = (stations[1] - stations[0]).cross(stations[2] - stations[0]);
   const double eps = 1e-9;
-  const bool flip = std::abs(normal.z()) > eps ? normal.z() < 0
-                    : std::abs(normal.y()) > eps ? normal.y() < 0
-                                                 : normal.x() < 0;
+  const bool flip = n0.norm() > 1e-9 * (stations[1] - stations[0]).squaredNorm() ? normal.dot(n0) < 0
+                    : std::abs(normal.z()) > eps                                 ? normal.z() < 0
+                    : std::abs(normal.y()) > eps                                 ? normal.y() < 0
+                                                                                 : normal.x() < 0;
   if (flip) normal = -normal;
-  return stations[0] + x + std::sqrt(std::max(0.0, h2)) * normal;
+  const double h = std::sqrt(std::max(0.0, h2));
+  if (mirror != nullptr) *mirror = stations[0] + x - h * normal;
+  return stations[0] + x + h * normal;
 }
 
 std::vector<Eigen::Vector3d> StartStationsFromAngles(const MultilaterationProblem& p) {

@@ -47,8 +47,8 @@ struct StationReading {
 struct MultilaterationProblem {
   std::vector<std::string> point_ids;
   std::vector<std::string> station_names;
-  // Known positions (mm, common frame) or, for a self-calibration, starting values in any frame. Empty for a
-  // self-calibration with angles: StartStationsFromAngles then supplies them.
+  // Known positions (mm, common frame) or, for a self-calibration, starting values in any frame. May be empty for
+  // a self-calibration whose readings all have angles: StartStationsFromAngles then supplies them.
   std::vector<Eigen::Vector3d> stations;
   std::vector<StationReading> readings;
 };
@@ -112,8 +112,10 @@ void ThreeTwoOneFrame(const std::vector<Eigen::Vector3d>& stations, Eigen::Matri
 std::vector<Eigen::Vector3d> StartStationsFromAngles(const MultilaterationProblem& problem);
 
 // A point from its ranges in closed form: linear least squares on the differences of squared ranges with four
-// or more stations that span 3D; otherwise in the stations' plane plus the height above it, on the side the
-// plane's normal points to (normal oriented towards +z, or +y, or +x when the plane contains z). Starts the
+// or more stations that span 3D; otherwise in the stations' plane plus the height above it. The ranges cannot
+// tell that point from its mirror image across the plane: it is taken on the side (s2 - s1) x (s3 - s1) of the
+// first three stations points to, i.e. where they appear counter-clockwise (in a self-calibration: +z of the
+// 3-2-1 frame). Multilaterate settles the side from the angles instead when every reading has them. Starts the
 // Gauss-Newton solves.
 Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges_mm);
 
