@@ -347,6 +347,12 @@ Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& 
           need, o.self_calibrate ? " (3 ranges only locate a point, they add nothing to the stations)" : " (three spheres meet in a point)"));
     }
   }
+  // Stations in their own order, whatever the order of the readings: the side rule of the start names them so.
+  for (std::vector<int>& k : of_point) {
+    std::sort(k.begin(), k.end(), [&](int a, int b) {
+      return p.readings[static_cast<size_t>(a)].station < p.readings[static_cast<size_t>(b)].station;
+    });
+  }
   out.pr.readings_of_point = of_point;
 
   State& st = out.state;
