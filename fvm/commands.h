@@ -55,6 +55,8 @@ void RegisterSimulate(CLI::App& app);
 
 // fvm verify DATA.csv --chain XFYZ --order N --tool X,Y,Z [-o MACHINE.json] (fvm/verify.cc).
 void RegisterVerify(CLI::App& app);
+// fvm multilaterate READINGS.csv --stations S.json [--self-calibrate] [--angles] -o POINTS.csv (fvm/multilaterate.cc).
+void RegisterMultilaterate(CLI::App& app);
 
 // fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
 void RegisterDiff(CLI::App& app);

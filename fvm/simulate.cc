@@ -4,6 +4,7 @@
 
 #include <fmt/core.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -13,6 +14,7 @@
 #include <stdexcept>
 
 #include "artefacts/io/machine_truth_file.h"
+#include "artefacts/io/multilateration_readings.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
@@ -23,6 +25,7 @@
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "stage/fvm_stage_models.h"
+#include "stage/multilateration.h"
 #include "stage/pose.h"
 #include "stage/tracker.h"
 
@@ -130,6 +133,7 @@ struct SimulateTrackerArgs {
   double dwell_s = 6.0;
   double feed_mm_min = 2000.0;
   std::string validation;
+  std::string stations;
 };
 
 std::string PointsCsv(const std::vector<artefacts::PlannedPoint>& points, const std::string& comment) {
@@ -161,6 +165,110 @@ void CheckSight(const artefacts::TrackerReadings& readings, const stage::Pose& p
                                limits.max_elevation_deg, limits.max_range_mm / 1000.0, list));
 }
 
+// --stations: the same machine read by several stations for fvm multilaterate. The stations file is in the
+// machine frame; what the run writes is in the stations' 3-2-1 frame (station 1 at the origin, 2 on +x, 3 in the
+// xy plane), the frame a self-calibration finds, so known and self-calibrated stations give comparable points.
+void RunStations(const SimulateTrackerArgs& args, const stage::AxisChain& chain, const artefacts::Workspace& ws,
+                 const artefacts::MachineTruth& truth, const std::vector<artefacts::PlannedPoint>& points,
+                 const stage::TrackerNoise& noise, const std::string& where) {
+  const std::vector<artefacts::Station> machine_stations = artefacts::ReadStations(args.stations);
+  if (machine_stations.size() < 3) {
+    throw InputError(fmt::format("{}: {} station(s); multilateration needs at least 3", args.stations, machine_stations.size()));
+  }
+  std::vector<Eigen::Vector3d> positions;
+  for (const auto& s : machine_stations) positions.push_back(s.position);
+  Eigen::Matrix3d to_frame;
+  Eigen::Vector3d shift;
+  try {
+    stage::ThreeTwoOneFrame(positions, &to_frame, &shift);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: {}", args.stations, e.what()));
+  }
+  const auto targets = artefacts::TrueToolPoints(chain, truth, points);
+  // Sight: every station, levelled, against the tracker's limits.
+  for (const artefacts::Station& s : machine_stations) {
+    artefacts::TrackerReadings seen;
+    for (const auto& [id, p] : targets) {
+      artefacts::TrackerReading r;
+      r.id = id;
+      r.measured = p - s.position;
+      seen.points.push_back(r);
+    }
+    stage::Pose at;
+    at.translation = s.position;
+    CheckSight(seen, at, "points", "station " + s.name);
+  }
+  std::vector<Eigen::Vector3d> nominal;
+  for (const auto& p : points) nominal.push_back(p.nominal);
+  artefacts::MultilaterationReadings readings =
+      artefacts::SimulateMultilaterationReadings(machine_stations, targets, nominal, noise, StreamSeed(args.seed, 2));
+  readings.comments = {
+      "fvm simulate tracker: multilateration readings of a simulated machine tool, one row per point and station",
+      fmt::format("chain {}, tool offset {} mm, points {}; {} stations of {} (levelled, azimuth 0 along machine +x)",
+                  args.chain, args.tool, where, machine_stations.size(), args.stations),
+      fmt::format("tracker {} (range sigma {} mm + {} mm/mm, azimuth {} rad, elevation {} rad), seed {}", noise.name,
+                  FormatShortest(noise.range_sigma_mm), FormatShortest(noise.range_sigma_per_mm),
+                  FormatShortest(noise.azimuth_sigma_rad), FormatShortest(noise.elevation_sigma_rad), args.seed),
+      "range (mm), azimuth, elevation (rad) in each station's frame; x,y,z: commanded machine coordinates (mm)"};
+  std::vector<artefacts::Station> frame_stations = machine_stations;
+  for (auto& s : frame_stations) s.position = to_frame * s.position + shift;
+  // Exactly the 3-2-1 frame, not its rounding.
+  frame_stations[0].position.setZero();
+  frame_stations[1].position.tail<2>().setZero();
+  frame_stations[2].position.z() = 0.0;
+  std::string true_points = "# fvm simulate tracker: true tool points in the stations' frame (station 1 at the origin, "
+                            "2 on +x, 3 in the xy plane), mm\n" + CsvLine({"id", "x", "y", "z"});
+  for (const auto& [id, p] : targets) {
+    const Eigen::Vector3d f = to_frame * p + shift;
+    true_points += CsvLine({id, FormatShortest(f.x()), FormatShortest(f.y()), FormatShortest(f.z())});
+  }
+  // The stations' frame in the machine frame, as fvm verify's tracker pose would find it.
+  stage::Pose frame_pose;
+  frame_pose.translation = machine_stations[0].position;
+  const Eigen::AngleAxisd aa(Eigen::Matrix3d(to_frame.transpose()));
+  frame_pose.rotation = aa.angle() * aa.axis();
+  std::optional<artefacts::TrackerReadings> validation;
+  if (!args.validation.empty()) {
+    auto others = Plan(ParsePointSpec(args.validation, "--validation"), ws, StreamSeed(args.seed, 3));
+    for (auto& p : others) p.id[0] = 'V';
+    stage::AxisChain in_frame = chain;
+    in_frame.instrument = frame_pose;
+    validation = artefacts::SimulateTrackerReadings(in_frame, truth, others, stage::TrackerNoise::Preset("none"), 0);
+    validation->comments = {"fvm simulate tracker: noise-free validation points in the stations' frame (tracker none)",
+                            fmt::format("chain {}, tool offset {} mm, points {}", args.chain, args.tool, args.validation)};
+  }
+  const artefacts::ErrorSummary error = artefacts::VolumetricErrorSummary(chain, truth, points);
+  nlohmann::json json = nlohmann::json::parse(artefacts::MachineTruthJson(truth));
+  json["what"] = "machine-tool truth of fvm simulate tracker --stations: the 21 error terms (mm, rad) as functions of q - "
+                 "workspace min (mm), and the stations";
+  json["chain"] = args.chain;
+  json["tool_offset_mm"] = {chain.tool_offset.x(), chain.tool_offset.y(), chain.tool_offset.z()};
+  json["stations_machine_frame"] = nlohmann::json::parse(artefacts::StationsJson(machine_stations))["stations"];
+  json["stations_frame"] = nlohmann::json::parse(artefacts::StationsJson(frame_stations))["stations"];
+  json["stations_frame_pose"] = {{"translation_mm", {frame_pose.translation.x(), frame_pose.translation.y(), frame_pose.translation.z()}},
+                                 {"rotation_vector_rad", {frame_pose.rotation.x(), frame_pose.rotation.y(), frame_pose.rotation.z()}}};
+  json["tracker"] = {{"name", noise.name},
+                     {"range_sigma_mm", noise.range_sigma_mm},
+                     {"range_sigma_per_mm", noise.range_sigma_per_mm},
+                     {"azimuth_sigma_rad", noise.azimuth_sigma_rad},
+                     {"elevation_sigma_rad", noise.elevation_sigma_rad}};
+  json["points"] = {{"spec", args.points}, {"count", points.size()}, {"mean_error_um", error.mean_um}, {"max_error_um", error.max_um}};
+  json["seed"] = args.seed;
+  const std::filesystem::path dir(args.output);
+  std::filesystem::create_directories(dir);
+  WriteFileAtomically(dir / "points.csv", PointsCsv(points, "fvm simulate tracker: " + where));
+  WriteFileAtomically(dir / "program.nc", artefacts::GCodeProgram(points, args.dwell_s, args.feed_mm_min));
+  artefacts::WriteMultilaterationReadings(dir / "readings.csv", readings);
+  WriteFileAtomically(dir / "stations.json", artefacts::StationsJson(frame_stations));
+  WriteFileAtomically(dir / "true_points.csv", true_points);
+  if (validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *validation);
+  WriteFileAtomically(dir / "truth.json", json.dump(2) + "\n");
+  fmt::print("simulated {} points ({}, {}) read by {} stations into {}: readings.csv ({} rows), stations.json and "
+             "true_points.csv in the stations' frame; initial volumetric error mean {:.1f} um; tracker {}, seed {}\n",
+             points.size(), where, args.chain, machine_stations.size(), args.output, readings.rows.size(), error.mean_um,
+             noise.name, args.seed);
+}
+
 void RunTracker(const SimulateTrackerArgs& args) {
   // The validators have checked every text; parsing again cannot fail.
   const artefacts::Workspace ws = ParseMachine(args.machine);
@@ -168,6 +276,9 @@ void RunTracker(const SimulateTrackerArgs& args) {
   const auto tool = ParseNumbers(args.tool, 3, "--tool", "0,0,100");
   const auto pose6 = ParseNumbers(args.pose, 6, "--pose", "1100,-1000,600,63,14,35");
   const bool with_truth = args.seed_given || !args.errors.empty();
+  if (!args.stations.empty() && !with_truth) {
+    throw CLI::ValidationError("--stations", "needs a machine truth to simulate: give --seed N or --errors FILE.json");
+  }
   if (!args.validation.empty() && !with_truth) {
     throw CLI::ValidationError("--validation", "needs a machine truth to simulate: give --seed N or --errors FILE.json");
   }
@@ -195,6 +306,10 @@ void RunTracker(const SimulateTrackerArgs& args) {
   const artefacts::MachineTruth truth = args.errors.empty()
                                             ? artefacts::RandomMachineTruth(chain, ws, StreamSeed(args.seed, 0), args.mean_error_um)
                                             : artefacts::ReadMachineTruth(args.errors, ws);
+  if (!args.stations.empty()) {
+    RunStations(args, chain, ws, truth, points, noise, where);
+    return;
+  }
   artefacts::TrackerReadings noise_free;
   artefacts::TrackerReadings readings =
       artefacts::SimulateTrackerReadings(chain, truth, points, noise, StreamSeed(args.seed, 2), &noise_free);
@@ -325,8 +440,14 @@ void RegisterSimulateTracker(CLI::App* simulate) {
       ->capture_default_str();
   sub->add_option("--validation", args->validation, "noise-free readings of other points, same SPEC forms as --points")
       ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--validation"); }, "SPEC"));
+  sub->add_option("--stations", args->stations,
+                  "several stations instead of one tracker: JSON {\"stations\": [{\"name\", \"x\", \"y\", \"z\"}]} "
+                  "in the machine frame (mm); writes readings.csv for fvm multilaterate, stations.json and "
+                  "true_points.csv in the stations' frame (--pose is then unused)")
+      ->check(CLI::ExistingFile);
   sub->footer("Example:\n  fvm simulate tracker --machine 2500x1500x1200 --chain XFYZ --points mesh:500,500,400 "
-              "--tool 0,0,100 -o plan --seed 1 --validation mesh:100,100,100");
+              "--tool 0,0,100 -o plan --seed 1 --validation mesh:100,100,100\n"
+              "  fvm simulate tracker --seed 1 --stations stations.json -o net   # for fvm multilaterate");
   sub->callback([args, seed] {
     SimulateTrackerArgs a = *args;
     a.seed_given = seed->count() > 0;

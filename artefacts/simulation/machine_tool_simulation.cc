@@ -370,4 +370,56 @@ TrackerReadings SimulateTrackerReadings(const stage::AxisChain& chain, const Mac
   return readings;
 }
 
+MultilaterationReadings SimulateMultilaterationReadings(const std::vector<Station>& stations,
+                                                        const std::vector<std::pair<std::string, Eigen::Vector3d>>& targets,
+                                                        const std::vector<Eigen::Vector3d>& nominal,
+                                                        const stage::TrackerNoise& noise, std::uint64_t seed) {
+  if (!nominal.empty() && nominal.size() != targets.size()) {
+    throw std::invalid_argument("SimulateMultilaterationReadings: nominal and targets differ in number");
+  }
+  Random random(seed);
+  MultilaterationReadings out;
+  out.angles = true;
+  out.nominal = !nominal.empty();
+  out.rows.reserve(targets.size() * stations.size());
+  for (size_t j = 0; j < targets.size(); ++j) {
+    for (const Station& station : stations) {
+      stage::Spherical s = stage::ToSpherical(targets[j].second - station.position);
+      if (!(s.range_mm > 0.0)) {
+        throw std::invalid_argument(fmt::format("point {} is at station {}", targets[j].first, station.name));
+      }
+      const double n_range = random.Normal(), n_azimuth = random.Normal(), n_elevation = random.Normal();
+      if (!noise.IsNoiseFree()) {
+        s.range_mm += noise.RangeSigmaMm(s.range_mm) * n_range;
+        s.azimuth_rad = std::remainder(s.azimuth_rad + noise.azimuth_sigma_rad * n_azimuth, 2.0 * kPi);
+        s.elevation_rad += noise.elevation_sigma_rad * n_elevation;
+      }
+      StationReadingRow row;
+      row.id = targets[j].first;
+      row.station = station.name;
+      row.range_mm = s.range_mm;
+      row.azimuth_rad = s.azimuth_rad;
+      row.elevation_rad = s.elevation_rad;
+      if (out.nominal) row.nominal = nominal[j];
+      out.rows.push_back(std::move(row));
+    }
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, Eigen::Vector3d>> TrueToolPoints(const stage::AxisChain& chain, const MachineTruth& truth,
+                                                                    const std::vector<PlannedPoint>& points) {
+  stage::AxisChain machine = chain;
+  machine.instrument.reset();
+  std::vector<std::pair<std::string, Eigen::Vector3d>> out;
+  out.reserve(points.size());
+  double e[stage::kNumErrorTerms];
+  for (const PlannedPoint& p : points) {
+    TermValuesAt(truth, p.nominal, e);
+    out.emplace_back(p.id, stage::ChainForward(machine, e, p.nominal));
+  }
+  return out;
+}
+
 }  // namespace fvm::artefacts
+

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "artefacts/io/multilateration_readings.h"
 #include "artefacts/io/tracker_readings.h"
 #include "stage/axis_chain.h"
 #include "stage/error_terms.h"
@@ -138,5 +139,23 @@ std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readin
 TrackerReadings SimulateTrackerReadings(const stage::AxisChain& chain, const MachineTruth& truth,
                                         const std::vector<PlannedPoint>& points, const stage::TrackerNoise& noise,
                                         std::uint64_t seed, TrackerReadings* noise_free = nullptr);
+
+// Multilateration: the same points read by several tracker stations (fvm multilaterate). Each station stands
+// levelled at its position in the common frame, its azimuth zero along the common +x (identity rotation: a
+// bundle adjustment estimates each station's rotation anyway). A reading is the range and the two angles of
+// target - station with the preset's noise (range sigma a + b * range, angle sigmas), three normal draws per
+// reading in the order point by point, station by station, so the same seed gives the same bits. `targets` are
+// (id, true position in the common frame, mm); `nominal`, when not empty, is written as x,y,z beside them (same
+// size). Rows: point by point, stations in the given order. Throws std::invalid_argument on a station at a
+// target or mismatched sizes.
+MultilaterationReadings SimulateMultilaterationReadings(const std::vector<Station>& stations,
+                                                        const std::vector<std::pair<std::string, Eigen::Vector3d>>& targets,
+                                                        const std::vector<Eigen::Vector3d>& nominal,
+                                                        const stage::TrackerNoise& noise, std::uint64_t seed);
+
+// The tool points of the machine `truth` at `points` in the machine frame (the chain's instrument pose ignored):
+// what the stations of a multilateration see, and the truth to judge it against.
+std::vector<std::pair<std::string, Eigen::Vector3d>> TrueToolPoints(const stage::AxisChain& chain, const MachineTruth& truth,
+                                                                    const std::vector<PlannedPoint>& points);
 
 }  // namespace fvm::artefacts

@@ -45,3 +45,8 @@ if(NOT ERR MATCHES "batch.json" OR EXISTS ${WORK}/cal.json)
   message(FATAL_ERROR "fvm calibrate on a batch.json with a number beyond double:\n${ERR}")
 endif()
 refuses_all(tracker_readings ${WORK}/machine.json verify @FILE@ --tool 0,0,100 -o ${WORK}/machine.json)
+# Multilateration readings and stations through fvm multilaterate (the stations file of the other: a valid one).
+file(WRITE ${WORK}/ok-stations.json "{\"stations\": [{\"name\": \"A\", \"x\": 0, \"y\": 0, \"z\": 0}, {\"name\": \"B\", \"x\": 1000, \"y\": 0, \"z\": 0}, {\"name\": \"C\", \"x\": 0, \"y\": 1000, \"z\": 0}]}")
+file(WRITE ${WORK}/ok-readings.csv "id,station,range\nP1,A,707.1067811865476\nP1,B,948.6832980505138\nP1,C,836.6600265340756\n")
+refuses_all(multilateration_readings ${WORK}/points.csv multilaterate @FILE@ --stations ${WORK}/ok-stations.json -o ${WORK}/points.csv)
+refuses_all(stations ${WORK}/points.csv multilaterate ${WORK}/ok-readings.csv --stations @FILE@ -o ${WORK}/points.csv)
