@@ -52,6 +52,10 @@ expect_light(diff diff ${SAMPLES}/stitching-strategies/x/a.csv ${SAMPLES}/stitch
 expect_light(diagnose diagnose ${SAMPLES}/bar17 --model 27 --json)
 expect_light(simulate simulate fvm-batch -o ${WORK}/sim --seed 1)
 expect_light(simulate_tracker simulate tracker -o ${WORK}/tracker --seed 1)
+expect_light(verify verify ${WORK}/tracker/readings.csv --tool 0,0,100 --order 2 -o ${WORK}/machine.json)
+expect_light(simulate_stations simulate tracker -o ${WORK}/multi --seed 1 --stations ${SAMPLES}/stations/spread-4.json)
+expect_light(multilaterate multilaterate ${WORK}/multi/readings.csv --stations ${WORK}/multi/stations.json -o ${WORK}/multi/p.csv)
+expect_light(correct_machine correct --calibration ${WORK}/machine.json ${WORK}/tracker/points.csv -o ${WORK}/table.csv)
 
 # Positive control: a TIFF loads the image plugin and OpenImageIO behind it, so the check above can fail.
 run(0 tiles synthesize -o ${WORK}/tile --rows 1 --cols 1 --size 64 --bits 32 --seed 1)
