@@ -1,0 +1,158 @@
+#include "stage/machine_monte_carlo.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/random.h"
+
+namespace fvm::stage {
+
+std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
+                                               const Pose& pose, const std::vector<Observation>& points,
+                                               const std::vector<Eigen::Vector3d>& tool_offsets) {
+  std::vector<Observation> at = points;
+  for (Observation& o : at) o.measured.setZero();  // model - 0 = the model
+  return VolumetricResiduals(layout, values, pose, at, tool_offsets);
+}
+
+std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+                                                    const std::vector<Observation>& readings,
+                                                    const std::vector<Observation>& validation, const TrackerNoise& noise,
+                                                    const IdentificationOptions& identification,
+                                                    const MonteCarloOptions& options) {
+  if (options.runs < 1) throw std::invalid_argument("a Monte Carlo needs at least one run");
+  if (identification.instrument == InstrumentPose::kNone) {
+    throw std::invalid_argument("a machine Monte Carlo needs the tracker pose: held or estimated");
+  }
+  const Calibration& truth = reference.calibration;
+  const std::vector<Eigen::Vector3d>& tools = identification.tool_offsets;
+  std::vector<Observation> evaluation = readings;
+  evaluation.insert(evaluation.end(), validation.begin(), validation.end());
+  const std::vector<Eigen::Vector3d> true_readings = PredictedReadings(truth.layout, &truth.values, reference.pose, readings, tools);
+  const std::vector<Eigen::Vector3d> true_evaluation =
+      PredictedReadings(truth.layout, &truth.values, reference.pose, evaluation, tools);
+
+  IdentificationOptions run_options = identification;
+  run_options.pose = reference.pose;  // held, or where the estimate starts: the truth of the simulation
+  run_options.num_threads = 1;        // the runs are the parallel work; one thread each keeps them deterministic
+
+  std::vector<MachineMonteCarloRun> runs(static_cast<size_t>(options.runs));
+  const auto one_run = [&](int index) {
+    Random random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
+    std::vector<Observation> drawn = readings;
+    for (size_t i = 0; i < drawn.size(); ++i) {
+      const double n_range = random.Normal(), n_azimuth = random.Normal(), n_elevation = random.Normal();
+      drawn[i].measured = noise.Perturb(true_readings[i], n_range, n_azimuth, n_elevation);
+      drawn[i].covariance = options.weighted ? noise.Covariance(drawn[i].measured) : Eigen::Matrix3d::Zero();
+    }
+    const IdentificationResult r = Identify(layout, drawn, run_options);
+    MachineMonteCarloRun& out = runs[static_cast<size_t>(index)];
+    out.converged = r.converged;
+    out.pose = r.pose;
+    out.final = SummarizeVolumetric(r.residuals);
+    const Calibration& c = r.calibration;
+    if (!validation.empty()) out.validation = SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, r.pose, validation, tools));
+    out.deviation_mm = PredictedReadings(c.layout, &c.values, r.pose, evaluation, tools);
+    for (size_t i = 0; i < evaluation.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
+    if (options.on_run_done) options.on_run_done();
+  };
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, options.runs, 1), [&](const tbb::blocked_range<int>& range) {
+      for (int i = range.begin(); i != range.end(); ++i) one_run(i);
+    });
+  });
+  return runs;
+}
+
+namespace {
+
+double Quantile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return 0.0;
+  const double at = p * static_cast<double>(sorted.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(at));
+  const size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (at - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+constexpr double kChi2Of3At95 = 7.814727903251178;  // chi^2 quantile, 3 d.o.f., 0.95
+
+}  // namespace
+
+SampleSummary Summarize(std::vector<double> values) {
+  SampleSummary s;
+  s.n = static_cast<int>(values.size());
+  if (values.empty()) return s;
+  std::sort(values.begin(), values.end());
+  for (double v : values) s.mean += v;
+  s.mean /= s.n;
+  for (double v : values) s.sd += (v - s.mean) * (v - s.mean);
+  s.sd = s.n > 1 ? std::sqrt(s.sd / (s.n - 1)) : 0.0;
+  s.p2_5 = Quantile(values, 0.025);
+  s.p95 = Quantile(values, 0.95);
+  s.p97_5 = Quantile(values, 0.975);
+  s.max = values.back();
+  return s;
+}
+
+std::vector<PointSpread> PointSpreads(const std::vector<MachineMonteCarloRun>& runs) {
+  if (runs.empty()) return {};
+  const size_t points = runs.front().deviation_mm.size();
+  std::vector<PointSpread> out(points);
+  std::vector<double> norms(runs.size());
+  for (size_t p = 0; p < points; ++p) {
+    PointSpread& s = out[p];
+    for (const MachineMonteCarloRun& r : runs) s.mean_mm += r.deviation_mm[p];
+    s.mean_mm /= static_cast<double>(runs.size());
+    for (size_t k = 0; k < runs.size(); ++k) {
+      const Eigen::Vector3d d = runs[k].deviation_mm[p];
+      s.covariance += (d - s.mean_mm) * (d - s.mean_mm).transpose();
+      norms[k] = d.norm();
+    }
+    if (runs.size() > 1) s.covariance /= static_cast<double>(runs.size() - 1);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s.covariance);
+    s.semi_axes_mm = (eig.eigenvalues().cwiseMax(0.0) * kChi2Of3At95).cwiseSqrt();
+    s.axes = eig.eigenvectors();
+    std::vector<double> sorted = norms;
+    std::sort(sorted.begin(), sorted.end());
+    s.u95_mm = Quantile(sorted, 0.95);
+  }
+  return out;
+}
+
+PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, const std::vector<Eigen::Vector3d>& points_mm,
+                              int max_points) {
+  PairSpread out;
+  const size_t n = std::min(points_mm.size(), static_cast<size_t>(std::max(max_points, 0)));
+  if (runs.empty() || n < 2) return out;
+  std::vector<double> per_pair_u95, errors(runs.size());
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      const Eigen::Vector3d delta = points_mm[i] - points_mm[j];
+      if (!(delta.norm() > 0.0)) continue;
+      const Eigen::Vector3d unit = delta.normalized();
+      for (size_t k = 0; k < runs.size(); ++k) {
+        errors[k] = std::abs((runs[k].deviation_mm[i] - runs[k].deviation_mm[j]).dot(unit)) * 1e3;
+      }
+      std::sort(errors.begin(), errors.end());
+      const double u95 = Quantile(errors, 0.95);
+      per_pair_u95.push_back(u95);
+      if (u95 > out.worst_u95_um) {
+        out.worst_u95_um = u95;
+        out.worst_i = static_cast<int>(i);
+        out.worst_j = static_cast<int>(j);
+      }
+    }
+  }
+  out.pairs = static_cast<int>(per_pair_u95.size());
+  out.all_um = Summarize(std::move(per_pair_u95));
+  return out;
+}
+
+}  // namespace fvm::stage

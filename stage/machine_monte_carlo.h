@@ -1,0 +1,87 @@
+#pragma once
+// Monte Carlo uncertainty of a machine-tool verification (GUM Supplement 1; 000:1741, 000:3470, 000:4560): the
+// identified machine and tracker pose are taken as the truth, the tracker's readings of it are drawn again and
+// again with the tracker's noise (normal in range, azimuth and elevation, eq. 22-24), and each set is identified
+// afresh, rank treatment included, exactly as the original readings were. The spread of what the runs predict is
+// the uncertainty of the verification.
+//
+// Reproducible: run i draws from Random(StreamSeed(seed, i)) (core/random.h) and writes only its own result, and
+// each identification runs on one thread, so the results are the same bits for any thread count.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "stage/identification.h"
+#include "stage/machine_verification.h"
+#include "stage/tracker.h"
+
+namespace fvm::stage {
+
+struct MonteCarloOptions {
+  int runs = 1000;
+  std::uint64_t seed = 1;
+  int threads = 0;                    // 0: all cores
+  bool weighted = true;               // weight each drawn reading by noise.Covariance, as fvm verify does
+  std::function<void()> on_run_done;  // after each run, from any thread (progress); may be empty
+};
+
+struct MachineMonteCarloRun {
+  bool converged = false;
+  VolumetricError final;       // the run's model against its own drawn readings
+  VolumetricError validation;  // the run's model against the validation readings (points 0 without them)
+  Pose pose;                   // the run's tracker pose
+  // The run's prediction minus the reference's at every evaluation point (the readings' commands, then the
+  // validation's), in the tracker frame, mm: gauge-free, as both are fitted to readings in that frame.
+  std::vector<Eigen::Vector3d> deviation_mm;
+};
+
+// The tracker-frame tool points that `layout` with free coefficients `values` (null: the ideal machine) at `pose`
+// predicts for the commands (and tools) of `points`.
+std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
+                                               const Pose& pose, const std::vector<Observation>& points,
+                                               const std::vector<Eigen::Vector3d>& tool_offsets);
+
+// `layout` is what each run identifies (MachineLayout, before any rank treatment); `reference` is the identification
+// of the real readings (its calibration and pose are the simulated truth); `readings` gives the commands and tools
+// to draw at; `validation` (may be empty) are readings the runs are judged on; `identification` the options of the
+// original fit (instrument held or estimated, tool offsets; pose and threads are set here). Throws
+// std::invalid_argument for runs < 1 or an identification without a tracker pose.
+std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+                                                    const std::vector<Observation>& readings,
+                                                    const std::vector<Observation>& validation, const TrackerNoise& noise,
+                                                    const IdentificationOptions& identification,
+                                                    const MonteCarloOptions& options);
+
+// Mean, standard deviation (n - 1) and the 2.5 / 95 / 97.5 % quantiles (linear interpolation) of a sample.
+struct SampleSummary {
+  int n = 0;
+  double mean = 0, sd = 0, p2_5 = 0, p95 = 0, p97_5 = 0, max = 0;
+};
+SampleSummary Summarize(std::vector<double> values);
+
+// The spread of one evaluation point's deviations over the runs.
+struct PointSpread {
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // about the mean deviation, mm^2
+  Eigen::Vector3d mean_mm = Eigen::Vector3d::Zero();     // mean deviation (bias of the re-identification), mm
+  Eigen::Vector3d semi_axes_mm = Eigen::Vector3d::Zero();  // of the 95 % ellipsoid (chi^2 with 3 d.o.f.), ascending
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();     // their directions (columns)
+  double u95_mm = 0;  // 95 % quantile of |deviation|: the radius that holds 95 % of the runs' predictions
+};
+std::vector<PointSpread> PointSpreads(const std::vector<MachineMonteCarloRun>& runs);
+
+// Distance errors over point pairs: for each run and pair (i, j) of the first `max_points` evaluation points, the
+// change of the predicted distance, (d_i - d_j) . (p_i - p_j) / |p_i - p_j| to first order; per pair the 95 %
+// quantile of its magnitude over the runs, summarised over the pairs, and the pair where it is largest.
+struct PairSpread {
+  int pairs = 0;
+  SampleSummary all_um;   // of the pairs' 95 % quantiles, um
+  int worst_i = -1, worst_j = -1;
+  double worst_u95_um = 0;  // 95 % quantile of |distance error| of the worst pair
+};
+PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, const std::vector<Eigen::Vector3d>& points_mm,
+                              int max_points = 200);
+
+}  // namespace fvm::stage

@@ -1,0 +1,169 @@
+// The machine Monte Carlo describes reality: independent noisy measurements of one simulated machine, each
+// identified on its own, scatter as much as the Monte Carlo predicts from a single one of them. And it is the same
+// bits for any number of threads.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include "artefacts/simulation/machine_tool_simulation.h"
+#include "artefacts/tracker_observations.h"
+#include "stage/machine_monte_carlo.h"
+
+namespace fvm::stage {
+namespace {
+
+// The published 75-point study (000:4560): a 5 x 5 x 3 mesh at 100 mm, here on an XFYZ machine with a 100 mm tool.
+artefacts::Workspace Workspace() {
+  artefacts::Workspace ws;
+  ws.max = Eigen::Vector3d(400, 400, 200);
+  return ws;
+}
+
+AxisChain Chain() {
+  AxisChain chain = AxisChain::Parse("XFYZ");
+  chain.tool_offset = Eigen::Vector3d(0, 0, 100);
+  chain.instrument = Pose::FromEulerXyzDegrees(Eigen::Vector3d(900, -900, 400), Eigen::Vector3d(0, 0, 30));
+  return chain;
+}
+
+ParameterLayout Layout() {
+  AxisChain chain = Chain();
+  chain.instrument.reset();
+  return MachineLayout(chain, {Travel{0, 400}, Travel{0, 400}, Travel{0, 200}}, Basis::kLegendre, 2);
+}
+
+IdentificationOptions Options() {
+  IdentificationOptions o;
+  o.instrument = InstrumentPose::kEstimated;
+  o.num_threads = 1;
+  return o;
+}
+
+struct Study {
+  artefacts::MachineTruth truth = artefacts::RandomMachineTruth(Chain(), Workspace(), 5);
+  std::vector<artefacts::PlannedPoint> points = artefacts::PlanMesh(Workspace(), Eigen::Vector3d(100, 100, 100));
+  TrackerNoise noise = TrackerNoise::Preset("published");
+  std::vector<Observation> validation;  // noise-free readings of a finer mesh
+  Study() {
+    const artefacts::TrackerReadings v = artefacts::SimulateTrackerReadings(
+        Chain(), truth, artefacts::PlanMesh(Workspace(), Eigen::Vector3d(50, 50, 50)), TrackerNoise::Preset("none"), 1);
+    validation = artefacts::TrackerObservations(v, nullptr);
+  }
+  std::vector<Observation> Readings(std::uint64_t seed) const {
+    return artefacts::TrackerObservations(artefacts::SimulateTrackerReadings(Chain(), truth, points, noise, seed), &noise);
+  }
+};
+
+double MeanOf(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
+}
+
+TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
+  const Study study;
+  const ParameterLayout layout = Layout();
+  // Reality: 24 independent tracker measurements of the same machine, each identified on its own.
+  constexpr int kReal = 24;
+  std::vector<std::vector<Eigen::Vector3d>> predictions;
+  std::vector<double> real_validation_means;
+  std::optional<VerificationResult> first;
+  for (int k = 0; k < kReal; ++k) {
+    VerificationResult v = VerifyMachine(layout, study.Readings(100 + static_cast<std::uint64_t>(k)), Options());
+    const Calibration& c = v.identified.calibration;
+    predictions.push_back(PredictedReadings(c.layout, &c.values, v.identified.pose, study.validation, {}));
+    real_validation_means.push_back(
+        SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, v.identified.pose, study.validation, {})).mean_um);
+    if (k == 0) first.emplace(std::move(v));
+  }
+  // The Monte Carlo from the first measurement alone.
+  MonteCarloOptions mc;
+  mc.runs = 48;
+  mc.seed = 7;
+  const std::vector<MachineMonteCarloRun> runs =
+      MachineMonteCarlo(layout, first->identified, study.Readings(100), study.validation, study.noise, Options(), mc);
+  const std::vector<PointSpread> spreads = PointSpreads(runs);
+  const size_t n_readings = study.points.size();
+  ASSERT_EQ(spreads.size(), n_readings + study.validation.size());
+
+  // Per validation point: the 3D standard deviation of the independent identifications' predictions against the
+  // Monte Carlo's, pooled over the points (rms).
+  double real_sum = 0, mc_sum = 0;
+  for (size_t p = 0; p < study.validation.size(); ++p) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& pr : predictions) mean += pr[p];
+    mean /= kReal;
+    double var = 0;
+    for (const auto& pr : predictions) var += (pr[p] - mean).squaredNorm();
+    real_sum += var / (kReal - 1);
+    mc_sum += spreads[n_readings + p].covariance.trace();
+  }
+  const double real_sd_um = 1e3 * std::sqrt(real_sum / static_cast<double>(study.validation.size()));
+  const double mc_sd_um = 1e3 * std::sqrt(mc_sum / static_cast<double>(study.validation.size()));
+  std::printf("prediction spread (3D sd, rms over %zu points): independent measurements %.2f um, Monte Carlo %.2f um\n",
+              study.validation.size(), real_sd_um, mc_sd_um);
+  EXPECT_GT(real_sd_um, 1.0);  // the noise matters here: the comparison means something
+  EXPECT_NEAR(mc_sd_um / real_sd_um, 1.0, 0.25);
+
+  // The mean volumetric error on the validation points: its scatter over the measurements and over the runs.
+  std::vector<double> mc_validation_means;
+  for (const MachineMonteCarloRun& r : runs) {
+    EXPECT_TRUE(r.converged);
+    mc_validation_means.push_back(r.validation.mean_um);
+  }
+  const SampleSummary real = Summarize(real_validation_means), simulated = Summarize(mc_validation_means);
+  std::printf("validation mean error: independent %.2f +- %.2f um, Monte Carlo %.2f +- %.2f um\n", real.mean, real.sd,
+              simulated.mean, simulated.sd);
+  EXPECT_NEAR(simulated.sd / real.sd, 1.0, 0.5);
+  EXPECT_NEAR(simulated.mean, real.mean, 2.0 * real.sd + 1.0);
+  EXPECT_GT(MeanOf(mc_validation_means), 0.0);
+}
+
+TEST(MachineMonteCarlo, SameBitsForAnyThreadCount) {
+  const Study study;
+  const ParameterLayout layout = Layout();
+  const std::vector<Observation> readings = study.Readings(1);
+  const VerificationResult v = VerifyMachine(layout, readings, Options());
+  MonteCarloOptions mc;
+  mc.runs = 6;
+  mc.seed = 42;
+  mc.threads = 1;
+  const std::vector<MachineMonteCarloRun> one = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  mc.threads = 2;
+  const std::vector<MachineMonteCarloRun> two = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  ASSERT_EQ(one.size(), two.size());
+  for (size_t r = 0; r < one.size(); ++r) {
+    EXPECT_EQ(one[r].final.mean_um, two[r].final.mean_um);
+    for (size_t p = 0; p < one[r].deviation_mm.size(); ++p) EXPECT_EQ(one[r].deviation_mm[p], two[r].deviation_mm[p]);
+  }
+  mc.seed = 43;
+  const std::vector<MachineMonteCarloRun> other = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  EXPECT_NE(one[0].final.mean_um, other[0].final.mean_um);
+}
+
+TEST(MachineMonteCarlo, NoiseFreeTrackerGivesNoSpread) {
+  const Study study;
+  const ParameterLayout layout = Layout();
+  const std::vector<Observation> readings = study.Readings(1);
+  const VerificationResult v = VerifyMachine(layout, readings, Options());
+  MonteCarloOptions mc;
+  mc.runs = 3;
+  mc.weighted = false;
+  const std::vector<MachineMonteCarloRun> runs =
+      MachineMonteCarlo(layout, v.identified, readings, {}, TrackerNoise::Preset("none"), Options(), mc);
+  for (const PointSpread& s : PointSpreads(runs)) EXPECT_LT(s.u95_mm, 1e-5);
+}
+
+TEST(MachineMonteCarlo, SummaryQuantiles) {
+  const SampleSummary s = Summarize({4, 1, 3, 2, 5});
+  EXPECT_DOUBLE_EQ(s.mean, 3.0);
+  EXPECT_DOUBLE_EQ(s.sd, std::sqrt(2.5));
+  EXPECT_DOUBLE_EQ(s.p95, 4.8);
+  EXPECT_DOUBLE_EQ(s.max, 5.0);
+}
+
+}  // namespace
+}  // namespace fvm::stage
