@@ -56,6 +56,9 @@ void RegisterSimulate(CLI::App& app);
 // fvm verify DATA.csv --chain XFYZ --order N --tool X,Y,Z [-o MACHINE.json] (fvm/verify.cc).
 void RegisterVerify(CLI::App& app);
 
+// fvm uncertainty DATA.csv --runs R --seed S [--validate VAL.csv] [--json] (fvm/uncertainty.cc).
+void RegisterUncertainty(CLI::App& app);
+
 // fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
 void RegisterDiff(CLI::App& app);
 

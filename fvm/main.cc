@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterTiles(app);
   fvm::cli::RegisterStitch(app);
   fvm::cli::RegisterVerify(app);
-  AddNotBuilt(app, "uncertainty", "Monte Carlo uncertainty of a verification or calibration", 0);
+  fvm::cli::RegisterUncertainty(app);
 
   try {
     app.parse(argc, argv);

@@ -6,6 +6,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <map>
+#include <tuple>
 #include <cmath>
 #include <stdexcept>
 
@@ -153,6 +155,47 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
   out.pairs = static_cast<int>(per_pair_u95.size());
   out.all_um = Summarize(std::move(per_pair_u95));
   return out;
+}
+
+UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vector<Observation>& readings,
+                         const TrackerNoise& noise, const BudgetInputs& inputs) {
+  UncertaintyBudget b;
+  b.k = inputs.k;
+  b.u_cal_mm = inputs.u_cal_mm;
+  double trace_sum = 0;
+  for (const PointSpread& s : spreads) trace_sum += s.covariance.trace();
+  if (!spreads.empty()) b.u_p_mm = 2.0 * std::sqrt(trace_sum / static_cast<double>(spreads.size()));
+
+  // Repeats: readings of one command with one tool.
+  std::map<std::tuple<double, double, double, int>, std::vector<Eigen::Vector3d>> groups;
+  for (const Observation& o : readings) groups[{o.command.x(), o.command.y(), o.command.z(), o.tool}].push_back(o.measured);
+  double squares = 0, dof = 0, count = 0;
+  for (const auto& [key, measured] : groups) {
+    if (measured.size() < 2) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& m : measured) mean += m;
+    mean /= static_cast<double>(measured.size());
+    for (const Eigen::Vector3d& m : measured) squares += (m - mean).squaredNorm();
+    dof += static_cast<double>(measured.size() - 1);
+    count += static_cast<double>(measured.size());
+    ++b.repeated_commands;
+  }
+  if (b.repeated_commands > 0) {
+    b.u_b_mm = std::sqrt(squares / dof) / std::sqrt(count / b.repeated_commands);
+  } else if (!readings.empty()) {
+    double trace = 0;
+    for (const Observation& o : readings) trace += noise.Covariance(o.measured).trace();
+    b.u_b_mm = std::sqrt(trace / static_cast<double>(readings.size()));
+  }
+
+  if (!readings.empty()) {
+    Eigen::Vector3d lo = readings.front().command, hi = lo;
+    for (const Observation& o : readings) lo = lo.cwiseMin(o.command), hi = hi.cwiseMax(o.command);
+    b.length_mm = (hi - lo).norm();
+  }
+  b.u_w_mm = inputs.cte_per_k * b.length_mm * inputs.temperature_half_range_k / std::sqrt(3.0);
+  b.U_mm = b.k * std::sqrt(b.u_cal_mm * b.u_cal_mm + b.u_p_mm * b.u_p_mm + b.u_b_mm * b.u_b_mm + b.u_w_mm * b.u_w_mm);
+  return b;
 }
 
 }  // namespace fvm::stage

@@ -84,4 +84,27 @@ struct PairSpread {
 PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, const std::vector<Eigen::Vector3d>& points_mm,
                               int max_points = 200);
 
+// The ISO/TS 15530-3 budget as 000:1741 applies it (FACTS section 2): U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
+//   u_cal: the reference's calibration, given;
+//   u_p:   2 x the standard deviation of the simulated positions (000's definition): 2 x the rms over the evaluation
+//          points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
+//   u_b:   repeatability, s / sqrt(n): from readings repeated at one command (same tool), pooled 3D standard
+//          deviation s over the repeated commands and n their mean count; without repeats, s from the tracker's noise
+//          model (rms over the readings of sqrt(trace Cov)) and n = 1;
+//   u_w:   the workpiece's expansion: CTE x length x temperature half-range / sqrt(3) (rectangular), the length the
+//          diagonal of the commanded points' span.
+struct BudgetInputs {
+  double u_cal_mm = 0.0;
+  double temperature_half_range_k = 0.2;  // 000: +-0.2 C
+  double cte_per_k = 11.5e-6;             // steel; 000 used 24e-6 for an aluminium plate
+  double k = 2.0;
+};
+struct UncertaintyBudget {
+  double u_cal_mm = 0, u_p_mm = 0, u_b_mm = 0, u_w_mm = 0, U_mm = 0, k = 2;
+  double length_mm = 0;
+  int repeated_commands = 0;  // commands read more than once (0: u_b from the noise model)
+};
+UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vector<Observation>& readings,
+                         const TrackerNoise& noise, const BudgetInputs& inputs);
+
 }  // namespace fvm::stage

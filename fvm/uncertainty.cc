@@ -1,0 +1,208 @@
+// fvm uncertainty DATA.csv --chain XFYZ --order N --tool X,Y,Z --runs R --seed S [--validate VAL.csv] [--json]:
+// Monte Carlo uncertainty of a machine-tool verification (GUM Supplement 1): the readings are drawn again with the
+// tracker's noise around the identified machine and identified afresh, R times.
+
+#include <fmt/core.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/exit_codes.h"
+#include "core/input_error.h"
+#include "core/progress.h"
+#include "fvm/commands.h"
+#include "fvm/machine_problem.h"
+#include "fvm/uncertainty_report.h"
+#include "stage/machine_monte_carlo.h"
+
+namespace fvm::cli {
+namespace {
+
+struct UncertaintyArgs : MachineArgs {
+  int order = 3;
+  int runs = 1000;
+  std::uint64_t seed = 1;
+  double u_cal_um = 0.0;
+  double temperature_c = 0.2;
+  double cte_per_k = 11.5e-6;
+  double k = 2.0;
+  std::string report;
+  bool json = false;
+};
+
+nlohmann::json DistributionJson(const stage::SampleSummary& s) {
+  return {{"mean", s.mean}, {"sd", s.sd}, {"p2_5", s.p2_5}, {"p97_5", s.p97_5}, {"p95", s.p95}, {"max", s.max}};
+}
+
+void Run(const UncertaintyArgs& args) {
+  const MachineProblem problem = LoadMachineProblem(args);
+  if (problem.noise.IsNoiseFree()) {
+    throw InputError("--tracker none: a noise-free tracker gives every run the same readings; name the tracker's noise "
+                     "(published, ifm, adm)");
+  }
+  const stage::ParameterLayout layout = problem.Layout(args.order);
+  const stage::VerificationResult reference = VerifyProblem(problem, layout);
+  CheckTrackerSight(problem, reference.identified.pose);
+  if (!reference.identified.converged) {
+    throw NotConvergedError("the identification of the readings did not converge: " + reference.identified.solver_report);
+  }
+
+  stage::MonteCarloOptions mc;
+  mc.runs = args.runs;
+  mc.seed = args.seed;
+  mc.threads = Common().threads;
+  mc.weighted = problem.weighted;
+  Progress progress("monte carlo runs", args.runs, ShowProgress());
+  mc.on_run_done = [&progress] { progress.Advance(); };
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
+      layout, reference.identified, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
+  progress.Finish();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<double> finals, validations;
+  int converged = 0;
+  for (const stage::MachineMonteCarloRun& r : runs) {
+    finals.push_back(r.final.mean_um);
+    if (problem.validation) validations.push_back(r.validation.mean_um);
+    converged += r.converged ? 1 : 0;
+  }
+  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
+  std::vector<Eigen::Vector3d> commands;
+  for (const stage::Observation& o : problem.observations) commands.push_back(o.command);
+  const stage::PairSpread pairs = stage::PairDistanceSpread(runs, commands, 100);
+  stage::BudgetInputs inputs;
+  inputs.u_cal_mm = args.u_cal_um * 1e-3;
+  inputs.temperature_half_range_k = args.temperature_c;
+  inputs.cte_per_k = args.cte_per_k;
+  inputs.k = args.k;
+  const stage::UncertaintyBudget budget = stage::Budget(spreads, problem.observations, problem.noise, inputs);
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["chain"] = problem.chain.code;
+  doc["order"] = args.order;
+  doc["runs"] = args.runs;
+  doc["converged_runs"] = converged;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["weights"] = problem.WeightsName();
+  doc["final_mean_um"] = DistributionJson(stage::Summarize(finals));
+  doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::Summarize(validations)) : nlohmann::json(nullptr);
+  doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
+  nlohmann::json points = nlohmann::json::array();
+  std::vector<double> u95s;
+  const auto add_points = [&](const artefacts::TrackerReadings& file, size_t offset, const char* set) {
+    for (size_t i = 0; i < file.points.size(); ++i) {
+      const stage::PointSpread& s = spreads[offset + i];
+      u95s.push_back(s.u95_mm * 1e3);
+      points.push_back({{"id", file.points[i].id},
+                        {"set", set},
+                        {"U95_um", s.u95_mm * 1e3},
+                        {"ellipsoid_semi_axes_um", {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3}},
+                        {"bias_um", s.mean_mm.norm() * 1e3}});
+    }
+  };
+  add_points(problem.readings, 0, "readings");
+  if (problem.validation) add_points(*problem.validation, problem.readings.points.size(), "validation");
+  doc["points"] = points;
+  const stage::SampleSummary u95 = stage::Summarize(u95s);
+  doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
+  if (pairs.pairs > 0) {
+    doc["pairs"] = {{"pairs", pairs.pairs},
+                    {"U95_um", {{"mean", pairs.all_um.mean}, {"max", pairs.worst_u95_um}}},
+                    {"worst", {problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
+                               problem.readings.points[static_cast<size_t>(pairs.worst_j)].id}}};
+  }
+  doc["budget"] = {{"u_cal_um", budget.u_cal_mm * 1e3}, {"u_p_um", budget.u_p_mm * 1e3}, {"u_b_um", budget.u_b_mm * 1e3},
+                   {"u_w_um", budget.u_w_mm * 1e3},     {"U_um", budget.U_mm * 1e3},     {"k", budget.k},
+                   {"u_b_from", budget.repeated_commands > 0 ? "repeats" : "noise model"},
+                   {"length_mm", budget.length_mm}};
+
+  if (!args.report.empty()) {
+    UncertaintyReportData data;
+    data.title = fmt::format("fvm uncertainty: {} order {}, {} runs, seed {} on {}", problem.chain.code, args.order, args.runs,
+                             args.seed, args.data);
+    data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
+                    {"final mean error (um)", fmt::format("{:.2f} +- {:.2f}", doc["final_mean_um"]["mean"].get<double>(),
+                                                          doc["final_mean_um"]["sd"].get<double>())}};
+    if (problem.validation) {
+      data.summary.push_back({"validation mean error (um)",
+                              fmt::format("{:.2f} +- {:.2f}", doc["validation_mean_um"]["mean"].get<double>(),
+                                          doc["validation_mean_um"]["sd"].get<double>())});
+    }
+    data.summary.push_back({"U95 per point (um)", fmt::format("mean {:.2f}, max {:.2f}", u95.mean, u95.max)});
+    data.summary.push_back({"budget", fmt::format("u_cal {:.2f}, u_p {:.2f}, u_b {:.2f}, u_w {:.2f} um; U = {:.2f} um (k = {})",
+                                                  budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
+                                                  budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k)});
+    data.final_mean_um = finals;
+    data.validation_mean_um = validations;
+    for (size_t i = 0; i < problem.observations.size(); ++i) {
+      const stage::PointSpread& s = spreads[i];
+      const Eigen::Vector3d& q = problem.observations[i].command;
+      data.points.push_back({problem.readings.points[i].id, q.x(), q.y(), q.z(), s.u95_mm * 1e3,
+                             s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3});
+    }
+    WriteUncertaintyReport(args.report, data);
+  }
+
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} Monte Carlo runs of {} {} points ({} weights), order {}, seed {}: {:.1f} s, {} converged\n", args.runs,
+             problem.readings.points.size(), problem.chain.code, problem.WeightsName(), args.order, args.seed, seconds,
+             converged);
+  fmt::print("  final mean error       {:.2f} +- {:.2f} um (the readings' own fit: {:.2f} um)\n",
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.final.mean_um);
+  if (problem.validation) {
+    const auto& v = doc["validation_mean_um"];
+    fmt::print("  validation mean error  {:.2f} +- {:.2f} um, 95 % of runs below {:.2f} um\n", v["mean"].get<double>(),
+               v["sd"].get<double>(), v["p95"].get<double>());
+  }
+  fmt::print("  U95 of the predicted point (radius holding 95 % of runs): mean {:.2f} um, max {:.2f} um\n", u95.mean, u95.max);
+  if (pairs.pairs > 0) {
+    fmt::print("  distance errors over {} pairs: U95 mean {:.2f} um, max {:.2f} um ({} - {})\n", pairs.pairs,
+               pairs.all_um.mean, pairs.worst_u95_um, problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
+               problem.readings.points[static_cast<size_t>(pairs.worst_j)].id);
+  }
+  fmt::print("  budget (ISO/TS 15530-3): u_cal {:.2f}, u_p {:.2f}, u_b {:.2f} ({}), u_w {:.2f} um -> U = {:.2f} um (k = {})\n",
+             budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
+             budget.repeated_commands > 0 ? "repeats" : "noise model", budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k);
+}
+
+}  // namespace
+
+void RegisterUncertainty(CLI::App& app) {
+  auto args = std::make_shared<UncertaintyArgs>();
+  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification (GUM Supplement 1)");
+  AddDetails(sub,
+             "Identifies the machine from the readings as fvm verify does, takes that machine and tracker pose as the "
+             "truth, and --runs times draws the readings again with the tracker's noise (normal in range, azimuth and "
+             "elevation) and identifies them afresh. Reports the distribution of the final and validation mean errors "
+             "over the runs, each point's 95 % radius and ellipsoid, distance errors over point pairs, and the "
+             "ISO/TS 15530-3 budget U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2). Run i draws from a stream seeded by "
+             "(--seed, i): the same seed gives the same bits for any --threads.");
+  AddMachineOptions(sub, *args);
+  sub->add_option("--order", args->order, "polynomial order of each error function")->check(CLI::Range(1, 3))->capture_default_str();
+  sub->add_option("--runs", args->runs, "Monte Carlo runs")->check(CLI::Range(1, 1'000'000))->capture_default_str();
+  sub->add_option("--seed", args->seed, "seed of the noise draws")->capture_default_str();
+  sub->add_option("--u-cal-um", args->u_cal_um, "standard uncertainty of the reference's calibration (um)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--temperature-c", args->temperature_c, "half-range of the temperature, rectangular (C)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--cte-per-k", args->cte_per_k, "expansion coefficient of the workpiece (1/K; aluminium 24e-6)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--report", args->report, "write an HTML report with SVG plots to this directory");
+  sub->add_flag("--json", args->json, "print the result as JSON");
+  sub->footer(
+      "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"
+      "  fvm uncertainty plan/readings.csv --chain XFYZ --order 3 --tool 0,0,100 --fit-pose --runs 1000 --seed 1 \\\n"
+      "    --validate plan/validation.csv --json");
+  sub->callback([args] { Run(*args); });
+}
+
+}  // namespace fvm::cli
