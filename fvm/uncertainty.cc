@@ -15,7 +15,7 @@
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/uncertainty_report.h"
-#include "stage/machine_monte_carlo.h"
+#include "stage/monte_carlo.h"
 
 namespace fvm::cli {
 namespace {
@@ -89,8 +89,8 @@ void Run(const UncertaintyArgs& args) {
   doc["seed"] = args.seed;
   doc["seconds"] = seconds;
   doc["weights"] = problem.WeightsName();
-  doc["final_mean_um"] = DistributionJson(stage::Summarize(finals));
-  doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::Summarize(validations)) : nlohmann::json(nullptr);
+  doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
+  doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::SummarizeSample(validations)) : nlohmann::json(nullptr);
   doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
   nlohmann::json points = nlohmann::json::array();
   std::vector<double> u95s;
@@ -108,7 +108,7 @@ void Run(const UncertaintyArgs& args) {
   add_points(problem.readings, 0, "readings");
   if (problem.validation) add_points(*problem.validation, problem.readings.points.size(), "validation");
   doc["points"] = points;
-  const stage::SampleSummary u95 = stage::Summarize(u95s);
+  const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
   doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
   if (pairs.pairs > 0) {
     doc["pairs"] = {{"pairs", pairs.pairs},

@@ -1,4 +1,4 @@
-#include "stage/machine_monte_carlo.h"
+#include "stage/monte_carlo.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -14,6 +14,15 @@
 #include "core/random.h"
 
 namespace fvm::stage {
+
+void ForEachRun(int runs, int threads, const std::function<void(int)>& run) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, runs, 1), [&](const tbb::blocked_range<int>& range) {
+      for (int i = range.begin(); i != range.end(); ++i) run(i);
+    });
+  });
+}
 
 std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
                                                const Pose& pose, const std::vector<Observation>& points,
@@ -64,11 +73,57 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
     for (size_t i = 0; i < evaluation.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
     if (options.on_run_done) options.on_run_done();
   };
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, options.runs, 1), [&](const tbb::blocked_range<int>& range) {
-      for (int i = range.begin(); i != range.end(); ++i) one_run(i);
-    });
+  ForEachRun(options.runs, options.threads, one_run);
+  return runs;
+}
+
+namespace {
+
+// What the model predicts for each observation's measurement (stitched centre), with its group's anchor.
+std::vector<Eigen::Vector3d> PredictedCentres(const Calibration& c, const MeasurementSet& set, bool anchored) {
+  std::vector<Eigen::Vector3d> out;
+  for (const Observation& o : set.observations) {
+    Observation at = o;
+    at.measured.setZero();
+    const Eigen::Vector3d* anchor = anchored ? &set.anchors.at(static_cast<size_t>(o.group)) : nullptr;
+    out.push_back(ModelResidual(c.layout, c.values.data(), at, anchor));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<StageMonteCarloRun> StageMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+                                                const MeasurementSet& identify, const MeasurementSet* validate,
+                                                double centre_sigma_mm, const IdentificationOptions& identification,
+                                                const MonteCarloOptions& options) {
+  if (options.runs < 1) throw std::invalid_argument("a Monte Carlo needs at least one run");
+  if (!(centre_sigma_mm >= 0.0)) throw std::invalid_argument("the centres' noise must be zero or positive");
+  const Calibration& truth = reference.calibration;
+  const bool anchored = identification.anchor == Anchor::kFirstTile;
+  const std::vector<Eigen::Vector3d> true_centres = PredictedCentres(truth, identify, anchored);
+  // Evaluated where fvm calibrate validates: each validation placement referenced to its own first tile.
+  const MeasurementSet& evaluation = validate != nullptr ? *validate : identify;
+  const std::vector<Eigen::Vector3d> true_evaluation = PredictedCentres(truth, evaluation, !evaluation.anchors.empty());
+  IdentificationOptions run_options = identification;
+  run_options.num_threads = 1;
+  std::vector<StageMonteCarloRun> runs(static_cast<size_t>(options.runs));
+  ForEachRun(options.runs, options.threads, [&](int index) {
+    Random random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
+    std::vector<Observation> drawn = identify.observations;
+    for (size_t i = 0; i < drawn.size(); ++i) {
+      const double nx = random.Normal(), ny = random.Normal(), nz = random.Normal();
+      drawn[i].measured = true_centres[i] + centre_sigma_mm * Eigen::Vector3d(nx, ny, nz);
+    }
+    const IdentificationResult r = Identify(layout, drawn, run_options);
+    StageMonteCarloRun& out = runs[static_cast<size_t>(index)];
+    out.converged = r.converged;
+    out.fit_mean_mm = r.mean_mm;
+    out.fit_rms_mm = r.rms_mm;
+    if (validate != nullptr) out.validation = Validate(&r.calibration, validate->observations, validate->anchors);
+    out.deviation_mm = PredictedCentres(r.calibration, evaluation, !evaluation.anchors.empty());
+    for (size_t i = 0; i < out.deviation_mm.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
+    if (options.on_run_done) options.on_run_done();
   });
   return runs;
 }
@@ -87,7 +142,7 @@ constexpr double kChi2Of3At95 = 7.814727903251178;  // chi^2 quantile, 3 d.o.f.,
 
 }  // namespace
 
-SampleSummary Summarize(std::vector<double> values) {
+SampleSummary SummarizeSample(std::vector<double> values) {
   SampleSummary s;
   s.n = static_cast<int>(values.size());
   if (values.empty()) return s;
@@ -103,17 +158,17 @@ SampleSummary Summarize(std::vector<double> values) {
   return s;
 }
 
-std::vector<PointSpread> PointSpreads(const std::vector<MachineMonteCarloRun>& runs) {
+std::vector<PointSpread> PointSpreads(const std::vector<const MonteCarloRun*>& runs) {
   if (runs.empty()) return {};
-  const size_t points = runs.front().deviation_mm.size();
+  const size_t points = runs.front()->deviation_mm.size();
   std::vector<PointSpread> out(points);
   std::vector<double> norms(runs.size());
   for (size_t p = 0; p < points; ++p) {
     PointSpread& s = out[p];
-    for (const MachineMonteCarloRun& r : runs) s.mean_mm += r.deviation_mm[p];
+    for (const MonteCarloRun* r : runs) s.mean_mm += r->deviation_mm[p];
     s.mean_mm /= static_cast<double>(runs.size());
     for (size_t k = 0; k < runs.size(); ++k) {
-      const Eigen::Vector3d d = runs[k].deviation_mm[p];
+      const Eigen::Vector3d d = runs[k]->deviation_mm[p];
       s.covariance += (d - s.mean_mm) * (d - s.mean_mm).transpose();
       norms[k] = d.norm();
     }
@@ -153,7 +208,7 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
     }
   }
   out.pairs = static_cast<int>(per_pair_u95.size());
-  out.all_um = Summarize(std::move(per_pair_u95));
+  out.all_um = SummarizeSample(std::move(per_pair_u95));
   return out;
 }
 

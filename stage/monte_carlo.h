@@ -1,12 +1,16 @@
 #pragma once
-// Monte Carlo uncertainty of a machine-tool verification (GUM Supplement 1; 000:1741, 000:3470, 000:4560): the
-// identified machine and tracker pose are taken as the truth, the tracker's readings of it are drawn again and
+// Monte Carlo uncertainty of an identification (GUM Supplement 1; 000:1741, 000:3470, 000:4560), for a machine tool
+// measured by a laser tracker and for the microscope stage. Machine: the identified machine and tracker pose are
+// taken as the truth, the tracker's readings of it are drawn again and
 // again with the tracker's noise (normal in range, azimuth and elevation, eq. 22-24), and each set is identified
 // afresh, rank treatment included, exactly as the original readings were. The spread of what the runs predict is
 // the uncertainty of the verification.
 //
 // Reproducible: run i draws from Random(StreamSeed(seed, i)) (core/random.h) and writes only its own result, and
 // each identification runs on one thread, so the results are the same bits for any thread count.
+//
+// Stage: the identified stage model is the truth, the stitched centres are drawn again around what it predicts
+// (normal, isotropic, the centres' noise) and identified afresh with the same anchoring.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -17,6 +21,7 @@
 #include "stage/identification.h"
 #include "stage/machine_verification.h"
 #include "stage/tracker.h"
+#include "stage/validation.h"
 
 namespace fvm::stage {
 
@@ -28,14 +33,22 @@ struct MonteCarloOptions {
   std::function<void()> on_run_done;  // after each run, from any thread (progress); may be empty
 };
 
-struct MachineMonteCarloRun {
+// Calls run(i) for i in [0, runs) on `threads` threads (0: all cores), each index exactly once.
+void ForEachRun(int runs, int threads, const std::function<void(int)>& run);
+
+// What every run reports: whether it converged and how its predictions differ from the reference's.
+struct MonteCarloRun {
   bool converged = false;
+  // The run's prediction minus the reference's at every evaluation point, mm (machine: the readings' commands, then
+  // the validation's, in the tracker frame, gauge-free as both are fitted to readings in that frame; stage: the
+  // validation centres, or the identification's without validation, each referenced to its first tile).
+  std::vector<Eigen::Vector3d> deviation_mm;
+};
+
+struct MachineMonteCarloRun : MonteCarloRun {
   VolumetricError final;       // the run's model against its own drawn readings
   VolumetricError validation;  // the run's model against the validation readings (points 0 without them)
   Pose pose;                   // the run's tracker pose
-  // The run's prediction minus the reference's at every evaluation point (the readings' commands, then the
-  // validation's), in the tracker frame, mm: gauge-free, as both are fitted to readings in that frame.
-  std::vector<Eigen::Vector3d> deviation_mm;
 };
 
 // The tracker-frame tool points that `layout` with free coefficients `values` (null: the ideal machine) at `pose`
@@ -55,12 +68,26 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
                                                     const IdentificationOptions& identification,
                                                     const MonteCarloOptions& options);
 
+struct StageMonteCarloRun : MonteCarloRun {
+  double fit_mean_mm = 0, fit_rms_mm = 0;  // the run's residuals on its own drawn centres
+  ResidualSummary validation;              // the run's calibration on the validation centres (count 0 without)
+};
+
+// `layout` is what each run identifies (the model, before rank treatment); `reference` the identification of the
+// real centres; `identify` the identification placements (commands, groups, anchors); `validate` (may be null) the
+// validation placements, judged as fvm calibrate does (stage::Validate); `centre_sigma_mm` the standard deviation
+// of each coordinate of a stitched centre. Throws std::invalid_argument for runs < 1 or a negative sigma.
+std::vector<StageMonteCarloRun> StageMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+                                                const MeasurementSet& identify, const MeasurementSet* validate,
+                                                double centre_sigma_mm, const IdentificationOptions& identification,
+                                                const MonteCarloOptions& options);
+
 // Mean, standard deviation (n - 1) and the 2.5 / 95 / 97.5 % quantiles (linear interpolation) of a sample.
 struct SampleSummary {
   int n = 0;
   double mean = 0, sd = 0, p2_5 = 0, p95 = 0, p97_5 = 0, max = 0;
 };
-SampleSummary Summarize(std::vector<double> values);
+SampleSummary SummarizeSample(std::vector<double> values);
 
 // The spread of one evaluation point's deviations over the runs.
 struct PointSpread {
@@ -70,7 +97,8 @@ struct PointSpread {
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();     // their directions (columns)
   double u95_mm = 0;  // 95 % quantile of |deviation|: the radius that holds 95 % of the runs' predictions
 };
-std::vector<PointSpread> PointSpreads(const std::vector<MachineMonteCarloRun>& runs);
+template <typename Run>
+std::vector<PointSpread> PointSpreads(const std::vector<Run>& runs);
 
 // Distance errors over point pairs: for each run and pair (i, j) of the first `max_points` evaluation points, the
 // change of the predicted distance, (d_i - d_j) . (p_i - p_j) / |p_i - p_j| to first order; per pair the 95 %
@@ -106,5 +134,14 @@ struct UncertaintyBudget {
 };
 UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vector<Observation>& readings,
                          const TrackerNoise& noise, const BudgetInputs& inputs);
+
+// ---- implementation of the template ----
+std::vector<PointSpread> PointSpreads(const std::vector<const MonteCarloRun*>& runs);
+template <typename Run>
+std::vector<PointSpread> PointSpreads(const std::vector<Run>& runs) {
+  std::vector<const MonteCarloRun*> base;
+  for (const Run& r : runs) base.push_back(&r);
+  return PointSpreads(base);
+}
 
 }  // namespace fvm::stage
