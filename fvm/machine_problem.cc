@@ -35,7 +35,7 @@ artefacts::Workspace WorkspaceOf(const MachineArgs& args, const artefacts::Track
 }  // namespace
 
 void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
-  sub->add_option("DATA", args.data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad)")
+  sub->add_option("DATA", args.data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad); fvm uncertainty also takes a batch directory")
       ->required();
   sub->add_option("--chain", args.chain, "F-notation chain: letters left of F move the part (e.g. XFYZ, FXYZ, XYFZ)")
       ->capture_default_str();

@@ -7,11 +7,15 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <nlohmann/json.hpp>
 
+#include "artefacts/batch_observations.h"
+#include "artefacts/io/batch.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/progress.h"
+#include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/uncertainty_report.h"
@@ -30,13 +34,149 @@ struct UncertaintyArgs : MachineArgs {
   double k = 2.0;
   std::string report;
   bool json = false;
+  // The microscope stage (DATA is a batch directory).
+  std::string model = "27";
+  std::string terms;
+  double centre_noise_um = -1.0;  // < 0: the identification's residual standard deviation per coordinate
+  IdentifySettings settings;
 };
 
 nlohmann::json DistributionJson(const stage::SampleSummary& s) {
   return {{"mean", s.mean}, {"sd", s.sd}, {"p2_5", s.p2_5}, {"p97_5", s.p97_5}, {"p95", s.p95}, {"max", s.max}};
 }
 
+stage::BudgetInputs BudgetInputsOf(const UncertaintyArgs& args) {
+  stage::BudgetInputs inputs;
+  inputs.u_cal_mm = args.u_cal_um * 1e-3;
+  inputs.temperature_half_range_k = args.temperature_c;
+  inputs.cte_per_k = args.cte_per_k;
+  inputs.k = args.k;
+  return inputs;
+}
+
+nlohmann::json BudgetJson(const stage::UncertaintyBudget& budget) {
+  return {{"u_cal_um", budget.u_cal_mm * 1e3}, {"u_p_um", budget.u_p_mm * 1e3}, {"u_b_um", budget.u_b_mm * 1e3},
+          {"u_w_um", budget.u_w_mm * 1e3},     {"U_um", budget.U_mm * 1e3},     {"k", budget.k},
+          {"u_b_from", budget.repeated_commands > 0 ? "repeats" : "noise model"},
+          {"length_mm", budget.length_mm}};
+}
+
+void PrintBudget(const stage::UncertaintyBudget& budget) {
+  fmt::print("  budget (ISO/TS 15530-3): u_cal {:.2f}, u_p {:.2f}, u_b {:.2f} ({}), u_w {:.2f} um -> U = {:.2f} um (k = {})\n",
+             budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
+             budget.repeated_commands > 0 ? "repeats" : "noise model", budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k);
+}
+
+// One entry per evaluation point: its id, 95 % radius and ellipsoid, and the mean deviation (the bias of
+// re-identification), appended to `points`; the radii to `u95s`.
+void AddPoints(const std::vector<stage::PointSpread>& spreads, size_t offset, const std::vector<std::string>& ids,
+               const char* set, nlohmann::json& points, std::vector<double>& u95s) {
+  for (size_t i = 0; i < ids.size(); ++i) {
+    const stage::PointSpread& s = spreads[offset + i];
+    u95s.push_back(s.u95_mm * 1e3);
+    points.push_back({{"id", ids[i]},
+                      {"set", set},
+                      {"U95_um", s.u95_mm * 1e3},
+                      {"ellipsoid_semi_axes_um", {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3}},
+                      {"bias_um", s.mean_mm.norm() * 1e3}});
+  }
+}
+
+std::vector<std::string> IdsOf(const artefacts::TrackerReadings& readings) {
+  std::vector<std::string> ids;
+  for (const artefacts::TrackerReading& r : readings.points) ids.push_back(r.id);
+  return ids;
+}
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// fvm uncertainty BATCH --model 27: the microscope stage, its centre noise resampled.
+void RunStage(const UncertaintyArgs& args) {
+  const artefacts::Batch batch = artefacts::ReadBatch(args.data);
+  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
+  const stage::IdentificationResult reference = IdentifyModel(args.model, args.terms, identify, args.settings);
+  if (!reference.converged) {
+    throw NotConvergedError("the identification of the batch did not converge: " + reference.solver_report);
+  }
+  std::optional<stage::MeasurementSet> validate;
+  if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
+  const double sigma_mm = args.centre_noise_um >= 0 ? args.centre_noise_um * 1e-3 : reference.calibration.sigma_mm;
+
+  stage::MonteCarloOptions mc;
+  mc.runs = args.runs;
+  mc.seed = args.seed;
+  mc.threads = Common().threads;
+  Progress progress("monte carlo runs", args.runs, ShowProgress());
+  mc.on_run_done = [&progress] { progress.Advance(); };
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<stage::StageMonteCarloRun> runs =
+      stage::StageMonteCarlo(ModelLayout(args.model, args.terms), reference, identify, validate ? &*validate : nullptr,
+                             sigma_mm, args.settings.ToOptions(identify), mc);
+  progress.Finish();
+  const double seconds = Seconds(start);
+
+  std::vector<double> finals, validation_means, validation_rms;
+  int converged = 0;
+  for (const stage::StageMonteCarloRun& r : runs) {
+    finals.push_back(r.fit_mean_mm * 1e3);
+    if (validate) validation_means.push_back(r.validation.mean_mm * 1e3), validation_rms.push_back(r.validation.rms_mm * 1e3);
+    converged += r.converged ? 1 : 0;
+  }
+  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
+  const stage::UncertaintyBudget budget =
+      stage::Budget(spreads, identify.observations, std::sqrt(3.0) * sigma_mm, BudgetInputsOf(args));
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["model"] = reference.calibration.model;
+  doc["runs"] = args.runs;
+  doc["converged_runs"] = converged;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["centre_noise_um"] = sigma_mm * 1e3;
+  doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
+  doc["validation_mean_um"] = validate ? DistributionJson(stage::SummarizeSample(validation_means)) : nlohmann::json(nullptr);
+  std::optional<stage::ValidationStats> stats;
+  if (validate) {
+    stats = stage::Validate(&reference.calibration, validate->observations, validate->anchors);
+    doc["validation_rms_um"] = DistributionJson(stage::SummarizeSample(validation_rms));
+    doc["reference"] = {{"validation_rms_um", stats->rms_mm * 1e3}, {"predicted_rms_um", stats->predicted_rms_mm * 1e3}};
+  }
+  nlohmann::json points = nlohmann::json::array();
+  std::vector<double> u95s;
+  AddPoints(spreads, 0, (validate ? *validate : identify).labels, validate ? "validation" : "identification", points, u95s);
+  doc["points"] = points;
+  const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
+  doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
+  doc["budget"] = BudgetJson(budget);
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} Monte Carlo runs of model {} on {} ({} centres, noise {:.3f} um per coordinate), seed {}: {:.1f} s, "
+             "{} converged\n",
+             args.runs, reference.calibration.model, args.data, identify.observations.size(), sigma_mm * 1e3, args.seed,
+             seconds, converged);
+  fmt::print("  identification mean error  {:.3f} +- {:.3f} um (the batch's own fit: {:.3f} um)\n",
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.mean_mm * 1e3);
+  if (validate) {
+    const nlohmann::json& v = doc["validation_rms_um"];
+    fmt::print("  validation rms ({} centres)  {:.3f} +- {:.3f} um, 95 % of runs below {:.3f} um; the batch's {:.3f} um, "
+               "predicted from the covariance {:.3f} um\n",
+               validate->observations.size(), v["mean"].get<double>(), v["sd"].get<double>(), v["p95"].get<double>(),
+               stats->rms_mm * 1e3, stats->predicted_rms_mm * 1e3);
+  }
+  fmt::print("  U95 of the predicted centre: mean {:.3f} um, max {:.3f} um\n", u95.mean, u95.max);
+  PrintBudget(budget);
+}
+
 void Run(const UncertaintyArgs& args) {
+  if (std::filesystem::is_directory(args.data)) {
+    RunStage(args);
+    return;
+  }
   const MachineProblem problem = LoadMachineProblem(args);
   if (problem.noise.IsNoiseFree()) {
     throw InputError("--tracker none: a noise-free tracker gives every run the same readings; name the tracker's noise "
@@ -60,7 +200,7 @@ void Run(const UncertaintyArgs& args) {
   const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
       layout, reference.identified, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
   progress.Finish();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = Seconds(start);
 
   std::vector<double> finals, validations;
   int converged = 0;
@@ -73,12 +213,8 @@ void Run(const UncertaintyArgs& args) {
   std::vector<Eigen::Vector3d> commands;
   for (const stage::Observation& o : problem.observations) commands.push_back(o.command);
   const stage::PairSpread pairs = stage::PairDistanceSpread(runs, commands, 100);
-  stage::BudgetInputs inputs;
-  inputs.u_cal_mm = args.u_cal_um * 1e-3;
-  inputs.temperature_half_range_k = args.temperature_c;
-  inputs.cte_per_k = args.cte_per_k;
-  inputs.k = args.k;
-  const stage::UncertaintyBudget budget = stage::Budget(spreads, problem.observations, problem.noise, inputs);
+  const stage::UncertaintyBudget budget = stage::Budget(
+      spreads, problem.observations, stage::TrackerReadingSd(problem.observations, problem.noise), BudgetInputsOf(args));
 
   nlohmann::json doc;
   doc["data"] = args.data;
@@ -94,19 +230,8 @@ void Run(const UncertaintyArgs& args) {
   doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
   nlohmann::json points = nlohmann::json::array();
   std::vector<double> u95s;
-  const auto add_points = [&](const artefacts::TrackerReadings& file, size_t offset, const char* set) {
-    for (size_t i = 0; i < file.points.size(); ++i) {
-      const stage::PointSpread& s = spreads[offset + i];
-      u95s.push_back(s.u95_mm * 1e3);
-      points.push_back({{"id", file.points[i].id},
-                        {"set", set},
-                        {"U95_um", s.u95_mm * 1e3},
-                        {"ellipsoid_semi_axes_um", {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3}},
-                        {"bias_um", s.mean_mm.norm() * 1e3}});
-    }
-  };
-  add_points(problem.readings, 0, "readings");
-  if (problem.validation) add_points(*problem.validation, problem.readings.points.size(), "validation");
+  AddPoints(spreads, 0, IdsOf(problem.readings), "readings", points, u95s);
+  if (problem.validation) AddPoints(spreads, problem.readings.points.size(), IdsOf(*problem.validation), "validation", points, u95s);
   doc["points"] = points;
   const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
   doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
@@ -116,10 +241,7 @@ void Run(const UncertaintyArgs& args) {
                     {"worst", {problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
                                problem.readings.points[static_cast<size_t>(pairs.worst_j)].id}}};
   }
-  doc["budget"] = {{"u_cal_um", budget.u_cal_mm * 1e3}, {"u_p_um", budget.u_p_mm * 1e3}, {"u_b_um", budget.u_b_mm * 1e3},
-                   {"u_w_um", budget.u_w_mm * 1e3},     {"U_um", budget.U_mm * 1e3},     {"k", budget.k},
-                   {"u_b_from", budget.repeated_commands > 0 ? "repeats" : "noise model"},
-                   {"length_mm", budget.length_mm}};
+  doc["budget"] = BudgetJson(budget);
 
   if (!args.report.empty()) {
     UncertaintyReportData data;
@@ -168,23 +290,24 @@ void Run(const UncertaintyArgs& args) {
                pairs.all_um.mean, pairs.worst_u95_um, problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
                problem.readings.points[static_cast<size_t>(pairs.worst_j)].id);
   }
-  fmt::print("  budget (ISO/TS 15530-3): u_cal {:.2f}, u_p {:.2f}, u_b {:.2f} ({}), u_w {:.2f} um -> U = {:.2f} um (k = {})\n",
-             budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
-             budget.repeated_commands > 0 ? "repeats" : "noise model", budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k);
+  PrintBudget(budget);
 }
 
 }  // namespace
 
 void RegisterUncertainty(CLI::App& app) {
   auto args = std::make_shared<UncertaintyArgs>();
-  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification (GUM Supplement 1)");
+  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification or stage calibration (GUM S1)");
   AddDetails(sub,
              "Identifies the machine from the readings as fvm verify does, takes that machine and tracker pose as the "
              "truth, and --runs times draws the readings again with the tracker's noise (normal in range, azimuth and "
              "elevation) and identifies them afresh. Reports the distribution of the final and validation mean errors "
              "over the runs, each point's 95 % radius and ellipsoid, distance errors over point pairs, and the "
              "ISO/TS 15530-3 budget U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2). Run i draws from a stream seeded by "
-             "(--seed, i): the same seed gives the same bits for any --threads.");
+             "(--seed, i): the same seed gives the same bits for any --threads. With a batch directory instead of "
+             "readings, the microscope stage: the model (--model) is identified as fvm calibrate does, the stitched "
+             "centres are drawn again around it with their noise, and the validation rms over the runs is shown next "
+             "to the covariance-based prediction of fvm calibrate.");
   AddMachineOptions(sub, *args);
   sub->add_option("--order", args->order, "polynomial order of each error function")->check(CLI::Range(1, 3))->capture_default_str();
   sub->add_option("--runs", args->runs, "Monte Carlo runs")->check(CLI::Range(1, 1'000'000))->capture_default_str();
@@ -196,12 +319,21 @@ void RegisterUncertainty(CLI::App& app) {
   sub->add_option("--cte-per-k", args->cte_per_k, "expansion coefficient of the workpiece (1/K; aluminium 24e-6)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--report", args->report, "write an HTML report with SVG plots to this directory");
+  sub->add_option("--report", args->report, "write an HTML report with SVG plots to this directory (machine)");
+  sub->add_option("--model", args->model, "microscope stage (DATA a batch): published model 9, 15, 27 or 42")
+      ->check(CLI::IsMember({"9", "15", "27", "42"}))
+      ->capture_default_str();
+  sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");
+  sub->add_option("--centre-noise-um", args->centre_noise_um,
+                  "microscope stage: standard deviation of a stitched centre per coordinate (default: the fit's residual)")
+      ->check(CLI::NonNegativeNumber);
+  args->settings.AddOptions(*sub);
   sub->add_flag("--json", args->json, "print the result as JSON");
   sub->footer(
       "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"
       "  fvm uncertainty plan/readings.csv --chain XFYZ --order 3 --tool 0,0,100 --fit-pose --runs 1000 --seed 1 \\\n"
-      "    --validate plan/validation.csv --json");
+      "    --validate plan/validation.csv --json\n"
+      "  fvm uncertainty samples/bar17 --model 27 --runs 200");
   sub->callback([args] { Run(*args); });
 }
 

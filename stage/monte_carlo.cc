@@ -212,8 +212,15 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
   return out;
 }
 
+double TrackerReadingSd(const std::vector<Observation>& readings, const TrackerNoise& noise) {
+  if (readings.empty()) return 0.0;
+  double trace = 0;
+  for (const Observation& o : readings) trace += noise.Covariance(o.measured).trace();
+  return std::sqrt(trace / static_cast<double>(readings.size()));
+}
+
 UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vector<Observation>& readings,
-                         const TrackerNoise& noise, const BudgetInputs& inputs) {
+                         double reading_sd_mm, const BudgetInputs& inputs) {
   UncertaintyBudget b;
   b.k = inputs.k;
   b.u_cal_mm = inputs.u_cal_mm;
@@ -237,10 +244,8 @@ UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vec
   }
   if (b.repeated_commands > 0) {
     b.u_b_mm = std::sqrt(squares / dof) / std::sqrt(count / b.repeated_commands);
-  } else if (!readings.empty()) {
-    double trace = 0;
-    for (const Observation& o : readings) trace += noise.Covariance(o.measured).trace();
-    b.u_b_mm = std::sqrt(trace / static_cast<double>(readings.size()));
+  } else {
+    b.u_b_mm = reading_sd_mm;
   }
 
   if (!readings.empty()) {

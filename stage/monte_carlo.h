@@ -117,8 +117,8 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
 //   u_p:   2 x the standard deviation of the simulated positions (000's definition): 2 x the rms over the evaluation
 //          points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
 //   u_b:   repeatability, s / sqrt(n): from readings repeated at one command (same tool), pooled 3D standard
-//          deviation s over the repeated commands and n their mean count; without repeats, s from the tracker's noise
-//          model (rms over the readings of sqrt(trace Cov)) and n = 1;
+//          deviation s over the repeated commands and n their mean count; without repeats, s from the noise model
+//          (the tracker's: rms over the readings of sqrt(trace Cov); the microscope's: sqrt(3) sigma) and n = 1;
 //   u_w:   the workpiece's expansion: CTE x length x temperature half-range / sqrt(3) (rectangular), the length the
 //          diagonal of the commanded points' span.
 struct BudgetInputs {
@@ -132,8 +132,11 @@ struct UncertaintyBudget {
   double length_mm = 0;
   int repeated_commands = 0;  // commands read more than once (0: u_b from the noise model)
 };
+// `reading_sd_mm`: the 3D standard deviation of one reading under the noise model, used without repeats.
 UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vector<Observation>& readings,
-                         const TrackerNoise& noise, const BudgetInputs& inputs);
+                         double reading_sd_mm, const BudgetInputs& inputs);
+// The rms over the readings of sqrt(trace Cov) under the tracker's noise model.
+double TrackerReadingSd(const std::vector<Observation>& readings, const TrackerNoise& noise);
 
 // ---- implementation of the template ----
 std::vector<PointSpread> PointSpreads(const std::vector<const MonteCarloRun*>& runs);

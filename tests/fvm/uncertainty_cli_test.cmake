@@ -1,7 +1,7 @@
 # fvm uncertainty as a user runs it: the published 75-point mesh (5 x 5 x 3 at 100 mm) with tracker noise and a
 # noise-free validation mesh; the JSON contract; the same result for one and two threads; the report; bad input
 # that writes nothing.
-# Variables: FVM (the executable), WORK (a scratch directory).
+# Variables: FVM (the executable), SAMPLES (the bundled samples), WORK (a scratch directory).
 
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
@@ -63,6 +63,20 @@ file(STRINGS ${WORK}/report/runs.csv run_rows)
 list(LENGTH run_rows n_rows)
 if(NOT n_rows EQUAL 25)
   message(FATAL_ERROR "runs.csv has ${n_rows} lines, expected a header and 24 runs")
+endif()
+
+# The microscope stage: the bundled sample, its centre noise resampled; the runs' validation rms must agree with the
+# covariance-based prediction fvm calibrate prints (1.42 um) and the same seed gives the same result.
+run(0 uncertainty ${SAMPLES}/bar17 --model 27 --runs 40 --seed 2 --json --threads 2)
+string(JSON rms GET "${OUT}" validation_rms_um mean)
+string(JSON predicted GET "${OUT}" reference predicted_rms_um)
+string(JSON stage_u GET "${OUT}" budget U_um)
+expect_near("stage validation rms (um)" "${rms}" "${predicted}" 0.15)
+string(JSON stage_one REMOVE "${OUT}" seconds)
+run(0 uncertainty ${SAMPLES}/bar17 --model 27 --runs 40 --seed 2 --json --threads 1)
+string(JSON stage_two REMOVE "${OUT}" seconds)
+if(NOT stage_one STREQUAL stage_two)
+  message(FATAL_ERROR "the stage Monte Carlo differs between 1 and 2 threads")
 endif()
 
 run(0 uncertainty --help)
