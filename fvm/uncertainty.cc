@@ -198,7 +198,7 @@ void Run(const UncertaintyArgs& args) {
   mc.on_run_done = [&progress] { progress.Advance(); };
   const auto start = std::chrono::steady_clock::now();
   const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
-      layout, reference.identified, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
+      layout, reference, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
   progress.Finish();
   const double seconds = Seconds(start);
 
@@ -208,6 +208,14 @@ void Run(const UncertaintyArgs& args) {
     finals.push_back(r.final.mean_um);
     if (problem.validation) validations.push_back(r.validation.mean_um);
     converged += r.converged ? 1 : 0;
+  }
+  // Pooled over runs and readings: the ideal machine's error (initial), the fit's residual (final), and the run's
+  // model against the simulated truth (model error: what the published studies call the residual).
+  std::vector<double> initial_pooled, final_pooled, model_pooled;
+  for (const stage::MachineMonteCarloRun& r : runs) {
+    initial_pooled.insert(initial_pooled.end(), r.initial_um.begin(), r.initial_um.end());
+    final_pooled.insert(final_pooled.end(), r.final_um.begin(), r.final_um.end());
+    for (size_t i = 0; i < problem.observations.size(); ++i) model_pooled.push_back(r.deviation_mm[i].norm() * 1e3);
   }
   const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
   std::vector<Eigen::Vector3d> commands;
@@ -228,6 +236,10 @@ void Run(const UncertaintyArgs& args) {
   doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
   doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::SummarizeSample(validations)) : nlohmann::json(nullptr);
   doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
+  const stage::SampleSummary model_error = stage::SummarizeSample(model_pooled);
+  doc["pooled_um"] = {{"initial", DistributionJson(stage::SummarizeSample(initial_pooled))},
+                      {"final", DistributionJson(stage::SummarizeSample(final_pooled))},
+                      {"model_error", DistributionJson(model_error)}};
   nlohmann::json points = nlohmann::json::array();
   std::vector<double> u95s;
   AddPoints(spreads, 0, IdsOf(problem.readings), "readings", points, u95s);
@@ -284,6 +296,11 @@ void Run(const UncertaintyArgs& args) {
     fmt::print("  validation mean error  {:.2f} +- {:.2f} um, 95 % of runs below {:.2f} um\n", v["mean"].get<double>(),
                v["sd"].get<double>(), v["p95"].get<double>());
   }
+  fmt::print("  every point of every run: initial {:.2f} +- {:.2f} um, final {:.2f} +- {:.2f} um; model against the "
+             "simulated truth {:.2f} +- {:.2f} um, 95 % below {:.2f} um, max {:.2f} um\n",
+             doc["pooled_um"]["initial"]["mean"].get<double>(), doc["pooled_um"]["initial"]["sd"].get<double>(),
+             doc["pooled_um"]["final"]["mean"].get<double>(), doc["pooled_um"]["final"]["sd"].get<double>(), model_error.mean,
+             model_error.sd, model_error.p95, model_error.max);
   fmt::print("  U95 of the predicted point (radius holding 95 % of runs): mean {:.2f} um, max {:.2f} um\n", u95.mean, u95.max);
   if (pairs.pairs > 0) {
     fmt::print("  distance errors over {} pairs: U95 mean {:.2f} um, max {:.2f} um ({} - {})\n", pairs.pairs,

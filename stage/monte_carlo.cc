@@ -32,7 +32,7 @@ std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, co
   return VolumetricResiduals(layout, values, pose, at, tool_offsets);
 }
 
-std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const VerificationResult& verification,
                                                     const std::vector<Observation>& readings,
                                                     const std::vector<Observation>& validation, const TrackerNoise& noise,
                                                     const IdentificationOptions& identification,
@@ -41,6 +41,7 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
   if (identification.instrument == InstrumentPose::kNone) {
     throw std::invalid_argument("a machine Monte Carlo needs the tracker pose: held or estimated");
   }
+  const IdentificationResult& reference = verification.identified;
   const Calibration& truth = reference.calibration;
   const std::vector<Eigen::Vector3d>& tools = identification.tool_offsets;
   std::vector<Observation> evaluation = readings;
@@ -67,6 +68,12 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
     out.converged = r.converged;
     out.pose = r.pose;
     out.final = SummarizeVolumetric(r.residuals);
+    const std::vector<Eigen::Vector3d> ideal = VolumetricResiduals(layout, nullptr, verification.initial_pose, drawn, tools);
+    out.initial = SummarizeVolumetric(ideal);
+    for (size_t i = 0; i < drawn.size(); ++i) {
+      out.initial_um.push_back(ideal[i].norm() * 1e3);
+      out.final_um.push_back(r.residuals[i].norm() * 1e3);
+    }
     const Calibration& c = r.calibration;
     if (!validation.empty()) out.validation = SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, r.pose, validation, tools));
     out.deviation_mm = PredictedReadings(c.layout, &c.values, r.pose, evaluation, tools);
@@ -256,6 +263,67 @@ UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vec
   b.u_w_mm = inputs.cte_per_k * b.length_mm * inputs.temperature_half_range_k / std::sqrt(3.0);
   b.U_mm = b.k * std::sqrt(b.u_cal_mm * b.u_cal_mm + b.u_p_mm * b.u_p_mm + b.u_b_mm * b.u_b_mm + b.u_w_mm * b.u_w_mm);
   return b;
+}
+
+std::vector<Eigen::Matrix3d> PredictedPointCovariances(const Calibration& calibration, const Pose& pose, bool estimate_pose,
+                                                       const std::vector<Observation>& points,
+                                                       const std::vector<Eigen::Vector3d>& tool_offsets,
+                                                       const TrackerNoise& noise) {
+  const ParameterLayout& layout = calibration.layout;
+  const int n_free = layout.NumFree();
+  const int n = n_free + (estimate_pose ? 6 : 0);
+  const Eigen::Index m = static_cast<Eigen::Index>(points.size());
+  const Eigen::VectorXd plausible = PlausibleSizes(layout);
+  const auto predict = [&](const std::vector<double>& values, const Pose& at) {
+    return PredictedReadings(layout, &values, at, points, tool_offsets);
+  };
+  Eigen::MatrixXd jacobian(3 * m, n);
+  for (int j = 0; j < n; ++j) {
+    std::vector<double> plus = calibration.values, minus = calibration.values;
+    Pose pose_plus = pose, pose_minus = pose;
+    double h = 0;
+    if (j < n_free) {
+      h = 1e-4 * plausible[j];
+      plus[static_cast<size_t>(j)] += h;
+      minus[static_cast<size_t>(j)] -= h;
+    } else {
+      const int k = j - n_free;
+      h = k < 3 ? 1e-3 : 1e-6;  // mm, rad
+      (k < 3 ? pose_plus.translation : pose_plus.rotation)[k % 3] += h;
+      (k < 3 ? pose_minus.translation : pose_minus.rotation)[k % 3] -= h;
+    }
+    const std::vector<Eigen::Vector3d> a = predict(plus, pose_plus), b = predict(minus, pose_minus);
+    for (Eigen::Index i = 0; i < m; ++i) jacobian.block<3, 1>(3 * i, j) = (a[static_cast<size_t>(i)] - b[static_cast<size_t>(i)]) / (2 * h);
+  }
+  const std::vector<Eigen::Vector3d> readings = predict(calibration.values, pose);
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::MatrixXd ji = jacobian.middleRows(3 * i, 3);
+    normal += ji.transpose() * noise.Covariance(readings[static_cast<size_t>(i)]).inverse() * ji;
+  }
+  const Eigen::MatrixXd parameter_covariance = normal.completeOrthogonalDecomposition().pseudoInverse();
+  std::vector<Eigen::Matrix3d> out;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::MatrixXd ji = jacobian.middleRows(3 * i, 3);
+    out.push_back(ji * parameter_covariance * ji.transpose());
+  }
+  return out;
+}
+
+double U95OfCovariance(const Eigen::Matrix3d& covariance) {
+  static const std::vector<Eigen::Vector3d> draws = [] {
+    Random random(StreamSeed(95, 3));
+    std::vector<Eigen::Vector3d> z(4000);
+    for (Eigen::Vector3d& v : z) v = Eigen::Vector3d(random.Normal(), random.Normal(), random.Normal());
+    return z;
+  }();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+  const Eigen::Vector3d scale = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  std::vector<double> norms;
+  norms.reserve(draws.size());
+  for (const Eigen::Vector3d& z : draws) norms.push_back(scale.cwiseProduct(z).norm());  // |Q diag(s) z| = |diag(s) z|
+  std::sort(norms.begin(), norms.end());
+  return Quantile(norms, 0.95);
 }
 
 }  // namespace fvm::stage

@@ -46,9 +46,11 @@ struct MonteCarloRun {
 };
 
 struct MachineMonteCarloRun : MonteCarloRun {
+  VolumetricError initial;     // the ideal machine (the reference's initial pose) against the run's drawn readings
   VolumetricError final;       // the run's model against its own drawn readings
   VolumetricError validation;  // the run's model against the validation readings (points 0 without them)
   Pose pose;                   // the run's tracker pose
+  std::vector<double> initial_um, final_um;  // per reading: |ideal machine - drawn reading|, |run's model - drawn reading|
 };
 
 // The tracker-frame tool points that `layout` with free coefficients `values` (null: the ideal machine) at `pose`
@@ -57,12 +59,13 @@ std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, co
                                                const Pose& pose, const std::vector<Observation>& points,
                                                const std::vector<Eigen::Vector3d>& tool_offsets);
 
-// `layout` is what each run identifies (MachineLayout, before any rank treatment); `reference` is the identification
-// of the real readings (its calibration and pose are the simulated truth); `readings` gives the commands and tools
+// `layout` is what each run identifies (MachineLayout, before any rank treatment); `reference` is the verification
+// of the real readings (its identified calibration and pose are the simulated truth, its initial pose states the
+// ideal machine's error); `readings` gives the commands and tools
 // to draw at; `validation` (may be empty) are readings the runs are judged on; `identification` the options of the
 // original fit (instrument held or estimated, tool offsets; pose and threads are set here). Throws
 // std::invalid_argument for runs < 1 or an identification without a tracker pose.
-std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const IdentificationResult& reference,
+std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const VerificationResult& reference,
                                                     const std::vector<Observation>& readings,
                                                     const std::vector<Observation>& validation, const TrackerNoise& noise,
                                                     const IdentificationOptions& identification,
@@ -137,6 +140,19 @@ UncertaintyBudget Budget(const std::vector<PointSpread>& spreads, const std::vec
                          double reading_sd_mm, const BudgetInputs& inputs);
 // The rms over the readings of sqrt(trace Cov) under the tracker's noise model.
 double TrackerReadingSd(const std::vector<Observation>& readings, const TrackerNoise& noise);
+
+// Covariance propagation, the fast stand-in for a Monte Carlo (tracker placement): the linearised covariance (mm^2)
+// of each point's predicted reading when `calibration`'s free coefficients and, with `estimate_pose`, the tracker
+// pose are identified from weighted readings at `points` by a tracker at `pose` with `noise`:
+// C_i = J_i (J^T W J)^+ J_i^T, J the Jacobian (central differences) of the predicted readings, W = their inverse
+// covariances. The rank treatment is the calibration's (its fixed coefficients stay fixed).
+std::vector<Eigen::Matrix3d> PredictedPointCovariances(const Calibration& calibration, const Pose& pose, bool estimate_pose,
+                                                       const std::vector<Observation>& points,
+                                                       const std::vector<Eigen::Vector3d>& tool_offsets,
+                                                       const TrackerNoise& noise);
+// The 95 % quantile of |d| for d ~ N(0, covariance): the covariance counterpart of PointSpread::u95_mm, from a fixed
+// set of 4000 seeded normal draws (the same for every call, so rankings are not noisy).
+double U95OfCovariance(const Eigen::Matrix3d& covariance);
 
 // ---- implementation of the template ----
 std::vector<PointSpread> PointSpreads(const std::vector<const MonteCarloRun*>& runs);

@@ -88,7 +88,7 @@ TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   mc.runs = 48;
   mc.seed = 7;
   const std::vector<MachineMonteCarloRun> runs =
-      MachineMonteCarlo(layout, first->identified, study.Readings(100), study.validation, study.noise, Options(), mc);
+      MachineMonteCarlo(layout, *first, study.Readings(100), study.validation, study.noise, Options(), mc);
   const std::vector<PointSpread> spreads = PointSpreads(runs);
   const size_t n_readings = study.points.size();
   ASSERT_EQ(spreads.size(), n_readings + study.validation.size());
@@ -111,6 +111,19 @@ TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
               study.validation.size(), real_sd_um, mc_sd_um);
   EXPECT_GT(real_sd_um, 1.0);  // the noise matters here: the comparison means something
   EXPECT_NEAR(mc_sd_um / real_sd_um, 1.0, 0.25);
+
+  // Covariance propagation (the fast stand-in used to place the tracker) agrees with the Monte Carlo at the readings.
+  const std::vector<Eigen::Matrix3d> predicted = PredictedPointCovariances(
+      first->identified.calibration, first->identified.pose, true, study.Readings(100), {}, study.noise);
+  ASSERT_EQ(predicted.size(), n_readings);
+  double predicted_u95 = 0, mc_u95 = 0;
+  for (size_t p = 0; p < n_readings; ++p) {
+    predicted_u95 += U95OfCovariance(predicted[p]) / n_readings;
+    mc_u95 += spreads[p].u95_mm / n_readings;
+  }
+  std::printf("mean U95 at the readings: covariance propagation %.2f um, Monte Carlo %.2f um\n", predicted_u95 * 1e3,
+              mc_u95 * 1e3);
+  EXPECT_NEAR(predicted_u95 / mc_u95, 1.0, 0.25);
 
   // The mean volumetric error on the validation points: its scatter over the measurements and over the runs.
   std::vector<double> mc_validation_means;
@@ -135,16 +148,16 @@ TEST(MachineMonteCarlo, SameBitsForAnyThreadCount) {
   mc.runs = 6;
   mc.seed = 42;
   mc.threads = 1;
-  const std::vector<MachineMonteCarloRun> one = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  const std::vector<MachineMonteCarloRun> one = MachineMonteCarlo(layout, v, readings, {}, study.noise, Options(), mc);
   mc.threads = 2;
-  const std::vector<MachineMonteCarloRun> two = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  const std::vector<MachineMonteCarloRun> two = MachineMonteCarlo(layout, v, readings, {}, study.noise, Options(), mc);
   ASSERT_EQ(one.size(), two.size());
   for (size_t r = 0; r < one.size(); ++r) {
     EXPECT_EQ(one[r].final.mean_um, two[r].final.mean_um);
     for (size_t p = 0; p < one[r].deviation_mm.size(); ++p) EXPECT_EQ(one[r].deviation_mm[p], two[r].deviation_mm[p]);
   }
   mc.seed = 43;
-  const std::vector<MachineMonteCarloRun> other = MachineMonteCarlo(layout, v.identified, readings, {}, study.noise, Options(), mc);
+  const std::vector<MachineMonteCarloRun> other = MachineMonteCarlo(layout, v, readings, {}, study.noise, Options(), mc);
   EXPECT_NE(one[0].final.mean_um, other[0].final.mean_um);
 }
 
@@ -157,7 +170,7 @@ TEST(MachineMonteCarlo, NoiseFreeTrackerGivesNoSpread) {
   mc.runs = 3;
   mc.weighted = false;
   const std::vector<MachineMonteCarloRun> runs =
-      MachineMonteCarlo(layout, v.identified, readings, {}, TrackerNoise::Preset("none"), Options(), mc);
+      MachineMonteCarlo(layout, v, readings, {}, TrackerNoise::Preset("none"), Options(), mc);
   for (const PointSpread& s : PointSpreads(runs)) EXPECT_LT(s.u95_mm, 1e-5);
 }
 
