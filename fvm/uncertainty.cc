@@ -18,6 +18,7 @@
 #include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
+#include "fvm/option_parsing.h"
 #include "fvm/uncertainty_report.h"
 #include "stage/monte_carlo.h"
 
@@ -39,6 +40,10 @@ struct UncertaintyArgs : MachineArgs {
   std::string terms;
   double centre_noise_um = -1.0;  // < 0: the identification's residual standard deviation per coordinate
   IdentifySettings settings;
+  // Tracker placement.
+  std::string place_tracker;
+  int place_steps = 4;
+  int place_confirm = 3;
 };
 
 nlohmann::json DistributionJson(const stage::SampleSummary& s) {
@@ -172,6 +177,139 @@ void RunStage(const UncertaintyArgs& args) {
   PrintBudget(budget);
 }
 
+// --place-tracker X0,Y0,Z0,X1,Y1,Z1: tracker positions on a grid of the box (machine frame, mm; the estimated
+// orientation kept: the noise is the same in any orientation of the tracker's frame), each ranked by the largest
+// 95 % radius over the readings' points that covariance propagation predicts; the best few confirmed by the Monte
+// Carlo. Positions from which the tracker could not see every point are left out.
+void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, const stage::ParameterLayout& layout,
+                  const stage::VerificationResult& reference) {
+  const std::vector<double> box = ParseNumbers(args.place_tracker, 6, "--place-tracker", "1000,-1500,0,2000,-500,800");
+  const stage::Calibration& truth = reference.identified.calibration;
+  const bool estimate_pose = problem.options.instrument == stage::InstrumentPose::kEstimated;
+  struct Candidate {
+    Eigen::Vector3d position;
+    double predicted_max_um = 0;
+    double monte_carlo_max_um = -1;
+    bool current = false;
+  };
+  std::vector<Candidate> candidates;
+  const int steps = args.place_steps;
+  for (int i = 0; i < steps; ++i) {
+    for (int j = 0; j < steps; ++j) {
+      for (int k = 0; k < steps; ++k) {
+        const Eigen::Vector3d t(i, j, k);
+        Candidate c;
+        for (int a = 0; a < 3; ++a) {
+          c.position[a] = steps == 1 ? 0.5 * (box[a] + box[3 + a]) : box[a] + (box[3 + a] - box[a]) * t[a] / (steps - 1);
+        }
+        candidates.push_back(c);
+      }
+    }
+  }
+  Candidate current;
+  current.position = reference.identified.pose.translation;
+  current.current = true;
+  candidates.push_back(current);
+
+  const auto pose_at = [&](const Eigen::Vector3d& position) {
+    stage::Pose p = reference.identified.pose;
+    p.translation = position;
+    return p;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  Progress progress("tracker positions", static_cast<int>(candidates.size()), ShowProgress());
+  std::vector<char> visible(candidates.size(), 0);
+  stage::ForEachRun(static_cast<int>(candidates.size()), Common().threads, [&](int index) {
+    Candidate& c = candidates[static_cast<size_t>(index)];
+    const stage::Pose pose = pose_at(c.position);
+    artefacts::TrackerReadings seen = problem.readings;
+    const std::vector<Eigen::Vector3d> predicted =
+        stage::PredictedReadings(truth.layout, &truth.values, pose, problem.observations, problem.options.tool_offsets);
+    for (size_t i = 0; i < predicted.size(); ++i) seen.points[i].measured = predicted[i];
+    if (artefacts::PointsBeyondTrackerLimits(seen, pose).empty()) {
+      visible[static_cast<size_t>(index)] = 1;
+      for (const Eigen::Matrix3d& cov : stage::PredictedPointCovariances(truth, pose, estimate_pose, problem.observations,
+                                                                         problem.options.tool_offsets, problem.noise)) {
+        c.predicted_max_um = std::max(c.predicted_max_um, stage::U95OfCovariance(cov) * 1e3);
+      }
+    }
+    progress.Advance();
+  });
+  progress.Finish();
+  std::vector<Candidate> ranked;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    if (visible[i]) ranked.push_back(candidates[i]);
+  }
+  if (ranked.empty()) {
+    throw InputError(fmt::format("--place-tracker {}: from no position of the box can the tracker see every point; "
+                                 "move the box away from the machine or below the points",
+                                 args.place_tracker));
+  }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.predicted_max_um < b.predicted_max_um; });
+  const double propagation_seconds = Seconds(start);
+
+  // The Monte Carlo confirms the best few and the current position.
+  stage::MonteCarloOptions mc;
+  mc.runs = args.runs;
+  mc.seed = args.seed;
+  mc.threads = Common().threads;
+  mc.weighted = problem.weighted;
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    Candidate& c = ranked[r];
+    if (!(r < static_cast<size_t>(args.place_confirm) || c.current)) continue;
+    stage::VerificationResult at = reference;
+    at.identified.pose = pose_at(c.position);
+    at.initial_pose = at.identified.pose;
+    stage::IdentificationOptions options = problem.options;
+    options.pose = at.identified.pose;
+    const std::vector<stage::MachineMonteCarloRun> runs =
+        stage::MachineMonteCarlo(layout, at, problem.observations, {}, problem.noise, options, mc);
+    c.monte_carlo_max_um = 0;
+    for (const stage::PointSpread& s : stage::PointSpreads(runs)) c.monte_carlo_max_um = std::max(c.monte_carlo_max_um, s.u95_mm * 1e3);
+  }
+  const double seconds = Seconds(start);
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["box_mm"] = box;
+  doc["candidates"] = candidates.size() - 1;
+  doc["visible"] = ranked.size();
+  doc["runs"] = args.runs;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["propagation_seconds"] = propagation_seconds;
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    const Candidate& c = ranked[r];
+    nlohmann::json e{{"rank", r + 1},
+                     {"position_mm", {c.position.x(), c.position.y(), c.position.z()}},
+                     {"predicted_max_U95_um", c.predicted_max_um},
+                     {"current", c.current}};
+    if (c.monte_carlo_max_um >= 0) e["monte_carlo_max_U95_um"] = c.monte_carlo_max_um;
+    list.push_back(e);
+  }
+  doc["ranked"] = list;
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} tracker positions in the box ({} see every point), ranked by the largest 95 % radius over {} points "
+             "(covariance propagation {:.1f} s; Monte Carlo {} runs each for the best {} and the current position; "
+             "{:.1f} s in all)\n",
+             candidates.size() - 1, ranked.size(), problem.readings.points.size(), propagation_seconds, args.runs,
+             args.place_confirm, seconds);
+  fmt::print("  {:>4}  {:>28}  {:>14}  {:>14}\n", "rank", "position (mm)", "predicted (um)", "Monte Carlo");
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    const Candidate& c = ranked[r];
+    if (!(r < 10 || c.current || r + 1 == ranked.size())) continue;
+    fmt::print("  {:>4}  {:>8.1f} {:>9.1f} {:>9.1f}  {:>14.2f}  {:>14}{}\n", r + 1, c.position.x(), c.position.y(),
+               c.position.z(), c.predicted_max_um,
+               c.monte_carlo_max_um >= 0 ? fmt::format("{:.2f}", c.monte_carlo_max_um) : std::string("-"),
+               c.current ? "  (the readings' tracker)" : "");
+  }
+}
+
 void Run(const UncertaintyArgs& args) {
   if (std::filesystem::is_directory(args.data)) {
     RunStage(args);
@@ -187,6 +325,11 @@ void Run(const UncertaintyArgs& args) {
   CheckTrackerSight(problem, reference.identified.pose);
   if (!reference.identified.converged) {
     throw NotConvergedError("the identification of the readings did not converge: " + reference.identified.solver_report);
+  }
+
+  if (!args.place_tracker.empty()) {
+    RunPlacement(args, problem, layout, reference);
+    return;
   }
 
   stage::MonteCarloOptions mc;
@@ -345,6 +488,15 @@ void RegisterUncertainty(CLI::App& app) {
                   "microscope stage: standard deviation of a stitched centre per coordinate (default: the fit's residual)")
       ->check(CLI::NonNegativeNumber);
   args->settings.AddOptions(*sub);
+  sub->add_option("--place-tracker", args->place_tracker,
+                  "rank tracker positions on a grid of this box X0,Y0,Z0,X1,Y1,Z1 (machine frame, mm) by the largest "
+                  "95 % radius over the points: covariance propagation for all, --runs Monte Carlo runs for the best")
+      ->check(Parses([](const std::string& t) { ParseNumbers(t, 6, "--place-tracker", "1000,-1500,0,2000,-500,800"); },
+                     "X0,Y0,Z0,X1,Y1,Z1"));
+  sub->add_option("--place-steps", args->place_steps, "grid positions per axis of the --place-tracker box")
+      ->check(CLI::Range(1, 50))->capture_default_str();
+  sub->add_option("--place-confirm", args->place_confirm, "best positions the Monte Carlo confirms")
+      ->check(CLI::Range(0, 100))->capture_default_str();
   sub->add_flag("--json", args->json, "print the result as JSON");
   sub->footer(
       "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"

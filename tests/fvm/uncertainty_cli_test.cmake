@@ -65,6 +65,26 @@ if(NOT n_rows EQUAL 25)
   message(FATAL_ERROR "runs.csv has ${n_rows} lines, expected a header and 24 runs")
 endif()
 
+# Tracker placement: a 2 x 2 x 2 grid of a box beside the machine plus the readings' own position, ranked by
+# covariance propagation, the best confirmed by the Monte Carlo; the best is no worse than the current position.
+run(0 uncertainty ${WORK}/plan/readings.csv --order 2 --tool 0,0,100 --runs 12 --seed 1 --json
+    --place-tracker -200,-1200,0,600,-600,400 --place-steps 2 --place-confirm 1)
+string(JSON n_ranked LENGTH "${OUT}" ranked)
+string(JSON best GET "${OUT}" ranked 0 predicted_max_U95_um)
+string(JSON best_mc GET "${OUT}" ranked 0 monte_carlo_max_U95_um)
+math(EXPR last "${n_ranked} - 1")
+set(current_predicted "")
+foreach(i RANGE ${last})
+  string(JSON is_current GET "${OUT}" ranked ${i} current)
+  if(is_current)
+    string(JSON current_predicted GET "${OUT}" ranked ${i} predicted_max_U95_um)
+  endif()
+endforeach()
+if(NOT n_ranked EQUAL 9 OR current_predicted STREQUAL "" OR best GREATER current_predicted)
+  message(FATAL_ERROR "placement: ${n_ranked} ranked, best ${best} um, current ${current_predicted} um:\n${OUT}")
+endif()
+expect_near("best position: Monte Carlo against covariance propagation (um)" "${best_mc}" "${best}" 8)
+
 # The microscope stage: the bundled sample, its centre noise resampled; the runs' validation rms must agree with the
 # covariance-based prediction fvm calibrate prints (1.42 um) and the same seed gives the same result.
 run(0 uncertainty ${SAMPLES}/bar17 --model 27 --runs 40 --seed 2 --json --threads 2)
