@@ -93,12 +93,28 @@ std::vector<std::string> IdsOf(const artefacts::TrackerReadings& readings) {
   return ids;
 }
 
+// The Monte Carlo options of the command line; `progress` (may be null) advances with every run.
+stage::MonteCarloOptions MonteCarloOptionsOf(const UncertaintyArgs& args, bool weighted, Progress* progress) {
+  stage::MonteCarloOptions mc;
+  mc.runs = args.runs;
+  mc.seed = args.seed;
+  mc.threads = Common().threads;
+  mc.weighted = weighted;
+  if (progress != nullptr) mc.on_run_done = [progress] { progress->Advance(); };
+  return mc;
+}
+
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // fvm uncertainty BATCH --model 27: the microscope stage, its centre noise resampled.
 void RunStage(const UncertaintyArgs& args) {
+  if (!args.validate.empty() || !args.place_tracker.empty()) {
+    throw InputError(fmt::format("{} is a batch directory: {} is for tracker readings (a batch names its validation "
+                                 "placements in batch.json)",
+                                 args.data, args.validate.empty() ? "--place-tracker" : "--validate"));
+  }
   const artefacts::Batch batch = artefacts::ReadBatch(args.data);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult reference = IdentifyModel(args.model, args.terms, identify, args.settings);
@@ -109,12 +125,8 @@ void RunStage(const UncertaintyArgs& args) {
   if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
   const double sigma_mm = args.centre_noise_um >= 0 ? args.centre_noise_um * 1e-3 : reference.calibration.sigma_mm;
 
-  stage::MonteCarloOptions mc;
-  mc.runs = args.runs;
-  mc.seed = args.seed;
-  mc.threads = Common().threads;
   Progress progress("monte carlo runs", args.runs, ShowProgress());
-  mc.on_run_done = [&progress] { progress.Advance(); };
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, false, &progress);
   const auto start = std::chrono::steady_clock::now();
   const std::vector<stage::StageMonteCarloRun> runs =
       stage::StageMonteCarlo(ModelLayout(args.model, args.terms), reference, identify, validate ? &*validate : nullptr,
@@ -156,6 +168,30 @@ void RunStage(const UncertaintyArgs& args) {
   const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
   doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
   doc["budget"] = BudgetJson(budget);
+  if (!args.report.empty()) {
+    UncertaintyReportData data;
+    data.title = fmt::format("fvm uncertainty: model {}, {} runs, seed {} on {}", reference.calibration.model, args.runs,
+                             args.seed, args.data);
+    data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
+                    {"centre noise", fmt::format("{:.3f} um per coordinate", sigma_mm * 1e3)},
+                    {"U95 per centre (um)", fmt::format("mean {:.3f}, max {:.3f}", u95.mean, u95.max)}};
+    if (validate) {
+      data.summary.push_back({"validation rms (um)", fmt::format("{:.3f} +- {:.3f}; predicted from the covariance {:.3f}",
+                                                                 doc["validation_rms_um"]["mean"].get<double>(),
+                                                                 doc["validation_rms_um"]["sd"].get<double>(),
+                                                                 stats->predicted_rms_mm * 1e3)});
+    }
+    data.final_mean_um = finals;
+    data.validation_mean_um = validation_means;
+    const stage::MeasurementSet& evaluated = validate ? *validate : identify;
+    for (size_t i = 0; i < spreads.size(); ++i) {
+      const stage::PointSpread& p = spreads[i];
+      const Eigen::Vector3d& q = evaluated.observations[i].command;
+      data.points.push_back({evaluated.labels[i], q.x(), q.y(), q.z(), p.u95_mm * 1e3, p.semi_axes_mm[0] * 1e3,
+                             p.semi_axes_mm[1] * 1e3, p.semi_axes_mm[2] * 1e3});
+    }
+    WriteUncertaintyReport(args.report, data);
+  }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
     return;
@@ -250,11 +286,7 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   const double propagation_seconds = Seconds(start);
 
   // The Monte Carlo confirms the best few and the current position.
-  stage::MonteCarloOptions mc;
-  mc.runs = args.runs;
-  mc.seed = args.seed;
-  mc.threads = Common().threads;
-  mc.weighted = problem.weighted;
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, nullptr);
   for (size_t r = 0; r < ranked.size(); ++r) {
     Candidate& c = ranked[r];
     if (!(r < static_cast<size_t>(args.place_confirm) || c.current)) continue;
@@ -332,13 +364,8 @@ void Run(const UncertaintyArgs& args) {
     return;
   }
 
-  stage::MonteCarloOptions mc;
-  mc.runs = args.runs;
-  mc.seed = args.seed;
-  mc.threads = Common().threads;
-  mc.weighted = problem.weighted;
   Progress progress("monte carlo runs", args.runs, ShowProgress());
-  mc.on_run_done = [&progress] { progress.Advance(); };
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, &progress);
   const auto start = std::chrono::steady_clock::now();
   const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
       layout, reference, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
@@ -479,7 +506,7 @@ void RegisterUncertainty(CLI::App& app) {
   sub->add_option("--cte-per-k", args->cte_per_k, "expansion coefficient of the workpiece (1/K; aluminium 24e-6)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--report", args->report, "write an HTML report with SVG plots to this directory (machine)");
+  sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
   sub->add_option("--model", args->model, "microscope stage (DATA a batch): published model 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
