@@ -244,6 +244,35 @@ TEST(StageMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   EXPECT_NEAR(mc_sd / real_sd, 1.0, 0.3);
 }
 
+// The ISO/TS 15530-3 budget: u_p from the spreads, u_b from repeated commands (or the noise model), u_w from the
+// temperature range and CTE, U = k sqrt(sum of squares).
+TEST(UncertaintyBudget, CombinesItsFourContributions) {
+  PointSpread a, b;
+  a.covariance = Eigen::Vector3d(9e-6, 0, 0).asDiagonal();   // 3 um along x
+  b.covariance = Eigen::Vector3d(0, 16e-6, 9e-6).asDiagonal();  // 5 um in y and z together
+  std::vector<Observation> readings(4);
+  readings[0].command = Eigen::Vector3d(0, 0, 0);
+  readings[1].command = Eigen::Vector3d(0, 0, 0);
+  readings[1].measured = Eigen::Vector3d(0.002, 0, 0);  // a repeat, 2 um away
+  readings[2].command = Eigen::Vector3d(300, 400, 0);
+  readings[3].command = Eigen::Vector3d(300, 400, 0);
+  readings[3].tool = 1;                                  // another tool: not a repeat
+  BudgetInputs inputs;
+  inputs.u_cal_mm = 1e-3;
+  inputs.temperature_half_range_k = 0.2;
+  inputs.cte_per_k = 24e-6;
+  const UncertaintyBudget budget = Budget({a, b}, readings, 0.05, inputs);
+  EXPECT_NEAR(budget.u_p_mm, 2 * std::sqrt((9e-6 + 25e-6) / 2), 1e-12);
+  EXPECT_EQ(budget.repeated_commands, 1);
+  EXPECT_NEAR(budget.u_b_mm, std::sqrt(2e-6) / std::sqrt(2.0), 1e-12);  // s = sqrt(2 (1 um)^2 / 1), n = 2
+  EXPECT_DOUBLE_EQ(budget.length_mm, 500.0);
+  EXPECT_NEAR(budget.u_w_mm, 24e-6 * 500 * 0.2 / std::sqrt(3.0), 1e-15);
+  EXPECT_NEAR(budget.U_mm, 2 * std::hypot(std::hypot(1e-3, budget.u_p_mm), std::hypot(budget.u_b_mm, budget.u_w_mm)), 1e-15);
+  // Without repeats, one reading's standard deviation under the noise model.
+  readings.resize(1);
+  EXPECT_DOUBLE_EQ(Budget({a}, readings, 0.05, inputs).u_b_mm, 0.05);
+}
+
 TEST(MachineMonteCarlo, SummaryQuantiles) {
   const SampleSummary s = SummarizeSample({4, 1, 3, 2, 5});
   EXPECT_DOUBLE_EQ(s.mean, 3.0);
