@@ -273,10 +273,11 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   });
   progress.Finish();
   std::vector<Candidate> ranked;
+  size_t visible_in_box = 0;
   for (size_t i = 0; i < candidates.size(); ++i) {
-    if (visible[i]) ranked.push_back(candidates[i]);
+    if (visible[i]) ranked.push_back(candidates[i]), visible_in_box += candidates[i].current ? 0 : 1;
   }
-  if (ranked.empty()) {
+  if (visible_in_box == 0) {
     throw InputError(fmt::format("--place-tracker {}: from no position of the box can the tracker see every point; "
                                  "move the box away from the machine or below the points",
                                  args.place_tracker));
@@ -306,7 +307,7 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   doc["data"] = args.data;
   doc["box_mm"] = box;
   doc["candidates"] = candidates.size() - 1;
-  doc["visible"] = ranked.size();
+  doc["visible"] = visible_in_box;
   doc["runs"] = args.runs;
   doc["seed"] = args.seed;
   doc["seconds"] = seconds;
@@ -329,7 +330,7 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   fmt::print("{} tracker positions in the box ({} see every point), ranked by the largest 95 % radius over {} points "
              "(covariance propagation {:.1f} s; Monte Carlo {} runs each for the best {} and the current position; "
              "{:.1f} s in all)\n",
-             candidates.size() - 1, ranked.size(), problem.readings.points.size(), propagation_seconds, args.runs,
+             candidates.size() - 1, visible_in_box, problem.readings.points.size(), propagation_seconds, args.runs,
              args.place_confirm, seconds);
   fmt::print("  {:>4}  {:>28}  {:>14}  {:>14}\n", "rank", "position (mm)", "predicted (um)", "Monte Carlo");
   for (size_t r = 0; r < ranked.size(); ++r) {

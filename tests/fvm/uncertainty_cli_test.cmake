@@ -85,6 +85,11 @@ if(NOT n_ranked EQUAL 9 OR current_predicted STREQUAL "" OR best GREATER current
 endif()
 expect_near("best position: Monte Carlo against covariance propagation (um)" "${best_mc}" "${best}" 8)
 
+run(1 uncertainty ${WORK}/plan/readings.csv --tool 0,0,100 --runs 2 --place-tracker 100,100,0,200,200,100 --place-steps 2)
+if(NOT ERR MATCHES "from no position of the box can the tracker see every point")
+  message(FATAL_ERROR "a box inside the machine: ${ERR}")
+endif()
+
 # The microscope stage: the bundled sample, its centre noise resampled; the runs' validation rms must agree with the
 # covariance-based prediction fvm calibrate prints (1.42 um) and the same seed gives the same result.
 run(0 uncertainty ${SAMPLES}/bar17 --model 27 --runs 40 --seed 2 --json --threads 2)
