@@ -104,6 +104,12 @@ stage::MonteCarloOptions MonteCarloOptionsOf(const UncertaintyArgs& args, bool w
   return mc;
 }
 
+UncertaintyReportData::Point ReportPoint(const std::string& id, const Eigen::Vector3d& q, const stage::PointSpread& s) {
+  return {id, q.x(), q.y(), q.z(), s.u95_mm * 1e3,
+          {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3},
+          {s.covariance(0, 0) * 1e6, s.covariance(0, 1) * 1e6, s.covariance(1, 1) * 1e6}};
+}
+
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -187,8 +193,7 @@ void RunStage(const UncertaintyArgs& args) {
     for (size_t i = 0; i < spreads.size(); ++i) {
       const stage::PointSpread& p = spreads[i];
       const Eigen::Vector3d& q = evaluated.observations[i].command;
-      data.points.push_back({evaluated.labels[i], q.x(), q.y(), q.z(), p.u95_mm * 1e3, p.semi_axes_mm[0] * 1e3,
-                             p.semi_axes_mm[1] * 1e3, p.semi_axes_mm[2] * 1e3});
+      data.points.push_back(ReportPoint(evaluated.labels[i], q, p));
     }
     WriteUncertaintyReport(args.report, data);
   }
@@ -447,8 +452,7 @@ void Run(const UncertaintyArgs& args) {
     for (size_t i = 0; i < problem.observations.size(); ++i) {
       const stage::PointSpread& s = spreads[i];
       const Eigen::Vector3d& q = problem.observations[i].command;
-      data.points.push_back({problem.readings.points[i].id, q.x(), q.y(), q.z(), s.u95_mm * 1e3,
-                             s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3});
+      data.points.push_back(ReportPoint(problem.readings.points[i].id, q, s));
     }
     WriteUncertaintyReport(args.report, data);
   }

@@ -61,30 +61,47 @@ std::string RenderDistribution(const UncertaintyReportData& data) {
   return plot.Finish();
 }
 
-// XY view: a disc per point with radius proportional to its 95 % radius.
+// XY view: each point's 95 % ellipsoid seen from above (the shadow of the ellipsoid x^T C^-1 x = chi^2_3(0.95) on the
+// XY plane is the ellipse of C's XY block at the same level), magnified to a common scale.
 std::string RenderU95Map(const UncertaintyReportData& data) {
+  constexpr double kChi2Of3At95 = 7.814727903251178;
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1, largest = 0;
   for (size_t i = 0; i < data.points.size(); ++i) {
     const auto& p = data.points[i];
     if (i == 0) x0 = x1 = p.x_mm, y0 = y1 = p.y_mm;
     x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm), y0 = std::min(y0, p.y_mm), y1 = std::max(y1, p.y_mm);
-    largest = std::max(largest, p.u95_um);
+    largest = std::max(largest, p.semi_axis_um[2]);
   }
   const double span = std::max({x1 - x0, y1 - y0, 1.0}), margin = 0.1 * span;
-  const double scale_um = largest > 0 ? NiceCeil(largest) : 1.0;
-  const double mm_per_um = 0.06 * span / scale_um;
+  const double mm_per_um = largest > 0 ? 0.06 * span / largest : 1.0;
   SvgPlot plot(800, 800);
   plvpas(0.12, 0.95, 0.1, 0.9, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
   Frame("bcnst", 0, 0, "bcnstv", 0, 0);
-  std::vector<const UncertaintyReportData::Point*> order;
-  for (const auto& p : data.points) order.push_back(&p);
-  std::sort(order.begin(), order.end(), [](const auto* a, const auto* b) { return a->u95_um > b->u95_um; });
-  plcol0(kAfterFill);
-  for (const auto* p : order) Disc(p->x_mm, p->y_mm, p->u95_um * mm_per_um);
+  for (const auto& p : data.points) {
+    // The XY block's principal axes: a x a^T + ... by the closed form of a symmetric 2 x 2 eigen decomposition.
+    const double a = p.covariance_xy_um2[0], b = p.covariance_xy_um2[1], c = p.covariance_xy_um2[2];
+    const double mean = 0.5 * (a + c), diff = std::hypot(0.5 * (a - c), b);
+    const double major = std::sqrt(std::max(0.0, kChi2Of3At95 * (mean + diff)));
+    const double minor = std::sqrt(std::max(0.0, kChi2Of3At95 * (mean - diff)));
+    const double angle = 0.5 * std::atan2(2 * b, a - c);
+    constexpr int kSides = 48;
+    std::vector<PLFLT> x(kSides), y(kSides);
+    for (int k = 0; k < kSides; ++k) {
+      const double t = 2 * M_PI * k / kSides;
+      const double u = major * std::cos(t), v = minor * std::sin(t);
+      x[static_cast<size_t>(k)] = p.x_mm + mm_per_um * (u * std::cos(angle) - v * std::sin(angle));
+      y[static_cast<size_t>(k)] = p.y_mm + mm_per_um * (u * std::sin(angle) + v * std::cos(angle));
+    }
+    plcol0(kAfterFill);
+    plfill(kSides, x.data(), y.data());
+    plcol0(kAfter);
+    x.push_back(x.front()), y.push_back(y.front());
+    plline(kSides + 1, x.data(), y.data());
+  }
   plcol0(kInk);
   pllab("machine x (mm)", "machine y (mm)",
-        fmt::format("95 % radius of each point (largest disc {:.3g} µm; all z levels)", largest).c_str());
+        fmt::format("95 % ellipsoids seen from above (largest semi-axis {:.3g} µm; all z levels)", largest).c_str());
   return plot.Finish();
 }
 
@@ -112,9 +129,11 @@ std::string RenderPage(const UncertaintyReportData& data) {
   html += HtmlFigure("distribution.svg", "Distribution over the runs", "Histograms of the runs' mean errors",
                      "Each run draws the readings again with the tracker's noise around the identified machine and "
                      "identifies them afresh: the mean error on its own readings (final) and on the validation points.");
-  html += HtmlFigure("u95_map.svg", "95 % radius per point", "Discs sized by each point's 95 % radius",
-                     "The radius around the identified prediction of each reading that holds 95 % of the runs' "
-                     "predictions (points.csv adds the semi-axes of the 95 % ellipsoid).");
+  html += HtmlFigure("u95_map.svg", "95 % ellipsoid per point", "Each point's 95 % ellipsoid seen from above",
+                     "The ellipsoid around the identified prediction of each point that holds 95 % of the runs' "
+                     "predictions (normal approximation, chi-square with 3 degrees of freedom), seen from above and "
+                     "magnified to a common scale; points.csv lists its semi-axes and the radius that holds 95 % of "
+                     "the runs.");
   html += "<p>Numbers: <a href=\"points.csv\">points.csv</a>, <a href=\"runs.csv\">runs.csv</a>.</p>\n";
   return html + HtmlTail();
 }

@@ -1,6 +1,7 @@
 #pragma once
 // The report of `fvm uncertainty --report DIR`: a summary, the distribution of the final and validation mean errors
-// over the Monte Carlo runs (histograms), each point's 95 % radius over the workspace, and the numbers as CSV.
+// over the Monte Carlo runs (histograms), each point's 95 % ellipsoid seen from above (its shadow on the XY plane),
+// and the numbers as CSV.
 
 #include <filesystem>
 #include <string>
@@ -18,6 +19,7 @@ struct UncertaintyReportData {
     std::string id;
     double x_mm, y_mm, z_mm, u95_um;
     double semi_axis_um[3];  // of the 95 % ellipsoid, ascending
+    double covariance_xy_um2[3] = {0, 0, 0};  // xx, xy, yy of the covariance: the ellipsoid's shadow in the XY view
   };
   std::vector<Point> points;
 };
