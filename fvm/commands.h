@@ -58,6 +58,9 @@ void RegisterVerify(CLI::App& app);
 // fvm multilaterate READINGS.csv --stations S.json [--self-calibrate] [--angles] -o POINTS.csv (fvm/multilaterate.cc).
 void RegisterMultilaterate(CLI::App& app);
 
+// fvm uncertainty DATA.csv --runs R --seed S [--validate VAL.csv] [--json] (fvm/uncertainty.cc).
+void RegisterUncertainty(CLI::App& app);
+
 // fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
 void RegisterDiff(CLI::App& app);
 

@@ -69,7 +69,6 @@ constexpr const char* kExitCodeFooter =
 }  // namespace fvm::cli
 
 int main(int argc, char** argv) {
-  using fvm::cli::AddNotBuilt;
   // Named here, not from argv[0]: messages and usage lines say "fvm", never the binary's full path.
   CLI::App app{"fvm: calibrate the motion stage of focus-variation microscopes (and machine tools measured with "
                "laser\ntrackers) from measurements of an uncalibrated artefact. Units: mm and rad in files, um and "
@@ -100,7 +99,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterStitch(app);
   fvm::cli::RegisterVerify(app);
   fvm::cli::RegisterMultilaterate(app);
-  AddNotBuilt(app, "uncertainty", "Monte Carlo uncertainty of a verification or calibration", 0);
+  fvm::cli::RegisterUncertainty(app);
 
   try {
     app.parse(argc, argv);

@@ -15,6 +15,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "fvm/commands.h"
+#include "fvm/machine_problem.h"
 #include "fvm/machine_report.h"
 #include "fvm/option_parsing.h"
 #include "stage/calibration.h"
@@ -26,48 +27,12 @@
 namespace fvm::cli {
 namespace {
 
-struct VerifyArgs {
-  std::string data;
-  std::string chain = "XFYZ";
+struct VerifyArgs : MachineArgs {
   std::string order = "3";
-  std::string basis = "legendre";
-  std::vector<std::string> tools{"0,0,0"};
-  bool fit_pose = false;
-  std::string pose;
-  std::string machine;
-  std::string tracker = "published";
-  bool unweighted = false;
-  std::string validate;
   std::string output;
   std::string report;
   bool json = false;
 };
-
-stage::ParameterLayout MachineLayout(const stage::AxisChain& chain, const artefacts::Workspace& ws, stage::Basis basis, int order) {
-  std::array<stage::Travel, 3> travel;
-  for (int k = 0; k < 3; ++k) travel[static_cast<size_t>(k)] = stage::Travel{ws.min[k], ws.max[k]};
-  return stage::MachineLayout(chain, travel, basis, order);
-}
-
-// The workspace the error functions are defined on: --machine, or the span of the commanded points.
-artefacts::Workspace WorkspaceOf(const VerifyArgs& args, const artefacts::TrackerReadings& readings) {
-  if (!args.machine.empty()) return ParseMachine(args.machine);
-  artefacts::Workspace ws;
-  ws.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  ws.max = -ws.min;
-  for (const artefacts::TrackerReading& r : readings.points) {
-    ws.min = ws.min.cwiseMin(r.nominal);
-    ws.max = ws.max.cwiseMax(r.nominal);
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (!(ws.max[k] > ws.min[k])) {
-      throw InputError(fmt::format("{}: every point has {} = {} mm: the {} axis never moves, so its errors cannot be "
-                                   "identified; measure points along all three axes",
-                                   readings.source, "xyz"[k], ws.min[k], "XYZ"[k]));
-    }
-  }
-  return ws;
-}
 
 nlohmann::json ErrorJson(const stage::VolumetricError& e) {
   return {{"mean_um", e.mean_um}, {"max_um", e.max_um}, {"min_um", e.min_um}};
@@ -203,37 +168,14 @@ MachineReportData ReportOf(const VerifyArgs& args, const nlohmann::json& doc, co
 }
 
 void Run(const VerifyArgs& args) {
-  const artefacts::TrackerReadings readings = artefacts::ReadTrackerReadings(args.data);
-  std::optional<artefacts::TrackerReadings> validation;
-  if (!args.validate.empty()) validation = artefacts::ReadTrackerReadings(args.validate);
-
-  stage::AxisChain chain;
-  try {
-    chain = stage::AxisChain::Parse(args.chain);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(fmt::format("--chain {}: {}", args.chain, e.what()));
-  }
-  stage::IdentificationOptions options;
-  for (const std::string& t : args.tools) options.tool_offsets.push_back(ParseVector3(t, "--tool", "0,0,100"));
-  chain.tool_offset = options.tool_offsets.front();
-  const std::vector<const artefacts::TrackerReadings*> files{&readings, validation ? &*validation : nullptr};
-  for (const artefacts::TrackerReadings* file : files) {
-    if (file == nullptr) continue;
-    for (const artefacts::TrackerReading& r : file->points) {
-      if (r.tool >= static_cast<int>(options.tool_offsets.size())) {
-        throw InputError(fmt::format("{}:{}: point {} was measured with tool {}, but only {} --tool offset(s) were given",
-                                     file->source, r.line, r.id, r.tool + 1, options.tool_offsets.size()));
-      }
-    }
-  }
-  const stage::TrackerNoise noise = stage::TrackerNoise::Preset(args.tracker);
-  const bool weighted = !args.unweighted && !noise.IsNoiseFree();
-  const std::vector<stage::Observation> observations = artefacts::TrackerObservations(readings, weighted ? &noise : nullptr);
-  const artefacts::Workspace ws = WorkspaceOf(args, readings);
-  const stage::Basis basis = *stage::ParseBasis(args.basis);
-  options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
-  if (!args.pose.empty()) options.pose = ParsePose(args.pose, "--pose");
-  options.num_threads = ThreadCount();
+  const MachineProblem problem = LoadMachineProblem(args);
+  const artefacts::TrackerReadings& readings = problem.readings;
+  const std::optional<artefacts::TrackerReadings>& validation = problem.validation;
+  const stage::AxisChain& chain = problem.chain;
+  const stage::IdentificationOptions& options = problem.options;
+  const stage::TrackerNoise& noise = problem.noise;
+  const bool weighted = problem.weighted;
+  const std::vector<stage::Observation>& observations = problem.observations;
 
   std::vector<int> orders;
   if (args.order == "auto") {
@@ -245,11 +187,7 @@ void Run(const VerifyArgs& args) {
   for (int order : orders) {
     OrderFit fit;
     fit.order = order;
-    try {
-      fit.result = stage::VerifyMachine(MachineLayout(chain, ws, basis, order), observations, options);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(fmt::format("{}: {}", args.data, e.what()));
-    }
+    fit.result = VerifyProblem(problem, problem.Layout(order));
     const stage::IdentificationResult& r = fit.result->identified;
     // BIC on the (weighted) residuals: chi^2 + k ln(N), or N ln(RSS / N) + k ln(N) with equal weights.
     const double n_eq = 3.0 * static_cast<double>(observations.size());
@@ -259,7 +197,7 @@ void Run(const VerifyArgs& args) {
                                      : n_eq * std::log(std::max(r.rms_mm * r.rms_mm, 1e-30));
     fit.bic = fit_term + k * std::log(n_eq);
     if (validation) {
-      const std::vector<stage::Observation> others = artefacts::TrackerObservations(*validation, nullptr);
+      const std::vector<stage::Observation>& others = problem.validation_observations;
       fit.validation_before = stage::SummarizeVolumetric(stage::VolumetricResiduals(
           r.calibration.layout, nullptr, fit.result->initial_pose, others, options.tool_offsets));
       fit.validation_after = stage::SummarizeVolumetric(stage::VolumetricResiduals(
@@ -278,13 +216,7 @@ void Run(const VerifyArgs& args) {
   const stage::VerificationResult& v = *chosen.result;
   const stage::IdentificationResult& r = v.identified;
 
-  // Points the tracker could not have seen from the pose found: a reading there is a mistake in the file.
-  const std::vector<std::string> beyond = artefacts::PointsBeyondTrackerLimits(readings, r.pose);
-  if (!beyond.empty()) {
-    throw InputError(fmt::format("{}: {} of {} readings lie outside the tracker's range or angle limits from the pose "
-                                 "found (first: {}); check the file's units and columns",
-                                 args.data, beyond.size(), readings.points.size(), beyond.front()));
-  }
+  CheckTrackerSight(problem, r.pose);
 
   nlohmann::json doc;
   doc["data"] = args.data;
@@ -320,8 +252,8 @@ void Run(const VerifyArgs& args) {
   }
 
   if (!args.report.empty()) {
-    const std::vector<stage::Observation> others = validation ? artefacts::TrackerObservations(*validation, nullptr) : std::vector<stage::Observation>{};
-    WriteMachineReport(args.report, ReportOf(args, doc, v, observations, validation ? &others : nullptr, options.tool_offsets));
+    WriteMachineReport(args.report, ReportOf(args, doc, v, observations, validation ? &problem.validation_observations : nullptr,
+                                             options.tool_offsets));
   }
   if (!args.output.empty()) {
     nlohmann::json model = calibration;
@@ -365,29 +297,10 @@ void RegisterVerify(CLI::App& app) {
              "of the ideal machine (initial) or of the identified one (final), in the tracker frame. Error functions "
              "only matter up to their value at each axis' origin, which the tracker pose absorbs: the pose is "
              "estimated jointly unless --pose holds it, and terms the data cannot separate are fixed and named.");
-  sub->add_option("DATA", args->data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad)")
-      ->required();
-  sub->add_option("--chain", args->chain, "F-notation chain: letters left of F move the part (e.g. XFYZ, FXYZ, XYFZ)")
-      ->capture_default_str();
+  AddMachineOptions(sub, *args);
   sub->add_option("--order", args->order, "polynomial order of each error function, 1-3, or auto (held-out points or BIC)")
       ->check(CLI::IsMember({"1", "2", "3", "auto"}))
       ->capture_default_str();
-  sub->add_option("--basis", args->basis, "polynomial basis")->check(CLI::IsMember({"power", "legendre", "chebyshev"}))
-      ->capture_default_str();
-  sub->add_option("--tool", args->tools, "tool offset X,Y,Z in mm (give it twice for two tools: a `tool` column says which)")
-      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
-      ->capture_default_str();
-  auto* fit = sub->add_flag("--fit-pose", args->fit_pose, "estimate the tracker pose jointly (the default)");
-  sub->add_option("--pose", args->pose, "hold the tracker pose: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
-      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
-      ->excludes(fit);
-  sub->add_option("--machine", args->machine, "axis travels LXxLYxLZ[@X0,Y0,Z0] in mm (default: the span of the points)")
-      ->check(Parses([](const std::string& t) { ParseMachine(t); }, "LXxLYxLZ"));
-  sub->add_option("--tracker", args->tracker, "tracker noise model for the weights")
-      ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
-      ->capture_default_str();
-  sub->add_flag("--unweighted", args->unweighted, "equal weights instead of the tracker's covariances");
-  sub->add_option("--validate", args->validate, "other readings to judge the model on (never fitted)");
   sub->add_option("-o,--output", args->output, "write the identified machine (calibration JSON with the tracker pose)");
   sub->add_option("--report", args->report,
                   "write an HTML report with SVG plots to this directory (error functions with 95 % bands, tracker "

@@ -66,4 +66,14 @@ Eigen::Matrix3d TrackerNoise::Covariance(const Eigen::Vector3d& point) const {
   return j * variances.asDiagonal() * j.transpose();
 }
 
+Eigen::Vector3d TrackerNoise::Perturb(const Eigen::Vector3d& point, double n_range, double n_azimuth,
+                                      double n_elevation) const {
+  if (IsNoiseFree()) return point;
+  Spherical s = ToSpherical(point);
+  s.range_mm += RangeSigmaMm(s.range_mm) * n_range;
+  s.azimuth_rad += azimuth_sigma_rad * n_azimuth;
+  s.elevation_rad += elevation_sigma_rad * n_elevation;
+  return FromSpherical(s);
+}
+
 }  // namespace fvm::stage

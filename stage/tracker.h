@@ -43,6 +43,9 @@ struct TrackerNoise {
   // Covariance (mm^2) of a reading at `point` in the tracker's frame: J diag(sr^2, sa^2, se^2) J^T.
   Eigen::Matrix3d Covariance(const Eigen::Vector3d& point) const;
   bool IsNoiseFree() const;
+  // The reading of `point` (tracker frame, mm) with standard normal draws n_* scaled by the sigmas and added to its
+  // range, azimuth and elevation (eq. 22-24); `point` itself, bit for bit, when the tracker is noise-free.
+  Eigen::Vector3d Perturb(const Eigen::Vector3d& point, double n_range, double n_azimuth, double n_elevation) const;
 };
 
 }  // namespace fvm::stage

@@ -5,31 +5,17 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 
 #include "core/number_text.h"
+#include "core/random.h"
 
 namespace fvm::artefacts {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Uniform and normal draws from mt19937_64 with our own arithmetic (see the header: std::*_distribution differ
-// between standard libraries).
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(seed) {}
-  double Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double Normal() {                                                                  // Box-Muller, one value per pair
-    const double u1 = 1.0 - Uniform();                                                // (0, 1]: log is finite
-    const double u2 = Uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
+using fvm::Random;  // core/random.h: the same bits with any standard library
 
 double RoundToMicrometre(double mm) { return std::round(mm * 1000.0) / 1000.0; }
 
@@ -355,15 +341,9 @@ TrackerReadings SimulateTrackerReadings(const stage::AxisChain& chain, const Mac
     reading.approach = p.approach;
     reading.measured = stage::ChainForward(chain, e, p.nominal);
     truths.points.push_back(reading);
-    stage::Spherical s = stage::ToSpherical(reading.measured);
     // Three draws per point whatever the noise, so the sequence does not depend on the preset.
     const double n_range = random.Normal(), n_azimuth = random.Normal(), n_elevation = random.Normal();
-    if (!noise.IsNoiseFree()) {
-      s.range_mm += noise.RangeSigmaMm(s.range_mm) * n_range;
-      s.azimuth_rad += noise.azimuth_sigma_rad * n_azimuth;
-      s.elevation_rad += noise.elevation_sigma_rad * n_elevation;
-      reading.measured = stage::FromSpherical(s);
-    }
+    reading.measured = noise.Perturb(reading.measured, n_range, n_azimuth, n_elevation);
     readings.points.push_back(std::move(reading));
   }
   if (noise_free != nullptr) *noise_free = std::move(truths);

@@ -1,0 +1,40 @@
+#pragma once
+// Seeded random draws that are the same bits with any standard library: std::mt19937_64 (fully specified by the
+// standard) turned into uniform doubles (53 bits) and normal ones (Box-Muller) by our own arithmetic, not by
+// std::*_distribution, whose algorithms each library chooses. Only std::sin/cos/log/sqrt could differ in the last
+// bit on another libm.
+
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+
+namespace fvm {
+
+class Random {
+ public:
+  explicit Random(std::uint64_t seed) : engine_(seed) {}
+  double Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }  // [0, 1)
+  double Normal() {                                                                  // Box-Muller, one value per pair
+    const double u1 = 1.0 - Uniform();                                                // (0, 1]: log is finite
+    const double u2 = Uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+// A seed for stream `index` of `seed` (SplitMix64 finaliser of both): Monte Carlo run i draws from
+// Random(StreamSeed(seed, i)), so a run's draws depend on neither the thread that made it nor the other runs.
+inline std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t index) {
+  const auto mix = [](std::uint64_t z) {
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  return mix(mix(seed) ^ index);
+}
+
+}  // namespace fvm

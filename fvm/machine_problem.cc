@@ -1,0 +1,118 @@
+#include "fvm/machine_problem.h"
+
+#include <fmt/core.h>
+
+#include <limits>
+
+#include "artefacts/tracker_observations.h"
+#include "core/input_error.h"
+#include "fvm/commands.h"
+#include "fvm/option_parsing.h"
+
+namespace fvm::cli {
+namespace {
+
+// The workspace the error functions are defined on: --machine, or the span of the commanded points.
+artefacts::Workspace WorkspaceOf(const MachineArgs& args, const artefacts::TrackerReadings& readings) {
+  if (!args.machine.empty()) return ParseMachine(args.machine);
+  artefacts::Workspace ws;
+  ws.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  ws.max = -ws.min;
+  for (const artefacts::TrackerReading& r : readings.points) {
+    ws.min = ws.min.cwiseMin(r.nominal);
+    ws.max = ws.max.cwiseMax(r.nominal);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(ws.max[k] > ws.min[k])) {
+      throw InputError(fmt::format("{}: every point has {} = {} mm: the {} axis never moves, so its errors cannot be "
+                                   "identified; measure points along all three axes",
+                                   readings.source, "xyz"[k], ws.min[k], "XYZ"[k]));
+    }
+  }
+  return ws;
+}
+
+}  // namespace
+
+void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
+  sub->add_option("DATA", args.data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad); fvm uncertainty also takes a batch directory")
+      ->required();
+  sub->add_option("--chain", args.chain, "F-notation chain: letters left of F move the part (e.g. XFYZ, FXYZ, XYFZ)")
+      ->capture_default_str();
+  sub->add_option("--basis", args.basis, "polynomial basis")->check(CLI::IsMember({"power", "legendre", "chebyshev"}))
+      ->capture_default_str();
+  sub->add_option("--tool", args.tools, "tool offset X,Y,Z in mm (give it twice for two tools: a `tool` column says which)")
+      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->capture_default_str();
+  auto* fit = sub->add_flag("--fit-pose", args.fit_pose, "estimate the tracker pose jointly (the default)");
+  sub->add_option("--pose", args.pose, "hold the tracker pose: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
+      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
+      ->excludes(fit);
+  sub->add_option("--machine", args.machine, "axis travels LXxLYxLZ[@X0,Y0,Z0] in mm (default: the span of the points)")
+      ->check(Parses([](const std::string& t) { ParseMachine(t); }, "LXxLYxLZ"));
+  sub->add_option("--tracker", args.tracker, "tracker noise model for the weights")
+      ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
+      ->capture_default_str();
+  sub->add_flag("--unweighted", args.unweighted, "equal weights instead of the tracker's covariances");
+  sub->add_option("--validate", args.validate, "other readings to judge the model on (never fitted)");
+}
+
+std::string MachineProblem::WeightsName() const { return weighted ? "tracker " + noise.name : std::string("equal"); }
+
+stage::ParameterLayout MachineProblem::Layout(int order) const {
+  std::array<stage::Travel, 3> travel;
+  for (int k = 0; k < 3; ++k) travel[static_cast<size_t>(k)] = stage::Travel{workspace.min[k], workspace.max[k]};
+  return stage::MachineLayout(chain, travel, basis, order);
+}
+
+MachineProblem LoadMachineProblem(const MachineArgs& args) {
+  MachineProblem p;
+  p.readings = artefacts::ReadTrackerReadings(args.data);
+  if (!args.validate.empty()) p.validation = artefacts::ReadTrackerReadings(args.validate);
+  try {
+    p.chain = stage::AxisChain::Parse(args.chain);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("--chain {}: {}", args.chain, e.what()));
+  }
+  for (const std::string& t : args.tools) p.options.tool_offsets.push_back(ParseVector3(t, "--tool", "0,0,100"));
+  p.chain.tool_offset = p.options.tool_offsets.front();
+  for (const artefacts::TrackerReadings* file : {&p.readings, p.validation ? &*p.validation : nullptr}) {
+    if (file == nullptr) continue;
+    for (const artefacts::TrackerReading& r : file->points) {
+      if (r.tool >= static_cast<int>(p.options.tool_offsets.size())) {
+        throw InputError(fmt::format("{}:{}: point {} was measured with tool {}, but only {} --tool offset(s) were given",
+                                     file->source, r.line, r.id, r.tool + 1, p.options.tool_offsets.size()));
+      }
+    }
+  }
+  p.noise = stage::TrackerNoise::Preset(args.tracker);
+  p.weighted = !args.unweighted && !p.noise.IsNoiseFree();
+  p.observations = artefacts::TrackerObservations(p.readings, p.weighted ? &p.noise : nullptr);
+  if (p.validation) p.validation_observations = artefacts::TrackerObservations(*p.validation, nullptr);
+  p.workspace = WorkspaceOf(args, p.readings);
+  p.basis = *stage::ParseBasis(args.basis);
+  p.options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
+  if (!args.pose.empty()) p.options.pose = ParsePose(args.pose, "--pose");
+  p.options.num_threads = ThreadCount();
+  return p;
+}
+
+stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout) {
+  try {
+    return stage::VerifyMachine(layout, problem.observations, problem.options);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: {}", problem.readings.source, e.what()));
+  }
+}
+
+void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose) {
+  // Points the tracker could not have seen from the pose found: a reading there is a mistake in the file.
+  const std::vector<std::string> beyond = artefacts::PointsBeyondTrackerLimits(problem.readings, pose);
+  if (!beyond.empty()) {
+    throw InputError(fmt::format("{}: {} of {} readings lie outside the tracker's range or angle limits from the pose "
+                                 "found (first: {}); check the file's units and columns",
+                                 problem.readings.source, beyond.size(), problem.readings.points.size(), beyond.front()));
+  }
+}
+
+}  // namespace fvm::cli

@@ -1,0 +1,57 @@
+#pragma once
+// What fvm verify and fvm uncertainty share: the tracker readings and their options turned into an identification
+// problem (chain, tool offsets, weights, workspace, pose held or estimated), with the same checks and messages.
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "artefacts/io/tracker_readings.h"
+#include "artefacts/simulation/machine_tool_simulation.h"
+#include "stage/identification.h"
+#include "stage/machine_verification.h"
+#include "stage/tracker.h"
+
+namespace fvm::cli {
+
+struct MachineArgs {
+  std::string data;
+  std::string chain = "XFYZ";
+  std::string basis = "legendre";
+  std::vector<std::string> tools{"0,0,0"};
+  bool fit_pose = false;
+  std::string pose;
+  std::string machine;
+  std::string tracker = "published";
+  bool unweighted = false;
+  std::string validate;
+};
+
+// DATA, --chain, --basis, --tool, --fit-pose, --pose, --machine, --tracker, --unweighted, --validate.
+void AddMachineOptions(CLI::App* sub, MachineArgs& args);
+
+struct MachineProblem {
+  artefacts::TrackerReadings readings;
+  std::optional<artefacts::TrackerReadings> validation;
+  stage::AxisChain chain;              // tool offset: the first --tool
+  stage::IdentificationOptions options;  // tool offsets, instrument held or estimated, pose, threads
+  stage::TrackerNoise noise;
+  bool weighted = true;
+  std::vector<stage::Observation> observations;  // the readings, weighted by the noise model when `weighted`
+  std::vector<stage::Observation> validation_observations;  // unweighted; empty without --validate
+  artefacts::Workspace workspace;      // --machine, or the span of the commanded points
+  stage::Basis basis = stage::Basis::kLegendre;
+  std::string WeightsName() const;     // "tracker published" or "equal"
+  stage::ParameterLayout Layout(int order) const;
+};
+
+// Reads and checks everything; bad input is an InputError naming the file, line and point.
+MachineProblem LoadMachineProblem(const MachineArgs& args);
+
+// Identifies `layout` (VerifyMachine); a refusal is an InputError naming the data file. Then refuses readings the
+// tracker could not have made from the pose found.
+stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout);
+void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
+
+}  // namespace fvm::cli

@@ -1,0 +1,541 @@
+// fvm uncertainty DATA.csv --chain XFYZ --order N --tool X,Y,Z --runs R --seed S [--validate VAL.csv] [--json]:
+// Monte Carlo uncertainty of a machine-tool verification (GUM Supplement 1): the readings are drawn again with the
+// tracker's noise around the identified machine and identified afresh, R times.
+
+#include <fmt/core.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <nlohmann/json.hpp>
+
+#include "artefacts/batch_observations.h"
+#include "artefacts/io/batch.h"
+#include "core/exit_codes.h"
+#include "core/input_error.h"
+#include "core/progress.h"
+#include "fvm/calibration_run.h"
+#include "fvm/commands.h"
+#include "fvm/machine_problem.h"
+#include "fvm/option_parsing.h"
+#include "fvm/uncertainty_report.h"
+#include "stage/monte_carlo.h"
+
+namespace fvm::cli {
+namespace {
+
+struct UncertaintyArgs : MachineArgs {
+  int order = 3;
+  int runs = 1000;
+  std::uint64_t seed = 1;
+  double u_cal_um = 0.0;
+  double temperature_c = 0.2;
+  double cte_per_k = 11.5e-6;
+  double k = 2.0;
+  std::string report;
+  bool json = false;
+  // The microscope stage (DATA is a batch directory).
+  std::string model = "27";
+  std::string terms;
+  double centre_noise_um = -1.0;  // < 0: the identification's residual standard deviation per coordinate
+  IdentifySettings settings;
+  // Tracker placement.
+  std::string place_tracker;
+  int place_steps = 4;
+  int place_confirm = 3;
+};
+
+nlohmann::json DistributionJson(const stage::SampleSummary& s) {
+  return {{"mean", s.mean}, {"sd", s.sd}, {"p2_5", s.p2_5}, {"p97_5", s.p97_5}, {"p95", s.p95}, {"max", s.max}};
+}
+
+stage::BudgetInputs BudgetInputsOf(const UncertaintyArgs& args) {
+  stage::BudgetInputs inputs;
+  inputs.u_cal_mm = args.u_cal_um * 1e-3;
+  inputs.temperature_half_range_k = args.temperature_c;
+  inputs.cte_per_k = args.cte_per_k;
+  inputs.k = args.k;
+  return inputs;
+}
+
+nlohmann::json BudgetJson(const stage::UncertaintyBudget& budget) {
+  return {{"u_cal_um", budget.u_cal_mm * 1e3}, {"u_p_um", budget.u_p_mm * 1e3}, {"u_b_um", budget.u_b_mm * 1e3},
+          {"u_w_um", budget.u_w_mm * 1e3},     {"U_um", budget.U_mm * 1e3},     {"k", budget.k},
+          {"u_b_from", budget.repeated_commands > 0 ? "repeats" : "noise model"},
+          {"length_mm", budget.length_mm}};
+}
+
+void PrintBudget(const stage::UncertaintyBudget& budget) {
+  fmt::print("  budget (ISO/TS 15530-3): u_cal {:.2f}, u_p {:.2f}, u_b {:.2f} ({}), u_w {:.2f} um -> U = {:.2f} um (k = {})\n",
+             budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
+             budget.repeated_commands > 0 ? "repeats" : "noise model", budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k);
+}
+
+// One entry per evaluation point: its id, 95 % radius and ellipsoid, and the mean deviation (the bias of
+// re-identification), appended to `points`; the radii to `u95s`.
+void AddPoints(const std::vector<stage::PointSpread>& spreads, size_t offset, const std::vector<std::string>& ids,
+               const char* set, nlohmann::json& points, std::vector<double>& u95s) {
+  for (size_t i = 0; i < ids.size(); ++i) {
+    const stage::PointSpread& s = spreads[offset + i];
+    u95s.push_back(s.u95_mm * 1e3);
+    points.push_back({{"id", ids[i]},
+                      {"set", set},
+                      {"U95_um", s.u95_mm * 1e3},
+                      {"ellipsoid_semi_axes_um", {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3}},
+                      {"bias_um", s.mean_mm.norm() * 1e3}});
+  }
+}
+
+std::vector<std::string> IdsOf(const artefacts::TrackerReadings& readings) {
+  std::vector<std::string> ids;
+  for (const artefacts::TrackerReading& r : readings.points) ids.push_back(r.id);
+  return ids;
+}
+
+// The Monte Carlo options of the command line; `progress` (may be null) advances with every run.
+stage::MonteCarloOptions MonteCarloOptionsOf(const UncertaintyArgs& args, bool weighted, Progress* progress) {
+  stage::MonteCarloOptions mc;
+  mc.runs = args.runs;
+  mc.seed = args.seed;
+  mc.threads = Common().threads;
+  mc.weighted = weighted;
+  if (progress != nullptr) mc.on_run_done = [progress] { progress->Advance(); };
+  return mc;
+}
+
+UncertaintyReportData::Point ReportPoint(const std::string& id, const Eigen::Vector3d& q, const stage::PointSpread& s) {
+  return {id, q.x(), q.y(), q.z(), s.u95_mm * 1e3,
+          {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3},
+          {s.covariance(0, 0) * 1e6, s.covariance(0, 1) * 1e6, s.covariance(1, 1) * 1e6}};
+}
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// fvm uncertainty BATCH --model 27: the microscope stage, its centre noise resampled.
+void RunStage(const UncertaintyArgs& args) {
+  if (!args.validate.empty() || !args.place_tracker.empty()) {
+    throw InputError(fmt::format("{} is a batch directory: {} is for tracker readings (a batch names its validation "
+                                 "placements in batch.json)",
+                                 args.data, args.validate.empty() ? "--place-tracker" : "--validate"));
+  }
+  const artefacts::Batch batch = artefacts::ReadBatch(args.data);
+  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
+  const stage::IdentificationResult reference = IdentifyModel(args.model, args.terms, identify, args.settings);
+  if (!reference.converged) {
+    throw NotConvergedError("the identification of the batch did not converge: " + reference.solver_report);
+  }
+  std::optional<stage::MeasurementSet> validate;
+  if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
+  const double sigma_mm = args.centre_noise_um >= 0 ? args.centre_noise_um * 1e-3 : reference.calibration.sigma_mm;
+
+  Progress progress("monte carlo runs", args.runs, ShowProgress());
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, false, &progress);
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<stage::StageMonteCarloRun> runs =
+      stage::StageMonteCarlo(ModelLayout(args.model, args.terms), reference, identify, validate ? &*validate : nullptr,
+                             sigma_mm, args.settings.ToOptions(identify), mc);
+  progress.Finish();
+  const double seconds = Seconds(start);
+
+  std::vector<double> finals, validation_means, validation_rms;
+  int converged = 0;
+  for (const stage::StageMonteCarloRun& r : runs) {
+    finals.push_back(r.fit_mean_mm * 1e3);
+    if (validate) validation_means.push_back(r.validation.mean_mm * 1e3), validation_rms.push_back(r.validation.rms_mm * 1e3);
+    converged += r.converged ? 1 : 0;
+  }
+  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
+  const stage::UncertaintyBudget budget =
+      stage::Budget(spreads, identify.observations, std::sqrt(3.0) * sigma_mm, BudgetInputsOf(args));
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["model"] = reference.calibration.model;
+  doc["runs"] = args.runs;
+  doc["converged_runs"] = converged;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["centre_noise_um"] = sigma_mm * 1e3;
+  doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
+  doc["validation_mean_um"] = validate ? DistributionJson(stage::SummarizeSample(validation_means)) : nlohmann::json(nullptr);
+  std::optional<stage::ValidationStats> stats;
+  if (validate) {
+    stats = stage::Validate(&reference.calibration, validate->observations, validate->anchors);
+    doc["validation_rms_um"] = DistributionJson(stage::SummarizeSample(validation_rms));
+    doc["reference"] = {{"validation_rms_um", stats->rms_mm * 1e3}, {"predicted_rms_um", stats->predicted_rms_mm * 1e3}};
+  }
+  nlohmann::json points = nlohmann::json::array();
+  std::vector<double> u95s;
+  AddPoints(spreads, 0, (validate ? *validate : identify).labels, validate ? "validation" : "identification", points, u95s);
+  doc["points"] = points;
+  const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
+  doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
+  doc["budget"] = BudgetJson(budget);
+  if (!args.report.empty()) {
+    UncertaintyReportData data;
+    data.title = fmt::format("fvm uncertainty: model {}, {} runs, seed {} on {}", reference.calibration.model, args.runs,
+                             args.seed, args.data);
+    data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
+                    {"centre noise", fmt::format("{:.3f} um per coordinate", sigma_mm * 1e3)},
+                    {"U95 per centre (um)", fmt::format("mean {:.3f}, max {:.3f}", u95.mean, u95.max)}};
+    if (validate) {
+      data.summary.push_back({"validation rms (um)", fmt::format("{:.3f} +- {:.3f}; predicted from the covariance {:.3f}",
+                                                                 doc["validation_rms_um"]["mean"].get<double>(),
+                                                                 doc["validation_rms_um"]["sd"].get<double>(),
+                                                                 stats->predicted_rms_mm * 1e3)});
+    }
+    data.final_mean_um = finals;
+    data.validation_mean_um = validation_means;
+    const stage::MeasurementSet& evaluated = validate ? *validate : identify;
+    for (size_t i = 0; i < spreads.size(); ++i) {
+      const stage::PointSpread& p = spreads[i];
+      const Eigen::Vector3d& q = evaluated.observations[i].command;
+      data.points.push_back(ReportPoint(evaluated.labels[i], q, p));
+    }
+    WriteUncertaintyReport(args.report, data);
+  }
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} Monte Carlo runs of model {} on {} ({} centres, noise {:.3f} um per coordinate), seed {}: {:.1f} s, "
+             "{} converged\n",
+             args.runs, reference.calibration.model, args.data, identify.observations.size(), sigma_mm * 1e3, args.seed,
+             seconds, converged);
+  fmt::print("  identification mean error  {:.3f} +- {:.3f} um (the batch's own fit: {:.3f} um)\n",
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.mean_mm * 1e3);
+  if (validate) {
+    const nlohmann::json& v = doc["validation_rms_um"];
+    fmt::print("  validation rms ({} centres)  {:.3f} +- {:.3f} um, 95 % of runs below {:.3f} um; the batch's {:.3f} um, "
+               "predicted from the covariance {:.3f} um\n",
+               validate->observations.size(), v["mean"].get<double>(), v["sd"].get<double>(), v["p95"].get<double>(),
+               stats->rms_mm * 1e3, stats->predicted_rms_mm * 1e3);
+  }
+  fmt::print("  U95 of the predicted centre: mean {:.3f} um, max {:.3f} um\n", u95.mean, u95.max);
+  PrintBudget(budget);
+}
+
+// --place-tracker X0,Y0,Z0,X1,Y1,Z1: tracker positions on a grid of the box (machine frame, mm; the estimated
+// orientation kept: the noise is the same in any orientation of the tracker's frame), each ranked by the largest
+// 95 % radius over the readings' points that covariance propagation predicts; the best few confirmed by the Monte
+// Carlo. Positions from which the tracker could not see every point are left out.
+void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, const stage::ParameterLayout& layout,
+                  const stage::VerificationResult& reference) {
+  const std::vector<double> box = ParseNumbers(args.place_tracker, 6, "--place-tracker", "1000,-1500,0,2000,-500,800");
+  const stage::Calibration& truth = reference.identified.calibration;
+  const bool estimate_pose = problem.options.instrument == stage::InstrumentPose::kEstimated;
+  struct Candidate {
+    Eigen::Vector3d position;
+    double predicted_max_um = 0;
+    double monte_carlo_max_um = -1;
+    bool current = false;
+  };
+  std::vector<Candidate> candidates;
+  const int steps = args.place_steps;
+  for (int i = 0; i < steps; ++i) {
+    for (int j = 0; j < steps; ++j) {
+      for (int k = 0; k < steps; ++k) {
+        const Eigen::Vector3d t(i, j, k);
+        Candidate c;
+        for (int a = 0; a < 3; ++a) {
+          c.position[a] = steps == 1 ? 0.5 * (box[a] + box[3 + a]) : box[a] + (box[3 + a] - box[a]) * t[a] / (steps - 1);
+        }
+        candidates.push_back(c);
+      }
+    }
+  }
+  Candidate current;
+  current.position = reference.identified.pose.translation;
+  current.current = true;
+  candidates.push_back(current);
+
+  const auto pose_at = [&](const Eigen::Vector3d& position) {
+    stage::Pose p = reference.identified.pose;
+    p.translation = position;
+    return p;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  Progress progress("tracker positions", static_cast<int>(candidates.size()), ShowProgress());
+  std::vector<char> visible(candidates.size(), 0);
+  stage::ForEachRun(static_cast<int>(candidates.size()), Common().threads, [&](int index) {
+    Candidate& c = candidates[static_cast<size_t>(index)];
+    const stage::Pose pose = pose_at(c.position);
+    artefacts::TrackerReadings seen = problem.readings;
+    const std::vector<Eigen::Vector3d> predicted =
+        stage::PredictedReadings(truth.layout, &truth.values, pose, problem.observations, problem.options.tool_offsets);
+    for (size_t i = 0; i < predicted.size(); ++i) seen.points[i].measured = predicted[i];
+    if (artefacts::PointsBeyondTrackerLimits(seen, pose).empty()) {
+      visible[static_cast<size_t>(index)] = 1;
+      for (const Eigen::Matrix3d& cov : stage::PredictedPointCovariances(truth, pose, estimate_pose, problem.observations,
+                                                                         problem.options.tool_offsets, problem.noise)) {
+        c.predicted_max_um = std::max(c.predicted_max_um, stage::U95OfCovariance(cov) * 1e3);
+      }
+    }
+    progress.Advance();
+  });
+  progress.Finish();
+  std::vector<Candidate> ranked;
+  size_t visible_in_box = 0;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    if (visible[i]) ranked.push_back(candidates[i]), visible_in_box += candidates[i].current ? 0 : 1;
+  }
+  if (visible_in_box == 0) {
+    throw InputError(fmt::format("--place-tracker {}: from no position of the box can the tracker see every point; "
+                                 "move the box away from the machine or below the points",
+                                 args.place_tracker));
+  }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.predicted_max_um < b.predicted_max_um; });
+  const double propagation_seconds = Seconds(start);
+
+  // The Monte Carlo confirms the best few and the current position.
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, nullptr);
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    Candidate& c = ranked[r];
+    if (!(r < static_cast<size_t>(args.place_confirm) || c.current)) continue;
+    stage::VerificationResult at = reference;
+    at.identified.pose = pose_at(c.position);
+    at.initial_pose = at.identified.pose;
+    stage::IdentificationOptions options = problem.options;
+    options.pose = at.identified.pose;
+    const std::vector<stage::MachineMonteCarloRun> runs =
+        stage::MachineMonteCarlo(layout, at, problem.observations, {}, problem.noise, options, mc);
+    c.monte_carlo_max_um = 0;
+    for (const stage::PointSpread& s : stage::PointSpreads(runs)) c.monte_carlo_max_um = std::max(c.monte_carlo_max_um, s.u95_mm * 1e3);
+  }
+  const double seconds = Seconds(start);
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["box_mm"] = box;
+  doc["candidates"] = candidates.size() - 1;
+  doc["visible"] = visible_in_box;
+  doc["runs"] = args.runs;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["propagation_seconds"] = propagation_seconds;
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    const Candidate& c = ranked[r];
+    nlohmann::json e{{"rank", r + 1},
+                     {"position_mm", {c.position.x(), c.position.y(), c.position.z()}},
+                     {"predicted_max_U95_um", c.predicted_max_um},
+                     {"current", c.current}};
+    if (c.monte_carlo_max_um >= 0) e["monte_carlo_max_U95_um"] = c.monte_carlo_max_um;
+    list.push_back(e);
+  }
+  doc["ranked"] = list;
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} tracker positions in the box ({} see every point), ranked by the largest 95 % radius over {} points "
+             "(covariance propagation {:.1f} s; Monte Carlo {} runs each for the best {} and the current position; "
+             "{:.1f} s in all)\n",
+             candidates.size() - 1, visible_in_box, problem.readings.points.size(), propagation_seconds, args.runs,
+             args.place_confirm, seconds);
+  fmt::print("  {:>4}  {:>28}  {:>14}  {:>14}\n", "rank", "position (mm)", "predicted (um)", "Monte Carlo");
+  for (size_t r = 0; r < ranked.size(); ++r) {
+    const Candidate& c = ranked[r];
+    if (!(r < 10 || c.current || r + 1 == ranked.size())) continue;
+    fmt::print("  {:>4}  {:>8.1f} {:>9.1f} {:>9.1f}  {:>14.2f}  {:>14}{}\n", r + 1, c.position.x(), c.position.y(),
+               c.position.z(), c.predicted_max_um,
+               c.monte_carlo_max_um >= 0 ? fmt::format("{:.2f}", c.monte_carlo_max_um) : std::string("-"),
+               c.current ? "  (the readings' tracker)" : "");
+  }
+}
+
+void Run(const UncertaintyArgs& args) {
+  if (std::filesystem::is_directory(args.data)) {
+    RunStage(args);
+    return;
+  }
+  const MachineProblem problem = LoadMachineProblem(args);
+  if (problem.noise.IsNoiseFree()) {
+    throw InputError("--tracker none: a noise-free tracker gives every run the same readings; name the tracker's noise "
+                     "(published, ifm, adm)");
+  }
+  const stage::ParameterLayout layout = problem.Layout(args.order);
+  const stage::VerificationResult reference = VerifyProblem(problem, layout);
+  CheckTrackerSight(problem, reference.identified.pose);
+  if (!reference.identified.converged) {
+    throw NotConvergedError("the identification of the readings did not converge: " + reference.identified.solver_report);
+  }
+
+  if (!args.place_tracker.empty()) {
+    RunPlacement(args, problem, layout, reference);
+    return;
+  }
+
+  Progress progress("monte carlo runs", args.runs, ShowProgress());
+  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, &progress);
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
+      layout, reference, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
+  progress.Finish();
+  const double seconds = Seconds(start);
+
+  std::vector<double> finals, validations;
+  int converged = 0;
+  for (const stage::MachineMonteCarloRun& r : runs) {
+    finals.push_back(r.final.mean_um);
+    if (problem.validation) validations.push_back(r.validation.mean_um);
+    converged += r.converged ? 1 : 0;
+  }
+  // Pooled over runs and readings: the ideal machine's error (initial), the fit's residual (final), and the run's
+  // model against the simulated truth (model error: what the published studies call the residual).
+  std::vector<double> initial_pooled, final_pooled, model_pooled;
+  for (const stage::MachineMonteCarloRun& r : runs) {
+    initial_pooled.insert(initial_pooled.end(), r.initial_um.begin(), r.initial_um.end());
+    final_pooled.insert(final_pooled.end(), r.final_um.begin(), r.final_um.end());
+    for (size_t i = 0; i < problem.observations.size(); ++i) model_pooled.push_back(r.deviation_mm[i].norm() * 1e3);
+  }
+  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
+  std::vector<Eigen::Vector3d> commands;
+  for (const stage::Observation& o : problem.observations) commands.push_back(o.command);
+  const stage::PairSpread pairs = stage::PairDistanceSpread(runs, commands, 100);
+  const stage::UncertaintyBudget budget = stage::Budget(
+      spreads, problem.observations, stage::TrackerReadingSd(problem.observations, problem.noise), BudgetInputsOf(args));
+
+  nlohmann::json doc;
+  doc["data"] = args.data;
+  doc["chain"] = problem.chain.code;
+  doc["order"] = args.order;
+  doc["runs"] = args.runs;
+  doc["converged_runs"] = converged;
+  doc["seed"] = args.seed;
+  doc["seconds"] = seconds;
+  doc["weights"] = problem.WeightsName();
+  doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
+  doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::SummarizeSample(validations)) : nlohmann::json(nullptr);
+  doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
+  const stage::SampleSummary model_error = stage::SummarizeSample(model_pooled);
+  doc["pooled_um"] = {{"initial", DistributionJson(stage::SummarizeSample(initial_pooled))},
+                      {"final", DistributionJson(stage::SummarizeSample(final_pooled))},
+                      {"model_error", DistributionJson(model_error)}};
+  nlohmann::json points = nlohmann::json::array();
+  std::vector<double> u95s;
+  AddPoints(spreads, 0, IdsOf(problem.readings), "readings", points, u95s);
+  if (problem.validation) AddPoints(spreads, problem.readings.points.size(), IdsOf(*problem.validation), "validation", points, u95s);
+  doc["points"] = points;
+  const stage::SampleSummary u95 = stage::SummarizeSample(u95s);
+  doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
+  if (pairs.pairs > 0) {
+    doc["pairs"] = {{"pairs", pairs.pairs},
+                    {"U95_um", {{"mean", pairs.all_um.mean}, {"max", pairs.worst_u95_um}}},
+                    {"worst", {problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
+                               problem.readings.points[static_cast<size_t>(pairs.worst_j)].id}}};
+  }
+  doc["budget"] = BudgetJson(budget);
+
+  if (!args.report.empty()) {
+    UncertaintyReportData data;
+    data.title = fmt::format("fvm uncertainty: {} order {}, {} runs, seed {} on {}", problem.chain.code, args.order, args.runs,
+                             args.seed, args.data);
+    data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
+                    {"final mean error (um)", fmt::format("{:.2f} +- {:.2f}", doc["final_mean_um"]["mean"].get<double>(),
+                                                          doc["final_mean_um"]["sd"].get<double>())}};
+    if (problem.validation) {
+      data.summary.push_back({"validation mean error (um)",
+                              fmt::format("{:.2f} +- {:.2f}", doc["validation_mean_um"]["mean"].get<double>(),
+                                          doc["validation_mean_um"]["sd"].get<double>())});
+    }
+    data.summary.push_back({"U95 per point (um)", fmt::format("mean {:.2f}, max {:.2f}", u95.mean, u95.max)});
+    data.summary.push_back({"budget", fmt::format("u_cal {:.2f}, u_p {:.2f}, u_b {:.2f}, u_w {:.2f} um; U = {:.2f} um (k = {})",
+                                                  budget.u_cal_mm * 1e3, budget.u_p_mm * 1e3, budget.u_b_mm * 1e3,
+                                                  budget.u_w_mm * 1e3, budget.U_mm * 1e3, budget.k)});
+    data.final_mean_um = finals;
+    data.validation_mean_um = validations;
+    for (size_t i = 0; i < problem.observations.size(); ++i) {
+      const stage::PointSpread& s = spreads[i];
+      const Eigen::Vector3d& q = problem.observations[i].command;
+      data.points.push_back(ReportPoint(problem.readings.points[i].id, q, s));
+    }
+    WriteUncertaintyReport(args.report, data);
+  }
+
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    return;
+  }
+  fmt::print("{} Monte Carlo runs of {} {} points ({} weights), order {}, seed {}: {:.1f} s, {} converged\n", args.runs,
+             problem.readings.points.size(), problem.chain.code, problem.WeightsName(), args.order, args.seed, seconds,
+             converged);
+  fmt::print("  final mean error       {:.2f} +- {:.2f} um (the readings' own fit: {:.2f} um)\n",
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.final.mean_um);
+  if (problem.validation) {
+    const auto& v = doc["validation_mean_um"];
+    fmt::print("  validation mean error  {:.2f} +- {:.2f} um, 95 % of runs below {:.2f} um\n", v["mean"].get<double>(),
+               v["sd"].get<double>(), v["p95"].get<double>());
+  }
+  fmt::print("  every point of every run: initial {:.2f} +- {:.2f} um, final {:.2f} +- {:.2f} um; model against the "
+             "simulated truth {:.2f} +- {:.2f} um, 95 % below {:.2f} um, max {:.2f} um\n",
+             doc["pooled_um"]["initial"]["mean"].get<double>(), doc["pooled_um"]["initial"]["sd"].get<double>(),
+             doc["pooled_um"]["final"]["mean"].get<double>(), doc["pooled_um"]["final"]["sd"].get<double>(), model_error.mean,
+             model_error.sd, model_error.p95, model_error.max);
+  fmt::print("  U95 of the predicted point (radius holding 95 % of runs): mean {:.2f} um, max {:.2f} um\n", u95.mean, u95.max);
+  if (pairs.pairs > 0) {
+    fmt::print("  distance errors over {} pairs: U95 mean {:.2f} um, max {:.2f} um ({} - {})\n", pairs.pairs,
+               pairs.all_um.mean, pairs.worst_u95_um, problem.readings.points[static_cast<size_t>(pairs.worst_i)].id,
+               problem.readings.points[static_cast<size_t>(pairs.worst_j)].id);
+  }
+  PrintBudget(budget);
+}
+
+}  // namespace
+
+void RegisterUncertainty(CLI::App& app) {
+  auto args = std::make_shared<UncertaintyArgs>();
+  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification or stage calibration (GUM S1)");
+  AddDetails(sub,
+             "Identifies the machine from the readings as fvm verify does, takes that machine and tracker pose as the "
+             "truth, and --runs times draws the readings again with the tracker's noise (normal in range, azimuth and "
+             "elevation) and identifies them afresh. Reports the distribution of the final and validation mean errors "
+             "over the runs, each point's 95 % radius and ellipsoid, distance errors over point pairs, and the "
+             "ISO/TS 15530-3 budget U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2). Run i draws from a stream seeded by "
+             "(--seed, i): the same seed gives the same bits for any --threads. With a batch directory instead of "
+             "readings, the microscope stage: the model (--model) is identified as fvm calibrate does, the stitched "
+             "centres are drawn again around it with their noise, and the validation rms over the runs is shown next "
+             "to the covariance-based prediction of fvm calibrate.");
+  AddMachineOptions(sub, *args);
+  sub->add_option("--order", args->order, "polynomial order of each error function")->check(CLI::Range(1, 3))->capture_default_str();
+  sub->add_option("--runs", args->runs, "Monte Carlo runs")->check(CLI::Range(1, 1'000'000))->capture_default_str();
+  sub->add_option("--seed", args->seed, "seed of the noise draws")->capture_default_str();
+  sub->add_option("--u-cal-um", args->u_cal_um, "standard uncertainty of the reference's calibration (um)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--temperature-c", args->temperature_c, "half-range of the temperature, rectangular (C)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--cte-per-k", args->cte_per_k, "expansion coefficient of the workpiece (1/K; aluminium 24e-6)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
+  sub->add_option("--model", args->model, "microscope stage (DATA a batch): published model 9, 15, 27 or 42")
+      ->check(CLI::IsMember({"9", "15", "27", "42"}))
+      ->capture_default_str();
+  sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");
+  sub->add_option("--centre-noise-um", args->centre_noise_um,
+                  "microscope stage: standard deviation of a stitched centre per coordinate (default: the fit's residual)")
+      ->check(CLI::NonNegativeNumber);
+  args->settings.AddOptions(*sub);
+  sub->add_option("--place-tracker", args->place_tracker,
+                  "rank tracker positions on a grid of this box X0,Y0,Z0,X1,Y1,Z1 (machine frame, mm) by the largest "
+                  "95 % radius over the points: covariance propagation for all, --runs Monte Carlo runs for the best")
+      ->check(Parses([](const std::string& t) { ParseNumbers(t, 6, "--place-tracker", "1000,-1500,0,2000,-500,800"); },
+                     "X0,Y0,Z0,X1,Y1,Z1"));
+  sub->add_option("--place-steps", args->place_steps, "grid positions per axis of the --place-tracker box")
+      ->check(CLI::Range(1, 50))->capture_default_str();
+  sub->add_option("--place-confirm", args->place_confirm, "best positions the Monte Carlo confirms")
+      ->check(CLI::Range(0, 100))->capture_default_str();
+  sub->add_flag("--json", args->json, "print the result as JSON");
+  sub->footer(
+      "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"
+      "  fvm uncertainty plan/readings.csv --chain XFYZ --order 3 --tool 0,0,100 --fit-pose --runs 1000 --seed 1 \\\n"
+      "    --validate plan/validation.csv --json\n"
+      "  fvm uncertainty samples/bar17 --model 27 --runs 200");
+  sub->callback([args] { Run(*args); });
+}
+
+}  // namespace fvm::cli
