@@ -3,7 +3,8 @@
 #
 #   tests/fuzz/run.sh [EXECUTIONS]      default 20000 inputs per reader; CI runs 2000 per reader after the
 #                                       regression inputs (bash run.sh test). The documented run behind the
-#                                       closing notes is tests/fuzz/run.sh 100000 (about an hour on 2 cores).
+#                                       closing notes is tests/fuzz/run.sh 100000 (one to two hours on 2 cores:
+#                                       the image, layout and batch readers are the slow ones).
 #
 # Configures build-fuzz/ (clang, Ninja, -DFVM_FUZZ=ON; set FVM_FUZZ_BUILD for another directory), builds only the
 # fuzz targets, replays the regression inputs of each reader (tests/fuzz/regressions/<reader>/), then runs it for
