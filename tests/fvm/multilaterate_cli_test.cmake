@@ -28,12 +28,7 @@ endif()
 # Known stations, ranges only: the points within a few tens of um of the truth, the JSON contract.
 run(0 multilaterate ${WORK}/net/readings.csv --stations ${WORK}/net/stations.json -o ${WORK}/points.csv
     --verify-readings ${WORK}/ml.csv --truth ${WORK}/net/true_points.csv --json)
-foreach(key points stations range_rms_um geometry unobservable truth_error)
-  string(JSON ignored ERROR_VARIABLE missing GET "${OUT}" ${key})
-  if(missing)
-    message(FATAL_ERROR "fvm multilaterate --json has no '${key}':\n${OUT}")
-  endif()
-endforeach()
+expect_json_keys("fvm multilaterate" "${OUT}" points stations range_rms_um geometry unobservable truth_error)
 string(JSON n LENGTH "${OUT}" points)
 string(JSON name GET "${OUT}" stations 3 name)
 string(JSON err GET "${OUT}" truth_error mean_um)

@@ -11,12 +11,7 @@ file(MAKE_DIRECTORY ${WORK})
 run(0 simulate tracker --seed 1 --tool 0,0,100 --validation mesh:250,250,200 -o ${WORK}/plan)
 run(0 verify ${WORK}/plan/readings.csv --chain XFYZ --order 2 --tool 0,0,100 --validate ${WORK}/plan/validation.csv
     --json -o ${WORK}/machine.json --report ${WORK}/report)
-foreach(key points initial final validation pose fixed parameters)
-  string(JSON ignored ERROR_VARIABLE missing GET "${OUT}" ${key})
-  if(missing)
-    message(FATAL_ERROR "fvm verify --json has no '${key}':\n${OUT}")
-  endif()
-endforeach()
+expect_json_keys("fvm verify" "${OUT}" points initial final validation pose fixed parameters)
 string(JSON before GET "${OUT}" validation initial mean_um)
 string(JSON after GET "${OUT}" validation final mean_um)
 # The machine errs by 36 um on the validation points (truth.json); with 24 urad of angle noise on 96 readings an
