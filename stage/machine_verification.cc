@@ -3,8 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
+
+#include "stage/validation.h"
 
 namespace fvm::stage {
 namespace {
@@ -18,18 +19,8 @@ AxisChain ChainWithTool(const AxisChain& chain, const std::vector<Eigen::Vector3
 }  // namespace
 
 VolumetricError SummarizeVolumetric(const std::vector<Eigen::Vector3d>& residuals_mm) {
-  VolumetricError v;
-  v.points = static_cast<int>(residuals_mm.size());
-  if (residuals_mm.empty()) return v;
-  v.min_um = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& r : residuals_mm) {
-    const double d = r.norm() * 1e3;
-    v.mean_um += d;
-    v.max_um = std::max(v.max_um, d);
-    v.min_um = std::min(v.min_um, d);
-  }
-  v.mean_um /= v.points;
-  return v;
+  const ResidualSummary s = Summarize(residuals_mm);
+  return {s.count, s.mean_mm * 1e3, s.max_mm * 1e3, s.min_mm * 1e3};
 }
 
 std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, const std::vector<double>* values,

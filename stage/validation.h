@@ -13,10 +13,10 @@
 
 namespace fvm::stage {
 
-// Count, mean, rms and largest of Euclidean residuals: the statistics every report of fvm quotes.
+// Count, mean, rms, largest and smallest of Euclidean residuals: the statistics every report of fvm quotes.
 struct ResidualSummary {
   int count = 0;
-  double mean_mm = 0, rms_mm = 0, max_mm = 0;
+  double mean_mm = 0, rms_mm = 0, max_mm = 0, min_mm = 0;
 };
 ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals);
 
