@@ -61,3 +61,12 @@ function(expect_json_keys what json)
     endif()
   endforeach()
 endfunction()
+
+# Every named file exists in `dir`: what a command (`what`) promised to write.
+function(expect_files what dir)
+  foreach(name IN LISTS ARGN)
+    if(NOT EXISTS ${dir}/${name})
+      message(FATAL_ERROR "${what} wrote no ${name}")
+    endif()
+  endforeach()
+endfunction()

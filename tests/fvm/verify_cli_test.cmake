@@ -39,10 +39,9 @@ if(NOT chain STREQUAL "XFYZ" OR NOT pose_x MATCHES "^1(099|100)\\.")
 endif()
 
 # The report: the page and its three plots, each non-trivial, the page naming its tables and plots.
-foreach(name index.html error_functions.svg volumetric_errors.svg error_map.svg)
-  if(NOT EXISTS ${WORK}/report/${name})
-    message(FATAL_ERROR "fvm verify --report wrote no ${name}")
-  endif()
+set(report_files index.html error_functions.svg volumetric_errors.svg error_map.svg)
+expect_files("fvm verify --report" ${WORK}/report ${report_files})
+foreach(name IN LISTS report_files)
   file(SIZE ${WORK}/report/${name} size)
   if(size LESS 3000)
     message(FATAL_ERROR "report ${name} has only ${size} bytes")
