@@ -32,6 +32,46 @@ nlohmann::json StatsJson(const stage::ValidationStats& s) {
           {"predicted_rms_um", s.predicted_rms_mm * 1e3}};
 }
 
+nlohmann::json FrameFreeJson(const stage::FrameFreeStats& s) {
+  return {{"count", s.count}, {"rms_um", s.rms_mm * 1e3}, {"max_um", s.max_mm * 1e3}, {"predicted_rms_um", s.predicted_rms_mm * 1e3}};
+}
+
+// A calibration judged on held-out measurements: first what no frame changes, then the first-tile figure.
+struct Judged {
+  stage::FrameFreeStats rigid, distances;
+  stage::ValidationStats first_tile;
+};
+Judged Judge(const stage::Calibration* calibration, const stage::MeasurementSet& set, stage::StitchedFrame frame) {
+  return {stage::RigidValidation(calibration, set.observations), stage::PairDistanceValidation(calibration, set.observations),
+          stage::Validate(calibration, set.observations, set.anchors, frame)};
+}
+
+// What the first-tile figure did with each measurement's turn, for people.
+std::string TurnText(const stage::ValidationStats& s, stage::StitchedFrame frame) {
+  if (s.turn == "model") return "each placement turned by the model's " + JoinNames(s.turn_coefficients);
+  if (s.turn == "uncertainty") {
+    return fmt::format("the model cannot tell the turn, so the prediction carries its spread over the placements "
+                       "({:.1f} urad about z)", s.turn_u_rad.z() * 1e6);
+  }
+  return frame == stage::StitchedFrame::kTranslated ? "no turn" : "no model, no turn";
+}
+
+nlohmann::json ValidationJson(const Judged& before, const Judged& after, stage::StitchedFrame frame) {
+  nlohmann::json v = StatsJson(after.first_tile);
+  v["rigid"] = FrameFreeJson(after.rigid);
+  v["distances"] = FrameFreeJson(after.distances);
+  v["stitched_frame"] = stage::StitchedFrameName(frame);
+  v["turn"] = after.first_tile.turn;
+  v["turn_note"] = TurnText(after.first_tile, frame);
+  v["turn_coefficients"] = after.first_tile.turn_coefficients;
+  const Eigen::Vector3d& u = after.first_tile.turn_u_rad;
+  v["turn_u_urad"] = {u.x() * 1e6, u.y() * 1e6, u.z() * 1e6};
+  v["before"] = StatsJson(before.first_tile);
+  v["before"]["rigid"] = FrameFreeJson(before.rigid);
+  v["before"]["distances"] = FrameFreeJson(before.distances);
+  return v;
+}
+
 double MaxAbs(const std::vector<double>& v) {
   double m = 0;
   for (double x : v) m = std::max(m, std::abs(x));
@@ -59,15 +99,24 @@ ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResu
                       const std::string& shown_what) {
   ReportData data;
   data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, args.batch);
-  const stage::ValidationStats before = stage::Validate(nullptr, shown.observations, shown.anchors);
-  const stage::ValidationStats after = stage::Validate(&r.calibration, shown.observations, shown.anchors);
+  const stage::StitchedFrame frame = args.settings.Frame();
+  const Judged judged_before = Judge(nullptr, shown, frame), judged_after = Judge(&r.calibration, shown, frame);
+  const stage::ValidationStats& before = judged_before.first_tile;
+  const stage::ValidationStats& after = judged_after.first_tile;
+  const auto frame_free = [](const stage::FrameFreeStats& s) {
+    return fmt::format("{:.2f} rms / {:.2f} max um (predicted rms {:.2f})", s.rms_mm * 1e3, s.max_mm * 1e3, s.predicted_rms_mm * 1e3);
+  };
   data.summary = {{"model", r.calibration.model},
                   {"free parameters", std::to_string(r.calibration.layout.NumFree())},
                   {"fixed (not identifiable)", std::to_string(r.fixed.size())},
                   {"identification rms", fmt::format("{:.2f} um", r.rms_mm * 1e3)},
                   {"shown data", shown_what},
-                  {"error before (mean / max)", fmt::format("{:.1f} / {:.1f} um", before.mean_mm * 1e3, before.max_mm * 1e3)},
-                  {"error after (mean / max)", fmt::format("{:.2f} / {:.2f} um", after.mean_mm * 1e3, after.max_mm * 1e3)},
+                  {"rigid fit per placement, after", frame_free(judged_after.rigid)},
+                  {"distances, all pairs, after", frame_free(judged_after.distances)},
+                  {"first tile, before (mean / max)", fmt::format("{:.1f} / {:.1f} um", before.mean_mm * 1e3, before.max_mm * 1e3)},
+                  {"first tile, after (mean / max)", fmt::format("{:.2f} / {:.2f} um (predicted rms {:.2f})", after.mean_mm * 1e3,
+                                                                 after.max_mm * 1e3, after.predicted_rms_mm * 1e3)},
+                  {"first-tile frame", fmt::format("{}: {}", stage::StitchedFrameName(frame), TurnText(after, frame))},
                   {"condition number", fmt::format("{:.3g}", r.condition_number)}};
   for (double e : stage::DistanceErrors(nullptr, shown.observations)) data.distance_errors_before_um.push_back(e * 1e3);
   for (double e : stage::DistanceErrors(&r.calibration, shown.observations)) data.distance_errors_after_um.push_back(e * 1e3);
@@ -104,17 +153,16 @@ void Run(const CalibrateArgs& args) {
   nlohmann::json doc = stage::CalibrationToJson(result);
   doc["batch"] = args.batch;
   doc["anchor"] = args.settings.anchor;
+  doc["stitched_frame"] = args.settings.stitched_frame;
   doc["identification"]["placements"] = batch.identify;
   const stage::ValidationStats id_before = stage::Validate(nullptr, identify.observations, identify.anchors);
   doc["identification"]["before_mean_um"] = id_before.mean_mm * 1e3;
   std::optional<stage::MeasurementSet> validate;
   if (!batch.validate.empty()) {
     validate = artefacts::Observations(batch, batch.validate);
-    const stage::ValidationStats before = stage::Validate(nullptr, validate->observations, validate->anchors);
-    const stage::ValidationStats after = stage::Validate(&result.calibration, validate->observations, validate->anchors);
-    doc["validation"] = StatsJson(after);
+    const stage::StitchedFrame frame = args.settings.Frame();
+    doc["validation"] = ValidationJson(Judge(nullptr, *validate, frame), Judge(&result.calibration, *validate, frame), frame);
     doc["validation"]["placements"] = batch.validate;
-    doc["validation"]["before"] = StatsJson(before);
     doc["validation"]["distance_error_max_um"] = {
         {"before", MaxAbs(stage::DistanceErrors(nullptr, validate->observations)) * 1e3},
         {"after", MaxAbs(stage::DistanceErrors(&result.calibration, validate->observations)) * 1e3}};
@@ -144,11 +192,19 @@ void Run(const CalibrateArgs& args) {
              result.max_mm * 1e3);
   if (validate) {
     const auto& v = doc["validation"];
-    fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}\n", fmt::format("validation ({} centres), before", v["centres"].get<int>()),
-               v["before"]["mean_um"].get<double>(), v["before"]["rms_um"].get<double>(), v["before"]["max_um"].get<double>());
-    fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}   (predicted rms {:.2f})\n", "validation, after",
-               v["mean_um"].get<double>(), v["rms_um"].get<double>(), v["max_um"].get<double>(),
-               v["predicted_rms_um"].get<double>());
+    const auto row = [](const std::string& what, const nlohmann::json& s, const std::string& mean, bool predicted) {
+      fmt::print("  {:<34} {:>8} {:>8.2f} {:>8.2f}", what, mean, s["rms_um"].get<double>(), s["max_um"].get<double>());
+      fmt::print("{}\n", predicted ? fmt::format("   (predicted rms {:.2f})", s["predicted_rms_um"].get<double>()) : "");
+    };
+    fmt::print("  validation, {} centres; first what no choice of frame changes:\n", v["centres"].get<int>());
+    row("rigid fit per placement, before", v["before"]["rigid"], "", false);
+    row("rigid fit per placement, after", v["rigid"], "", true);
+    row(fmt::format("distances ({} pairs), before", v["distances"]["count"].get<int>()), v["before"]["distances"], "", false);
+    row("distances, after", v["distances"], "", true);
+    fmt::print("  then each placement in its first tile's frame ({}: {}):\n", v["stitched_frame"].get<std::string>(),
+               v["turn_note"].get<std::string>());
+    row("first tile, before", v["before"], fmt::format("{:.2f}", v["before"]["mean_um"].get<double>()), false);
+    row("first tile, after", v, fmt::format("{:.2f}", v["mean_um"].get<double>()), true);
     fmt::print("  largest distance error on validation: {:.1f} um before, {:.2f} um after\n",
                v["distance_error_max_um"]["before"].get<double>(), v["distance_error_max_um"]["after"].get<double>());
   }

@@ -12,6 +12,13 @@ void IdentifySettings::AddOptions(CLI::App& app) {
                  "one spot) or 'first-tile' (each placement anchored at the stage error of its own first tile)")
       ->check(CLI::IsMember({"none", "first-tile"}))
       ->capture_default_str();
+  app.add_option("--stitched-frame", stitched_frame,
+                 "how each stitched export sits in the stage frame: 'rotated' (the instrument registers tiles by "
+                 "translation, so the mosaic keeps the orientation of its first tile, turned with the stage there; "
+                 "first-tile figures turn it by the model's rotation terms, or, for a model without rotation terms of "
+                 "order 1 or more, carry the turn's spread in their prediction) or 'translated' (the turn left out)")
+      ->check(CLI::IsMember({"rotated", "translated"}))
+      ->capture_default_str();
   app.add_option("--loss", loss, "robust loss on each centre's Euclidean error")
       ->check(CLI::IsMember({"none", "huber", "cauchy"}))
       ->capture_default_str();
@@ -24,6 +31,7 @@ stage::IdentificationOptions IdentifySettings::ToOptions(const stage::Measuremen
   stage::IdentificationOptions o;
   o.anchor = anchor == "first-tile" ? stage::Anchor::kFirstTile : stage::Anchor::kNone;
   o.anchors = set.anchors;
+  o.frame = Frame();
   o.loss = loss;
   o.loss_scale_mm = loss_scale_um * 1e-3;
   o.num_threads = ThreadCount();

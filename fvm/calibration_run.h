@@ -15,9 +15,11 @@ struct IdentifySettings {
   std::string anchor = "none";  // none | first-tile
   std::string loss = "none";    // none | huber | cauchy
   double loss_scale_um = 5.0;
+  std::string stitched_frame = "rotated";  // rotated | translated (stage/stitched_frame.h)
 
   void AddOptions(CLI::App& app);
   stage::IdentificationOptions ToOptions(const stage::MeasurementSet& set) const;
+  stage::StitchedFrame Frame() const { return stage::ParseStitchedFrame(stitched_frame); }
 };
 
 // Model "9", "15", "27", "42", or a --terms spec (then the name is "terms:<spec>").

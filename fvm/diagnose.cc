@@ -88,6 +88,12 @@ void Run(const DiagnoseArgs& args) {
   doc["validation"] = {{"before", SummaryJson(d.validation_before)}, {"after", SummaryJson(d.validation_after)}};
   doc["size"] = {{"value", d.size}, {"u", d.size_u}, {"unit", d.size_unit}};
   doc["findings"] = d.findings;
+  doc["stitched_frame"] = args.settings.stitched_frame;
+  for (const stage::PlacementTurnFinding& t : d.turns) {
+    doc["turns"].push_back({{"placement", t.placement},
+                            {"rotation_urad", {t.rotation_rad.x() * 1e6, t.rotation_rad.y() * 1e6, t.rotation_rad.z() * 1e6}},
+                            {"u_urad", {t.u_rad.x() * 1e6, t.u_rad.y() * 1e6, t.u_rad.z() * 1e6}}});
+  }
   for (const stage::EffectScore& c : d.candidates) {
     doc["candidates"].push_back({{"effect", c.effect}, {"component", c.component}, {"extra_parameters", c.extra_parameters},
                                  {"f", c.f_statistic}, {"p_value", c.p_value}, {"delta_bic", c.delta_bic},
@@ -110,6 +116,13 @@ void Run(const DiagnoseArgs& args) {
   fmt::print("\n  effect: {}{}\n", d.effect.value_or("none"), d.component.empty() ? "" : " (" + d.component + ")");
   if (d.effect) fmt::print("  size: {:.3g} +- {:.2g} {}\n", d.size, d.size_u, d.size_unit);
   fmt::print("  {}\n\n", d.explanation);
+  if (!d.turns.empty()) {
+    fmt::print("  {:<16} {:>22}\n", "placement", "yaw about first tile");
+    for (const stage::PlacementTurnFinding& t : d.turns) {
+      fmt::print("  {:<16} {:>12.1f} +- {:.1f} urad\n", t.placement, t.rotation_rad.z() * 1e6, t.u_rad.z() * 1e6);
+    }
+    fmt::print("\n");
+  }
   fmt::print("  {:<28} {:>9} {:>9}\n", "mean 3D residual (um)", "before", "after");
   fmt::print("  {:<28} {:>9.2f} {:>9.2f}\n", "identification", d.before.mean_mm * 1e3, d.after.mean_mm * 1e3);
   if (d.validation_before.count > 0) {
@@ -135,8 +148,14 @@ void RegisterDiagnose(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--report", args->report, "write residual plots before and after into this directory (HTML)");
   sub->add_flag("--json", args->json, "print one JSON document on stdout");
+  // The workflow starts from the translation-only frame, so that a turn of the stitched frames shows up on the
+  // held-out placements as the frame_rotation effect, named and sized, instead of being hidden by the model's.
+  args->settings.stitched_frame = "translated";
   args->settings.AddOptions(*sub);
-  sub->footer("Example:\n  fvm simulate fvm-batch -o drift --hidden-effect thermal_drift && fvm diagnose drift --model 27");
+  sub->footer("The stitched frame defaults to 'translated' here (not 'rotated' as in calibrate): the diagnosis starts from "
+              "the plainest convention, so that a turn of each stitched export about its first tile is found and named "
+              "(frame_rotation).\n"
+              "Example:\n  fvm simulate fvm-batch -o drift --hidden-effect thermal_drift && fvm diagnose drift --model 27");
   sub->callback([args] { Run(*args); });
 }
 

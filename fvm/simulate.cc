@@ -36,10 +36,12 @@ struct SimulateBatchArgs {
   std::string output;
   artefacts::FvmBatchOptions options;
   bool different_starts = false;
+  std::string stitched_frame = "rotated";
 };
 
 void Run(SimulateBatchArgs args) {
   args.options.same_start = !args.different_starts;
+  args.options.stitched_frame = stage::ParseStitchedFrame(args.stitched_frame);
   const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(args.options);
   artefacts::WriteBatch(args.output, sim.batch);
 
@@ -51,6 +53,7 @@ void Run(SimulateBatchArgs args) {
   truth["pitch_error_um"] = args.options.pitch_error_um;
   truth["same_start"] = args.options.same_start;
   truth["height_step_mm"] = args.options.height_step_mm;
+  truth["stitched_frame"] = args.stitched_frame;
   truth["hidden_effect"] = args.options.hidden_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.options.hidden_effect);
   truth["effect_size"] = args.options.effect_size;
   truth["mean_error_um"] = sim.truth.mean_error_um;
@@ -490,6 +493,11 @@ void RegisterSimulate(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--different-starts", args->different_starts,
                 "identification placements do not share their first calotte's spot (needs --anchor first-tile)");
+  sub->add_option("--stitched-frame", args->stitched_frame,
+                  "rotated: each stitched export keeps the orientation of its first tile, turned with the stage there, "
+                  "as an instrument that registers tiles by translation does (default); translated: the turn left out")
+      ->check(CLI::IsMember({"rotated", "translated"}))
+      ->capture_default_str();
   sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
   sub->callback([args] { Run(*args); });
   RegisterSimulateTracker(simulate);

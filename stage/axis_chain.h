@@ -150,6 +150,33 @@ Eigen::Matrix<T, 3, 1> ChainForwardFromMotions(const AxisChain& chain, const T* 
   return w;
 }
 
+// The tool's orientation in the part frame: d(part coordinates) / d(tool offset), i.e. the rotations of
+// ChainForwardFromMotions without its translations (instrument pose excluded). For a microscope this is how the
+// camera sees the part: a vector in the camera's frame shows up as C v in the part frame. With `inverse`, C^-1,
+// by the inverse rotations in reverse order (exact for both rotation models, no matrix inverse).
+template <typename T>
+Eigen::Matrix<T, 3, 3> ChainOrientation(const AxisChain& chain, const T* motion, bool inverse = false) {
+  using internal::Vec3;
+  Eigen::Matrix<T, 3, 3> c;
+  for (int k = 0; k < 3; ++k) {
+    Vec3<T> w = Vec3<T>::Zero();
+    w[k] = T(1.0);
+    if (!inverse) {
+      for (auto it = chain.tool_axes.rbegin(); it != chain.tool_axes.rend(); ++it) {
+        w = internal::Rotate(chain.rotation_model, internal::AxisRotation(*it, motion), w);
+      }
+      for (Axis axis : chain.part_axes) w = internal::RotateInverse(chain.rotation_model, internal::AxisRotation(axis, motion), w);
+    } else {
+      for (auto it = chain.part_axes.rbegin(); it != chain.part_axes.rend(); ++it) {
+        w = internal::Rotate(chain.rotation_model, internal::AxisRotation(*it, motion), w);
+      }
+      for (Axis axis : chain.tool_axes) w = internal::RotateInverse(chain.rotation_model, internal::AxisRotation(axis, motion), w);
+    }
+    c.col(k) = w;
+  }
+  return c;
+}
+
 // Part coordinates of the tool point commanded to q, given the values e[0..20] of the 21 error terms at q.
 template <typename T>
 Eigen::Matrix<T, 3, 1> ChainForward(const AxisChain& chain, const T* e, const Eigen::Matrix<T, 3, 1>& q,

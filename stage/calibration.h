@@ -3,6 +3,7 @@
 // takes to compensate a stitching-free point and say how uncertain the compensation is.
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,9 @@ struct Calibration {
   std::vector<double> values;       // free coefficients, mm and rad
   Eigen::MatrixXd covariance;       // of `values`
   double sigma_mm = 0.0;            // residual standard deviation per coordinate after identification
+  // The first tile of the first identification measurement: the model's part frame is the orientation the camera
+  // had there (stitched_frame.h). Unset for data not referenced to a first tile.
+  std::optional<Eigen::Vector3d> frame_reference;
 
   Eigen::VectorXd StandardUncertainty() const { return covariance.diagonal().cwiseSqrt(); }
   Eigen::MatrixXd Correlation() const;

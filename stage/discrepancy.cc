@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <Eigen/QR>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
@@ -10,6 +11,7 @@
 #include <functional>
 #include <map>
 
+#include "stage/stitched_frame.h"
 #include "stage/validation.h"
 
 namespace fvm::stage {
@@ -221,6 +223,72 @@ MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Obser
   return out;
 }
 
+// frame_rotation on the held-out placements: each one's turn about its first tile, fitted to the calibration's
+// residuals (FitPlacementTurns) and tested against what the calibration's covariance and the noise predict for
+// it when there is no turn: chi^2 of the turns over the directions a placement determines (a bar shows nothing of
+// a turn about its own length).
+struct TurnTest {
+  EffectScore score{"frame_rotation", "", 0, 0.0, 1.0, 0.0, false};
+  std::vector<PlacementTurn> turns;
+  std::vector<Eigen::Vector3d> residuals_after;  // with each placement's turn taken out
+};
+
+TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
+                          double alpha_each) {
+  TurnTest t;
+  const ValidationStats v = Validate(&calibration, validate.observations, validate.anchors, frame);
+  std::vector<Eigen::Vector3d> arms;
+  std::vector<int> groups;
+  std::map<int, std::vector<size_t>> members;
+  for (size_t i = 0; i < validate.observations.size(); ++i) {
+    const Observation& o = validate.observations[i];
+    arms.push_back(o.measured - validate.anchors.at(static_cast<size_t>(o.group)));
+    groups.push_back(o.group);
+    members[o.group].push_back(i);
+  }
+  t.turns = FitPlacementTurns(v.residuals, arms, groups);
+  t.residuals_after = v.residuals;
+  const double sigma2 = calibration.sigma_mm * calibration.sigma_mm;
+  const bool covariance = calibration.covariance.size() > 0;
+  double chi2 = 0.0;
+  int dof = 0;
+  for (const PlacementTurn& turn : t.turns) {
+    const std::vector<size_t>& index = members.at(turn.group);
+    const Eigen::Index n = static_cast<Eigen::Index>(index.size());
+    Eigen::MatrixXd a(3 * n, 3);
+    Eigen::MatrixXd j(3 * n, covariance ? calibration.covariance.cols() : 0);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const Eigen::Vector3d& d = arms[index[static_cast<size_t>(k)]];
+      a.block<3, 3>(3 * k, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+      if (covariance) j.middleRows(3 * k, 3) = v.jacobians[index[static_cast<size_t>(k)]];
+      t.residuals_after[index[static_cast<size_t>(k)]] -= a.block<3, 3>(3 * k, 0) * turn.rotation;
+    }
+    const Eigen::MatrixXd pinv = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).pseudoInverse();
+    Eigen::Matrix3d predicted = sigma2 * pinv * pinv.transpose();
+    if (covariance) predicted += (pinv * j) * calibration.covariance * (pinv * j).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(predicted);
+    for (int k = 0; k < 3; ++k) {
+      const double lambda = eigen.eigenvalues()[k];
+      if (lambda <= 1e-9 * eigen.eigenvalues().maxCoeff()) continue;
+      chi2 += std::pow(eigen.eigenvectors().col(k).dot(turn.rotation), 2) / lambda;
+      ++dof;
+    }
+  }
+  if (dof == 0) return t;
+  const double m = 3.0 * static_cast<double>(v.residuals.size());
+  double rss_before = 0, rss_after = 0;
+  for (size_t i = 0; i < v.residuals.size(); ++i) {
+    rss_before += v.residuals[i].squaredNorm();
+    rss_after += t.residuals_after[i].squaredNorm();
+  }
+  t.score.extra_parameters = dof;
+  t.score.f_statistic = chi2 / dof;
+  t.score.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<double>(dof), chi2));
+  t.score.delta_bic = m * std::log(rss_after / rss_before) + dof * std::log(m);
+  t.score.significant = t.score.p_value < alpha_each && t.score.delta_bic < 0;
+  return t;
+}
+
 }  // namespace
 
 Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
@@ -239,7 +307,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.before = Summarize(base.residuals);
   const auto validation = [&](const Calibration& cal, const MeasurementSet& set) {
     if (set.observations.empty()) return ResidualSummary{};
-    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors));
+    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors, base_options.frame));
   };
   d.validation_before = validation(base.calibration, validate);
 
@@ -325,7 +393,8 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     }
   }
 
-  const double alpha_each = options.alpha / static_cast<double>(std::max<size_t>(1, candidates.size()));
+  const bool turns_testable = !validate.observations.empty() && !validate.anchors.empty();
+  const double alpha_each = options.alpha / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
   for (Candidate& c : candidates) Test(c, m, alpha_each);
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     if (a.score.significant != b.score.significant) return a.score.significant;
@@ -337,6 +406,45 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.after = d.before;
   d.validation_after = d.validation_before;
   if (candidates.empty() || !candidates.front().score.significant) {
+    if (turns_testable) {
+      // The identification data fit to noise: do the held-out placements turn about their first tiles?
+      TurnTest turn = TestHeldOutTurns(base.calibration, validate, base_options.frame, alpha_each);
+      d.candidates.push_back(turn.score);
+      if (turn.score.significant) {
+        d.effect = "frame_rotation";
+        d.component = "z";
+        double yaw_sq = 0, u_sq = 0;
+        for (const PlacementTurn& t : turn.turns) {
+          const Eigen::Vector3d u = t.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+          const std::string name = static_cast<size_t>(t.group) < validate.groups.size() ? validate.groups[static_cast<size_t>(t.group)]
+                                                                                        : std::to_string(t.group);
+          d.turns.push_back({name, t.rotation, u});
+          yaw_sq += t.rotation.z() * t.rotation.z();
+          u_sq += u.z() * u.z();
+        }
+        const double count = static_cast<double>(std::max<size_t>(1, turn.turns.size()));
+        d.size = std::sqrt(yaw_sq / count) * 1e6;
+        d.size_u = std::sqrt(u_sq / count) * 1e6;
+        d.size_unit = "urad";
+        d.validation_after = Summarize(turn.residuals_after);
+        const std::vector<std::string> turn_terms = TurnCoefficients(base.calibration.layout);
+        std::string terms;
+        for (const std::string& t : turn_terms) terms += (terms.empty() ? "" : ", ") + t;
+        d.explanation = fmt::format(
+            "The held-out placements' residuals grow perpendicular to, and in proportion to, their distance from the "
+            "first tile: each stitched measurement is turned about its first tile ({:.1f} +- {:.1f} urad rms yaw over {} "
+            "placements). The instrument registers tiles by translation, so a mosaic keeps the orientation the stage "
+            "had at its first tile; identification placements that share a start share that turn and the model's "
+            "constant terms absorb it, so only placements that start elsewhere show it. {}",
+            d.size, d.size_u, turn.turns.size(),
+            turn_terms.empty()
+                ? "This model has no rotation terms that vary over the stage: a model of order 1 or more (27, 42) can "
+                  "tell the turn at each first tile."
+                : fmt::format("fvm calibrate --stitched-frame rotated (the default) turns each placement by the model's own "
+                              "{}.", terms));
+        return d;
+      }
+    }
     d.explanation = "No listed effect explains the residuals better than noise: the model fits these data to " +
                     fmt::format("{:.2f} um rms, and no candidate passes the F-test at the {:.0f} % level with a lower BIC.",
                                 d.before.rms_mm * 1e3, options.alpha * 100);

@@ -9,9 +9,13 @@
 //   thermal_drift     stitching-free centres drift with measurement time (needs the t column)
 //   scale             stitched distances are scaled about the first tile (lens or stitching scale)
 //   outliers          centres far outside the noise: failed sphere fits
+//   frame_rotation    each stitched measurement keeps the orientation the stage had at its first tile
+//                     (stitched_frame.h); placements that share a start share the turn, so only held-out ones show it
 // Selection is statistical: every candidate is scored on the linearised fit with an F-test (extra sum of
 // squares) and BIC; the best significant one (p below alpha / number of candidates, BIC lower) is accepted only
-// if held-out placements do not get worse; otherwise no listed effect explains the gap.
+// if held-out placements do not get worse; otherwise no listed effect explains the gap. When the identification
+// data fit to noise, the held-out placements are examined for turns about their first tiles (frame_rotation): a
+// chi-square of the fitted turns against what the calibration's covariance and the noise predict for them.
 
 #include <Eigen/Core>
 #include <optional>
@@ -39,6 +43,13 @@ struct EffectScore {
   bool significant = false;
 };
 
+// frame_rotation: the turn of one held-out placement about its first tile.
+struct PlacementTurnFinding {
+  std::string placement;
+  Eigen::Vector3d rotation_rad = Eigen::Vector3d::Zero();  // small rotation vector; z is the yaw
+  Eigen::Vector3d u_rad = Eigen::Vector3d::Zero();         // standard uncertainties (0: not determined, e.g. about a bar's length)
+};
+
 struct Diagnosis {
   std::optional<std::string> effect;  // accepted effect, or none
   std::string component;
@@ -49,6 +60,7 @@ struct Diagnosis {
   std::string size_unit;
   std::vector<EffectScore> candidates;            // every candidate, best first
   std::vector<std::string> findings;              // what the residual analysis saw, one sentence each
+  std::vector<PlacementTurnFinding> turns;        // frame_rotation: per held-out placement
   std::vector<Eigen::Vector3d> residuals_before;  // identification residuals of the base model, mm
   std::vector<Eigen::Vector3d> residuals_after;   // ... with the effect (base model's when none is accepted)
 };

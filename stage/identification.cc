@@ -11,10 +11,12 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
 #include "stage/linear_dependence.h"
+#include "stage/stitched_frame.h"
 #include "stage/validation.h"
 
 namespace fvm::stage {
@@ -93,6 +95,8 @@ struct Prepared {
   std::vector<AxisChain> chains;  // one per tool offset
   std::vector<PreparedObservation> observations;
   std::vector<PreparedAnchor> anchors;
+  StitchedFrame frame = StitchedFrame::kTranslated;
+  std::optional<Eigen::Vector3d> frame_reference;  // r of the turn C(a)^-1 C(r): the first anchor
   bool weighted = false;
   bool estimate_pose = false;
   std::array<double, kPoseParameters> pose6{};  // held pose, or where the estimated one starts
@@ -100,19 +104,44 @@ struct Prepared {
   Eigen::Matrix<double, kPoseParameters, 1> pose_scale;
 };
 
+// The stitched frame of one anchored measurement at the current coefficients (stitched_frame.h): a point the
+// model puts at P is seen at first_tile + turn (P - origin).
+struct AnchorFrame {
+  Eigen::Vector3d first_tile = Eigen::Vector3d::Zero();
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // F(a)
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3Xd origin_jacobian;                  // dF(a) / d(free), 3 x n, when derivatives are wanted
+  std::vector<Eigen::Matrix3d> turn_jacobian;        // dT / d(free k); empty when the turn is held (translated)
+};
+
+AnchorFrame EvaluateAnchor(const ParameterLayout& layout, const AxisChain& chain, const double* free, const double* all,
+                           const Prepared& p, const PreparedAnchor& a, bool want_jacobian) {
+  AnchorFrame f;
+  f.first_tile = a.position;
+  f.origin = EvaluatePoint(layout, chain, all, a.position, a.derivative, want_jacobian ? &f.origin_jacobian : nullptr);
+  if (p.frame == StitchedFrame::kRotated) {
+    f.turn = FirstTileTurn(p.frame, layout, free, a.position, p.frame_reference ? &*p.frame_reference : nullptr,
+                           want_jacobian ? &f.turn_jacobian : nullptr);
+  }
+  return f;
+}
+
 // The residual of one observation, whitened, and its Jacobians w.r.t. the free coefficients (unscaled) and the
-// pose (unscaled, when estimated). anchor_shift / anchor_jacobian: F(a) - a of its placement and its Jacobian.
+// pose (unscaled, when estimated). `anchor`: the stitched frame of its placement, or null (the model's P itself).
 Eigen::Vector3d ObservationResidual(const ParameterLayout& layout, const double* all, const InstrumentMap& instrument,
-                                    const PreparedObservation& o, const Eigen::Vector3d& anchor_shift,
-                                    const Eigen::Matrix3Xd* anchor_jacobian, Eigen::Matrix3Xd* jacobian,
+                                    const PreparedObservation& o, const AnchorFrame* anchor, Eigen::Matrix3Xd* jacobian,
                                     Eigen::Matrix<double, 3, kPoseParameters>* pose_jacobian) {
   Eigen::Matrix3Xd j;
-  const Eigen::Vector3d part =
-      EvaluatePoint(layout, *o.chain, all, o.command, o.derivative, jacobian ? &j : nullptr) - anchor_shift;
-  if (jacobian) {
-    if (anchor_jacobian) j -= *anchor_jacobian;
-    *jacobian = o.whiten * instrument.Linear() * j;
+  Eigen::Vector3d part = EvaluatePoint(layout, *o.chain, all, o.command, o.derivative, jacobian ? &j : nullptr);
+  if (anchor) {
+    const Eigen::Vector3d arm = part - anchor->origin;
+    part = anchor->first_tile + anchor->turn * arm;
+    if (jacobian) {
+      j = anchor->turn * (j - anchor->origin_jacobian);
+      for (size_t k = 0; k < anchor->turn_jacobian.size(); ++k) j.col(static_cast<Eigen::Index>(k)) += anchor->turn_jacobian[k] * arm;
+    }
   }
+  if (jacobian) *jacobian = o.whiten * instrument.Linear() * j;
   if (pose_jacobian) *pose_jacobian = o.whiten * instrument.PoseJacobian(part);
   return o.whiten * (instrument.Apply(part) - o.measured);
 }
@@ -149,21 +178,17 @@ class BlockCost final : public ceres::CostFunction {
     }
     const bool want_coefficients = jacobians != nullptr && n > 0 && jacobians[0] != nullptr;
     const bool want_pose = jacobians != nullptr && prepared_.estimate_pose && jacobians[pose_block] != nullptr;
-    // The anchor term F(a) - a is common to the block (every observation of a block shares its anchor).
-    Eigen::Vector3d anchor_shift = Eigen::Vector3d::Zero();
-    Eigen::Matrix3Xd anchor_jacobian = Eigen::Matrix3Xd::Zero(3, n);
-    const bool anchored = block_.front()->anchor >= 0;
-    if (anchored) {
-      const PreparedAnchor& a = prepared_.anchors[static_cast<size_t>(block_.front()->anchor)];
-      anchor_shift = EvaluatePoint(layout_, *block_.front()->chain, all.data(), a.position, a.derivative,
-                                   want_coefficients ? &anchor_jacobian : nullptr) -
-                     a.position;
+    // The stitched frame is common to the block (every observation of a block shares its anchor).
+    std::optional<AnchorFrame> anchor;
+    if (block_.front()->anchor >= 0) {
+      anchor = EvaluateAnchor(layout_, *block_.front()->chain, free.data(), all.data(), prepared_,
+                              prepared_.anchors[static_cast<size_t>(block_.front()->anchor)], want_coefficients);
     }
     Eigen::Matrix3Xd jacobian;
     Eigen::Matrix<double, 3, kPoseParameters> pose_jacobian;
     for (size_t k = 0; k < block_.size(); ++k) {
       const Eigen::Vector3d r =
-          ObservationResidual(layout_, all.data(), instrument, *block_[k], anchor_shift, anchored ? &anchor_jacobian : nullptr,
+          ObservationResidual(layout_, all.data(), instrument, *block_[k], anchor ? &*anchor : nullptr,
                               want_coefficients ? &jacobian : nullptr, want_pose ? &pose_jacobian : nullptr);
       for (int c = 0; c < 3; ++c) residuals[3 * k + static_cast<size_t>(c)] = r[c];
       if (want_coefficients) {
@@ -235,6 +260,8 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
   }
   if (options.anchor == Anchor::kFirstTile) {
     for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, layout.TermDerivativeEntries(a)});
+    p.frame = options.frame;
+    if (!options.anchors.empty()) p.frame_reference = options.anchors.front();
   }
   for (const Observation& o : observations) p.weighted = p.weighted || !o.covariance.isZero(0.0);
   for (size_t i = 0; i < observations.size(); ++i) {
@@ -266,23 +293,17 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
   const InstrumentMap instrument = p.has_pose ? InstrumentMap(pose6) : InstrumentMap();
   residual->resize(3 * m);
   if (jacobian) jacobian->resize(3 * m, n + (p.estimate_pose ? kPoseParameters : 0));
-  std::vector<Eigen::Vector3d> anchor_shift;
-  std::vector<Eigen::Matrix3Xd> anchor_jacobian(p.anchors.size());
-  for (size_t a = 0; a < p.anchors.size(); ++a) {
-    anchor_shift.push_back(EvaluatePoint(layout, p.chains.front(), all.data(), p.anchors[a].position, p.anchors[a].derivative,
-                                         jacobian ? &anchor_jacobian[a] : nullptr) -
-                           p.anchors[a].position);
+  std::vector<AnchorFrame> anchors;
+  for (const PreparedAnchor& a : p.anchors) {
+    anchors.push_back(EvaluateAnchor(layout, p.chains.front(), free.data(), all.data(), p, a, jacobian != nullptr));
   }
   Eigen::Matrix3Xd j;
   Eigen::Matrix<double, 3, kPoseParameters> pose_j;
   for (Eigen::Index i = 0; i < m; ++i) {
     const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
-    const bool anchored = o.anchor >= 0;
-    const size_t a = static_cast<size_t>(std::max(o.anchor, 0));
     residual->segment<3>(3 * i) = ObservationResidual(
-        layout, all.data(), instrument, o, anchored ? anchor_shift[a] : Eigen::Vector3d::Zero(),
-        anchored && jacobian ? &anchor_jacobian[a] : nullptr, jacobian ? &j : nullptr,
-        jacobian && p.estimate_pose ? &pose_j : nullptr);
+        layout, all.data(), instrument, o, o.anchor >= 0 ? &anchors[static_cast<size_t>(o.anchor)] : nullptr,
+        jacobian ? &j : nullptr, jacobian && p.estimate_pose ? &pose_j : nullptr);
     if (!jacobian) continue;
     jacobian->block(3 * i, 0, 3, n) = j;
     if (p.estimate_pose) jacobian->block<3, kPoseParameters>(3 * i, n) = pose_j;
@@ -370,7 +391,8 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     }
   }
 
-  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0});
+  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0, std::nullopt});
+  if (!options.anchors.empty()) result.calibration.frame_reference = options.anchors.front();
   ParameterLayout& layout = result.calibration.layout;
   Prepared prepared = Prepare(layout, observations, options);
   const double* start_pose = prepared.pose6.data();
@@ -420,9 +442,11 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       fixed[static_cast<size_t>(d.column)] = true;
       std::string why;
       if (d.on.empty()) {
-        why = options.anchor == Anchor::kFirstTile
-                  ? "no effect on these data: anchoring every measurement at its first tile cancels it"
-                  : "no effect on these data";
+        why = options.anchor != Anchor::kFirstTile ? "no effect on these data"
+              : options.frame == StitchedFrame::kRotated
+                  ? "no effect on these data: every measurement is seen from its own first tile, offset and turned "
+                    "with the stage there, which cancels it"
+                  : "no effect on these data: anchoring every measurement at its first tile cancels it";
       } else {
         why = "same effect as";
         for (size_t k = 0; k < d.on.size(); ++k) {

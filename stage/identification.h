@@ -19,6 +19,7 @@
 #include "stage/calibration.h"
 #include "stage/parameter_layout.h"
 #include "stage/pose.h"
+#include "stage/stitched_frame.h"
 
 namespace fvm::stage {
 
@@ -66,6 +67,9 @@ struct IdentificationOptions {
   // two or more, the rank analysis sees the lever arms they add.
   std::vector<Eigen::Vector3d> tool_offsets;
   std::vector<Eigen::Vector3d> anchors;     // kFirstTile: first-tile stage coordinates of each group
+  // kFirstTile: whether each measurement's stitched frame turns with the stage at its first tile, relative to the
+  // first group's (stitched_frame.h). Measurements that share a start share the turn, which the model absorbs.
+  StitchedFrame frame = StitchedFrame::kTranslated;
   std::string loss = "none";                // "none", "huber" or "cauchy" on each point's Euclidean error
   double loss_scale_mm = 0.005;             // where the robust loss starts to bend
   double alias_tolerance = 1e-8;            // relative residual of a Jacobian column that counts as explained

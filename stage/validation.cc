@@ -1,5 +1,7 @@
 #include "stage/validation.h"
 
+#include <Eigen/Geometry>
+#include <Eigen/QR>
 #include <cmath>
 #include <map>
 
@@ -35,24 +37,159 @@ ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals) {
 }
 
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
-                         const std::vector<Eigen::Vector3d>& anchors) {
+                         const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame) {
   ValidationStats stats;
-  double predicted_sq = 0;
+  const bool modelled = calibration != nullptr;
+  const bool covariance = modelled && calibration->covariance.size() > 0;
+  if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
+    stats.turn_coefficients = TurnCoefficients(calibration->layout);
+    stats.turn = stats.turn_coefficients.empty() ? "uncertainty" : "model";
+  }
+  // Each measurement's frame under the model, with the derivatives of its origin and turn.
+  struct Frame {
+    FirstTileFrame frame;
+    Eigen::MatrixXd origin_jacobian;
+    std::vector<Eigen::Matrix3d> turn_jacobian;
+  };
+  std::vector<Frame> frames;
+  for (const Eigen::Vector3d& a : anchors) {
+    Frame f;
+    f.frame.first_tile = a;
+    f.frame.origin = Compensated(calibration, a, &f.origin_jacobian);
+    if (stats.turn == "model") {
+      const Eigen::Vector3d* reference = calibration->frame_reference ? &*calibration->frame_reference : nullptr;
+      f.frame.turn = FirstTileTurn(frame, calibration->layout, calibration->values.data(), a, reference, &f.turn_jacobian);
+    }
+    frames.push_back(std::move(f));
+  }
+  std::vector<double> predicted_sq;
+  std::vector<Eigen::Vector3d> arms;  // s - a, for the turns the model cannot tell
+  std::vector<int> groups;
   for (const Observation& o : observations) {
-    Eigen::MatrixXd jq, ja;
-    Eigen::Vector3d r = Compensated(calibration, o.command, &jq) - o.measured;
+    Eigen::MatrixXd j;
+    const Eigen::Vector3d p = Compensated(calibration, o.command, &j);
+    Eigen::Vector3d r = p - o.measured;
     if (!anchors.empty()) {
-      const Eigen::Vector3d& a = anchors.at(static_cast<size_t>(o.group));
-      r -= Compensated(calibration, a, &ja) - a;
+      const Frame& f = frames.at(static_cast<size_t>(o.group));
+      r = f.frame.Stitched(p) - o.measured;
+      if (modelled) {
+        j = f.frame.turn * (j - f.origin_jacobian);
+        for (size_t k = 0; k < f.turn_jacobian.size(); ++k) j.col(static_cast<Eigen::Index>(k)) += f.turn_jacobian[k] * (p - f.frame.origin);
+      }
+      arms.push_back(o.measured - f.frame.first_tile);
+      groups.push_back(o.group);
     }
     stats.residuals.push_back(r);
-    if (calibration != nullptr && calibration->covariance.size() > 0) {
-      const Eigen::MatrixXd d = anchors.empty() ? jq : Eigen::MatrixXd(jq - ja);
-      predicted_sq += (d * calibration->covariance * d.transpose()).trace() + 3 * calibration->sigma_mm * calibration->sigma_mm;
+    if (modelled) stats.jacobians.push_back(j);
+    if (modelled) {
+      predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
+                             3 * calibration->sigma_mm * calibration->sigma_mm);
+    }
+  }
+  if (stats.turn == "uncertainty") {
+    // The spread of the turns the measurements show about their first tiles, less what their noise explains.
+    const std::vector<PlacementTurn> turns = FitPlacementTurns(stats.residuals, arms, groups);
+    Eigen::Vector3d variance = Eigen::Vector3d::Zero();
+    for (const PlacementTurn& t : turns) variance += t.rotation.cwiseAbs2() - t.covariance.diagonal();
+    if (!turns.empty()) stats.turn_u_rad = (variance / static_cast<double>(turns.size())).cwiseMax(0.0).cwiseSqrt();
+    for (size_t i = 0; i < predicted_sq.size(); ++i) {
+      for (int c = 0; c < 3; ++c) predicted_sq[i] += std::pow(stats.turn_u_rad[c], 2) * arms[i].cross(Eigen::Vector3d::Unit(c)).squaredNorm();
     }
   }
   static_cast<ResidualSummary&>(stats) = Summarize(stats.residuals);
-  if (stats.count > 0) stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
+  double sum = 0;
+  for (double v : predicted_sq) sum += v;
+  if (!predicted_sq.empty()) stats.predicted_rms_mm = std::sqrt(sum / static_cast<double>(predicted_sq.size()));
+  return stats;
+}
+
+namespace {
+
+// The observations of each group, in their order.
+std::map<int, std::vector<const Observation*>> ByGroup(const std::vector<Observation>& observations) {
+  std::map<int, std::vector<const Observation*>> out;
+  for (const Observation& o : observations) out[o.group].push_back(&o);
+  return out;
+}
+
+double Variance(const Calibration* calibration, const Eigen::MatrixXd& j) {
+  if (calibration == nullptr || calibration->covariance.size() == 0) return 0.0;
+  return (j * calibration->covariance * j.transpose()).trace();
+}
+
+}  // namespace
+
+FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector<Observation>& observations) {
+  FrameFreeStats stats;
+  double sum_sq = 0, predicted_sq = 0;
+  const double sigma = calibration ? calibration->sigma_mm : 0.0;
+  for (const auto& [group, members] : ByGroup(observations)) {
+    const Eigen::Index n = static_cast<Eigen::Index>(members.size());
+    if (n < 3) continue;
+    Eigen::Matrix3Xd p(3, n), s(3, n);
+    std::vector<Eigen::MatrixXd> j(static_cast<size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      p.col(i) = Compensated(calibration, members[static_cast<size_t>(i)]->command, &j[static_cast<size_t>(i)]);
+      s.col(i) = members[static_cast<size_t>(i)]->measured;
+    }
+    const Eigen::Matrix4d t = Eigen::umeyama(p, s, false);
+    const Eigen::Matrix3Xd r = (t.topLeftCorner<3, 3>() * p).colwise() + t.topRightCorner<3, 1>() - s;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      sum_sq += r.col(i).squaredNorm();
+      stats.max_mm = std::max(stats.max_mm, r.col(i).norm());
+    }
+    stats.count += static_cast<int>(n);
+    if (calibration == nullptr) continue;
+    // What a rigid motion of the measurement cannot take: the complement of translations and small rotations
+    // about its centroid, applied to the model's uncertainty; the noise keeps 3n - 6 of its 3n degrees of freedom.
+    const Eigen::Vector3d centroid = p.rowwise().mean();
+    Eigen::MatrixXd rigid = Eigen::MatrixXd::Zero(3 * n, 6);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Vector3d d = p.col(i) - centroid;
+      rigid.block<3, 3>(3 * i, 0).setIdentity();
+      rigid.block<3, 3>(3 * i, 3) << 0, d.z(), -d.y(), -d.z(), 0, d.x(), d.y(), -d.x(), 0;
+    }
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(rigid);
+    const Eigen::MatrixXd q = Eigen::MatrixXd(qr.householderQ()).leftCols(6);
+    if (calibration->covariance.size() > 0) {
+      Eigen::MatrixXd stacked(3 * n, calibration->covariance.cols());
+      for (Eigen::Index i = 0; i < n; ++i) stacked.middleRows(3 * i, 3) = j[static_cast<size_t>(i)];
+      predicted_sq += Variance(calibration, stacked - q * (q.transpose() * stacked));
+    }
+    predicted_sq += sigma * sigma * static_cast<double>(3 * n - 6);
+  }
+  if (stats.count > 0) {
+    stats.rms_mm = std::sqrt(sum_sq / stats.count);
+    stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
+  }
+  return stats;
+}
+
+FrameFreeStats PairDistanceValidation(const Calibration* calibration, const std::vector<Observation>& observations) {
+  FrameFreeStats stats;
+  double sum_sq = 0, predicted_sq = 0;
+  const double sigma = calibration ? calibration->sigma_mm : 0.0;
+  for (const auto& [group, members] : ByGroup(observations)) {
+    std::vector<Eigen::Vector3d> p;
+    std::vector<Eigen::MatrixXd> j(members.size());
+    for (size_t i = 0; i < members.size(); ++i) p.push_back(Compensated(calibration, members[i]->command, &j[i]));
+    for (size_t a = 0; a < members.size(); ++a) {
+      for (size_t b = a + 1; b < members.size(); ++b) {
+        const Eigen::Vector3d d = p[a] - p[b];
+        const double e = d.norm() - (members[a]->measured - members[b]->measured).norm();
+        sum_sq += e * e;
+        stats.max_mm = std::max(stats.max_mm, std::abs(e));
+        ++stats.count;
+        if (calibration == nullptr) continue;
+        const Eigen::RowVector3d u = d.normalized().transpose();
+        predicted_sq += Variance(calibration, u * (j[a] - j[b])) + 2 * sigma * sigma;
+      }
+    }
+  }
+  if (stats.count > 0) {
+    stats.rms_mm = std::sqrt(sum_sq / stats.count);
+    stats.predicted_rms_mm = std::sqrt(predicted_sq / stats.count);
+  }
   return stats;
 }
 

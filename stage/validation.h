@@ -2,14 +2,16 @@
 // How well a calibration predicts measurements it was not fitted to.
 //
 // Every validation measurement is referenced to its own first tile (the instrument anchors each stitched
-// measurement there, 000:4826), so the residual is F(q) - F(a) + a - s whatever anchoring identification used:
-// a constant offset common to a measurement is not a stage error the calibration can be blamed for.
+// measurement there, 000:4826) whatever anchoring identification used: a constant offset common to a measurement
+// is not a stage error the calibration can be blamed for. Its turn is (stitched_frame.h) where the model can tell
+// it; and the figures no frame changes (rigid fit per measurement, distances) judge the calibration beside it.
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "stage/calibration.h"
 #include "stage/identification.h"
+#include "stage/stitched_frame.h"
 
 namespace fvm::stage {
 
@@ -23,12 +25,35 @@ ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals);
 struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
   std::vector<Eigen::Vector3d> residuals;
+  std::vector<Eigen::MatrixXd> jacobians;  // d(residual) / d(free coefficients) of each, with a calibration
+  // How the turn of each measurement's stitched frame entered (rotated frame, with a calibration):
+  //   "none"         translated frame, or no calibration;
+  //   "model"        the model's own rotation terms turn each frame (turn_coefficients), their covariance
+  //                  included in the prediction;
+  //   "uncertainty"  the model cannot tell one first tile's turn from another's: the prediction includes the
+  //                  spread of the turns the measurements show about their first tiles (turn_u_rad, per axis).
+  std::string turn = "none";
+  std::vector<std::string> turn_coefficients;
+  Eigen::Vector3d turn_u_rad = Eigen::Vector3d::Zero();
 };
 
-// `anchors[g]` is the first tile of observation group g; without anchors (data not referenced to a first tile,
-// such as laser-tracker readings) the residual is F(q) - s. A null calibration means "no compensation".
+// The first-tile figure: every measurement in its own first tile's frame (stitched_frame.h), the residual
+// a + T (F(q) - F(a)) - s. `anchors[g]` is the first tile of observation group g; without anchors (data not
+// referenced to a first tile, such as laser-tracker readings) the residual is F(q) - s. A null calibration means
+// "no compensation".
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
-                         const std::vector<Eigen::Vector3d>& anchors);
+                         const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame = StitchedFrame::kTranslated);
+
+// A figure no choice of frame changes, with its prediction from the calibration's covariance and noise.
+struct FrameFreeStats {
+  int count = 0;  // residual vectors (rigid) or distances
+  double rms_mm = 0, max_mm = 0, predicted_rms_mm = 0;
+};
+// Residuals after the best rigid transform (rotation and translation, Umeyama) of each measurement's compensated
+// points onto its stitched ones. The prediction projects the model's covariance onto what no rigid motion takes.
+FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector<Observation>& observations);
+// Errors of the distances between every two points of a measurement (compensated - stitched).
+FrameFreeStats PairDistanceValidation(const Calibration* calibration, const std::vector<Observation>& observations);
 
 // Errors of the distances from the first observation of each group to every other one (compensated free
 // distance - stitched distance), mm: anchor-free, the paper's figure of merit (Figs. 6 and 8).

@@ -191,12 +191,12 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
       commands.push_back(command.command);
     }
     const Eigen::Vector3d anchor = stage::FirstTile(commands);
-    const Eigen::Vector3d anchor_error = StageError(layout, values, anchor);
+    const stage::FirstTileFrame frame = stage::MakeFirstTileFrame(options.stitched_frame, layout, values.data(), anchor, nullptr);
     for (size_t i = 0; i < commands.size(); ++i) {
       const double t = options.seconds_per_centre * static_cast<double>(i);
       placement.ids.push_back(static_cast<int>(i) + 1);
       placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * t);
-      Eigen::Vector3d stitched = stage::Forward(layout, values, commands[i]) - anchor_error;
+      Eigen::Vector3d stitched = frame.Stitched(stage::Forward(layout, values, commands[i]));
       if (scale != 0.0) stitched.head<2>() = anchor.head<2>() + (1.0 + scale) * (stitched - anchor).head<2>();
       placement.stitched.push_back(noisy(stitched));
       placement.t_s.push_back(t);

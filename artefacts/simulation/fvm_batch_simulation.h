@@ -5,13 +5,15 @@
 // The 17-calotte bar is placed on a 200 x 200 mm stage along X, along Y and obliquely with its first calotte at
 // one physical spot (identification), and at random positions and angles over the whole stage (validation).
 // Each placement is "measured" twice: stitching-free centres q carry the stage error (F(q) = true position), and
-// stitched centres carry only the error of the measurement's first tile, s = F(q) - e(a), e(a) = F(a) - a.
+// stitched centres carry only the error of the measurement's first tile a, in its frame (stage/stitched_frame.h):
+// s = a + T (F(q) - F(a)), turned with the stage at a (T = C(a)^-1) or, translated, T = I.
 
 #include <string>
 #include <vector>
 
 #include "artefacts/io/batch.h"
 #include "stage/parameter_layout.h"
+#include "stage/stitched_frame.h"
 
 namespace fvm::artefacts {
 
@@ -25,6 +27,9 @@ struct FvmBatchOptions {
   double pitch_error_um = 5.0;         // the bar is uncalibrated: its calottes deviate from 10 mm pitch
   double seconds_per_centre = 20.0;    // measurement time per calotte (the t column)
   double height_step_mm = 0.0;         // the bar lies on a wedge: it rises by -step, 0, +step over its length, in turn
+  // Rotated by default: the instrument registers tiles by translation only, so its mosaic keeps the orientation of
+  // the first tile, turned with the stage there. Translated leaves the turn out (the convention before).
+  stage::StitchedFrame stitched_frame = stage::StitchedFrame::kRotated;
 
   // One effect the stage model does not describe, hidden in the data for the discrepancy workflow
   // (fvm diagnose); names from the contract list. `effect_size` 0 takes the default in parentheses:

@@ -94,6 +94,10 @@ json CalibrationToJson(const stage::IdentificationResult& result) {
   doc["correlation"] = corr;
   doc["condition_number"] = result.condition_number;
   doc["sigma_mm"] = cal.sigma_mm;
+  if (cal.frame_reference) {
+    const Eigen::Vector3d& r = *cal.frame_reference;
+    doc["frame_reference_mm"] = {r.x(), r.y(), r.z()};  // the first tile whose view the part frame is (stitched_frame.h)
+  }
   doc["identification"] = {{"centres", result.residuals.size()}, {"mean_um", result.mean_mm * 1e3},
                            {"rms_um", result.rms_mm * 1e3},       {"max_um", result.max_mm * 1e3},
                            {"iterations", result.iterations},     {"converged", result.converged}};
@@ -178,7 +182,7 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
         throw fail(fmt::format("{}: {}", key, e.what()));
       }
     }
-    stage::Calibration cal{doc.value("model", ""), layout, {}, {}, doc.value("sigma_mm", 0.0)};
+    stage::Calibration cal{doc.value("model", ""), layout, {}, {}, doc.value("sigma_mm", 0.0), std::nullopt};
     for (const std::string& name : layout.FreeNames()) cal.values.push_back(free_values.at(name));
     const int n = layout.NumFree();
     cal.covariance = Eigen::MatrixXd::Zero(n, n);
@@ -191,6 +195,12 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
     }
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) cal.covariance(i, j) = cov.at(static_cast<size_t>(i)).at(static_cast<size_t>(j)).get<double>();
+    if (doc.contains("frame_reference_mm")) {
+      const json& r = doc.at("frame_reference_mm");
+      if (!r.is_array() || r.size() != 3) throw fail("'frame_reference_mm' is not three numbers (x, y, z in mm)");
+      cal.frame_reference = Eigen::Vector3d(r.at(0).get<double>(), r.at(1).get<double>(), r.at(2).get<double>());
+      if (!cal.frame_reference->allFinite()) throw fail("'frame_reference_mm' is not finite");
+    }
     return cal;
   } catch (const json::exception& e) {
     throw fail(std::string("missing or malformed key (") + e.what() + ")");

@@ -153,7 +153,7 @@ TEST_F(CalibrationFile, WritesAndReadsTheToolOffsetOfAMachineModel) {
   chain.tool_offset = Eigen::Vector3d(12.5, -3.25, 100);
   ParameterLayout layout(chain, {Travel{0, 2500}, Travel{0, 1500}, Travel{0, 1200}});
   layout.SetTerm("zRx", Basis::kLegendre, 1);
-  IdentificationResult machine(Calibration{"machine", layout, {0, 2e-5}, Eigen::MatrixXd::Identity(2, 2) * 1e-12, 0});
+  IdentificationResult machine(Calibration{"machine", layout, {0, 2e-5}, Eigen::MatrixXd::Identity(2, 2) * 1e-12, 0, std::nullopt});
   const json doc = CalibrationToJson(machine);
   EXPECT_EQ(doc.at("tool_offset_mm"), json({12.5, -3.25, 100.0}));
   const Calibration read = ReadCalibration(Write(doc));

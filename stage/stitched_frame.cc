@@ -1,0 +1,105 @@
+#include "stage/stitched_frame.h"
+
+#include <ceres/jet.h>
+
+#include <Eigen/QR>
+#include <map>
+#include <stdexcept>
+
+namespace fvm::stage {
+
+const char* StitchedFrameName(StitchedFrame frame) { return frame == StitchedFrame::kRotated ? "rotated" : "translated"; }
+
+StitchedFrame ParseStitchedFrame(std::string_view name) {
+  if (name == "rotated") return StitchedFrame::kRotated;
+  if (name == "translated") return StitchedFrame::kTranslated;
+  throw std::invalid_argument("unknown stitched frame '" + std::string(name) + "': use rotated or translated");
+}
+
+namespace {
+
+template <typename T>
+Eigen::Matrix<T, 3, 3> Turn(const ParameterLayout& layout, const T* free, const Eigen::Vector3d& first_tile,
+                            const Eigen::Vector3d* reference) {
+  Eigen::Matrix<T, 3, 3> turn = CameraOrientation(layout, free, first_tile, /*inverse=*/true);
+  if (reference != nullptr) turn = turn * CameraOrientation(layout, free, *reference);
+  return turn;
+}
+
+}  // namespace
+
+Eigen::Matrix3d FirstTileTurn(StitchedFrame frame, const ParameterLayout& layout, const double* free,
+                              const Eigen::Vector3d& first_tile, const Eigen::Vector3d* reference,
+                              std::vector<Eigen::Matrix3d>* jacobian) {
+  const int n = layout.NumFree();
+  if (jacobian) jacobian->assign(static_cast<size_t>(n), Eigen::Matrix3d::Zero());
+  if (frame == StitchedFrame::kTranslated) return Eigen::Matrix3d::Identity();
+  if (jacobian == nullptr) return Turn(layout, free, first_tile, reference);
+  // Forward-mode derivatives through the chain's rotations, one dual part per free coefficient.
+  using Jet = ceres::Jet<double, kMaxCoefficients>;
+  std::vector<Jet> jets(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) jets[static_cast<size_t>(k)] = Jet(free[k], k);
+  const Eigen::Matrix<Jet, 3, 3> turn = Turn(layout, jets.data(), first_tile, reference);
+  Eigen::Matrix3d value;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      value(r, c) = turn(r, c).a;
+      for (int k = 0; k < n; ++k) (*jacobian)[static_cast<size_t>(k)](r, c) = turn(r, c).v[k];
+    }
+  }
+  return value;
+}
+
+std::vector<std::string> TurnCoefficients(const ParameterLayout& layout) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < layout.coefficients().size(); ++i) {
+    const ParameterLayout::Coefficient& c = layout.coefficients()[i];
+    if (GetErrorTerm(c.term).kind == ErrorKind::kRotation && c.power >= 1 && layout.SlotOf(i) >= 0) out.push_back(c.name);
+  }
+  return out;
+}
+
+FirstTileFrame MakeFirstTileFrame(StitchedFrame frame, const ParameterLayout& layout, const double* free,
+                                  const Eigen::Vector3d& first_tile, const Eigen::Vector3d* reference) {
+  FirstTileFrame f;
+  f.first_tile = first_tile;
+  f.origin = Forward(layout, free, first_tile);
+  f.turn = FirstTileTurn(frame, layout, free, first_tile, reference);
+  return f;
+}
+
+std::vector<PlacementTurn> FitPlacementTurns(const std::vector<Eigen::Vector3d>& residuals,
+                                             const std::vector<Eigen::Vector3d>& arms, const std::vector<int>& groups) {
+  // r = -w x d = [d]x w: one 3 x 3 block per observation.
+  const auto cross = [](const Eigen::Vector3d& d) {
+    Eigen::Matrix3d m;
+    m << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+    return m;
+  };
+  std::map<int, std::vector<size_t>> members;
+  for (size_t i = 0; i < residuals.size(); ++i) members[groups[i]].push_back(i);
+  std::vector<PlacementTurn> out;
+  for (const auto& [group, index] : members) {
+    if (index.size() < 3) continue;
+    Eigen::MatrixXd a(3 * static_cast<Eigen::Index>(index.size()), 3);
+    Eigen::VectorXd b(a.rows());
+    for (size_t k = 0; k < index.size(); ++k) {
+      a.block<3, 3>(3 * static_cast<Eigen::Index>(k), 0) = cross(arms[index[k]]);
+      b.segment<3>(3 * static_cast<Eigen::Index>(k)) = residuals[index[k]];
+    }
+    // A bar turned about its own length shows nothing: the minimum-norm solution leaves that part at zero.
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
+    PlacementTurn t;
+    t.group = group;
+    t.count = static_cast<int>(index.size());
+    t.rotation = cod.solve(b);
+    const double dof = std::max<double>(1.0, static_cast<double>(a.rows() - cod.rank()));
+    const double sigma2 = (a * t.rotation - b).squaredNorm() / dof;
+    const Eigen::MatrixXd pinv = cod.pseudoInverse();
+    t.covariance = sigma2 * pinv * pinv.transpose();
+    out.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace fvm::stage
