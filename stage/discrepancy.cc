@@ -237,39 +237,18 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
                           double alpha_each) {
   TurnTest t;
   const ValidationStats v = Validate(&calibration, validate.observations, validate.anchors, frame);
-  std::vector<Eigen::Vector3d> arms;
-  std::vector<int> groups;
-  std::map<int, std::vector<size_t>> members;
-  for (size_t i = 0; i < validate.observations.size(); ++i) {
-    const Observation& o = validate.observations[i];
-    arms.push_back(o.measured - validate.anchors.at(static_cast<size_t>(o.group)));
-    groups.push_back(o.group);
-    members[o.group].push_back(i);
-  }
-  t.turns = FitPlacementTurns(v.residuals, arms, groups);
+  t.turns = PlacementTurns(calibration, v, validate.observations, validate.anchors);
   t.residuals_after = v.residuals;
-  const double sigma2 = calibration.sigma_mm * calibration.sigma_mm;
-  const bool covariance = calibration.covariance.size() > 0;
   double chi2 = 0.0;
   int dof = 0;
   for (const PlacementTurn& turn : t.turns) {
-    const std::vector<size_t>& index = members.at(turn.group);
-    const Eigen::Index n = static_cast<Eigen::Index>(index.size());
-    Eigen::MatrixXd a(3 * n, 3);
-    Eigen::MatrixXd j(3 * n, covariance ? calibration.covariance.cols() : 0);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const Eigen::Vector3d& d = arms[index[static_cast<size_t>(k)]];
-      a.block<3, 3>(3 * k, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
-      if (covariance) j.middleRows(3 * k, 3) = v.jacobians[index[static_cast<size_t>(k)]];
-      t.residuals_after[index[static_cast<size_t>(k)]] -= a.block<3, 3>(3 * k, 0) * turn.rotation;
+    for (size_t k = 0; k < turn.observations.size(); ++k) {
+      t.residuals_after[turn.observations[k]] -= TurnDisplacement(turn.rotation, turn.arms[k]);
     }
-    const Eigen::MatrixXd pinv = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).pseudoInverse();
-    Eigen::Matrix3d predicted = sigma2 * pinv * pinv.transpose();
-    if (covariance) predicted += (pinv * j) * calibration.covariance * (pinv * j).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(predicted);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(turn.predicted);
     for (int k = 0; k < 3; ++k) {
       const double lambda = eigen.eigenvalues()[k];
-      if (lambda <= 1e-9 * eigen.eigenvalues().maxCoeff()) continue;
+      if (lambda <= 1e-9 * eigen.eigenvalues().maxCoeff()) continue;  // a direction the placement does not show
       chi2 += std::pow(eigen.eigenvectors().col(k).dot(turn.rotation), 2) / lambda;
       ++dof;
     }
@@ -415,7 +394,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
         d.component = "z";
         double yaw_sq = 0, u_sq = 0;
         for (const PlacementTurn& t : turn.turns) {
-          const Eigen::Vector3d u = t.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+          const Eigen::Vector3d u = t.predicted.diagonal().cwiseMax(0.0).cwiseSqrt();
           const std::string name = static_cast<size_t>(t.group) < validate.groups.size() ? validate.groups[static_cast<size_t>(t.group)]
                                                                                         : std::to_string(t.group);
           d.turns.push_back({name, t.rotation, u});

@@ -2,8 +2,8 @@
 
 #include <ceres/jet.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/QR>
-#include <map>
 #include <stdexcept>
 
 namespace fvm::stage {
@@ -68,38 +68,26 @@ FirstTileFrame MakeFirstTileFrame(StitchedFrame frame, const ParameterLayout& la
   return f;
 }
 
-std::vector<PlacementTurn> FitPlacementTurns(const std::vector<Eigen::Vector3d>& residuals,
-                                             const std::vector<Eigen::Vector3d>& arms, const std::vector<int>& groups) {
-  // r = -w x d = [d]x w: one 3 x 3 block per observation.
-  const auto cross = [](const Eigen::Vector3d& d) {
-    Eigen::Matrix3d m;
-    m << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
-    return m;
-  };
-  std::map<int, std::vector<size_t>> members;
-  for (size_t i = 0; i < residuals.size(); ++i) members[groups[i]].push_back(i);
-  std::vector<PlacementTurn> out;
-  for (const auto& [group, index] : members) {
-    if (index.size() < 3) continue;
-    Eigen::MatrixXd a(3 * static_cast<Eigen::Index>(index.size()), 3);
-    Eigen::VectorXd b(a.rows());
-    for (size_t k = 0; k < index.size(); ++k) {
-      a.block<3, 3>(3 * static_cast<Eigen::Index>(k), 0) = cross(arms[index[k]]);
-      b.segment<3>(3 * static_cast<Eigen::Index>(k)) = residuals[index[k]];
-    }
-    // A bar turned about its own length shows nothing: the minimum-norm solution leaves that part at zero.
-    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
-    PlacementTurn t;
-    t.group = group;
-    t.count = static_cast<int>(index.size());
-    t.rotation = cod.solve(b);
-    const double dof = std::max<double>(1.0, static_cast<double>(a.rows() - cod.rank()));
-    const double sigma2 = (a * t.rotation - b).squaredNorm() / dof;
-    const Eigen::MatrixXd pinv = cod.pseudoInverse();
-    t.covariance = sigma2 * pinv * pinv.transpose();
-    out.push_back(t);
+Eigen::Vector3d TurnDisplacement(const Eigen::Vector3d& rotation, const Eigen::Vector3d& arm) { return -rotation.cross(arm); }
+
+TurnFit FitTurn(const std::vector<Eigen::Vector3d>& residuals, const std::vector<Eigen::Vector3d>& arms) {
+  // -w x d = d x w = [d]x w: one 3 x 3 block per observation.
+  const Eigen::Index n = static_cast<Eigen::Index>(residuals.size());
+  Eigen::MatrixXd a(3 * n, 3);
+  Eigen::VectorXd b(3 * n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Vector3d& d = arms[static_cast<size_t>(k)];
+    a.block<3, 3>(3 * k, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+    b.segment<3>(3 * k) = residuals[static_cast<size_t>(k)];
   }
-  return out;
+  // Directions with less than a percent of the measurement's lever arm (a flat bar's turn about its own length,
+  // seen only through its tilt) are left out rather than amplified.
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
+  cod.setThreshold(1e-2);
+  TurnFit fit;
+  fit.solve = cod.pseudoInverse();
+  fit.rotation = fit.solve * b;
+  return fit;
 }
 
 }  // namespace fvm::stage

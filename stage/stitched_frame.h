@@ -65,18 +65,15 @@ struct FirstTileFrame {
 FirstTileFrame MakeFirstTileFrame(StitchedFrame frame, const ParameterLayout& layout, const double* free,
                                   const Eigen::Vector3d& first_tile, const Eigen::Vector3d* reference);
 
-// Per-measurement turns about the first tile fitted to residuals (model - stitched), the rotation a stitched frame
-// has that the model did not give it: r ~ -w x (s - a) by least squares per group. Diagnosis names them; validation
-// of a model that cannot tell the turn takes their spread as its uncertainty.
-struct PlacementTurn {
-  int group = 0;
-  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();     // rad, small rotation vector
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();   // from the residual scatter about the fit, rad^2
-  int count = 0;                                          // observations it rests on
+// The turn about its first tile that best explains one measurement's residuals (model - stitched), the rotation
+// its stitched frame has that the model did not give it: r_i ~ -w x d_i with d_i = s_i - a, by least squares. A
+// bar turned about its own length shows nothing: the minimum-norm solution leaves that part at zero.
+struct TurnFit {
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // rad, small rotation vector
+  Eigen::MatrixXd solve;                               // 3 x 3n: rotation = solve * stacked residuals
 };
-// `arms[i]` is observation i's stitched position relative to its first tile (s - a), `groups[i]` its group.
-// Groups with fewer than three observations get none.
-std::vector<PlacementTurn> FitPlacementTurns(const std::vector<Eigen::Vector3d>& residuals,
-                                             const std::vector<Eigen::Vector3d>& arms, const std::vector<int>& groups);
+TurnFit FitTurn(const std::vector<Eigen::Vector3d>& residuals, const std::vector<Eigen::Vector3d>& arms);
+// -w x d, the displacement a turn w about the first tile gives a point at arm d.
+Eigen::Vector3d TurnDisplacement(const Eigen::Vector3d& rotation, const Eigen::Vector3d& arm);
 
 }  // namespace fvm::stage

@@ -63,8 +63,7 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
     frames.push_back(std::move(f));
   }
   std::vector<double> predicted_sq;
-  std::vector<Eigen::Vector3d> arms;  // s - a, for the turns the model cannot tell
-  std::vector<int> groups;
+  std::vector<Eigen::Vector3d> arms;  // s - a, for the turn the model does not tell
   for (const Observation& o : observations) {
     Eigen::MatrixXd j;
     const Eigen::Vector3d p = Compensated(calibration, o.command, &j);
@@ -77,7 +76,6 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
         for (size_t k = 0; k < f.turn_jacobian.size(); ++k) j.col(static_cast<Eigen::Index>(k)) += f.turn_jacobian[k] * (p - f.frame.origin);
       }
       arms.push_back(o.measured - f.frame.first_tile);
-      groups.push_back(o.group);
     }
     stats.residuals.push_back(r);
     if (modelled) stats.jacobians.push_back(j);
@@ -86,12 +84,12 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
                              3 * calibration->sigma_mm * calibration->sigma_mm);
     }
   }
-  if (stats.turn == "uncertainty") {
-    // The spread of the turns the measurements show about their first tiles, less what their noise explains.
-    const std::vector<PlacementTurn> turns = FitPlacementTurns(stats.residuals, arms, groups);
-    Eigen::Vector3d variance = Eigen::Vector3d::Zero();
-    for (const PlacementTurn& t : turns) variance += t.rotation.cwiseAbs2() - t.covariance.diagonal();
-    if (!turns.empty()) stats.turn_u_rad = (variance / static_cast<double>(turns.size())).cwiseMax(0.0).cwiseSqrt();
+  if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
+    // The turn the model does not tell: the spread of the fitted turns beyond what they would show without one.
+    Eigen::Vector3d excess = Eigen::Vector3d::Zero();
+    const std::vector<PlacementTurn> turns = PlacementTurns(*calibration, stats, observations, anchors);
+    for (const PlacementTurn& t : turns) excess += t.rotation.cwiseAbs2() - t.predicted.diagonal();
+    if (!turns.empty()) stats.turn_u_rad = (excess / static_cast<double>(turns.size())).cwiseMax(0.0).cwiseSqrt();
     for (size_t i = 0; i < predicted_sq.size(); ++i) {
       for (int c = 0; c < 3; ++c) predicted_sq[i] += std::pow(stats.turn_u_rad[c], 2) * arms[i].cross(Eigen::Vector3d::Unit(c)).squaredNorm();
     }
@@ -101,6 +99,37 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
   for (double v : predicted_sq) sum += v;
   if (!predicted_sq.empty()) stats.predicted_rms_mm = std::sqrt(sum / static_cast<double>(predicted_sq.size()));
   return stats;
+}
+
+std::vector<PlacementTurn> PlacementTurns(const Calibration& calibration, const ValidationStats& validation,
+                                          const std::vector<Observation>& observations,
+                                          const std::vector<Eigen::Vector3d>& anchors) {
+  std::map<int, PlacementTurn> by_group;
+  for (size_t i = 0; i < observations.size(); ++i) {
+    PlacementTurn& t = by_group[observations[i].group];
+    t.group = observations[i].group;
+    t.observations.push_back(i);
+    t.arms.push_back(observations[i].measured - anchors.at(static_cast<size_t>(observations[i].group)));
+  }
+  const double sigma2 = calibration.sigma_mm * calibration.sigma_mm;
+  const bool covariance = calibration.covariance.size() > 0 && validation.jacobians.size() == observations.size();
+  std::vector<PlacementTurn> out;
+  for (auto& [group, t] : by_group) {
+    if (t.observations.size() < 3) continue;
+    std::vector<Eigen::Vector3d> residuals;
+    for (size_t i : t.observations) residuals.push_back(validation.residuals[i]);
+    const TurnFit fit = FitTurn(residuals, t.arms);
+    t.rotation = fit.rotation;
+    t.predicted = sigma2 * fit.solve * fit.solve.transpose();
+    if (covariance) {
+      Eigen::MatrixXd j(3 * static_cast<Eigen::Index>(t.observations.size()), calibration.covariance.cols());
+      for (size_t k = 0; k < t.observations.size(); ++k) j.middleRows(3 * static_cast<Eigen::Index>(k), 3) = validation.jacobians[t.observations[k]];
+      const Eigen::MatrixXd through = fit.solve * j;
+      t.predicted += through * calibration.covariance * through.transpose();
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
 }
 
 namespace {

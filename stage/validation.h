@@ -34,6 +34,9 @@ struct ValidationStats : ResidualSummary {
   //                  spread of the turns the measurements show about their first tiles (turn_u_rad, per axis).
   std::string turn = "none";
   std::vector<std::string> turn_coefficients;
+  // Rotated frame: the spread of the turns the measurements show about their first tiles beyond what noise and the
+  // model's covariance explain (PlacementTurns), per axis; the prediction carries it. About zero where the model
+  // tells the turn; the pitch and roll a flat artefact cannot determine, or the whole turn, where it cannot.
   Eigen::Vector3d turn_u_rad = Eigen::Vector3d::Zero();
 };
 
@@ -43,6 +46,20 @@ struct ValidationStats : ResidualSummary {
 // "no compensation".
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
                          const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame = StitchedFrame::kTranslated);
+
+// Each measurement's turn about its first tile fitted to a validation's residuals (FitTurn), with the covariance
+// the fitted turn would have if there were no turn: the noise and the calibration's covariance propagated through
+// the fit. Diagnosis tests them (frame_rotation); the first-tile prediction carries their excess spread.
+struct PlacementTurn {
+  int group = 0;
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();    // rad
+  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();   // rad^2, under "no turn"
+  std::vector<size_t> observations;                      // indices into the validation's observations
+  std::vector<Eigen::Vector3d> arms;                     // s - a of each
+};
+std::vector<PlacementTurn> PlacementTurns(const Calibration& calibration, const ValidationStats& validation,
+                                          const std::vector<Observation>& observations,
+                                          const std::vector<Eigen::Vector3d>& anchors);
 
 // A figure no choice of frame changes, with its prediction from the calibration's covariance and noise.
 struct FrameFreeStats {

@@ -28,13 +28,16 @@ FvmBatchTruth DrawTruth(const FvmBatchOptions& options, std::mt19937_64& rng) {
   ParameterLayout layout = stage::FvmModelLayout(options.truth_model);
   const Eigen::VectorXd tau = stage::PlausibleSizes(layout);
   // Stage errors grow with travel from the home position: offsets stay small (10 um), the terms that vary
-  // along the axes carry the error (000:7640: up to 180-200 um over 200 mm).
+  // along the axes carry the error (000:7640: up to 180-200 um over 200 mm). The guideways turn the carriages by
+  // tens of microradians, a tenth of the plausible size the translations and squareness are drawn at: that turn is
+  // what each stitched frame keeps from its first tile (stitched_frame.h).
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<double> values(static_cast<size_t>(layout.NumFree()));
   for (int i = 0; i < layout.NumFree(); ++i) {
     const auto& c = layout.coefficients()[static_cast<size_t>(layout.FindCoefficient(layout.FreeNames()[static_cast<size_t>(i)]))];
-    const bool offset = c.power == 0 && stage::GetErrorTerm(c.term).kind == stage::ErrorKind::kTranslation;
-    values[static_cast<size_t>(i)] = normal(rng) * (offset ? 0.02 : 0.3) * tau[i];
+    const stage::ErrorKind kind = stage::GetErrorTerm(c.term).kind;
+    const bool offset = c.power == 0 && kind == stage::ErrorKind::kTranslation;
+    values[static_cast<size_t>(i)] = normal(rng) * (offset ? 0.02 : kind == stage::ErrorKind::kRotation ? 0.03 : 0.3) * tau[i];
   }
 
   // Scale the draw so the mean error over the stage is the requested one (the model is nearly linear in its
