@@ -163,7 +163,7 @@ void RunStage(const UncertaintyArgs& args) {
   doc["validation_mean_um"] = validate ? DistributionJson(stage::SummarizeSample(validation_means)) : nlohmann::json(nullptr);
   std::optional<stage::ValidationStats> stats;
   if (validate) {
-    stats = stage::Validate(&reference.calibration, validate->observations, validate->anchors);
+    stats = stage::Validate(&reference.calibration, validate->observations, validate->anchors, args.settings.Frame());
     doc["validation_rms_um"] = DistributionJson(stage::SummarizeSample(validation_rms));
     doc["reference"] = {{"validation_rms_um", stats->rms_mm * 1e3}, {"predicted_rms_um", stats->predicted_rms_mm * 1e3}};
   }

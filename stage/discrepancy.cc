@@ -401,9 +401,10 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
           yaw_sq += t.rotation.z() * t.rotation.z();
           u_sq += u.z() * u.z();
         }
+        // The rms yaw over the placements less what their own noise adds, and the standard uncertainty of that rms.
         const double count = static_cast<double>(std::max<size_t>(1, turn.turns.size()));
-        d.size = std::sqrt(yaw_sq / count) * 1e6;
-        d.size_u = std::sqrt(u_sq / count) * 1e6;
+        d.size = std::sqrt(std::max(0.0, yaw_sq - u_sq) / count) * 1e6;
+        d.size_u = std::sqrt(u_sq / count / count) * 1e6;
         d.size_unit = "urad";
         d.validation_after = Summarize(turn.residuals_after);
         const std::vector<std::string> turn_terms = TurnCoefficients(base.calibration.layout);

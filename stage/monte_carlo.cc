@@ -127,7 +127,7 @@ std::vector<StageMonteCarloRun> StageMonteCarlo(const ParameterLayout& layout, c
     out.converged = r.converged;
     out.fit_mean_mm = r.mean_mm;
     out.fit_rms_mm = r.rms_mm;
-    if (validate != nullptr) out.validation = Validate(&r.calibration, validate->observations, validate->anchors);
+    if (validate != nullptr) out.validation = Validate(&r.calibration, validate->observations, validate->anchors, identification.frame);
     out.deviation_mm = PredictedCentres(r.calibration, evaluation, !evaluation.anchors.empty());
     for (size_t i = 0; i < out.deviation_mm.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
     if (options.on_run_done) options.on_run_done();

@@ -19,6 +19,29 @@ endif()
 if(NOT after LESS 2.0 OR NOT before GREATER 50)
   message(FATAL_ERROR "calibrate: validation mean ${before} um before, ${after} um after")
 endif()
+# Judged first by what no frame changes, each figure beside its prediction; the sample's exports turn with the
+# stage at their first tiles, and the 27 model's own rotation terms turn the first-tile figure with them.
+expect_json_keys("calibrate" "${OUT}" validation/rigid/rms_um validation/rigid/max_um validation/rigid/predicted_rms_um
+                 validation/distances/rms_um validation/distances/max_um validation/distances/predicted_rms_um
+                 validation/predicted_rms_um validation/turn_coefficients frame_reference_mm)
+string(JSON turn GET "${OUT}" validation turn)
+string(JSON rigid GET "${OUT}" validation rigid rms_um)
+string(JSON rigid_predicted GET "${OUT}" validation rigid predicted_rms_um)
+string(JSON first_tile GET "${OUT}" validation rms_um)
+string(JSON first_tile_predicted GET "${OUT}" validation predicted_rms_um)
+# The targets: the rigid figure's prediction within 0.8-1.3 of it, the first tile's at least 0.8 of it (in nm:
+# CMake's math has integers only).
+foreach(v rigid rigid_predicted first_tile first_tile_predicted)
+  scaled("${${v}}" 3 ${v}_nm)
+endforeach()
+math(EXPR rigid_low "${rigid_nm} * 8 / 10")
+math(EXPR rigid_high "${rigid_nm} * 13 / 10")
+math(EXPR first_tile_low "${first_tile_nm} * 8 / 10")
+if(NOT turn MATCHES "^model$" OR rigid_predicted_nm LESS rigid_low OR rigid_predicted_nm GREATER rigid_high
+   OR first_tile_predicted_nm LESS first_tile_low)
+  message(FATAL_ERROR "calibrate: turn '${turn}', rigid ${rigid} um (predicted ${rigid_predicted}), first tile "
+                      "${first_tile} um (predicted ${first_tile_predicted})")
+endif()
 file(READ ${WORK}/cal.json written)
 string(JSON written_model GET "${written}" model)
 if(NOT written_model STREQUAL "27")
@@ -102,11 +125,21 @@ fails_naming("fewer than the 42" calibrate ${WORK}/few --model 42)
 
 fails_naming("cal-missing.json" correct --calibration ${WORK}/cal-missing.json ${SAMPLES}/bar17/val-01.free.csv -o ${WORK}/x.csv)
 
-# 6. Diagnose: nothing on the clean sample; a hidden drift named, with the held-out gap shrinking.
+# 6. Diagnose: the sample's exports turn with the stage at their first tiles, which only the held-out placements
+#    show (frame_rotation, a yaw per placement); exports without the turn show nothing; a hidden drift is named,
+#    with the held-out gap shrinking.
 run(0 diagnose ${SAMPLES}/bar17 --model 27 --json)
+string(JSON effect GET "${OUT}" effect)
+string(JSON turns LENGTH "${OUT}" turns)
+string(JSON unit GET "${OUT}" size unit)
+if(NOT effect STREQUAL "frame_rotation" OR NOT turns EQUAL 10 OR NOT unit STREQUAL "urad")
+  message(FATAL_ERROR "diagnose on the sample: ${effect}, ${turns} turns in ${unit}:\n${OUT}")
+endif()
+run(0 simulate fvm-batch -o ${WORK}/translated --seed 1 --stitched-frame translated)
+run(0 diagnose ${WORK}/translated --model 27 --json)
 string(JSON effect TYPE "${OUT}" effect)
 if(NOT effect STREQUAL "NULL")
-  message(FATAL_ERROR "diagnose named an effect on the clean sample:\n${OUT}")
+  message(FATAL_ERROR "diagnose named an effect on exports without the turn:\n${OUT}")
 endif()
 run(0 simulate fvm-batch -o ${WORK}/drift --seed 7 --hidden-effect thermal_drift)
 run(0 diagnose ${WORK}/drift --model 27 --json --report ${WORK}/drift-report)

@@ -31,7 +31,7 @@ IdentificationResult SmallResult() {
   layout.Fix("xTx1", 0.002);
   layout.Tie("yTx0", "xTx0", -0.5);
   // Free: xTx0, yRz0, xWy.
-  Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4};
+  Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4, Eigen::Vector3d(-185.0, -15.0, -50.0)};
   cal.covariance << 4e-8, 1e-12, 0, 1e-12, 9e-12, 2e-13, 0, 2e-13, 1.6e-11;
   IdentificationResult result(cal);
   result.rms_mm = 1.25e-3;
@@ -95,6 +95,7 @@ TEST_F(CalibrationFile, RoundTripsEveryStateValueAndTheCovariance) {
   EXPECT_EQ(read.values, cal.values);
   EXPECT_EQ(read.covariance, cal.covariance);
   EXPECT_EQ(read.sigma_mm, cal.sigma_mm);
+  EXPECT_EQ(read.frame_reference, cal.frame_reference);  // the first tile whose view the part frame is
   // The rebuilt model moves a point exactly as the written one.
   const Eigen::Vector3d q(-120, -35, -50);
   EXPECT_EQ(Forward(read.layout, read.values, q), Forward(cal.layout, cal.values, q));
@@ -125,6 +126,10 @@ TEST_F(CalibrationFile, RefusesATieToATiedCoefficientInsteadOfOverflowing) {
         p["factor"] = 1.0;
       },
       {"(xWy)", "yTx0 is itself tied to xTx0"});
+}
+
+TEST_F(CalibrationFile, RefusesABadFrameReference) {
+  ExpectRefused([&](json& d) { d["frame_reference_mm"] = {1.0, 2.0}; }, {"frame_reference_mm", "three numbers"});
 }
 
 TEST_F(CalibrationFile, RefusesAWrongFormatKey) {

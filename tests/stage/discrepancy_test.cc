@@ -19,9 +19,12 @@ struct Case {
   double height_step_mm = 0.0;
 };
 
-Diagnosis DiagnoseCase(const Case& c, unsigned seed) {
+// One effect hidden at a time: the exports keep the translated frame, since the turn of a stitched frame is itself
+// an effect of the catalogue (frame_rotation, below).
+Diagnosis DiagnoseCase(const Case& c, unsigned seed, StitchedFrame frame = StitchedFrame::kTranslated) {
   artefacts::FvmBatchOptions options;
   options.seed = seed;
+  options.stitched_frame = frame;
   options.truth_model = c.model;
   options.hidden_effect = c.effect;
   options.height_step_mm = c.height_step_mm;
@@ -69,15 +72,44 @@ TEST(Discrepancy, CleanDataRarelyRaisesAnAlarm) {
   // The selection runs at a 1 % family-wise level per batch; over 60 clean batches of three model forms the
   // expected count is below 1. The issue allows 5 % (3 of 60).
   int alarms = 0, batches = 0;
+  std::string named;
   for (const Case& c : {Case{"", "27"}, Case{"", "9", 20.0}, Case{"", "15"}}) {
     for (unsigned seed = 100; seed < 120; ++seed) {
       const Diagnosis d = DiagnoseCase(c, seed);
       alarms += d.effect.has_value();
+      if (d.effect) named += " " + *d.effect + "(" + c.model + ", seed " + std::to_string(seed) + ")";
       ++batches;
       EXPECT_EQ(d.after.mean_mm, d.before.mean_mm);
     }
   }
-  EXPECT_LE(alarms, 3) << alarms << " false alarms in " << batches << " clean batches";
+  EXPECT_LE(alarms, 3) << alarms << " false alarms in " << batches << " clean batches:" << named;
+}
+
+// Exports that keep the orientation of their first tile (the default of the simulator, what an instrument that
+// registers tiles by translation gives): identification placements share a start and the turn, so only the
+// held-out ones show it. Named on every seed, with the held-out figure after the step close to what a rigid fit per
+// placement leaves; never on exports without the turn.
+TEST(Discrepancy, NamesTheTurnOfTheStitchedFrame) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    artefacts::FvmBatchOptions options;
+    options.seed = seed;
+    const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(options);
+    const MeasurementSet identify = artefacts::Observations(sim.batch, sim.batch.identify);
+    const MeasurementSet validate = artefacts::Observations(sim.batch, sim.batch.validate);
+    const Diagnosis d = Diagnose(FvmModelLayout("27"), identify, validate);
+    ASSERT_TRUE(d.effect.has_value()) << "seed " << seed << ": " << d.explanation;
+    EXPECT_EQ(*d.effect, "frame_rotation") << "seed " << seed;
+    EXPECT_EQ(d.size_unit, "urad");
+    EXPECT_EQ(d.turns.size(), validate.anchors.size());
+    EXPECT_GT(d.size, 3 * d.size_u) << "seed " << seed;
+    IdentificationOptions id;
+    id.anchors = identify.anchors;
+    const IdentificationResult fit = Identify(FvmModelLayout("27"), identify.observations, id);
+    const FrameFreeStats rigid = RigidValidation(&fit.calibration, validate.observations);
+    EXPECT_LE(d.validation_after.rms_mm, 1.15 * rigid.rms_mm) << "seed " << seed;  // the issue's target
+    EXPECT_LT(d.validation_after.rms_mm, d.validation_before.rms_mm) << "seed " << seed;
+    EXPECT_FALSE(DiagnoseCase({"", "27"}, seed).effect.has_value()) << "seed " << seed << ": translated exports";
+  }
 }
 
 TEST(Discrepancy, ResidualAnalysisPointsAtWhatIsWrong) {

@@ -52,14 +52,16 @@ struct PublishedStage {
   double ripple_mm = 0.0;
   double ripple_period_mm = 37.0;
 
-  static PublishedStage Draw(unsigned seed, double ripple_mm = 0.0) {
+  // `rotation_size`: offsets and slopes of the rotation terms (rad); squareness keeps 2e-4.
+  static PublishedStage Draw(unsigned seed, double ripple_mm = 0.0, double rotation_size = 2e-4) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     PublishedStage s;
     s.ripple_mm = ripple_mm;
     for (int k = 0; k < 15; ++k) {
       const bool translation = k < 12 && k % 6 < 3;
-      const double size = translation ? 0.04 : 2e-4;  // mm; rad
+      const bool rotation = k < 12 && k % 6 >= 3;
+      const double size = translation ? 0.04 : rotation ? rotation_size : 2e-4;  // mm; rad
       s.offset[static_cast<size_t>(k)] = size * unit(rng);
       s.slope[static_cast<size_t>(k)] = k < 12 ? size * unit(rng) : 0.0;
     }
@@ -86,6 +88,13 @@ struct PublishedStage {
 
   // Part coordinates of the commanded point q.
   Eigen::Vector3d Part(const Eigen::Vector3d& q) const { return PublishedEquation1(ErrorsAt(q.x(), q.y()), q); }
+
+  // How the camera turns a vector of its own frame into the part frame's, inverted: R_Y R_X at q (eq. 1 maps a
+  // tool offset v to R_X^-1 R_Y^-1 v).
+  Eigen::Matrix3d CameraToStitched(const Eigen::Vector3d& q) const {
+    const PublishedErrors e = ErrorsAt(q.x(), q.y());
+    return PublishedRotation(e.yRx, e.yRy, e.yRz) * PublishedRotation(e.xRx, e.xRy, e.xRz);
+  }
 };
 
 // The first tile of a measurement (000:7264), written out: lowest x, highest y of the positions, at the height
@@ -120,8 +129,10 @@ struct PublishedMeasurements {
 // highest y) and `validation` random placements, measured on `stage`: the stitching-free centre is the command
 // plus noise, the stitched one the part coordinates (eq. 1) relative to the measurement's first tile, plus noise
 // (`noise_mm` per coordinate in both). `apart`: the identification placements start up to 30 mm apart.
+// `turned`: the stitched export keeps the orientation the camera had at the first tile a, as an instrument that
+// registers tiles by translation does: s = a + R_Y R_X (at a) (P(q) - P(a)); otherwise s = a + P(q) - P(a).
 inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage, unsigned seed, double noise_mm,
-                                                      int validation = 10, bool apart = false) {
+                                                      int validation = 10, bool apart = false, bool turned = false) {
   std::mt19937_64 rng(seed * 7919u + 1u);
   std::normal_distribution<double> noise(0.0, 1.0);
   std::uniform_real_distribution<double> tilt(-1.5e-3, 1.5e-3), shift(0.0, 30.0), angle(-std::numbers::pi, std::numbers::pi),
@@ -134,11 +145,11 @@ inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage
     const int group = static_cast<int>(set.anchors.size());
     const Eigen::Vector3d anchor = PublishedFirstTile(commands);
     // The stitched coordinates start at the first tile, where the stage's own error is not seen.
-    const Eigen::Vector3d anchor_error = stage.Part(anchor) - anchor;
+    const Eigen::Matrix3d turn = turned ? stage.CameraToStitched(anchor) : Eigen::Matrix3d::Identity();
     std::vector<Eigen::Vector3d> free;
     for (const Eigen::Vector3d& q : commands) {
       free.push_back(noisy(q));
-      set.observations.push_back({free.back(), noisy(stage.Part(q) - anchor_error), group});
+      set.observations.push_back({free.back(), noisy(anchor + turn * (stage.Part(q) - stage.Part(anchor))), group});
     }
     set.anchors.push_back(PublishedFirstTile(free));
     set.groups.push_back("placement " + std::to_string(group));
