@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "core/csv.h"
@@ -11,6 +12,7 @@
 #include "core/number_text.h"
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
+#include "stage/identification.h"
 #include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
 
@@ -21,6 +23,8 @@ struct CorrectArgs {
   std::string calibration;
   std::string input;
   std::string output;
+  std::string frame = "stage";             // stage | first-tile
+  std::string stitched_frame = "rotated";  // first-tile: rotated | translated
   bool json = false;
 };
 
@@ -125,9 +129,21 @@ void Run(const CorrectArgs& args) {
   }
   const stage::Calibration cal = stage::ReadCalibration(args.calibration);
   const artefacts::CentreExport input = artefacts::ReadCentreExport(in);
-
+  // The stage frame: the model's part frame. The first tile's: where a stitched measurement of the same centres
+  // would put them, started at the first tile of this export (its encoder reading) and turned with the stage there.
+  std::optional<stage::FirstTileCompensation> first_tile;
+  if (args.frame == "first-tile") {
+    std::vector<Eigen::Vector3d> positions;
+    for (const artefacts::CentreRecord& r : input.centres) positions.push_back(r.position);
+    if (positions.empty()) throw InputError(args.input + ": no centres, so no first tile");
+    first_tile.emplace(cal, stage::ParseStitchedFrame(args.stitched_frame), stage::FirstTile(positions));
+  }
   // Same rows, compensated; u_x, u_y, u_z are the standard uncertainties the model's covariance gives each point.
   std::string csv = fmt::format("# corrected by fvm {} with {} (model {})\n", FVM_VERSION, args.calibration, cal.model);
+  if (first_tile) {
+    const Eigen::Vector3d& a = first_tile->frame().first_tile;
+    csv += fmt::format("# frame: first tile at ({:.4f}, {:.4f}, {:.4f}) mm, {}\n", a.x(), a.y(), a.z(), args.stitched_frame);
+  }
   for (const std::string& c : input.comments) csv += "#" + c + "\n";
   csv += "id,x,y,z,u_x,u_y,u_z";
   const bool has_t = !input.centres.empty() && input.centres.front().t_s.has_value();
@@ -136,7 +152,7 @@ void Run(const CorrectArgs& args) {
   nlohmann::json doc;
   double largest_shift = 0.0;
   for (const artefacts::CentreRecord& r : input.centres) {
-    const stage::CorrectedPoint p = stage::Correct(cal, r.position);
+    const stage::CorrectedPoint p = first_tile ? first_tile->Correct(r.position) : stage::Correct(cal, r.position);
     const Eigen::Vector3d u = p.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     csv += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}", r.id, p.position.x(), p.position.y(), p.position.z(),
                        u.x(), u.y(), u.z());
@@ -173,6 +189,16 @@ void RegisterCorrect(CLI::App& app) {
   sub->add_option("IN", args->input, "stitching-free centre export, or nominal machine points (CSV: id,x,y,z in mm)")->required();
   sub->add_option("-o,--output", args->output, "corrected export (id,x,y,z,u_x,u_y,u_z) or compensation table (CSV, mm)")
       ->required();
+  sub->add_option("--frame", args->frame,
+                  "stage model: 'stage' (the model's part frame) or 'first-tile' (where a stitched measurement started at "
+                  "this export's first tile puts the centres: comparable with its stitched export)")
+      ->check(CLI::IsMember({"stage", "first-tile"}))
+      ->capture_default_str();
+  sub->add_option("--stitched-frame", args->stitched_frame,
+                  "--frame first-tile: 'rotated' (turned with the stage at the first tile, by the model's rotation terms) "
+                  "or 'translated'")
+      ->check(CLI::IsMember({"rotated", "translated"}))
+      ->capture_default_str();
   sub->add_flag("--json", args->json, "print the corrected centres (or commands) as JSON");
   sub->footer("Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm correct --calibration stage.json "
               "samples/bar17/val-01.free.csv -o val-01.corrected.csv\n"

@@ -56,4 +56,31 @@ CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& fr
   return out;
 }
 
+FirstTileCompensation::FirstTileCompensation(const Calibration& calibration, StitchedFrame frame,
+                                             const Eigen::Vector3d& first_tile)
+    : calibration_(calibration) {
+  frame_.first_tile = first_tile;
+  origin_jacobian_ = ForwardJacobian(calibration.layout, calibration.values.data(), first_tile, &frame_.origin);
+  const Eigen::Vector3d* reference = calibration.frame_reference ? &*calibration.frame_reference : nullptr;
+  frame_.turn = FirstTileTurn(frame, calibration.layout, calibration.values.data(), first_tile, reference, &turn_jacobian_);
+}
+
+Eigen::Vector3d FirstTileCompensation::operator()(const Eigen::Vector3d& free_point, Eigen::MatrixXd* jacobian) const {
+  Eigen::Vector3d p;
+  const Eigen::MatrixXd j = ForwardJacobian(calibration_.layout, calibration_.values.data(), free_point, &p);
+  if (jacobian) {
+    *jacobian = frame_.turn * (j - origin_jacobian_);
+    for (size_t k = 0; k < turn_jacobian_.size(); ++k) jacobian->col(static_cast<Eigen::Index>(k)) += turn_jacobian_[k] * (p - frame_.origin);
+  }
+  return frame_.Stitched(p);
+}
+
+CorrectedPoint FirstTileCompensation::Correct(const Eigen::Vector3d& free_point) const {
+  CorrectedPoint out;
+  Eigen::MatrixXd j;
+  out.position = (*this)(free_point, &j);
+  if (calibration_.covariance.rows() == j.cols()) out.covariance = j * calibration_.covariance * j.transpose();
+  return out;
+}
+
 }  // namespace fvm::stage

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "stage/parameter_layout.h"
+#include "stage/stitched_frame.h"
 
 namespace fvm::stage {
 
@@ -57,5 +58,23 @@ Compensation CompensateCommand(const Calibration& calibration, const Eigen::Vect
 
 // Compensates one stitching-free point: the forward model, eq. 1.
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point);
+
+// Compensation into the frame of one stitched measurement (stitched_frame.h): where the instrument, stitching from
+// the first tile a, puts the point, a + T (F(q) - F(a)), with the model's turn T relative to the calibration's frame
+// reference. Built once per measurement, then applied to its points.
+class FirstTileCompensation {
+ public:
+  FirstTileCompensation(const Calibration& calibration, StitchedFrame frame, const Eigen::Vector3d& first_tile);
+  // With `jacobian`: d(point) / d(free coefficients), 3 x n.
+  Eigen::Vector3d operator()(const Eigen::Vector3d& free_point, Eigen::MatrixXd* jacobian = nullptr) const;
+  CorrectedPoint Correct(const Eigen::Vector3d& free_point) const;
+  const FirstTileFrame& frame() const { return frame_; }
+
+ private:
+  const Calibration& calibration_;
+  FirstTileFrame frame_;
+  Eigen::MatrixXd origin_jacobian_;
+  std::vector<Eigen::Matrix3d> turn_jacobian_;
+};
 
 }  // namespace fvm::stage

@@ -45,38 +45,25 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
     stats.turn_coefficients = TurnCoefficients(calibration->layout);
     stats.turn = stats.turn_coefficients.empty() ? "uncertainty" : "model";
   }
-  // Each measurement's frame under the model, with the derivatives of its origin and turn.
-  struct Frame {
-    FirstTileFrame frame;
-    Eigen::MatrixXd origin_jacobian;
-    std::vector<Eigen::Matrix3d> turn_jacobian;
-  };
-  std::vector<Frame> frames;
-  for (const Eigen::Vector3d& a : anchors) {
-    Frame f;
-    f.frame.first_tile = a;
-    f.frame.origin = Compensated(calibration, a, &f.origin_jacobian);
-    if (stats.turn == "model") {
-      const Eigen::Vector3d* reference = calibration->frame_reference ? &*calibration->frame_reference : nullptr;
-      f.frame.turn = FirstTileTurn(frame, calibration->layout, calibration->values.data(), a, reference, &f.turn_jacobian);
-    }
-    frames.push_back(std::move(f));
+  // Each measurement's frame under the model: the translated one for "none", since only the model can turn it.
+  const StitchedFrame model_frame = stats.turn == "model" ? frame : StitchedFrame::kTranslated;
+  std::vector<FirstTileCompensation> frames;
+  if (modelled) {
+    for (const Eigen::Vector3d& a : anchors) frames.emplace_back(*calibration, model_frame, a);
   }
   std::vector<double> predicted_sq;
   std::vector<Eigen::Vector3d> arms;  // s - a, for the turn the model does not tell
   for (const Observation& o : observations) {
     Eigen::MatrixXd j;
-    const Eigen::Vector3d p = Compensated(calibration, o.command, &j);
-    Eigen::Vector3d r = p - o.measured;
-    if (!anchors.empty()) {
-      const Frame& f = frames.at(static_cast<size_t>(o.group));
-      r = f.frame.Stitched(p) - o.measured;
-      if (modelled) {
-        j = f.frame.turn * (j - f.origin_jacobian);
-        for (size_t k = 0; k < f.turn_jacobian.size(); ++k) j.col(static_cast<Eigen::Index>(k)) += f.turn_jacobian[k] * (p - f.frame.origin);
-      }
-      arms.push_back(o.measured - f.frame.first_tile);
+    Eigen::Vector3d r;
+    if (!modelled) {
+      r = o.command - o.measured;  // no compensation: the first tile's own error is zero, whatever the frame
+    } else if (anchors.empty()) {
+      r = Compensated(calibration, o.command, &j) - o.measured;
+    } else {
+      r = frames.at(static_cast<size_t>(o.group))(o.command, &j) - o.measured;
     }
+    if (!anchors.empty()) arms.push_back(o.measured - anchors.at(static_cast<size_t>(o.group)));
     stats.residuals.push_back(r);
     if (modelled) stats.jacobians.push_back(j);
     if (modelled) {
