@@ -224,7 +224,7 @@ MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Obser
 }
 
 // frame_rotation on the held-out placements: each one's turn about its first tile, fitted to the calibration's
-// residuals (FitPlacementTurns) and tested against what the calibration's covariance and the noise predict for
+// residuals (PlacementTurns) and tested against what the calibration's covariance and the noise predict for
 // it when there is no turn: chi^2 of the turns over the directions a placement determines (a bar shows nothing of
 // a turn about its own length).
 struct TurnTest {

@@ -65,8 +65,8 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
     }
     if (!anchors.empty()) arms.push_back(o.measured - anchors.at(static_cast<size_t>(o.group)));
     stats.residuals.push_back(r);
-    if (modelled) stats.jacobians.push_back(j);
     if (modelled) {
+      stats.jacobians.push_back(j);
       predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
                              3 * calibration->sigma_mm * calibration->sigma_mm);
     }
