@@ -45,7 +45,9 @@ std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std
 ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
   ReportData data;
   data.title = fmt::format("fvm diagnose: model {} on {}", args.model, args.batch);
-  data.change = d.effect ? "adding " + *d.effect : "(no effect accepted)";
+  std::string added;
+  for (const stage::DiagnosisStep& s : d.steps) added += (added.empty() ? "adding " : ", then ") + s.effect;
+  data.change = d.steps.empty() ? "(no effect accepted)" : added;
   data.summary = {{"effect", d.effect.value_or("none")},
                   {"component", d.component.empty() ? "-" : d.component},
                   {"explanation", d.explanation},
@@ -63,7 +65,14 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
     data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
     data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
   }
-  if (d.effect) data.parameters.push_back({*d.effect + (d.component.empty() ? "" : " " + d.component), d.size, d.size_u, d.size_unit});
+  for (size_t k = 0; k < d.steps.size(); ++k) {
+    const stage::DiagnosisStep& s = d.steps[k];
+    data.summary.emplace_back(fmt::format("step {}: {}", k + 1, s.effect),
+                              fmt::format("held-out mean {:.2f} -> {:.2f} um; {}", s.validation_before.mean_mm * 1e3,
+                                          s.validation_after.mean_mm * 1e3, s.explanation));
+    data.parameters.push_back({s.effect + (s.component.empty() ? "" : " " + s.component), s.size, s.size_u, s.size_unit});
+  }
+  for (const std::string& note : d.notes) data.summary.emplace_back("note", note);
   return data;
 }
 
@@ -88,6 +97,17 @@ void Run(const DiagnoseArgs& args) {
   doc["validation"] = {{"before", SummaryJson(d.validation_before)}, {"after", SummaryJson(d.validation_after)}};
   doc["size"] = {{"value", d.size}, {"u", d.size_u}, {"unit", d.size_unit}};
   doc["findings"] = d.findings;
+  doc["effects"] = nlohmann::json::array();
+  for (const stage::DiagnosisStep& s : d.steps) {
+    doc["effects"].push_back({{"effect", s.effect},
+                              {"component", s.component},
+                              {"explanation", s.explanation},
+                              {"size", {{"value", s.size}, {"u", s.size_u}, {"unit", s.size_unit}}},
+                              {"before", SummaryJson(s.before)},
+                              {"after", SummaryJson(s.after)},
+                              {"validation", {{"before", SummaryJson(s.validation_before)}, {"after", SummaryJson(s.validation_after)}}}});
+  }
+  doc["notes"] = d.notes;
   doc["stitched_frame"] = args.settings.stitched_frame;
   for (const stage::PlacementTurnFinding& t : d.turns) {
     doc["turns"].push_back({{"placement", t.placement},
@@ -113,9 +133,16 @@ void Run(const DiagnoseArgs& args) {
     fmt::print("  {:<22} {:>6} {:>10.3g} {:>10.2g} {:>9.1f}{}\n", c.effect + (c.component.empty() ? "" : " " + c.component),
                c.extra_parameters, c.f_statistic, c.p_value, c.delta_bic, c.significant ? "  significant" : "");
   }
-  fmt::print("\n  effect: {}{}\n", d.effect.value_or("none"), d.component.empty() ? "" : " (" + d.component + ")");
-  if (d.effect) fmt::print("  size: {:.3g} +- {:.2g} {}\n", d.size, d.size_u, d.size_unit);
-  fmt::print("  {}\n\n", d.explanation);
+  if (d.steps.empty()) fmt::print("\n  effect: none\n  {}\n\n", d.explanation);
+  for (size_t k = 0; k < d.steps.size(); ++k) {
+    const stage::DiagnosisStep& s = d.steps[k];
+    fmt::print("\n  step {}: {}{}, {:.3g} +- {:.2g} {}; held-out mean {:.2f} -> {:.2f} um\n", k + 1, s.effect,
+               s.component.empty() ? "" : " (" + s.component + ")", s.size, s.size_u, s.size_unit,
+               s.validation_before.mean_mm * 1e3, s.validation_after.mean_mm * 1e3);
+    fmt::print("  {}\n", s.explanation);
+  }
+  for (const std::string& note : d.notes) fmt::print("  note: {}\n", note);
+  fmt::print("\n");
   if (!d.turns.empty()) {
     fmt::print("  {:<16} {:>22}\n", "placement", "yaw about first tile");
     for (const stage::PlacementTurnFinding& t : d.turns) {

@@ -482,8 +482,20 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--pitch-error-um", args->options.pitch_error_um, "calotte deviations of the uncalibrated bar (um)")
       ->capture_default_str();
   sub->add_option("--hidden-effect", args->options.hidden_effect,
-                  "hide one effect the stage model lacks, for 'fvm diagnose' (sizes: see --effect-size)")
-      ->check(CLI::IsMember(artefacts::HiddenEffectNames()));
+                  "hide effects the stage model lacks, for 'fvm diagnose': one name or several joined by commas, e.g. "
+                  "thermal_drift,scale (sizes: see --effect-size)")
+      ->check(CLI::Validator(
+          [](std::string& value) {
+            artefacts::FvmBatchOptions o;
+            o.hidden_effect = value;
+            try {
+              o.Check();
+            } catch (const std::invalid_argument& e) {
+              return std::string(e.what());
+            }
+            return std::string();
+          },
+          "EFFECT[,EFFECT...]"));
   sub->add_option("--effect-size", args->options.effect_size,
                   "size of the hidden effect; 0 = default: thermal_drift 3 um/min, higher_order 80 um, reference_anchor "
                   "30 mm, z_coupling 500 urad, outliers 80 um, scale 300 ppm")

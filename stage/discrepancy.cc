@@ -2,14 +2,15 @@
 
 #include <fmt/core.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
 #include <functional>
 #include <map>
+#include <numeric>
 
 #include "stage/stitched_frame.h"
 #include "stage/validation.h"
@@ -225,8 +226,7 @@ MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Obser
 
 // frame_rotation on the held-out placements: each one's turn about its first tile, fitted to the calibration's
 // residuals (PlacementTurns) and tested against what the calibration's covariance and the noise predict for
-// it when there is no turn: chi^2 of the turns over the directions a placement determines (a bar shows nothing of
-// a turn about its own length).
+// it when there is no turn: chi^2 of the yaws; the step then takes each placement's whole turn out.
 struct TurnTest {
   EffectScore score{"frame_rotation", "", 0, 0.0, 1.0, 0.0, false};
   std::vector<PlacementTurn> turns;
@@ -239,21 +239,31 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
   const ValidationStats v = Validate(&calibration, validate.observations, validate.anchors, frame);
   t.turns = PlacementTurns(calibration, v, validate.observations, validate.anchors);
   t.residuals_after = v.residuals;
-  double chi2 = 0.0;
-  int dof = 0;
   for (const PlacementTurn& turn : t.turns) {
     for (size_t k = 0; k < turn.observations.size(); ++k) {
       t.residuals_after[turn.observations[k]] -= TurnDisplacement(turn.rotation, turn.arms[k]);
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(turn.predicted);
-    for (int k = 0; k < 3; ++k) {
-      const double lambda = eigen.eigenvalues()[k];
-      if (lambda <= 1e-9 * eigen.eigenvalues().maxCoeff()) continue;  // a direction the placement does not show
-      chi2 += std::pow(eigen.eigenvectors().col(k).dot(turn.rotation), 2) / lambda;
-      ++dof;
+  }
+  // The test looks at the yaws, which an in-plane placement always shows (tilts about the first tile are also what
+  // a model that cannot determine pitch and roll gets wrong), jointly: an error of the model turns every
+  // placement alike, so their yaws are correlated through the calibration's covariance.
+  const Eigen::Index n = static_cast<Eigen::Index>(t.turns.size());
+  if (n == 0) return t;
+  Eigen::VectorXd yaw(n);
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
+  const bool model = calibration.covariance.size() > 0;
+  for (Eigen::Index g = 0; g < n; ++g) {
+    const PlacementTurn& a = t.turns[static_cast<size_t>(g)];
+    yaw[g] = a.rotation.z();
+    covariance(g, g) = a.noise(2, 2);
+    for (Eigen::Index h = 0; h < n && model && a.sensitivity.size() > 0; ++h) {
+      covariance(g, h) += a.sensitivity.row(2).dot(calibration.covariance * t.turns[static_cast<size_t>(h)].sensitivity.row(2).transpose());
     }
   }
-  if (dof == 0) return t;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
+  if (ldlt.info() != Eigen::Success || !(covariance.diagonal().minCoeff() > 0)) return t;
+  const double chi2 = yaw.dot(ldlt.solve(yaw));
+  const int dof = static_cast<int>(n);
   const double m = 3.0 * static_cast<double>(v.residuals.size());
   double rss_before = 0, rss_after = 0;
   for (size_t i = 0; i < v.residuals.size(); ++i) {
@@ -268,36 +278,127 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
   return t;
 }
 
-}  // namespace
+// What an accepted step added, with the values it was estimated at: enough to rebuild the problem with or without
+// it (the backward check).
+struct Applied {
+  DiagnosisStep step;
+  std::vector<std::string> coefficient_names;            // higher_order, z_coupling
+  Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();  // thermal_drift
+  double scale = 0.0;                                    // scale
+  std::vector<int> flagged;                              // outliers: indices into the original identification set
+  int extra = 0;                                         // parameters it added
+};
 
-Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
-                   const DiagnosisOptions& options) {
-  Diagnosis d;
-  const IdentificationOptions& base_options = options.identification;
-  const bool anchored = base_options.anchor == Anchor::kFirstTile;
-  const auto identify_with = [&](const ParameterLayout& l, const MeasurementSet& set, Anchor anchor) {
+// The problem a step fits: the base model and data with every applied effect.
+struct Problem {
+  ParameterLayout layout;
+  MeasurementSet identify, validate;
+  Anchor anchor = Anchor::kNone;
+  std::vector<int> original;  // index of each identification observation in the original set
+};
+
+MeasurementSet Undrifted(const MeasurementSet& set, const Eigen::Vector3d& v) {
+  if (set.t_s.empty()) return set;
+  return Changed(set, [&](Observation& o, size_t i) { o.command -= v * set.t_s[i]; });
+}
+
+MeasurementSet Unscaled(const MeasurementSet& set, double kappa) {
+  if (set.anchors.empty()) return set;
+  return Changed(set, [&](Observation& o, size_t) {
+    const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
+    o.measured.head<2>() = a.head<2>() + (o.measured - a).head<2>() / (1.0 + kappa);
+  });
+}
+
+Problem Build(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate, Anchor anchor,
+              const std::vector<Applied>& applied) {
+  Problem p{layout, identify, validate, anchor, {}};
+  std::vector<int> dropped;
+  for (const Applied& a : applied) {
+    const std::string& e = a.step.effect;
+    if (e == "higher_order") RaiseOrder(p.layout, a.step.component);
+    if (e == "z_coupling") AddPitchAndRoll(p.layout);
+    if (e == "reference_anchor") p.anchor = Anchor::kFirstTile;
+    if (e == "thermal_drift") p.identify = Undrifted(p.identify, a.drift_mm_per_s), p.validate = Undrifted(p.validate, a.drift_mm_per_s);
+    if (e == "scale") p.identify = Unscaled(p.identify, a.scale), p.validate = Unscaled(p.validate, a.scale);
+    if (e == "outliers") dropped.insert(dropped.end(), a.flagged.begin(), a.flagged.end());
+  }
+  // Outliers last: the indices refer to the original set, which the other effects change in place only.
+  MeasurementSet kept = p.identify;
+  kept.observations.clear();
+  kept.t_s.clear();
+  kept.labels.clear();
+  for (size_t i = 0; i < p.identify.observations.size(); ++i) {
+    if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) != dropped.end()) continue;
+    kept.observations.push_back(p.identify.observations[i]);
+    if (!p.identify.t_s.empty()) kept.t_s.push_back(p.identify.t_s[i]);
+    if (!p.identify.labels.empty()) kept.labels.push_back(p.identify.labels[i]);
+    p.original.push_back(static_cast<int>(i));
+  }
+  p.identify = std::move(kept);
+  return p;
+}
+
+bool IsApplied(const std::vector<Applied>& applied, const std::string& effect) {
+  return std::any_of(applied.begin(), applied.end(), [&](const Applied& a) { return a.step.effect == effect; });
+}
+
+// Noise per coordinate that a few blunders cannot inflate: the median absolute residual (MAD) scaled to sigma.
+double RobustSigma(const std::vector<Eigen::Vector3d>& residuals, double floor_mm) {
+  std::vector<double> components;
+  for (const Eigen::Vector3d& r : residuals) components.insert(components.end(), {std::abs(r.x()), std::abs(r.y()), std::abs(r.z())});
+  if (components.empty()) return floor_mm;
+  std::nth_element(components.begin(), components.begin() + static_cast<long>(components.size() / 2), components.end());
+  return std::max(1.4826 * components[components.size() / 2], floor_mm);
+}
+
+// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), found
+// one at a time: the worst is taken out and the model refitted before the next is judged, so that a large
+// blunder, which drags the fit towards itself, cannot make its good neighbours look bad. Indices into p.identify.
+std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit, const IdentificationOptions& base_options,
+                              double alpha) {
+  std::vector<int> flagged;
+  std::vector<int> index(p.identify.observations.size());
+  std::iota(index.begin(), index.end(), 0);
+  std::vector<Observation> kept = p.identify.observations;
+  std::vector<Eigen::Vector3d> residuals = fit.residuals;
+  const boost::math::chi_squared_distribution<double> chi2(3.0);
+  const double limit = boost::math::quantile(boost::math::complement(chi2, alpha / static_cast<double>(kept.size())));
+  const size_t most = kept.size() / 5;  // beyond a fifth of the centres, the "outliers" are the model's failure
+  while (flagged.size() < most) {
+    const double sigma = RobustSigma(residuals, base_options.noise_floor_mm);
+    size_t worst = 0;
+    for (size_t i = 1; i < residuals.size(); ++i) {
+      if (residuals[i].squaredNorm() > residuals[worst].squaredNorm()) worst = i;
+    }
+    if (residuals.empty() || residuals[worst].squaredNorm() / (sigma * sigma) <= limit) break;
+    flagged.push_back(index[worst]);
+    kept.erase(kept.begin() + static_cast<long>(worst));
+    index.erase(index.begin() + static_cast<long>(worst));
     IdentificationOptions o = base_options;
-    o.anchor = anchor;
-    o.anchors = set.anchors;
-    return Identify(l, set.observations, o);
-  };
-  const IdentificationResult base = identify_with(layout, identify, base_options.anchor);
-  d.residuals_before = base.residuals;
-  d.before = Summarize(base.residuals);
-  const auto validation = [&](const Calibration& cal, const MeasurementSet& set) {
-    if (set.observations.empty()) return ResidualSummary{};
-    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors, base_options.frame));
-  };
-  d.validation_before = validation(base.calibration, validate);
+    o.anchor = p.anchor;
+    o.anchors = p.identify.anchors;
+    try {
+      residuals = Identify(p.layout, kept, o).residuals;
+    } catch (const std::invalid_argument&) {
+      break;  // too few centres left for the model: stop flagging
+    }
+  }
+  return flagged;
+}
 
-  const Eigen::VectorXd r0 = Stack(base.residuals);
-  const double m = static_cast<double>(r0.size());
-  const ParameterLayout& fitted = base.calibration.layout;
-  const Eigen::MatrixXd jb = CoefficientColumns(fitted, base.calibration.values, fitted.FreeNames(), identify, anchored);
+// Every candidate effect scored against the current fit (CoefficientColumns, ScoreColumns), but those already
+// applied once (an anchor, a drift, a scale, outliers cannot be added twice).
+std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationResult& fit, const ParameterLayout& base_layout,
+                                       const std::vector<Applied>& applied, const IdentificationOptions& base_options,
+                                       double alpha) {
+  const MeasurementSet& identify = p.identify;
+  const bool anchored = p.anchor == Anchor::kFirstTile;
+  const Eigen::VectorXd r0 = Stack(fit.residuals);
+  const ParameterLayout& fitted = fit.calibration.layout;
+  const Eigen::MatrixXd jb = CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), identify, anchored);
   const Eigen::Index rows = r0.size();
-
   std::vector<Candidate> candidates;
-  // Coefficients added to the model: higher orders, pitch and roll.
   const auto coefficient_candidate = [&](const std::string& effect, const std::string& component,
                                          const std::function<void(ParameterLayout&)>& extend) {
     ParameterLayout extended = fitted;
@@ -307,18 +408,16 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       if (fitted.FreeIndexOf(name) < 0) added.push_back(name);
     }
     if (added.empty()) return;
-    const std::vector<double> values = ValuesByName(fitted, base.calibration.values, extended);
-    Candidate c{{effect, component}, ScoreColumns(r0, jb, CoefficientColumns(extended, values, added, identify, anchored)), added, {}};
-    candidates.push_back(std::move(c));
+    const std::vector<double> values = ValuesByName(fitted, fit.calibration.values, extended);
+    candidates.push_back({{effect, component}, ScoreColumns(r0, jb, CoefficientColumns(extended, values, added, identify, anchored)), added, {}});
   };
   for (int t = 0; t < kFirstSquarenessTerm; ++t) {
-    const TermSpec& spec = layout.term(t);
-    if (!spec.present || spec.order >= kMaxOrder) continue;
+    const TermSpec& spec = p.layout.term(t);
+    if (!spec.present || spec.order >= kMaxOrder || !base_layout.term(t).present) continue;
     const std::string term(GetErrorTerm(t).vdi);
     coefficient_candidate("higher_order", term, [&](ParameterLayout& l) { RaiseOrder(l, term); });
   }
   coefficient_candidate("z_coupling", "", AddPitchAndRoll);
-
   const auto column_candidate = [&](const std::string& effect, const std::string& component, const Eigen::MatrixXd& columns) {
     candidates.push_back(Candidate{{effect, component}, ScoreColumns(r0, jb, columns), {}, {}});
   };
@@ -332,14 +431,14 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     }
     column_candidate("reference_anchor", "", columns);
   }
-  if (!identify.t_s.empty()) {
+  if (!identify.t_s.empty() && !IsApplied(applied, "thermal_drift")) {
     Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3);
     for (size_t i = 0; i < identify.observations.size(); ++i) {
       for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -identify.t_s[i];
     }
     column_candidate("thermal_drift", "", columns);
   }
-  if (!identify.anchors.empty()) {  // a scale about the first tile needs one
+  if (!identify.anchors.empty() && !IsApplied(applied, "scale")) {  // a scale about the first tile needs one
     Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 1);
     for (size_t i = 0; i < identify.observations.size(); ++i) {
       const Observation& o = identify.observations[i];
@@ -348,20 +447,8 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     }
     column_candidate("scale", "xy", columns);
   }
-  // Noise per coordinate that a few blunders cannot inflate: the median absolute residual (MAD) scaled to sigma.
-  std::vector<double> components;
-  for (const Eigen::Vector3d& r : base.residuals) components.insert(components.end(), {std::abs(r.x()), std::abs(r.y()), std::abs(r.z())});
-  std::nth_element(components.begin(), components.begin() + static_cast<long>(components.size() / 2), components.end());
-  const double robust_sigma = std::max(1.4826 * components[components.size() / 2], base_options.noise_floor_mm);
-  {
-    // Outliers: centres whose error is improbable for Gaussian noise of the robust scale, Bonferroni over centres.
-    const double sigma = robust_sigma;
-    const boost::math::chi_squared_distribution<double> chi2(3.0);
-    const double limit = boost::math::quantile(boost::math::complement(chi2, options.alpha / static_cast<double>(base.residuals.size())));
-    Candidate c{{"outliers", ""}, {}, {}, {}};
-    for (size_t i = 0; i < base.residuals.size(); ++i) {
-      if (base.residuals[i].squaredNorm() / (sigma * sigma) > limit) c.flagged.push_back(static_cast<int>(i));
-    }
+  if (!IsApplied(applied, "outliers")) {
+    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p, fit, base_options, alpha)};
     if (!c.flagged.empty()) {
       Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(c.flagged.size()));
       for (size_t k = 0; k < c.flagged.size(); ++k) {
@@ -371,197 +458,308 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       candidates.push_back(std::move(c));
     }
   }
+  return candidates;
+}
 
-  const bool turns_testable = !validate.observations.empty() && !validate.anchors.empty();
-  const double alpha_each = options.alpha / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
-  for (Candidate& c : candidates) Test(c, m, alpha_each);
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-    if (a.score.significant != b.score.significant) return a.score.significant;
-    return a.score.delta_bic < b.score.delta_bic;
-  });
-  for (const Candidate& c : candidates) d.candidates.push_back(c.score);
-  d.findings = Findings(base.residuals, identify, robust_sigma);
-  d.residuals_after = base.residuals;
-  d.after = d.before;
-  d.validation_after = d.validation_before;
-  if (candidates.empty() || !candidates.front().score.significant) {
-    if (turns_testable) {
-      // The identification data fit to noise: do the held-out placements turn about their first tiles?
-      TurnTest turn = TestHeldOutTurns(base.calibration, validate, base_options.frame, alpha_each);
-      d.candidates.push_back(turn.score);
-      if (turn.score.significant) {
-        d.effect = "frame_rotation";
-        d.component = "z";
-        double yaw_sq = 0, u_sq = 0;
-        for (const PlacementTurn& t : turn.turns) {
-          const Eigen::Vector3d u = t.predicted.diagonal().cwiseMax(0.0).cwiseSqrt();
-          const std::string name = static_cast<size_t>(t.group) < validate.groups.size() ? validate.groups[static_cast<size_t>(t.group)]
-                                                                                        : std::to_string(t.group);
-          d.turns.push_back({name, t.rotation, u});
-          yaw_sq += t.rotation.z() * t.rotation.z();
-          u_sq += u.z() * u.z();
-        }
-        // The rms yaw over the placements less what their own noise adds, and the standard uncertainty of that rms.
-        const double count = static_cast<double>(std::max<size_t>(1, turn.turns.size()));
-        d.size = std::sqrt(std::max(0.0, yaw_sq - u_sq) / count) * 1e6;
-        d.size_u = std::sqrt(u_sq / count / count) * 1e6;
-        d.size_unit = "urad";
-        d.validation_after = Summarize(turn.residuals_after);
-        const std::vector<std::string> turn_terms = TurnCoefficients(base.calibration.layout);
-        std::string terms;
-        for (const std::string& t : turn_terms) terms += (terms.empty() ? "" : ", ") + t;
-        d.explanation = fmt::format(
-            "The held-out placements' residuals grow perpendicular to, and in proportion to, their distance from the "
-            "first tile: each stitched measurement is turned about its first tile ({:.1f} +- {:.1f} urad rms yaw over {} "
-            "placements). The instrument registers tiles by translation, so a mosaic keeps the orientation the stage "
-            "had at its first tile; identification placements that share a start share that turn and the model's "
-            "constant terms absorb it, so only placements that start elsewhere show it. {}",
-            d.size, d.size_u, turn.turns.size(),
-            turn_terms.empty()
-                ? "This model has no rotation terms that vary over the stage: a model of order 1 or more (27, 42) can "
-                  "tell the turn at each first tile."
-                : fmt::format("fvm calibrate --stitched-frame rotated (the default) turns each placement by the model's own "
-                              "{}.", terms));
-        return d;
-      }
-    }
-    d.explanation = "No listed effect explains the residuals better than noise: the model fits these data to " +
-                    fmt::format("{:.2f} um rms, and no candidate passes the F-test at the {:.0f} % level with a lower BIC.",
-                                d.before.rms_mm * 1e3, options.alpha * 100);
-    return d;
-  }
-
-  // Refit with the winner and measure the gap again, on identification and held-out placements.
-  const Candidate& best = candidates.front();
-  const std::string& effect = best.score.effect;
-  IdentificationResult improved = base;
-  MeasurementSet validate_corrected = validate;
-  const LinearScore& l = best.linear;
-  if (effect == "higher_order" || effect == "z_coupling") {
-    ParameterLayout extended = layout;
-    if (effect == "higher_order") {
-      RaiseOrder(extended, best.score.component);
-    } else {
-      AddPitchAndRoll(extended);
-    }
-    improved = identify_with(extended, identify, base_options.anchor);
-    // The effect's size: the largest added coefficient the refit could determine.
-    const Calibration& cal = improved.calibration;
-    const Eigen::VectorXd u = cal.StandardUncertainty();
-    std::string name;
-    double largest = -1.0;
-    for (const std::string& candidate : best.coefficient_names) {
-      const int slot = cal.layout.FreeIndexOf(candidate);
-      if (slot < 0) continue;
-      const DisplayUnit unit = UnitOf(cal.layout.coefficients()[static_cast<size_t>(cal.layout.FindCoefficient(candidate))]);
-      const double value = cal.values[static_cast<size_t>(slot)] * unit.per_si;
-      if (std::abs(value) > largest) {
-        largest = std::abs(value);
-        name = candidate;
-        d.size = value;
-        d.size_u = u[slot] * unit.per_si;
-        d.size_unit = unit.name;
-      }
-    }
-    if (name.empty()) name = best.coefficient_names.front();
-    d.component = effect == "higher_order" ? best.score.component : name.substr(0, 3);
-    d.explanation = effect == "higher_order"
-                        ? fmt::format("The {} error of the stage bends more than its order-{} polynomial can follow: adding {} "
-                                      "({:.2f} +- {:.2f} {}) takes the residual structure along the axis away.",
-                                      d.component, layout.term(*FindErrorTerm(d.component)).order, name, d.size, d.size_u, d.size_unit)
-                        : fmt::format("The stage pitches and rolls ({} = {:.1f} +- {:.1f} urad): the artefact was measured at "
-                                      "different heights, and a rotation moves the lateral coordinates in proportion to the "
-                                      "height, which the model without pitch and roll cannot follow.",
-                                      name, d.size, d.size_u);
-  } else if (effect == "reference_anchor") {
-    improved = identify_with(layout, identify, Anchor::kFirstTile);
+// A candidate as an effect to apply, with what can be said of it before the refit (coefficient effects get their
+// size from the refit: FinishCoefficientEffect).
+Applied MakeApplied(const Candidate& c, const Problem& p, const IdentificationResult& fit) {
+  Applied a;
+  a.step.effect = c.score.effect;
+  a.step.component = c.score.component;
+  a.coefficient_names = c.coefficient_names;
+  a.extra = c.linear.extra;
+  const LinearScore& l = c.linear;
+  const std::string& effect = c.score.effect;
+  if (effect == "reference_anchor") {
     double largest = 0;
     for (Eigen::Index k = 0; k < l.effect.size(); ++k) largest = std::max(largest, std::abs(l.effect[k]));
-    d.size = largest * 1e3;
-    d.size_u = (l.effect_u.size() ? l.effect_u.maxCoeff() : 0.0) * 1e3;
-    d.size_unit = "um";
-    d.explanation = fmt::format(
+    a.step.size = largest * 1e3;
+    a.step.size_u = (l.effect_u.size() ? l.effect_u.maxCoeff() : 0.0) * 1e3;
+    a.step.size_unit = "um";
+    a.step.explanation = fmt::format(
         "The placements did not start at one spot, and the instrument places the first tile of every stitched "
         "measurement by its encoders: each measurement carries the stage error of its own first tile (offsets up to "
         "{:.1f} +- {:.1f} um between placements). Referencing each measurement to its first tile (--anchor first-tile) "
-        "removes them.", d.size, d.size_u);
+        "removes them.", a.step.size, a.step.size_u);
   } else if (effect == "thermal_drift") {
-    const Eigen::Vector3d v(l.effect[0], l.effect[1], l.effect[2]);  // mm/s
+    a.drift_mm_per_s = Eigen::Vector3d(l.effect[0], l.effect[1], l.effect[2]);
     Eigen::Index axis = 0;
-    v.cwiseAbs().maxCoeff(&axis);
-    const auto undrift = [&](const MeasurementSet& set) {
-      return Changed(set, [&](Observation& o, size_t i) { o.command -= v * set.t_s[i]; });
-    };
-    improved = identify_with(layout, undrift(identify), base_options.anchor);
-    if (!validate.t_s.empty()) validate_corrected = undrift(validate);
-    d.component = std::string(1, "xyz"[axis]);
-    d.size = v[axis] * 1e3 * 60.0;
-    d.size_u = l.effect_u[axis] * 1e3 * 60.0;
-    d.size_unit = "um/min";
-    d.explanation = fmt::format(
-        "The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, {:.2f}, "
-        "{:.2f} um/min), as a stage or column warming up would (000:7130). Removing a drift linear in t takes the "
-        "time-correlated residuals away.", d.size, d.size_u, d.component, v.x() * 6e4, v.y() * 6e4, v.z() * 6e4);
+    a.drift_mm_per_s.cwiseAbs().maxCoeff(&axis);
+    const Eigen::Vector3d v = a.drift_mm_per_s * 6e4;  // um/min
+    a.step.component = std::string(1, "xyz"[axis]);
+    a.step.size = v[axis];
+    a.step.size_u = l.effect_u[axis] * 6e4;
+    a.step.size_unit = "um/min";
+    a.step.explanation = fmt::format(
+        "The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, "
+        "{:.2f}, {:.2f} um/min), as a stage or column warming up would (000:7130). Removing a drift linear in t takes the "
+        "time-correlated residuals away.", a.step.size, a.step.size_u, a.step.component, v.x(), v.y(), v.z());
   } else if (effect == "scale") {
-    const double kappa = -l.effect[0];  // the column is -(s - a): its coefficient undoes the scale
-    const auto unscale = [&](const MeasurementSet& set) {
-      return Changed(set, [&](Observation& o, size_t) {
-        const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
-        o.measured.head<2>() = a.head<2>() + (o.measured - a).head<2>() / (1.0 + kappa);
-      });
-    };
-    improved = identify_with(layout, unscale(identify), base_options.anchor);
-    validate_corrected = unscale(validate);
-    d.component = "xy";
-    d.size = kappa * 1e6;
-    d.size_u = l.effect_u[0] * 1e6;
-    d.size_unit = "ppm";
-    d.explanation = fmt::format(
+    a.scale = -l.effect[0];  // the column is -(s - a): its coefficient undoes the scale
+    a.step.size = a.scale * 1e6;
+    a.step.size_u = l.effect_u[0] * 1e6;
+    a.step.size_unit = "ppm";
+    a.step.explanation = fmt::format(
         "Stitched distances are scaled by {:.0f} +- {:.0f} ppm about the first tile: a lens (pixel size) or stitching scale "
         "error of the reference. The stage model cannot absorb a scale that restarts at every measurement's first tile.",
-        d.size, d.size_u);
+        a.step.size, a.step.size_u);
   } else if (effect == "outliers") {
-    MeasurementSet kept;
-    std::vector<std::string> names;
     double largest = 0;
-    for (size_t i = 0; i < identify.observations.size(); ++i) {
-      if (std::find(best.flagged.begin(), best.flagged.end(), static_cast<int>(i)) != best.flagged.end()) {
-        names.push_back(identify.labels.empty() ? std::to_string(i) : identify.labels[i]);
-        largest = std::max(largest, base.residuals[i].norm());
-        continue;
-      }
-      kept.observations.push_back(identify.observations[i]);
-      if (!identify.t_s.empty()) kept.t_s.push_back(identify.t_s[i]);
-      if (!identify.labels.empty()) kept.labels.push_back(identify.labels[i]);
+    for (int i : c.flagged) {
+      a.flagged.push_back(p.original[static_cast<size_t>(i)]);
+      const std::string name = p.identify.labels.empty() ? std::to_string(i) : p.identify.labels[static_cast<size_t>(i)];
+      a.step.component += (a.step.component.empty() ? "" : ",") + name;
+      largest = std::max(largest, fit.residuals[static_cast<size_t>(i)].norm());
     }
-    kept.anchors = identify.anchors;
-    improved = identify_with(layout, kept, base_options.anchor);
-    d.component = "";
-    for (const std::string& n : names) d.component += (d.component.empty() ? "" : ",") + n;
-    d.size = largest * 1e3;
-    d.size_u = base.calibration.sigma_mm * std::sqrt(3.0) * 1e3;
-    d.size_unit = "um";
-    d.explanation = fmt::format(
+    a.step.size = largest * 1e3;
+    a.step.size_u = fit.calibration.sigma_mm * std::sqrt(3.0) * 1e3;
+    a.step.size_unit = "um";
+    a.step.explanation = fmt::format(
         "{} centre(s) ({}) lie far outside the noise (largest {:.1f} um against {:.2f} um per coordinate): failed sphere "
         "fits, e.g. a burr or missing points in the calotte. Dropping them (or --loss cauchy) restores the fit.",
-        names.size(), d.component, d.size, base.calibration.sigma_mm * 1e3);
+        c.flagged.size(), a.step.component, a.step.size, fit.calibration.sigma_mm * 1e3);
   }
-  d.validation_after = validation(improved.calibration, validate_corrected);
-  const ResidualSummary after = Summarize(improved.residuals);
-  // Held-out placements must not get worse (beyond their own scatter): otherwise the effect fitted noise.
-  if (d.validation_before.count > 0 && d.validation_after.mean_mm > 1.05 * d.validation_before.mean_mm) {
-    d.explanation = fmt::format("The best candidate ({}) fits the identification data better but makes the held-out "
-                                "placements worse ({:.2f} -> {:.2f} um): no listed effect explains the gap.",
-                                effect, d.validation_before.mean_mm * 1e3, d.validation_after.mean_mm * 1e3);
-    d.validation_after = d.validation_before;
-    d.component.clear();
-    d.size = d.size_u = 0;
-    d.size_unit.clear();
+  return a;
+}
+
+// higher_order and z_coupling: the largest added coefficient the refit could determine is the effect's size.
+void FinishCoefficientEffect(Applied& a, const ParameterLayout& before, const Calibration& refit) {
+  const Eigen::VectorXd u = refit.StandardUncertainty();
+  std::string name;
+  double largest = -1.0;
+  for (const std::string& candidate : a.coefficient_names) {
+    const int slot = refit.layout.FreeIndexOf(candidate);
+    if (slot < 0) continue;
+    const DisplayUnit unit = UnitOf(refit.layout.coefficients()[static_cast<size_t>(refit.layout.FindCoefficient(candidate))]);
+    const double value = refit.values[static_cast<size_t>(slot)] * unit.per_si;
+    if (std::abs(value) > largest) {
+      largest = std::abs(value);
+      name = candidate;
+      a.step.size = value;
+      a.step.size_u = u[slot] * unit.per_si;
+      a.step.size_unit = unit.name;
+    }
+  }
+  if (name.empty()) name = a.coefficient_names.front();
+  if (a.step.effect == "z_coupling") a.step.component = name.substr(0, 3);
+  a.step.explanation =
+      a.step.effect == "higher_order"
+          ? fmt::format("The {} error of the stage bends more than its order-{} polynomial can follow: adding {} ({:.2f} +- "
+                        "{:.2f} {}) takes the residual structure along the axis away.",
+                        a.step.component, before.term(*FindErrorTerm(a.step.component)).order, name, a.step.size,
+                        a.step.size_u, a.step.size_unit)
+          : fmt::format("The stage pitches and rolls ({} = {:.1f} +- {:.1f} urad): the artefact was measured at different "
+                        "heights, and a rotation moves the lateral coordinates in proportion to the height, which the model "
+                        "without pitch and roll cannot follow.",
+                        name, a.step.size, a.step.size_u);
+}
+
+double ResidualSquares(const std::vector<Eigen::Vector3d>& residuals) {
+  double s = 0;
+  for (const Eigen::Vector3d& r : residuals) s += r.squaredNorm();
+  return s;
+}
+
+}  // namespace
+
+Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
+                   const DiagnosisOptions& options) {
+  Diagnosis d;
+  const IdentificationOptions& base_options = options.identification;
+  const auto fit_of = [&](const Problem& p) {
+    IdentificationOptions o = base_options;
+    o.anchor = p.anchor;
+    o.anchors = p.identify.anchors;
+    return Identify(p.layout, p.identify.observations, o);
+  };
+  const auto held_out = [&](const Calibration& cal, const MeasurementSet& set) {
+    if (set.observations.empty()) return ResidualSummary{};
+    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors, base_options.frame));
+  };
+  const auto build = [&](const std::vector<Applied>& applied) {
+    return Build(layout, identify, validate, base_options.anchor, applied);
+  };
+
+  // A drift or a scale estimated again with every other applied effect in the model: it was estimated before the
+  // later ones, and an outlier or a bend may have pulled it. True when the value changed.
+  const auto reestimate = [&](std::vector<Applied>& list, size_t j, double alpha) {
+    const std::string effect = list[j].step.effect;
+    if (effect != "thermal_drift" && effect != "scale") return false;
+    std::vector<Applied> without = list;
+    without.erase(without.begin() + static_cast<long>(j));
+    const Problem reduced = build(without);
+    const IdentificationResult reduced_fit = fit_of(reduced);
+    for (const Candidate& c : ScoreCandidates(reduced, reduced_fit, layout, without, base_options, alpha)) {
+      if (c.score.effect != effect) continue;
+      Applied fresh = MakeApplied(c, reduced, reduced_fit);
+      fresh.step.before = list[j].step.before;
+      fresh.step.after = list[j].step.after;
+      fresh.step.validation_before = list[j].step.validation_before;
+      fresh.step.validation_after = list[j].step.validation_after;
+      fresh.step.candidates = list[j].step.candidates;
+      list[j] = fresh;
+      return true;
+    }
+    return false;
+  };
+
+  std::vector<Applied> applied;
+  Problem problem = build(applied);
+  IdentificationResult fit = fit_of(problem);
+  d.residuals_before = fit.residuals;
+  d.before = Summarize(fit.residuals);
+  d.validation_before = held_out(fit.calibration, problem.validate);
+  d.findings = Findings(fit.residuals, identify, RobustSigma(fit.residuals, base_options.noise_floor_mm));
+  ResidualSummary validation = d.validation_before;
+  const bool turns_testable = !validate.observations.empty() && !validate.anchors.empty();
+  constexpr int kMostSteps = 6;
+  int step = 1;
+  for (; step <= kMostSteps; ++step) {
+    // Alpha spending: step k may raise a false alarm with probability alpha / 2^k at most.
+    const double alpha_step = options.alpha / std::pow(2.0, step);
+    std::vector<Candidate> candidates = ScoreCandidates(problem, fit, layout, applied, base_options, alpha_step);
+    const double m = 3.0 * static_cast<double>(fit.residuals.size());
+    const double alpha_each = alpha_step / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
+    for (Candidate& c : candidates) Test(c, m, alpha_each);
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.score.significant != b.score.significant) return a.score.significant;
+      return a.score.delta_bic < b.score.delta_bic;
+    });
+    std::vector<EffectScore> scores;
+    for (const Candidate& c : candidates) scores.push_back(c.score);
+    if (step == 1) d.candidates = scores;
+    bool accepted = false;
+    for (const Candidate& c : candidates) {
+      if (!c.score.significant) break;
+      Applied a = MakeApplied(c, problem, fit);
+      std::vector<Applied> with = applied;
+      with.push_back(a);
+      for (size_t j = 0; j + 1 < with.size(); ++j) reestimate(with, j, alpha_step);
+      const Problem next = build(with);
+      const IdentificationResult refit = fit_of(next);
+      const ResidualSummary next_validation = held_out(refit.calibration, next.validate);
+      // Held-out placements must not get worse (beyond their own scatter): otherwise the effect fitted noise.
+      if (validation.count > 0 && next_validation.mean_mm > 1.05 * validation.mean_mm) {
+        d.notes.push_back(fmt::format("step {}: {}{} fits the identification data better but makes the held-out placements "
+                                      "worse ({:.2f} -> {:.2f} um); the next candidate was tried",
+                                      step, c.score.effect, c.score.component.empty() ? "" : " " + c.score.component,
+                                      validation.mean_mm * 1e3, next_validation.mean_mm * 1e3));
+        continue;
+      }
+      if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem.layout, refit.calibration);
+      a.step.before = Summarize(fit.residuals);
+      a.step.after = Summarize(refit.residuals);
+      a.step.validation_before = validation;
+      a.step.validation_after = next_validation;
+      a.step.candidates = scores;
+      with.back() = a;
+      applied = with;
+      problem = next;
+      fit = refit;
+      validation = next_validation;
+      accepted = true;
+      break;
+    }
+    if (!accepted) break;
+    // Backward check: an earlier effect the later ones made redundant no longer earns its parameters.
+    bool refreshed = false;
+    for (size_t j = 0; j + 1 < applied.size(); ++j) {
+      if (applied[j].step.effect == "outliers" || applied[j].extra <= 0) continue;  // other data, not nested
+      std::vector<Applied> without = applied;
+      without.erase(without.begin() + static_cast<long>(j));
+      const Problem reduced = build(without);
+      const IdentificationResult reduced_fit = fit_of(reduced);
+      const double rss = ResidualSquares(fit.residuals), rss_reduced = ResidualSquares(reduced_fit.residuals);
+      const double dof = std::max(1.0, 3.0 * static_cast<double>(fit.residuals.size()) - fit.calibration.layout.NumFree());
+      const double f = ((rss_reduced - rss) / applied[j].extra) / (rss / dof);
+      const boost::math::fisher_f_distribution<double> dist(applied[j].extra, dof);
+      const double p = f > 0 ? boost::math::cdf(boost::math::complement(dist, f)) : 1.0;
+      if (p < alpha_step) {
+        refreshed = reestimate(applied, j, alpha_step) || refreshed;
+        continue;
+      }
+      d.notes.push_back(fmt::format("step {}: {}{} dropped, the later effects explain it (p = {:.2g})", step,
+                                    applied[j].step.effect, applied[j].step.component.empty() ? "" : " " + applied[j].step.component, p));
+      applied = without;
+      problem = reduced;
+      fit = reduced_fit;
+      validation = held_out(fit.calibration, problem.validate);
+      refreshed = false;
+      break;  // one at a time: the others are judged again at the next step
+    }
+    if (refreshed) {
+      problem = build(applied);
+      fit = fit_of(problem);
+      validation = held_out(fit.calibration, problem.validate);
+    }
+  }
+  for (const Applied& a : applied) d.steps.push_back(a.step);
+
+  if (turns_testable && step <= kMostSteps) {
+    // The identification data fit to noise now: do the held-out placements turn about their first tiles?
+    const double alpha_step = options.alpha / std::pow(2.0, step);
+    TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, alpha_step);
+    if (applied.empty()) d.candidates.push_back(turn.score);
+    if (turn.score.significant) {
+      DiagnosisStep s;
+      s.effect = "frame_rotation";
+      s.component = "z";
+      double yaw_sq = 0, u_sq = 0;
+      for (const PlacementTurn& t : turn.turns) {
+        const Eigen::Vector3d u = t.predicted.diagonal().cwiseMax(0.0).cwiseSqrt();
+        const std::string name = static_cast<size_t>(t.group) < validate.groups.size() ? validate.groups[static_cast<size_t>(t.group)]
+                                                                                      : std::to_string(t.group);
+        d.turns.push_back({name, t.rotation, u});
+        yaw_sq += t.rotation.z() * t.rotation.z();
+        u_sq += u.z() * u.z();
+      }
+      // The rms yaw over the placements less what their own noise adds, and the standard uncertainty of that rms.
+      const double count = static_cast<double>(std::max<size_t>(1, turn.turns.size()));
+      s.size = std::sqrt(std::max(0.0, yaw_sq - u_sq) / count) * 1e6;
+      s.size_u = std::sqrt(u_sq / count / count) * 1e6;
+      s.size_unit = "urad";
+      s.before = s.after = Summarize(fit.residuals);
+      s.validation_before = validation;
+      s.validation_after = Summarize(turn.residuals_after);
+      s.candidates = {turn.score};
+      const std::vector<std::string> turn_terms = TurnCoefficients(fit.calibration.layout);
+      std::string terms;
+      for (const std::string& t : turn_terms) terms += (terms.empty() ? "" : ", ") + t;
+      s.explanation = fmt::format(
+          "The held-out placements' residuals grow perpendicular to, and in proportion to, their distance from the "
+          "first tile: each stitched measurement is turned about its first tile ({:.1f} +- {:.1f} urad rms yaw over {} "
+          "placements). The instrument registers tiles by translation, so a mosaic keeps the orientation the stage "
+          "had at its first tile; identification placements that share a start share that turn and the model's "
+          "constant terms absorb it, so only placements that start elsewhere show it. {}",
+          s.size, s.size_u, turn.turns.size(),
+          turn_terms.empty()
+              ? "This model has no rotation terms that vary over the stage: a model of order 1 or more (27, 42) can "
+                "tell the turn at each first tile."
+              : fmt::format("fvm calibrate --stitched-frame rotated (the default) turns each placement by the model's own "
+                            "{}.", terms));
+      validation = s.validation_after;
+      d.steps.push_back(s);
+    }
+  }
+
+  d.residuals_after = fit.residuals;
+  d.after = Summarize(fit.residuals);
+  d.validation_after = d.steps.empty() ? d.validation_before : validation;
+  if (d.steps.empty()) {
+    d.explanation = "No listed effect explains the residuals better than noise: the model fits these data to " +
+                    fmt::format("{:.2f} um rms, and no candidate passes the F-test at the {:.0f} % level with a lower BIC.",
+                                d.before.rms_mm * 1e3, options.alpha * 100);
+    if (!d.notes.empty()) d.explanation += " " + d.notes.front() + ".";
     return d;
   }
-  d.effect = effect;
-  d.after = after;
-  d.residuals_after = improved.residuals;
+  const DiagnosisStep& first = d.steps.front();
+  d.effect = first.effect;
+  d.component = first.component;
+  d.explanation = first.explanation;
+  d.size = first.size;
+  d.size_u = first.size_u;
+  d.size_unit = first.size_unit;
   return d;
 }
 

@@ -11,11 +11,16 @@
 //   outliers          centres far outside the noise: failed sphere fits
 //   frame_rotation    each stitched measurement keeps the orientation the stage had at its first tile
 //                     (stitched_frame.h); placements that share a start share the turn, so only held-out ones show it
-// Selection is statistical: every candidate is scored on the linearised fit with an F-test (extra sum of
-// squares) and BIC; the best significant one (p below alpha / number of candidates, BIC lower) is accepted only
-// if held-out placements do not get worse; otherwise no listed effect explains the gap. When the identification
-// data fit to noise, the held-out placements are examined for turns about their first tiles (frame_rotation): a
-// chi-square of the fitted turns against what the calibration's covariance and the noise predict for them.
+// Selection is statistical and forward: every candidate is scored on the linearised fit with an F-test (extra sum
+// of squares) and BIC; the significant ones are tried best first, and the first whose refit does not make the
+// held-out placements worse is accepted. Then the remaining candidates are scored against the new residuals, and
+// so on until none passes. Step k tests at alpha / 2^k, Bonferroni over its candidates, so the family-wise
+// false-alarm probability over all steps stays below alpha (the sum of alpha / 2^k). After each step, an earlier
+// effect that the later ones made redundant (its own F-test no longer significant) is dropped. When the
+// identification data fit to noise, the held-out placements are examined for turns about their first tiles
+// (frame_rotation): a chi-square of the fitted turns against what the calibration's covariance and the noise
+// predict for them. Outliers are found one at a time, refitting after each, so that a large blunder does not drag
+// good neighbours over the limit (swamping).
 
 #include <Eigen/Core>
 #include <optional>
@@ -50,15 +55,27 @@ struct PlacementTurnFinding {
   Eigen::Vector3d u_rad = Eigen::Vector3d::Zero();         // standard uncertainties (0: not determined, e.g. about a bar's length)
 };
 
+// One accepted step of the forward selection.
+struct DiagnosisStep {
+  std::string effect, component, explanation;
+  double size = 0.0, size_u = 0.0;
+  std::string size_unit;
+  ResidualSummary before, after;                        // identification residuals
+  ResidualSummary validation_before, validation_after;  // held-out placements
+  std::vector<EffectScore> candidates;                  // as scored at this step, best first
+};
+
 struct Diagnosis {
-  std::optional<std::string> effect;  // accepted effect, or none
+  std::optional<std::string> effect;  // the first accepted effect, or none (the steps hold them all)
   std::string component;
   std::string explanation;
-  ResidualSummary before, after;                  // identification residuals, base model and with the effect
+  std::vector<DiagnosisStep> steps;   // every accepted effect, in the order it was added
+  std::vector<std::string> notes;     // candidates tried and refused, effects dropped by the backward check
+  ResidualSummary before, after;                  // identification residuals, base model and with every effect
   ResidualSummary validation_before, validation_after;
-  double size = 0.0, size_u = 0.0;                // estimated size of the effect and its standard uncertainty
+  double size = 0.0, size_u = 0.0;                // the first effect's size and its standard uncertainty
   std::string size_unit;
-  std::vector<EffectScore> candidates;            // every candidate, best first
+  std::vector<EffectScore> candidates;            // every candidate of the first step, best first
   std::vector<std::string> findings;              // what the residual analysis saw, one sentence each
   std::vector<PlacementTurnFinding> turns;        // frame_rotation: per held-out placement
   std::vector<Eigen::Vector3d> residuals_before;  // identification residuals of the base model, mm

@@ -107,12 +107,13 @@ std::vector<PlacementTurn> PlacementTurns(const Calibration& calibration, const 
     for (size_t i : t.observations) residuals.push_back(validation.residuals[i]);
     const TurnFit fit = FitTurn(residuals, t.arms);
     t.rotation = fit.rotation;
-    t.predicted = sigma2 * fit.solve * fit.solve.transpose();
+    t.noise = sigma2 * fit.solve * fit.solve.transpose();
+    t.predicted = t.noise;
     if (covariance) {
       Eigen::MatrixXd j(3 * static_cast<Eigen::Index>(t.observations.size()), calibration.covariance.cols());
       for (size_t k = 0; k < t.observations.size(); ++k) j.middleRows(3 * static_cast<Eigen::Index>(k), 3) = validation.jacobians[t.observations[k]];
-      const Eigen::MatrixXd through = fit.solve * j;
-      t.predicted += through * calibration.covariance * through.transpose();
+      t.sensitivity = fit.solve * j;
+      t.predicted += t.sensitivity * calibration.covariance * t.sensitivity.transpose();
     }
     out.push_back(std::move(t));
   }

@@ -53,7 +53,10 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
 struct PlacementTurn {
   int group = 0;
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();    // rad
-  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();   // rad^2, under "no turn"
+  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();   // rad^2, under "no turn": noise + model
+  Eigen::Matrix3d noise = Eigen::Matrix3d::Zero();       // rad^2, the noise's part alone
+  Eigen::MatrixXd sensitivity;  // 3 x n: d(turn) / d(free coefficients); the model's errors are common to all
+                                // placements, so their turns are correlated through it
   std::vector<size_t> observations;                      // indices into the validation's observations
   std::vector<Eigen::Vector3d> arms;                     // s - a of each
 };

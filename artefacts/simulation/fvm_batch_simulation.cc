@@ -1,12 +1,14 @@
 #include "artefacts/simulation/fvm_batch_simulation.h"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include "artefacts/geometry/artefact.h"
@@ -97,14 +99,29 @@ std::vector<std::string> HiddenEffectNames() {
   return {"thermal_drift", "higher_order", "reference_anchor", "z_coupling", "outliers", "scale"};
 }
 
+bool FvmBatchOptions::Hides(std::string_view effect) const {
+  std::string_view rest = hidden_effect;
+  while (!rest.empty()) {
+    const size_t comma = rest.find(',');
+    if (rest.substr(0, comma) == effect) return true;
+    if (comma == std::string_view::npos) break;
+    rest.remove_prefix(comma + 1);
+  }
+  return false;
+}
+
 void FvmBatchOptions::Check() const {
   if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0 ||
       !(height_step_mm >= 0) || !(effect_size >= 0)) {
     throw std::invalid_argument("simulation sizes must be non-negative");
   }
   const std::vector<std::string> names = HiddenEffectNames();
-  if (!hidden_effect.empty() && std::find(names.begin(), names.end(), hidden_effect) == names.end()) {
-    throw std::invalid_argument("unknown hidden effect '" + hidden_effect + "'");
+  std::stringstream list(hidden_effect);
+  for (std::string name; std::getline(list, name, ',');) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      throw std::invalid_argument("unknown hidden effect '" + name + "': use " + fmt::format("{}", fmt::join(names, ", ")) +
+                                  ", or several joined by commas");
+    }
   }
 }
 
@@ -141,12 +158,12 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   std::mt19937_64 effect_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
   std::uniform_int_distribution<int> sign(0, 1);
   const auto signed_size = [&](double size) { return sign(effect_rng) ? size : -size; };
-  const std::string& effect = options.hidden_effect;
-  if (effect == "higher_order") {
+  if (options.Hides("higher_order")) {
     // The next power of xTx, reaching the size at the far end of the travel (u = q / 100 = -2).
     const int order = out.truth.layout.term(*stage::FindErrorTerm("xTx")).order + 1;
     ExtendTruth(out.truth, {{"xTx", signed_size(EffectSize(options, 80.0) * 1e-3 / std::pow(2.0, order))}}, order);
-  } else if (effect == "z_coupling") {
+  }
+  if (options.Hides("z_coupling")) {
     std::vector<std::pair<std::string, double>> pitch_roll;
     for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) pitch_roll.emplace_back(term, signed_size(EffectSize(options, 500.0) * 1e-6));
     for (auto& [term, value] : pitch_roll) {
@@ -163,8 +180,8 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   for (const Calotte& c : CalotteBar17().calottes) bar.push_back(c.centre + Eigen::Vector3d(pitch(rng), pitch(rng), pitch(rng)));
 
   std::vector<PlacementPose> poses = IdentificationPoses();
-  if (!options.same_start || effect == "reference_anchor") {
-    std::uniform_real_distribution<double> shift(0.0, effect == "reference_anchor" ? EffectSize(options, 30.0) : 30.0);
+  if (!options.same_start || options.Hides("reference_anchor")) {
+    std::uniform_real_distribution<double> shift(0.0, options.Hides("reference_anchor") ? EffectSize(options, 30.0) : 30.0);
     for (PlacementPose& p : poses) p.start += Eigen::Vector2d(shift(rng), -shift(rng));
   }
   for (const PlacementPose& p : ValidationPoses(options.validation_placements, rng)) poses.push_back(p);
@@ -172,10 +189,10 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   std::normal_distribution<double> noise(0.0, options.noise_um * 1e-3);
   std::uniform_real_distribution<double> tilt(-1.5e-3, 1.5e-3);  // the bar never lies perfectly flat
   const auto noisy = [&](Eigen::Vector3d v) { return Eigen::Vector3d(v.x() + noise(rng), v.y() + noise(rng), v.z() + noise(rng)); };
-  const Eigen::Vector3d drift_mm_per_s = effect == "thermal_drift"
+  const Eigen::Vector3d drift_mm_per_s = options.Hides("thermal_drift")
                                              ? Eigen::Vector3d(Eigen::Vector3d(1.0, -0.5, 0.3) * EffectSize(options, 3.0) * 1e-3 / 60.0)
                                              : Eigen::Vector3d::Zero();
-  const double scale = effect == "scale" ? signed_size(EffectSize(options, 300.0) * 1e-6) : 0.0;
+  const double scale = options.Hides("scale") ? signed_size(EffectSize(options, 300.0) * 1e-6) : 0.0;
   for (size_t p = 0; p < poses.size(); ++p) {
     const PlacementPose& pose = poses[p];
     const double c = std::cos(pose.angle_rad), s = std::sin(pose.angle_rad);
@@ -204,7 +221,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
       placement.stitched.push_back(noisy(stitched));
       placement.t_s.push_back(t);
     }
-    if (effect == "outliers" && pose.name == "id-y") {
+    if (options.Hides("outliers") && pose.name == "id-y") {
       // Three failed sphere fits: a burr or a missing patch pulls the fitted centre sideways.
       std::uniform_int_distribution<size_t> which(0, commands.size() - 1);
       std::uniform_real_distribution<double> direction(-1.0, 1.0);

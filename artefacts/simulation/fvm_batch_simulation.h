@@ -9,6 +9,7 @@
 // s = a + T (F(q) - F(a)), turned with the stage at a (T = C(a)^-1) or, translated, T = I.
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "artefacts/io/batch.h"
@@ -31,8 +32,9 @@ struct FvmBatchOptions {
   // the first tile, turned with the stage there. Translated leaves the turn out (the convention before).
   stage::StitchedFrame stitched_frame = stage::StitchedFrame::kRotated;
 
-  // One effect the stage model does not describe, hidden in the data for the discrepancy workflow
-  // (fvm diagnose); names from the contract list. `effect_size` 0 takes the default in parentheses:
+  // Effects the stage model does not describe, hidden in the data for the discrepancy workflow (fvm diagnose):
+  // one name from the contract list, or several joined by commas ("thermal_drift,scale"). `effect_size` 0 takes
+  // each one's default in parentheses (another value applies to each):
   //   thermal_drift   stitching-free centres drift with measurement time (3 um/min, mostly along x)
   //   higher_order    the truth gets the next polynomial order of xTx (80 um at the end of the travel)
   //   reference_anchor identification placements start apart: each is anchored at its own first tile (30 mm)
@@ -41,6 +43,7 @@ struct FvmBatchOptions {
   //   scale           stitched distances scaled about the first tile, a lens scale error (300 ppm)
   std::string hidden_effect;
   double effect_size = 0.0;
+  bool Hides(std::string_view effect) const;  // `effect` is one of hidden_effect's names
   void Check() const;                  // throws std::invalid_argument
 };
 

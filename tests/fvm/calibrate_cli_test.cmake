@@ -174,12 +174,28 @@ endif()
 run(0 simulate fvm-batch -o ${WORK}/drift --seed 7 --hidden-effect thermal_drift)
 run(0 diagnose ${WORK}/drift --model 27 --json --report ${WORK}/drift-report)
 string(JSON effect GET "${OUT}" effect)
+string(JSON first_step GET "${OUT}" effects 0 effect)
+if(NOT first_step STREQUAL effect)
+  message(FATAL_ERROR "diagnose: 'effect' ${effect} is not the first of 'effects' (${first_step})")
+endif()
 string(JSON before GET "${OUT}" validation before mean_um)
 string(JSON after GET "${OUT}" validation after mean_um)
 if(NOT effect STREQUAL "thermal_drift" OR NOT EXISTS ${WORK}/drift-report/index.html OR NOT after LESS 2.5
    OR NOT before GREATER 5)
   message(FATAL_ERROR "diagnose on a drifting batch: ${effect}, held-out mean ${before} -> ${after} um")
 endif()
+
+# Several effects at once: both named, in the order they were added.
+run(0 simulate fvm-batch -o ${WORK}/two --seed 1 --hidden-effect thermal_drift,outliers --stitched-frame translated)
+run(0 diagnose ${WORK}/two --model 27 --json)
+expect_json_keys("diagnose" "${OUT}" effects/1/effect effects/1/size/unit effects/1/validation/after/mean_um)
+string(JSON steps LENGTH "${OUT}" effects)
+string(JSON e0 GET "${OUT}" effects 0 effect)
+string(JSON e1 GET "${OUT}" effects 1 effect)
+if(NOT steps EQUAL 2 OR NOT "${e0};${e1}" MATCHES "outliers" OR NOT "${e0};${e1}" MATCHES "thermal_drift")
+  message(FATAL_ERROR "diagnose with a drift and outliers named: ${e0}, ${e1} (${steps} steps)")
+endif()
+fails_naming("unknown hidden effect 'bogus'" simulate fvm-batch -o ${WORK}/bogus --hidden-effect thermal_drift,bogus)
 
 # 7. The published stitching strategies under the calibrated stage: a is exact, b = e = f is the whole error of
 #    the row, and c < d grow with the distance to the last tile placed by the encoders.
