@@ -1,6 +1,7 @@
 #include "imaging/stage_model.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -16,10 +17,16 @@ double Median(std::vector<double> values) {
   return 0.5 * (*middle + *std::max_element(values.begin(), middle));
 }
 
-// Whether a pair's information fixes axis k to better than 0.5 px (its variance along k with the other axis free).
+// Whether a pair's information fixes axis k: the directions it determines to better than 0.5 px span the axis
+// (to within 18 degrees). Not the marginal variance: along machining marks the information is rank one and tilted
+// by its noise, and the marginal variance across the marks is then as large as along them.
 bool Fixes(const Eigen::Matrix2d& information, int k) {
-  const Eigen::Matrix2d covariance = (information + 1e-9 * Eigen::Matrix2d::Identity()).inverse();
-  return covariance(k, k) < 0.25;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(information);
+  double spanned = 0.0;
+  for (int j = 0; j < 2; ++j) {
+    if (directions.eigenvalues()(j) > 4.0) spanned += std::pow(directions.eigenvectors()(k, j), 2);
+  }
+  return spanned > 0.95 * 0.95;
 }
 
 }  // namespace

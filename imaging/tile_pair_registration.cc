@@ -254,12 +254,25 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   cv::copyMakeBorder(surface, wrapped, 1, 1, 1, 1, cv::BORDER_WRAP);
   cv::dilate(wrapped, dilated, cv::Mat::ones(3, 3, CV_8U));
   dilated = dilated(cv::Rect(1, 1, surface.cols, surface.rows));
+  // Only where a shift lands in the window: along machining marks the surface is a ridge of maxima all along the
+  // marks, and the highest ones anywhere on it left none in the window.
+  const Eigen::Vector2i base(ra.x - rb.x + n.x(), ra.y - rb.y + n.y());  // the offset of a shift e = 0
+  const auto in_window = [&](int p, int size, int axis) {
+    for (const int e : {p, p - size}) {
+      if (std::abs(base(axis) + e - nominal(axis)) <= search(axis)) return true;
+    }
+    return false;
+  };
+  std::vector<char> column_in(static_cast<size_t>(surface.cols)), row_in(static_cast<size_t>(surface.rows));
+  for (int x = 0; x < surface.cols; ++x) column_in[static_cast<size_t>(x)] = in_window(x, surface.cols, 0);
+  for (int y = 0; y < surface.rows; ++y) row_in[static_cast<size_t>(y)] = in_window(y, surface.rows, 1);
   std::vector<std::pair<float, cv::Point>> maxima;
   for (int y = 0; y < surface.rows; ++y) {
+    if (!row_in[static_cast<size_t>(y)]) continue;
     const float* s = surface.ptr<float>(y);
     const float* d = dilated.ptr<float>(y);
     for (int x = 0; x < surface.cols; ++x) {
-      if (s[x] >= d[x] && s[x] > 0.0f) maxima.emplace_back(s[x], cv::Point(x, y));
+      if (column_in[static_cast<size_t>(x)] && s[x] >= d[x] && s[x] > 0.0f) maxima.emplace_back(s[x], cv::Point(x, y));
     }
   }
   const auto kept = std::min(maxima.size(), static_cast<size_t>(peaks));
@@ -272,7 +285,7 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
       for (const int ey : {p.y, p.y - common.height}) {
         // b's pixel u of its crop is a's u + e of its crop: offset = rb.tl - ra.tl + e in a's frame, rb holding n.
         const Eigen::Vector2i e(ex, ey);
-        const Eigen::Vector2i offset = Eigen::Vector2i(ra.x - rb.x + n.x(), ra.y - rb.y + n.y()) + e;
+        const Eigen::Vector2i offset = base + e;
         if (((offset.cast<double>() - nominal).cwiseAbs() - search).maxCoeff() > 0.0) continue;
         const bool seen = std::any_of(out.begin(), out.end(), [&](const TranslationCandidate& c) {
           return c.offset_px == offset.cast<double>();
@@ -288,8 +301,11 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   }
   std::stable_sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
   // The correlation's peaks of broad blobs lie a pixel or two off the best overlap; the best few climb the
-  // normalised cross-correlation, a whole pixel at a time, within the window, to its local maximum.
+  // normalised cross-correlation, a whole pixel at a time, within the window, to its local maximum. A step must
+  // gain kNccTie: along machining marks the correlation is a ridge whose noise would lead the climb anywhere
+  // along it.
   constexpr size_t kClimbed = 3;
+  constexpr double kNccTie = 0.01;
   for (size_t k = 0; k < std::min(kClimbed, out.size()); ++k) {
     TranslationCandidate& c = out[k];
     Eigen::Vector2i offset = c.offset_px.cast<int>();
@@ -301,9 +317,8 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
           if ((dx == 0 && dy == 0) || ((next.cast<double>() - nominal).cwiseAbs() - search).maxCoeff() > 0.0) continue;
           TranslationCandidate trial = c;
           trial.offset_px = next.cast<double>();
-          trial.ncc = OverlapNcc(pa, pb, next - Eigen::Vector2i(ra.x - rb.x + n.x(), ra.y - rb.y + n.y()),
-                                 trial.overlap_px);
-          if (trial.overlap_px > 0 && trial.ncc > best.ncc) best = trial;
+          trial.ncc = OverlapNcc(pa, pb, next - base, trial.overlap_px);
+          if (trial.overlap_px > 0 && trial.ncc > best.ncc + kNccTie) best = trial;
         }
       }
       if (best.offset_px == c.offset_px) break;
@@ -316,6 +331,19 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   out.erase(std::unique(out.begin(), out.end(),
                         [](const auto& l, const auto& r) { return l.offset_px == r.offset_px; }),
             out.end());
+  // Candidates within 2 kNccTie of the best match equally well as far as the overlap can tell (a ridge along
+  // marks, a blank strip): the one nearest the nominal offset, in units of the window, goes first.
+  if (!out.empty()) {
+    const double floor = out.front().ncc - 2.0 * kNccTie;
+    const auto distance = [&](const TranslationCandidate& c) {
+      return (c.offset_px - nominal).cwiseQuotient(search.cwiseMax(1.0)).squaredNorm();
+    };
+    auto chosen = out.begin();
+    for (auto it = out.begin(); it != out.end() && it->ncc >= floor; ++it) {
+      if (distance(*it) < distance(*chosen)) chosen = it;
+    }
+    std::rotate(out.begin(), chosen, chosen + 1);
+  }
   return out;
 }
 
@@ -687,11 +715,22 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     for (int k = 0; k < 2; ++k) {
       const double lambda = directions.eigenvalues()(k);
       const Eigen::Vector2d u = directions.eigenvectors().col(k);
-      if (lambda > 0.0) information += 1.0 / (1.0 / lambda + 0.25) * u * u.transpose();
+      if (lambda > 1e-9 * directions.eigenvalues()(1)) information += 1.0 / (1.0 / lambda + 0.25) * u * u.transpose();
     }
     pair.information = information;
   }
   pair.offset_px = offset;
+  {
+    // Along a direction the overlap does not determine (machining marks), the offset is wherever the search ended
+    // on the ridge, up to the window's width from the truth; the nominal says as much, and no tilt of the rank-one
+    // information by noise can then carry a wild value into the solve.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
+    if (directions.eigenvalues()(1) > 0.0 && directions.eigenvalues()(0) <= 1e-9 * directions.eigenvalues()(1)) {
+      const Eigen::Vector2d u = directions.eigenvectors().col(1);
+      const Eigen::Vector2d projected = nominal_px + u * u.dot(pair.offset_px - nominal_px);
+      pair.offset_px = projected;
+    }
+  }
   if (pair.rejection.empty() && !(pair.quality >= options.min_quality)) {
     pair.rejection = "quality " + std::to_string(pair.quality) + " is below min_quality " + std::to_string(options.min_quality);
   }

@@ -114,7 +114,7 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
 
 namespace {
 
-std::string fmt_disagrees(const Eigen::Vector2d& off, const Eigen::Vector2d& tolerance) {
+std::string DisagreementText(const Eigen::Vector2d& off, const Eigen::Vector2d& tolerance) {
   char text[160];
   std::snprintf(text, sizeof text, "its offset disagrees with the stage model by %.2f, %.2f px (tolerance %.2f, %.2f)",
                 off.x(), off.y(), tolerance.x(), tolerance.y());
@@ -210,7 +210,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       }
       if (pair.accepted) return;
       const Eigen::Vector2d off = first.offset_px - predicted(first);
-      pair.rejection = (first.accepted ? fmt_disagrees(off, tolerance) : first.rejection) +
+      pair.rejection = (first.accepted ? DisagreementText(off, tolerance) : first.rejection) +
                        "; searched again within the stage model's tolerance: " + pair.rejection;
     });
     for (size_t j = 0; j < again.size(); ++j) {
