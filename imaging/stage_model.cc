@@ -34,7 +34,7 @@ bool Fixes(const Eigen::Matrix2d& information, int k) {
 Eigen::Vector2d StageModel::Tolerance(const Eigen::Vector2d& fallback) const {
   Eigen::Vector2d out;
   for (int k = 0; k < 2; ++k) {
-    out(k) = repeatability_px(k) > 0.0 ? std::max(4.0 * std::sqrt(2.0) * repeatability_px(k), 2.0) : fallback(k);
+    out(k) = repeatability_px(k) > 0.0 ? std::max(5.0 * std::sqrt(2.0) * repeatability_px(k) + 1.0, 3.0) : fallback(k);
   }
   return out;
 }

@@ -34,8 +34,9 @@ struct StageModel {
   static constexpr int kMinPairs = 3;
   bool Any() const { return estimated[0] || estimated[1] || estimated[2] || estimated[3]; }
   // How far a pair's offset may lie from the model's prediction before it counts as disagreeing, per axis (px):
-  // 4 standard deviations of a pair's offset about the mean step, at least 2 px; `fallback` along an axis the
-  // model has no repeatability for.
+  // 5 standard deviations of a pair's offset about the mean step and a pixel (a whole-pixel candidate), at least
+  // 3 px; `fallback` along an axis the model has no repeatability for. Four rejected a good pair of the 220 of
+  // grid6x6, whose 1.5 px stage the MAD of the pairs put at 1.05 px.
   Eigen::Vector2d Tolerance(const Eigen::Vector2d& fallback) const;
   // The correction of tile (row, col)'s nominal position relative to the first tile (row0, col0):
   // (col - col0) (east - nominal east) + (row - row0) (south - nominal south).
