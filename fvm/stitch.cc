@@ -206,6 +206,7 @@ void RunStitch(const StitchArgs& args) {
                               {"sigma_px", sigma},
                               {"quality", pair.quality},
                               {"accepted", pair.accepted},
+                              {"searched", pair.searched},
                               {"search_px", {pair.search_px.x(), pair.search_px.y()}},
                               {"candidates", candidates},
                               {"rejection", pair.accepted ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(pair.rejection)}});

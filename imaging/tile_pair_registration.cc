@@ -143,7 +143,6 @@ bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
 // pixel. A thin overlap (narrow side below kThinOverlapPx) is then mirrored out by kThinPadPx on every side, both
 // crops alike: refinement and quality keep 5-8 px from a crop's edges for the Lanczos taps, which left nothing of
 // a 10-15 px overlap.
-constexpr int kThinOverlapPx = 24;
 constexpr int kThinPadPx = 8;
 
 struct Overlap {
@@ -158,7 +157,7 @@ void MirrorOut(Prepared& crop, int pad) {
 }
 
 std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const Eigen::Vector2i& whole,
-                                   double sigma) {
+                                   double sigma, bool mirror_thin = true) {
   const int dx = whole.x(), dy = whole.y();
   const int x0 = std::max(0, dx), x1 = std::min(static_cast<int>(a.cols()), dx + static_cast<int>(b.cols()));
   const int y0 = std::max(0, dy), y1 = std::min(static_cast<int>(a.rows()), dy + static_cast<int>(b.rows()));
@@ -169,7 +168,7 @@ std::optional<Overlap> CropOverlap(const TileImage& a, const TileImage& b, const
   const bool logarithm = MatchingDomain(View(a)(out.in_a), View(b)(out.in_b));
   out.a = HighPass(View(a)(out.in_a), sigma, logarithm);
   out.b = HighPass(View(b)(out.in_b), sigma, logarithm);
-  if (std::min(out.in_a.width, out.in_a.height) < kThinOverlapPx) {
+  if (mirror_thin && std::min(out.in_a.width, out.in_a.height) < kThinOverlapPx) {
     MirrorOut(out.a, kThinPadPx);
     MirrorOut(out.b, kThinPadPx);
   }
@@ -594,61 +593,25 @@ Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Ve
 
 void RegistrationOptions::Check() const {
   if (!(min_quality >= -1.0 && min_quality <= 1.0)) throw std::invalid_argument("min_quality must be in [-1, 1]");
+  if (!(max_correction > 0.0 && max_correction <= 0.5)) throw std::invalid_argument("max_correction: (0, 0.5]");
   if (!(search_fraction > 0.0 && search_fraction <= 0.5)) throw std::invalid_argument("search_fraction: (0, 0.5]");
   if (candidate_peaks < 1) throw std::invalid_argument("candidate_peaks must be >= 1");
   if (!(highpass_sigma_px >= 0.0)) throw std::invalid_argument("highpass_sigma_px must be >= 0");
   if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("stage_sigma_px must be positive");
 }
 
-PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
-                              const RegistrationOptions& options) {
-  const Eigen::Vector2d size(static_cast<double>(a.cols()), static_cast<double>(a.rows()));
-  return RegisterPair(a, b, nominal_px, options.search_fraction * size, options);
-}
+namespace {
 
-PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
-                              const Eigen::Vector2d& search_px, const RegistrationOptions& options) {
-  options.Check();
-  if (!(search_px.minCoeff() >= 0.0)) throw std::invalid_argument("RegisterPair: the search window must be >= 0");
-  PairRegistration pair;
-  pair.nominal_px = nominal_px;
-  pair.search_px = search_px;
-  const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
-  const cv::Rect nominal_overlap =
-      cv::Rect(0, 0, static_cast<int>(a.cols()), static_cast<int>(a.rows())) &
-      cv::Rect(nominal_whole.x(), nominal_whole.y(), static_cast<int>(b.cols()), static_cast<int>(b.rows()));
-  if (nominal_overlap.width < kMinOverlapPx || nominal_overlap.height < kMinOverlapPx) {
-    pair.rejection = "the nominal overlap is narrower than 8 px";
-    return pair;
-  }
-
-  Eigen::Vector2d offset;
-  if (options.crop_to_overlap) {
-    pair.candidates =
-        SearchCandidates(a, b, nominal_px, search_px, options.candidate_peaks, options.highpass_sigma_px);
-    if (pair.candidates.empty()) {
-      pair.rejection = "no correlation peak implies an overlap within the search window";
-      return pair;
-    }
-    pair.response = pair.candidates.front().peak;
-    offset = pair.candidates.front().offset_px;
-  } else {
-    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
-    // representative nearest the nominal offset.
-    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
-                          static_cast<int>(std::min(a.rows(), b.rows())));
-    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
-    pair.response = response;
-    offset = e;
-    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
-    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
-    if (((offset - nominal_px).cwiseAbs() - search_px).maxCoeff() > 0.0) {
-      pair.rejection = "the correlation's shift lies outside the search window";
-      return pair;
-    }
-  }
+// From a whole- or sub-pixel `offset` of b in a's frame: refines it on the overlap it implies, measures the
+// quality and the information there, and decides. `searched`: the offset is a candidate of the widened search,
+// which may lie a pixel or two off on broad blobs (the refinement may crop again, up to three times, and an
+// offset it could not refine claims a pixel's variance less); otherwise it is the nominal overlap's
+// phase-correlation peak, refined once on one crop (`reuse`, when given, is the crop at its whole pixel).
+void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
+                      const RegistrationOptions& options, bool searched, std::optional<Overlap> reuse,
+                      PairRegistration& pair) {
+  const Eigen::Vector2d nominal_px = pair.nominal_px;
+  const int crops = searched ? 3 : 1;
   // Crop again where the images really overlap, to the whole pixel: the shift left to refine is at most half a
   // pixel, so the refinement and the quality lose only a few pixels of a narrow overlap to their margins.
   // A refinement that ends more than half a pixel from its start crops again there and refines once more (a
@@ -658,12 +621,12 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   std::optional<Overlap> overlap;
   Eigen::Vector2d e;
   bool settled = !options.refine;  // the peak alone claims nothing more when asked for nothing more
-  for (int crop = 0; crop < 3; ++crop) {
+  for (int crop = 0; crop < crops; ++crop) {
   whole = offset.array().round().cast<int>();
-  overlap = CropOverlap(a, b, whole, options.highpass_sigma_px);
+  overlap = crop == 0 && reuse ? std::move(reuse) : CropOverlap(a, b, whole, options.highpass_sigma_px);
   if (!overlap) {
     pair.rejection = "the measured overlap is narrower than 8 px";
-    return pair;
+    return;
   }
   e = offset - whole.cast<double>();
   if (options.refine) {
@@ -706,7 +669,7 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   const Alignment alignment = MeasureAlignment(overlap->a, overlap->b, e);
   pair.quality = alignment.quality;
   pair.information = alignment.information;
-  if (!settled && !pair.information.isZero()) {
+  if (searched && !settled && !pair.information.isZero()) {
     // Not refined (no room, wandered): the offset is a whole-pixel candidate, or the correlation's peak, which
     // on broad blobs lies up to a pixel off. Its information says what the overlap could tell, not what this
     // estimate holds: add a pixel's variance (0.5 px standard deviation) in every direction it claims.
@@ -738,6 +701,106 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     pair.rejection = "the overlap has no texture that stands out of the noise in any direction";
   }
   pair.accepted = pair.rejection.empty();
+}
+
+}  // namespace
+
+PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                              const RegistrationOptions& options) {
+  options.Check();
+  PairRegistration pair;
+  pair.nominal_px = nominal_px;
+  const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
+  std::optional<Overlap> nominal = CropOverlap(a, b, nominal_whole, options.highpass_sigma_px, false);
+  if (!nominal) {
+    pair.rejection = "the nominal overlap is narrower than 8 px";
+    return pair;
+  }
+  const double limit = options.max_correction * std::min(nominal->in_a.width, nominal->in_a.height);
+  pair.search_px = Eigen::Vector2d::Constant(limit);
+  const int nominal_area = nominal->in_a.area();
+
+  Eigen::Vector2d offset;
+  if (options.crop_to_overlap) {
+    const auto [e, response] = PhaseShift(nominal->a.value, nominal->b.value);
+    pair.response = response;
+    offset = nominal_whole.cast<double>() + e;
+  } else {
+    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
+    // representative nearest the nominal offset.
+    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
+                          static_cast<int>(std::min(a.rows(), b.rows())));
+    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
+    pair.response = response;
+    offset = e;
+    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
+    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+  }
+  if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) {
+    pair.rejection = "the correlation's shift is farther from the nominal one than max_correction allows";
+    return pair;
+  }
+  // The nominal crop serves again when the peak keeps its whole pixel and the overlap is not thin (a thin one is
+  // cropped again, mirrored out for the refinement's margins).
+  const bool thin = std::min(nominal->in_a.width, nominal->in_a.height) < kThinOverlapPx;
+  std::optional<Overlap> reuse;
+  if (!thin && offset.array().round().cast<int>().matrix() == nominal_whole) reuse = std::move(nominal);
+  RefineAndMeasure(a, b, offset, options, false, std::move(reuse), pair);
+  TranslationCandidate single;
+  single.offset_px = pair.offset_px;
+  single.peak = pair.response;
+  single.ncc = pair.quality;
+  single.overlap_px = nominal_area;
+  pair.candidates.push_back(single);
+  return pair;
+}
+
+PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                            const Eigen::Vector2d& search_px, const RegistrationOptions& options) {
+  options.Check();
+  if (!(search_px.minCoeff() >= 0.0)) throw std::invalid_argument("SearchPair: the search window must be >= 0");
+  PairRegistration pair;
+  pair.nominal_px = nominal_px;
+  pair.search_px = search_px;
+  pair.searched = true;
+  const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
+  const cv::Rect nominal_overlap =
+      cv::Rect(0, 0, static_cast<int>(a.cols()), static_cast<int>(a.rows())) &
+      cv::Rect(nominal_whole.x(), nominal_whole.y(), static_cast<int>(b.cols()), static_cast<int>(b.rows()));
+  if (nominal_overlap.width < kMinOverlapPx || nominal_overlap.height < kMinOverlapPx) {
+    pair.rejection = "the nominal overlap is narrower than 8 px";
+    return pair;
+  }
+  Eigen::Vector2d offset;
+  if (options.crop_to_overlap) {
+    pair.candidates =
+        SearchCandidates(a, b, nominal_px, search_px, options.candidate_peaks, options.highpass_sigma_px);
+    if (pair.candidates.empty()) {
+      pair.rejection = "no correlation peak implies an overlap within the search window";
+      return pair;
+    }
+    pair.response = pair.candidates.front().peak;
+    offset = pair.candidates.front().offset_px;
+  } else {
+    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
+    // representative nearest the nominal offset.
+    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
+                          static_cast<int>(std::min(a.rows(), b.rows())));
+    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
+    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
+                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
+    pair.response = response;
+    offset = e;
+    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
+    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+    if (((offset - nominal_px).cwiseAbs() - search_px).maxCoeff() > 0.0) {
+      pair.rejection = "the correlation's shift lies outside the search window";
+      return pair;
+    }
+  }
+  RefineAndMeasure(a, b, offset, options, true, std::nullopt, pair);
   return pair;
 }
 

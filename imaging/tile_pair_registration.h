@@ -14,13 +14,23 @@
 
 namespace fvm::imaging {
 
+// An overlap whose narrow side is below this is thin: its crops are mirrored out for the refinement's margins,
+// and a grid sends its pairs straight to the widened search (SearchPair), where the nominal overlap's lone
+// phase-correlation peak of a sparse, thin overlap was a pixel or more off often enough.
+constexpr int kThinOverlapPx = 24;
+
 struct RegistrationOptions {
   // Pairs whose quality (the normalised cross-correlation of the high-passed overlap once aligned) falls below
   // this are rejected. The same scene under 3 % noise and 30 % vignetting gives > 0.9; unrelated overlaps of a
   // few thousand pixels reach 0.3 at their best shift. The phase-correlation peak (`response`) is no test: it
   // ranged 0.04-0.9 on good pairs and up to 0.4 on unrelated ones in the tests.
   double min_quality = 0.5;
-  // How far a pair's offset may lie from its nominal one, per axis, as a fraction of the tile's size along that
+  // The first pass (RegisterPair) correlates the nominal overlap only, and rejects a shift farther from the
+  // nominal one than this fraction of the overlap's narrow side: the correlation is periodic over the crop, so
+  // shifts near half of it are as likely wrapped as real.
+  double max_correction = 0.35;
+  // The widened search (SearchPair; RegisterTileGrid sends it the pairs the first pass rejects, or that disagree
+  // with the stage model): how far a pair's offset may lie from its nominal one, per axis, as a fraction of the tile's size along that
   // axis (0.1: 24 px of a 245 px wide tile). The candidates are searched over the nominal overlap widened by this
   // much on every side, so that a stage that steps a few pixels long or drifts sideways is found, not assumed
   // away; 0.5 searches the whole pair. A grid's second pass searches a few repeatabilities of the stage model
@@ -70,22 +80,25 @@ struct PairRegistration {
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   bool accepted = false;
   // The candidates that lay inside the search window, best (highest ncc) first; the first is what was refined.
+  // A first-pass pair (RegisterPair) reports its single candidate, the refined nominal overlap's peak.
   std::vector<TranslationCandidate> candidates;
+  bool searched = false;  // its offset comes from the widened search (SearchPair), not the first pass
   Eigen::Vector2d search_px = Eigen::Vector2d::Zero();  // the window's half-width per axis
   // Why the pair was rejected, for people (empty when accepted): the overlap too small, the shift implausible,
   // the sub-pixel refinement not settling, the quality below the threshold, or no texture to fix the shift.
   std::string rejection;
 };
 
-// Where b's top-left corner lies in a's pixel frame, searched within search_px (per axis) of nominal_px. Rejected
-// (accepted = false, `rejection` says why) when the nominal overlap is smaller than 8 x 8 px, no candidate lies in
-// the window, the sub-pixel refinement does not settle, the quality is below the threshold, or the texture's
-// gradient energy stands out of the noise's in no direction.
-PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
-                              const Eigen::Vector2d& search_px, const RegistrationOptions& options);
-// The same with the window of options.search_fraction of the tile's size.
+// Where b's top-left corner lies in a's pixel frame: the first pass, over the nominal overlap only. Rejected
+// (accepted = false, `rejection` says why) when the nominal overlap is smaller than 8 x 8 px, the shift is farther
+// than max_correction allows, the sub-pixel refinement does not settle, the quality is below the threshold, or
+// the texture's gradient energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
+// The same searched within search_px (per axis) of nominal_px: candidates from the phase correlation of the
+// widened overlap, tested by NCC, the best refined. Rejected also when no candidate lies in the window.
+PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                            const Eigen::Vector2d& search_px, const RegistrationOptions& options);
 
 
 }  // namespace fvm::imaging

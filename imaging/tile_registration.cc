@@ -163,23 +163,49 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       range_of(all);
     }
   };
+  const Eigen::Vector2d first_window =
+      options.search_fraction *
+      Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
   run([&](int k) {
     PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
     const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
-    pair = RegisterPair(images[a], images[b], tiles[b].nominal_px - tiles[a].nominal_px, options);
+    const Eigen::Vector2d nominal_px = tiles[b].nominal_px - tiles[a].nominal_px;
+    const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
+                                  static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
+    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, first_window, options)
+                                               : RegisterPair(images[a], images[b], nominal_px, options);
     pair.a = static_cast<int>(a);
     pair.b = static_cast<int>(b);
     if (on_pair_registered) on_pair_registered(++registered, total);
   });
 
-  // The stage from the pairs that passed; with it, the pairs that failed or disagree are searched again within a
-  // few repeatabilities of the model's offset (MIST's constrained second search).
+  // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
+  // again, widened, within a few repeatabilities of the model's offset (MIST's constrained second search). When
+  // too few pairs passed to estimate one, the failed ones are first searched within options.search_fraction of the
+  // tile around their nominal offsets, and the model is estimated from what then stands.
   result.stage = EstimateStageModel(tiles, result.pairs);
+  if (!result.stage.Any()) {
+    std::vector<int> again;
+    for (size_t k = 0; k < result.pairs.size(); ++k) {
+      if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
+    }
+    result.pairs_searched_again += static_cast<int>(again.size());
+    std::vector<PairRegistration> second(again.size());
+    run([&](int j) {
+      if (j >= static_cast<int>(again.size())) return;
+      const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
+      PairRegistration& pair = second[static_cast<size_t>(j)];
+      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], first.nominal_px,
+                        first_window, options);
+      pair.a = first.a;
+      pair.b = first.b;
+      if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
+    });
+    for (size_t j = 0; j < again.size(); ++j) result.pairs[static_cast<size_t>(again[j])] = second[j];
+    result.stage = EstimateStageModel(tiles, result.pairs);
+  }
   if (result.stage.Any()) {
     const StageModel& model = result.stage;
-    const Eigen::Vector2d first_window =
-        options.search_fraction * Eigen::Vector2d(static_cast<double>(images.front().cols()),
-                                                  static_cast<double>(images.front().rows()));
     const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(first_window);
     const auto predicted = [&](const PairRegistration& pair) {
       const GridTile& a = tiles[static_cast<size_t>(pair.a)];
@@ -194,14 +220,14 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       const PairRegistration& pair = result.pairs[k];
       if (!pair.accepted || disagreement(pair) > 0.0) again.push_back(static_cast<int>(k));
     }
-    result.pairs_searched_again = static_cast<int>(again.size());
+    result.pairs_searched_again += static_cast<int>(again.size());
     std::vector<PairRegistration> second(again.size());
     run([&](int j) {
       if (j >= static_cast<int>(again.size())) return;
       const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
       PairRegistration& pair = second[static_cast<size_t>(j)];
-      pair = RegisterPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)],
-                          predicted(first), tolerance, options);
+      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], predicted(first),
+                        tolerance, options);
       pair.a = first.a;
       pair.b = first.b;
       if (pair.accepted && disagreement(pair) > 0.0) {
@@ -219,7 +245,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       pair = second[j];
     }
     // Estimated again from every pair that now stands.
-    result.stage = EstimateStageModel(tiles, result.pairs);
+    if (!again.empty()) result.stage = EstimateStageModel(tiles, result.pairs);
   }
   const StageModel& model = result.stage;
   for (size_t i = 0; i < tiles.size(); ++i) {
