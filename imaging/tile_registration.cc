@@ -184,7 +184,10 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // too few pairs passed to estimate one, the failed ones are first searched within options.search_fraction of the
   // tile around their nominal offsets, and the model is estimated from what then stands.
   result.stage = EstimateStageModel(tiles, result.pairs);
-  if (!result.stage.Any()) {
+  // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
+  // correlates the same frames again, and only the first pass stands.
+  const bool search_again = options.crop_to_overlap;
+  if (search_again && !result.stage.Any()) {
     std::vector<int> again;
     for (size_t k = 0; k < result.pairs.size(); ++k) {
       if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
@@ -204,7 +207,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     for (size_t j = 0; j < again.size(); ++j) result.pairs[static_cast<size_t>(again[j])] = second[j];
     result.stage = EstimateStageModel(tiles, result.pairs);
   }
-  if (result.stage.Any()) {
+  if (search_again && result.stage.Any()) {
     const StageModel& model = result.stage;
     const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(first_window);
     const auto predicted = [&](const PairRegistration& pair) {
