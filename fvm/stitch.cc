@@ -272,9 +272,11 @@ void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
   AddDetails(sub,
-      "Registers every tile with its right and lower neighbour: phase-correlation candidates within 10 % of a tile "
+      "Registers every tile with its right and lower neighbour: the phase correlation of the nominal overlap, "
+      "refined to sub-pixel with the pair's uncertainty. Thin overlaps (under 24 px), and the pairs that fail when "
+      "too few pass to estimate the stage, are searched instead: phase-correlation candidates within 10 % of a tile "
       "of the nominal offset, each tested by the normalised cross-correlation of the overlap it implies, the best "
-      "refined to sub-pixel with the pair's uncertainty. From the pairs that pass it estimates the stage (step and "
+      "refined. From the pairs that pass it estimates the stage (step and "
       "sideways drift per column and row, repeatability), searches the failed and disagreeing pairs again within a "
       "few repeatabilities of it, and takes its positions as the stage prior; solves all positions by least squares weighted by those "
       "uncertainties, and writes file,x,y: each tile's top-left corner in pixels (x right, y down), the first tile "
