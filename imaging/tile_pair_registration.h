@@ -29,9 +29,9 @@ struct RegistrationOptions {
   // nominal one than this fraction of the overlap's narrow side: the correlation is periodic over the crop, so
   // shifts near half of it are as likely wrapped as real.
   double max_correction = 0.35;
-  // The widened search (SearchPair; RegisterTileGrid sends it the pairs the first pass rejects, or that disagree
-  // with the stage model): how far a pair's offset may lie from its nominal one, per axis, as a fraction of the tile's size along that
-  // axis (0.1: 24 px of a 245 px wide tile). The candidates are searched over the nominal overlap widened by this
+  // The widened search (SearchPair; RegisterTileGrid sends it thin overlaps, and the pairs the first pass
+  // rejects or the stage model disputes): how far a pair's offset may lie from its nominal one, per axis, as a
+  // fraction of the tile's size along that axis (0.1: 24 px of a 245 px wide tile). The candidates are searched over the nominal overlap widened by this
   // much on every side, so that a stage that steps a few pixels long or drifts sideways is found, not assumed
   // away; 0.5 searches the whole pair. A grid's second pass searches a few repeatabilities of the stage model
   // instead (RegisterTileGrid).
@@ -41,8 +41,8 @@ struct RegistrationOptions {
   // sparse overlaps put the true peak below a few spurious ones (edges, noise) often enough that one is not
   // enough.
   int candidate_peaks = 8;
-  // Search the nominal overlap widened by the window (true) or correlate the whole frames, one peak (false: the baseline of the benchmark, slower
-  // and noisier, since most of each frame has nothing to match).
+  // Correlate the (nominal or widened) overlap (true) or the whole frames, one peak, with no second search
+  // (false: the baseline of the benchmark, slower and noisier, since most of each frame has nothing to match).
   bool crop_to_overlap = true;
   // Refine the phase-correlation peak by Gauss-Newton on the overlap (Lanczos-4 resampling): the peak's centroid
   // alone is biased towards whole pixels by up to ~0.1 px.
