@@ -164,6 +164,24 @@ void RunStitch(const StitchArgs& args) {
     out["pairs_accepted"] = accepted;
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
+    const imaging::StageModel& model = result.stage;
+    const auto component = [&](const Eigen::Vector2d& v, int k, int index) {
+      return model.estimated[static_cast<size_t>(index)] ? nlohmann::ordered_json(v(k)) : nlohmann::ordered_json(nullptr);
+    };
+    out["stage_model"] = {
+        {"east_step_px", component(model.east_px, 0, 0)},
+        {"east_drift_px", component(model.east_px, 1, 1)},
+        {"south_step_px", component(model.south_px, 1, 3)},
+        {"south_drift_px", component(model.south_px, 0, 2)},
+        {"nominal_east_px", {model.nominal_east_px.x(), model.nominal_east_px.y()}},
+        {"nominal_south_px", {model.nominal_south_px.x(), model.nominal_south_px.y()}},
+        {"repeatability_px",
+         {model.repeatability_px.x() > 0.0 ? nlohmann::ordered_json(model.repeatability_px.x()) : nullptr,
+          model.repeatability_px.y() > 0.0 ? nlohmann::ordered_json(model.repeatability_px.y()) : nullptr}},
+        {"east_pairs", model.east_pairs},
+        {"south_pairs", model.south_pairs},
+        {"prior_sigma_px", result.stage_sigma_px},
+        {"pairs_searched_again", result.pairs_searched_again}};
     out["pairs"] = nlohmann::ordered_json::array();
     for (const auto& pair : result.pairs) {
       const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
@@ -173,6 +191,14 @@ void RunStitch(const StitchArgs& args) {
         const Eigen::Matrix2d covariance = pair.information.inverse();
         sigma = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
       }
+      nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
+      for (const auto& c : pair.candidates) {
+        candidates.push_back({{"dx_px", c.offset_px.x() - pair.nominal_px.x()},
+                              {"dy_px", c.offset_px.y() - pair.nominal_px.y()},
+                              {"peak", c.peak},
+                              {"ncc", c.ncc},
+                              {"overlap_px", c.overlap_px}});
+      }
       out["pairs"].push_back({{"a", layout.tiles[static_cast<size_t>(pair.a)].file},
                               {"b", layout.tiles[static_cast<size_t>(pair.b)].file},
                               {"dx_px", pair.accepted ? nlohmann::ordered_json(d.x()) : nullptr},
@@ -180,6 +206,9 @@ void RunStitch(const StitchArgs& args) {
                               {"sigma_px", sigma},
                               {"quality", pair.quality},
                               {"accepted", pair.accepted},
+                              {"searched", pair.searched},
+                              {"search_px", {pair.search_px.x(), pair.search_px.y()}},
+                              {"candidates", candidates},
                               {"rejection", pair.accepted ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(pair.rejection)}});
     }
     fmt::print("{}\n", out.dump(2));
@@ -188,6 +217,26 @@ void RunStitch(const StitchArgs& args) {
   fmt::print("{} tiles of {} x {} px, {} pairs, {} accepted (quality >= {}); nominal positions from the {}\n",
              layout.tiles.size(), images.front().cols(), images.front().rows(), result.pairs.size(), accepted,
              options.min_quality, from_stage ? "stage" : "grid and overlap");
+  {
+    const imaging::StageModel& model = result.stage;
+    if (!model.Any()) {
+      fmt::print("  stage model: not estimated ({} registered pairs; it needs {} per direction): the nominal "
+                 "positions stand\n",
+                 accepted, imaging::StageModel::kMinPairs);
+    } else {
+      const auto value = [&](const Eigen::Vector2d& v, int k, int index) {
+        return model.estimated[static_cast<size_t>(index)] ? fmt::format("{:+.2f}", v(k)) : std::string("nominal");
+      };
+      const auto repeat = [](double r) { return r > 0.0 ? fmt::format("{:.2f}", r) : std::string("unknown"); };
+      fmt::print("  stage model from {} east and {} south pairs: column step {} px (nominal {:.2f}), drift {} px "
+                 "per column; row step {} px (nominal {:.2f}), drift {} px per row; repeatability {} x, {} y px; "
+                 "{} pairs searched again within its tolerance\n",
+                 model.east_pairs, model.south_pairs, value(model.east_px, 0, 0), model.nominal_east_px.x(),
+                 value(model.east_px, 1, 1), value(model.south_px, 1, 3), model.nominal_south_px.y(),
+                 value(model.south_px, 0, 2), repeat(model.repeatability_px.x()),
+                 repeat(model.repeatability_px.y()), result.pairs_searched_again);
+    }
+  }
   for (const auto& pair : result.pairs) {
     if (!pair.accepted) {
       fmt::print("  rejected {} - {}: {}\n", layout.tiles[static_cast<size_t>(pair.a)].file,
@@ -199,6 +248,9 @@ void RunStitch(const StitchArgs& args) {
     for (const auto& f : files) text += (text.empty() ? "" : ", ") + f;
     return text;
   };
+  if (accepted == 0) {
+    fmt::print("  no pair registered: every tile stays at its nominal position\n");
+  }
   if (!fallback.empty()) {
     fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list(fallback));
   }
@@ -220,8 +272,13 @@ void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
   AddDetails(sub,
-      "Registers every tile with its right and lower neighbour by phase correlation of the overlap, refined to "
-      "sub-pixel with the pair's uncertainty; solves all positions by least squares weighted by those "
+      "Registers every tile with its right and lower neighbour: the phase correlation of the nominal overlap, "
+      "refined to sub-pixel with the pair's uncertainty. Thin overlaps (under 24 px), and the pairs that fail when "
+      "too few pass to estimate the stage, are searched instead: phase-correlation candidates within 10 % of a tile "
+      "of the nominal offset, each tested by the normalised cross-correlation of the overlap it implies, the best "
+      "refined. From the pairs that pass it estimates the stage (step and "
+      "sideways drift per column and row, repeatability), searches the failed and disagreeing pairs again within a "
+      "few repeatabilities of it, and takes its positions as the stage prior; solves all positions by least squares weighted by those "
       "uncertainties, and writes file,x,y: each tile's top-left corner in pixels (x right, y down), the first tile "
       "of the layout at 0,0, with its standard uncertainty. Tiles that no good pair links to an earlier one keep "
       "their stage (or grid) positions, as the instrument does; along parallel marks, where images cannot tell a "
@@ -251,8 +308,10 @@ void RegisterStitch(CLI::App& app) {
   AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], "
-                "\"stage_along_one_axis\": [files], \"pairs\": [{\"a\", \"b\", \"dx_px\", \"dy_px\", \"sigma_px\", "
-                "\"quality\", \"accepted\"}]}");
+                "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
+                "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
+                "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"candidates\": [{\"dx_px\", "
+                "\"dy_px\", \"peak\", \"ncc\"}]}]}");
   sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
               "-o demo/positions.csv --mosaic demo/mosaic.tif");
   sub->callback([args] { RunStitch(*args); });

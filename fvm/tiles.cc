@@ -26,6 +26,7 @@
 #include "core/number_text.h"
 #include "artefacts/simulation/rendered_stitching_strategy.h"
 #include "artefacts/simulation/stitching_strategy.h"
+#include "artefacts/simulation/sparse_tile_synthesis.h"
 #include "artefacts/simulation/tile_synthesis.h"
 #include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
@@ -218,6 +219,8 @@ struct SynthArgs {
   double sigma_px = 1.5;
   int bits = 0;  // 0: 16, or with --artefact 32
   std::string artefact;
+  std::string texture = "waves";
+  bool size_given = false, overlap_given = false;
   std::uint64_t seed = 1;
 };
 
@@ -270,8 +273,48 @@ void RunSynthesizeHeights(const SynthArgs& args) {
              tiles.images.size(), args.artefact, args.size, args.size, pixel, args.output);
 }
 
+// What a real microscope set of a sparse sample looks like (artefacts/simulation/sparse_tile_synthesis.h): 16-bit
+// blobs on a smooth background, thin overlaps, a stage with a systematic step error and a drift.
+void RunSynthesizeSparse(const SynthArgs& args) {
+  if (args.bits != 0 && args.bits != 16) throw InputError("--bits: sparse tiles are 16-bit counts");
+  artefacts::SparseTileOptions options;
+  if (args.rows > 0) options.rows = args.rows;
+  if (args.cols > 0) options.cols = args.cols;
+  if (args.size_given) options.width = options.height = args.size;
+  if (args.overlap_given) options.overlap = imaging::ParseOverlap(args.overlap, "--overlap");
+  options.repeatability_px = args.sigma_px;
+  options.seed = args.seed;
+  try {
+    options.Check();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("fvm tiles synthesize --texture sparse: ") + e.what());
+  }
+  const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeSparseTiles(options);
+  const std::vector<std::string> files = WriteTileSet(
+      args.output, tiles.images, tiles.tiles, {}, imaging::TilePixelType::kUint16,
+      fmt::format("fvm tiles synthesize --texture sparse --seed {}: {} x {} tiles of {} x {} px, overlap {}; the "
+                  "stage steps {:+g}, {:+g} px per column and {:+g}, {:+g} px per row off the nominal, "
+                  "repeatability {} px",
+                  args.seed, options.rows, options.cols, options.width, options.height, options.overlap,
+                  options.east_step_error_px.x(), options.east_step_error_px.y(), options.south_step_error_px.x(),
+                  options.south_step_error_px.y(), options.repeatability_px));
+  std::string truth = "file,x,y\n";
+  for (size_t i = 0; i < files.size(); ++i) {
+    truth += fmt::format("{},{:.6f},{:.6f}\n", files[i], tiles.truth_px[i].x(), tiles.truth_px[i].y());
+  }
+  WriteFileAtomically(std::filesystem::path(args.output) / "truth.csv", truth);
+  fmt::print("{} sparse tiles of {} x {} px (overlap {:g} %), layout.csv and truth.csv (true positions, px) written "
+             "to {}\n",
+             tiles.images.size(), options.width, options.height, options.overlap * 100, args.output);
+}
+
 void RunSynthesize(const SynthArgs& args) {
+  if (!args.artefact.empty() && args.texture != "waves") {
+    throw InputError("--texture " + args.texture + " and --artefact: give one of them");
+  }
   if (!args.artefact.empty()) return RunSynthesizeHeights(args);
+  if (args.texture == "sparse") return RunSynthesizeSparse(args);
+  if (args.texture != "waves") throw InputError("--texture " + args.texture + ": give waves or sparse");
   artefacts::TileSynthesisOptions options;
   options.rows = args.rows > 0 ? args.rows : 3;
   options.cols = args.cols > 0 ? args.cols : 3;
@@ -467,10 +510,23 @@ void RegisterTiles(CLI::App& app) {
       ->required();
   synth->add_option("--rows", synth_args->rows, "tile rows (default 3; with --artefact, as many as cover it)");
   synth->add_option("--cols", synth_args->cols, "tile columns (default 3; with --artefact, as many as cover it)");
-  synth->add_option("--tile-px", synth_args->size, "tile width and height (px)")->capture_default_str();
-  AddHiddenAlias(synth, "--size", synth_args->size, "--tile-px");
-  synth->add_option("--overlap", synth_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")->capture_default_str();
-  synth->add_option("--stage-sigma-px", synth_args->sigma_px, "standard deviation of the stage error per axis (px)")
+  synth->add_option("--tile-px", synth_args->size, "tile width and height (px; --texture sparse: 245 x 183)")
+      ->capture_default_str()
+      ->each([synth_args](const std::string&) { synth_args->size_given = true; });
+  AddHiddenAlias(synth, "--size", synth_args->size, "--tile-px")->each([synth_args](const std::string&) {
+    synth_args->size_given = true;
+  });
+  synth->add_option("--overlap", synth_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %; --texture sparse: 6)")
+      ->capture_default_str()
+      ->each([synth_args](const std::string&) { synth_args->overlap_given = true; });
+  synth->add_option("--stage-sigma-px", synth_args->sigma_px,
+                    "standard deviation of the stage error per axis (px; with --texture sparse the repeatability "
+                    "on top of the systematic step error)")
+      ->capture_default_str();
+  synth->add_option("--texture", synth_args->texture,
+                    "waves: a dense random texture; sparse: 16-bit blobs on a smooth background with shot noise, "
+                    "5 x 5 tiles, a stage that steps 1.2 px long and drifts 4 px per column (like a real "
+                    "microscope set of a sparse sample)")
       ->capture_default_str();
   AddHiddenAlias(synth, "--stage-error", synth_args->sigma_px, "--stage-sigma-px");
   synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer, the default) or 32 (float)");

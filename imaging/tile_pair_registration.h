@@ -8,10 +8,16 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
+
+// An overlap whose narrow side is below this is thin: its crops are mirrored out for the refinement's margins,
+// and a grid sends its pairs straight to the widened search (SearchPair), where the nominal overlap's lone
+// phase-correlation peak of a sparse, thin overlap was a pixel or more off often enough.
+constexpr int kThinOverlapPx = 24;
 
 struct RegistrationOptions {
   // Pairs whose quality (the normalised cross-correlation of the high-passed overlap once aligned) falls below
@@ -19,11 +25,24 @@ struct RegistrationOptions {
   // few thousand pixels reach 0.3 at their best shift. The phase-correlation peak (`response`) is no test: it
   // ranged 0.04-0.9 on good pairs and up to 0.4 on unrelated ones in the tests.
   double min_quality = 0.5;
-  // A shift farther from the nominal one than this fraction of the overlap's narrow side is rejected: the
-  // correlation is periodic over the crop, so shifts near half of it are as likely wrapped as real.
+  // The first pass (RegisterPair) correlates the nominal overlap only, and rejects a shift farther from the
+  // nominal one than this fraction of the overlap's narrow side: the correlation is periodic over the crop, so
+  // shifts near half of it are as likely wrapped as real.
   double max_correction = 0.35;
-  // Correlate only the nominal overlap (true) or the whole frames (false: the baseline of the benchmark, slower
-  // and noisier, since most of each frame has nothing to match).
+  // The widened search (SearchPair; RegisterTileGrid sends it thin overlaps, and the pairs the first pass
+  // rejects or the stage model disputes): how far a pair's offset may lie from its nominal one, per axis, as a
+  // fraction of the tile's size along that axis (0.1: 24 px of a 245 px wide tile). The candidates are searched over the nominal overlap widened by this
+  // much on every side, so that a stage that steps a few pixels long or drifts sideways is found, not assumed
+  // away; 0.5 searches the whole pair. A grid's second pass searches a few repeatabilities of the stage model
+  // instead (RegisterTileGrid).
+  double search_fraction = 0.1;
+  // Phase-correlation peaks kept as candidates; each is tested, with its wrap-around interpretations inside the
+  // window, by the normalised cross-correlation of the overlap it implies, and the best one is refined. Thin,
+  // sparse overlaps put the true peak below a few spurious ones (edges, noise) often enough that one is not
+  // enough.
+  int candidate_peaks = 8;
+  // Correlate the (nominal or widened) overlap (true) or the whole frames, one peak, with no second search
+  // (false: the baseline of the benchmark, slower and noisier, since most of each frame has nothing to match).
   bool crop_to_overlap = true;
   // Refine the phase-correlation peak by Gauss-Newton on the overlap (Lanczos-4 resampling): the peak's centroid
   // alone is biased towards whole pixels by up to ~0.1 px.
@@ -40,6 +59,14 @@ struct RegistrationOptions {
   void Check() const;  // throws std::invalid_argument for values outside their ranges
 };
 
+// One translation the phase correlation proposes for a pair, tested on the overlap it implies.
+struct TranslationCandidate {
+  Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();  // b's top-left in a's frame, whole pixels
+  double peak = 0.0;     // the phase-correlation peak it comes from
+  double ncc = 0.0;      // normalised cross-correlation of the high-passed overlap at this offset
+  int overlap_px = 0;    // pixels of that overlap
+};
+
 struct PairRegistration {
   int a = 0, b = 0;                                     // tile indices
   Eigen::Vector2d nominal_px = Eigen::Vector2d::Zero();  // b's top-left in a's frame, from the stage / grid
@@ -52,16 +79,26 @@ struct PairRegistration {
   // polished face) carries none: the overlap cannot tell a shift along it, and the stage decides it.
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
   bool accepted = false;
+  // The candidates that lay inside the search window, best (highest ncc) first; the first is what was refined.
+  // A first-pass pair (RegisterPair) reports its single candidate, the refined nominal overlap's peak.
+  std::vector<TranslationCandidate> candidates;
+  bool searched = false;  // its offset comes from the widened search (SearchPair), not the first pass
+  Eigen::Vector2d search_px = Eigen::Vector2d::Zero();  // the window's half-width per axis
   // Why the pair was rejected, for people (empty when accepted): the overlap too small, the shift implausible,
   // the sub-pixel refinement not settling, the quality below the threshold, or no texture to fix the shift.
   std::string rejection;
 };
 
-// Where b's top-left corner lies in a's pixel frame. Rejected (accepted = false, `rejection` says why) when the
-// nominal overlap is smaller than 8 x 8 px, the shift is implausible, the sub-pixel refinement does not settle,
-// the quality is below the threshold, or the texture's gradient energy stands out of the noise's in no direction.
+// Where b's top-left corner lies in a's pixel frame: the first pass, over the nominal overlap only. Rejected
+// (accepted = false, `rejection` says why) when the nominal overlap is smaller than 8 x 8 px, the shift is farther
+// than max_correction allows, the sub-pixel refinement does not settle, the quality is below the threshold, or
+// the texture's gradient energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
+// The same searched within search_px (per axis) of nominal_px: candidates from the phase correlation of the
+// widened overlap, tested by NCC, the best refined. Rejected also when no candidate lies in the window.
+PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                            const Eigen::Vector2d& search_px, const RegistrationOptions& options);
 
 
 }  // namespace fvm::imaging

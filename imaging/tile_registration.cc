@@ -4,6 +4,9 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
+#include <functional>
+#include <string>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -109,6 +112,17 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
   return out;
 }
 
+namespace {
+
+std::string DisagreementText(const Eigen::Vector2d& off, const Eigen::Vector2d& tolerance) {
+  char text[160];
+  std::snprintf(text, sizeof text, "its offset disagrees with the stage model by %.2f, %.2f px (tolerance %.2f, %.2f)",
+                off.x(), off.y(), tolerance.x(), tolerance.y());
+  return text;
+}
+
+}  // namespace
+
 void SetImagingThreads(int threads) {
   if (threads < 0) throw std::invalid_argument("SetImagingThreads: give 0 (all cores) or a positive count");
   // OpenCV reads a negative count as "its default", i.e. all cores; 0 would mean no pool at all.
@@ -138,23 +152,112 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // Pairs are independent: each writes only its own slot, so the result does not depend on the thread count.
   std::atomic<int> registered{0};
   const int total = static_cast<int>(result.pairs.size());
-  const auto register_range = [&](const cv::Range& range) {
-    for (int k = range.start; k < range.end; ++k) {
-      PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
-      const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
-      pair = RegisterPair(images[a], images[b], tiles[b].nominal_px - tiles[a].nominal_px, options);
-      pair.a = static_cast<int>(a);
-      pair.b = static_cast<int>(b);
-      if (on_pair_registered) on_pair_registered(++registered, total);
+  const auto run = [&](const std::function<void(int)>& one) {
+    const auto range_of = [&](const cv::Range& range) {
+      for (int k = range.start; k < range.end; ++k) one(k);
+    };
+    const cv::Range all(0, static_cast<int>(result.pairs.size()));
+    if (options.parallel) {
+      cv::parallel_for_(all, range_of);
+    } else {
+      range_of(all);
     }
   };
-  const cv::Range all(0, static_cast<int>(result.pairs.size()));
-  if (options.parallel) {
-    cv::parallel_for_(all, register_range);
-  } else {
-    register_range(all);
+  const Eigen::Vector2d first_window =
+      options.search_fraction *
+      Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
+  run([&](int k) {
+    PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
+    const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
+    const Eigen::Vector2d nominal_px = tiles[b].nominal_px - tiles[a].nominal_px;
+    const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
+                                  static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
+    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, first_window, options)
+                                               : RegisterPair(images[a], images[b], nominal_px, options);
+    pair.a = static_cast<int>(a);
+    pair.b = static_cast<int>(b);
+    if (on_pair_registered) on_pair_registered(++registered, total);
+  });
+
+  // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
+  // again, widened, within a few repeatabilities of the model's offset (MIST's constrained second search). When
+  // too few pairs passed to estimate one, the failed ones are first searched within options.search_fraction of the
+  // tile around their nominal offsets, and the model is estimated from what then stands.
+  result.stage = EstimateStageModel(tiles, result.pairs);
+  // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
+  // correlates the same frames again, and only the first pass stands.
+  const bool search_again = options.crop_to_overlap;
+  if (search_again && !result.stage.Any()) {
+    std::vector<int> again;
+    for (size_t k = 0; k < result.pairs.size(); ++k) {
+      if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
+    }
+    result.pairs_searched_again += static_cast<int>(again.size());
+    std::vector<PairRegistration> second(again.size());
+    run([&](int j) {
+      if (j >= static_cast<int>(again.size())) return;
+      const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
+      PairRegistration& pair = second[static_cast<size_t>(j)];
+      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], first.nominal_px,
+                        first_window, options);
+      pair.a = first.a;
+      pair.b = first.b;
+      if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
+    });
+    for (size_t j = 0; j < again.size(); ++j) result.pairs[static_cast<size_t>(again[j])] = second[j];
+    result.stage = EstimateStageModel(tiles, result.pairs);
   }
-  result.positions = SolveTilePositions(nominal, result.pairs, options.stage_sigma_px);
+  if (search_again && result.stage.Any()) {
+    const StageModel& model = result.stage;
+    const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(first_window);
+    const auto predicted = [&](const PairRegistration& pair) {
+      const GridTile& a = tiles[static_cast<size_t>(pair.a)];
+      const GridTile& b = tiles[static_cast<size_t>(pair.b)];
+      return Eigen::Vector2d(b.nominal_px - a.nominal_px + model.Correction(b.row - a.row, b.col - a.col));
+    };
+    const auto disagreement = [&](const PairRegistration& pair) {
+      return ((pair.offset_px - predicted(pair)).cwiseAbs() - tolerance).maxCoeff();
+    };
+    std::vector<int> again;
+    for (size_t k = 0; k < result.pairs.size(); ++k) {
+      const PairRegistration& pair = result.pairs[k];
+      if (!pair.accepted || disagreement(pair) > 0.0) again.push_back(static_cast<int>(k));
+    }
+    result.pairs_searched_again += static_cast<int>(again.size());
+    std::vector<PairRegistration> second(again.size());
+    run([&](int j) {
+      if (j >= static_cast<int>(again.size())) return;
+      const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
+      PairRegistration& pair = second[static_cast<size_t>(j)];
+      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], predicted(first),
+                        tolerance, options);
+      pair.a = first.a;
+      pair.b = first.b;
+      if (pair.accepted && disagreement(pair) > 0.0) {
+        pair.accepted = false;
+        pair.rejection = "refined outside the stage model's tolerance";
+      }
+      if (pair.accepted) return;
+      const Eigen::Vector2d off = first.offset_px - predicted(first);
+      pair.rejection = (first.accepted ? DisagreementText(off, tolerance) : first.rejection) +
+                       "; searched again within the stage model's tolerance: " + pair.rejection;
+    });
+    for (size_t j = 0; j < again.size(); ++j) {
+      PairRegistration& pair = result.pairs[static_cast<size_t>(again[j])];
+      second[j].nominal_px = pair.nominal_px;  // the stage's, as for every pair; the search window says the rest
+      pair = second[j];
+    }
+    // Estimated again from every pair that now stands.
+    if (!again.empty()) result.stage = EstimateStageModel(tiles, result.pairs);
+  }
+  const StageModel& model = result.stage;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    result.stage_positions_px.push_back(
+        nominal[i] + model.Correction(tiles[i].row - tiles[0].row, tiles[i].col - tiles[0].col));
+  }
+  const Eigen::Vector2d& repeatability = model.repeatability_px;
+  result.stage_sigma_px = repeatability.minCoeff() > 0.0 ? repeatability.maxCoeff() : options.stage_sigma_px;
+  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px);
   return result;
 }
 

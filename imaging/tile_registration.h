@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "imaging/io/tile_image.h"
+#include "imaging/stage_model.h"
 #include "imaging/tile_pair_registration.h"
 
 namespace fvm::imaging {
@@ -39,10 +40,20 @@ struct GridTile {
 struct RegistrationResult {
   TilePositions positions;
   std::vector<PairRegistration> pairs;  // right and lower neighbours of every tile
+  // The stage as the accepted pairs show it (none estimated when too few registered), and what the solve took
+  // for each tile's stage position and its standard deviation: the nominal corrected by the model.
+  StageModel stage;
+  std::vector<Eigen::Vector2d> stage_positions_px;
+  double stage_sigma_px = 0.0;
+  int pairs_searched_again = 0;  // pairs the model's window searched a second time
 };
 
-// Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, then solves. Tiles in
-// scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
+// Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, within
+// options.search_fraction of the nominal offsets. From the accepted pairs it estimates the stage model; pairs that
+// failed, or that disagree with the model by more than its tolerance, are searched again within that tolerance of
+// the model's offset and keep the result only if it passes and agrees. Then solves, with the model's positions and
+// repeatability as the stage prior (the nominal positions and options.stage_sigma_px along what it could not
+// estimate). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
 // given, is called after each pair, from the pool's threads at once: it must be thread-safe.
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
                                     const RegistrationOptions& options,

@@ -149,4 +149,16 @@ run(1 tiles plan --artefact grid6x6 --region 0,0,5,5)
 if(NOT ERR MATCHES "feature 1 at .* is not wholly inside the tile grid")
   message(FATAL_ERROR "a feature outside the region was not named:\n${ERR}")
 endif()
+# Issue 13: a sparse set (thin 6 % overlaps, blobs, a drifting stage). Its thin overlaps go to the widened search,
+# whose candidates --json lists per pair; the stage model comes from the pairs that pass.
+run(0 tiles synthesize --texture sparse -o ${WORK}/sparse --seed 2)
+run(0 stitch --layout ${WORK}/sparse/layout.csv --overlap 6 -o ${WORK}/sparse/p.csv --json)
+expect_json_keys("fvm stitch (sparse)" "${OUT}" stage_model/east_step_px stage_model/east_drift_px
+                 stage_model/south_step_px stage_model/repeatability_px pairs/0/searched pairs/0/candidates/0/dx_px
+                 pairs/0/candidates/0/ncc pairs/0/search_px)
+string(JSON east_pairs GET "${OUT}" stage_model east_pairs)
+string(JSON searched GET "${OUT}" pairs 0 searched)
+if(east_pairs LESS 3 OR NOT searched)
+  message(FATAL_ERROR "sparse set: ${east_pairs} east pairs in the stage model, first pair searched: ${searched}")
+endif()
 file(REMOVE_RECURSE ${WORK})

@@ -1,0 +1,51 @@
+#pragma once
+// The stage as the registered pairs of a grid show it (issue 13, after NIST MIST's stage model): a real stage steps
+// a little longer or shorter than nominal and drifts sideways by the same amount at every step, and repeats each
+// position only to within its repeatability. Estimated from the pairs that register, it predicts the pairs that
+// do not, rejects registrations that disagree with it, and is the prior of the global solve.
+//
+// Pixel frame as in tile_registration.h: x right, y down; offsets are b's top-left corner in a's frame.
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "imaging/tile_pair_registration.h"
+
+namespace fvm::imaging {
+
+struct GridTile;
+
+struct StageModel {
+  // The mean offset of a tile's right neighbour (east: x the step, y the sideways drift per column) and of its
+  // lower one (south: y the step, x the drift per row), px: the 2 x 2 map from grid index to pixels.
+  Eigen::Vector2d east_px = Eigen::Vector2d::Zero(), south_px = Eigen::Vector2d::Zero();
+  // The same from the nominal positions, which the model corrects.
+  Eigen::Vector2d nominal_east_px = Eigen::Vector2d::Zero(), nominal_south_px = Eigen::Vector2d::Zero();
+  // Which of the four components the pairs determined (east x, east y, south x, south y); the others keep the
+  // nominal value. A component needs kMinPairs pairs whose images fix it (not along machining marks).
+  std::array<bool, 4> estimated{};
+  int east_pairs = 0, south_pairs = 0;  // accepted pairs each direction rests on
+  // The stage's repeatability per axis (px, standard deviation of one tile's position about the model): the
+  // robust spread of the pairs' offsets about the mean step, over sqrt(2) (a pair differs two positions). 0 when
+  // fewer than kMinPairs pairs fix the axis.
+  Eigen::Vector2d repeatability_px = Eigen::Vector2d::Zero();
+
+  static constexpr int kMinPairs = 3;
+  bool Any() const { return estimated[0] || estimated[1] || estimated[2] || estimated[3]; }
+  // How far a pair's offset may lie from the model's prediction before it counts as disagreeing, per axis (px):
+  // 5 standard deviations of a pair's offset about the mean step and a pixel (a whole-pixel candidate), at least
+  // 3 px; `fallback` along an axis the model has no repeatability for. Four rejected a good pair of the 220 of
+  // grid6x6, whose 1.5 px stage the MAD of the pairs put at 1.05 px.
+  Eigen::Vector2d Tolerance(const Eigen::Vector2d& fallback) const;
+  // The correction of tile (row, col)'s nominal position relative to the first tile (row0, col0):
+  // (col - col0) (east - nominal east) + (row - row0) (south - nominal south).
+  Eigen::Vector2d Correction(int drow, int dcol) const;
+};
+
+// From the accepted pairs between right (east) and lower (south) neighbours of `tiles`: the median offset per
+// direction and axis (robust against a wrong registration), over the pairs whose information fixes that axis to
+// better than 0.5 px; the spread from the median absolute deviation.
+StageModel EstimateStageModel(const std::vector<GridTile>& tiles, const std::vector<PairRegistration>& pairs);
+
+}  // namespace fvm::imaging
