@@ -608,6 +608,21 @@ namespace {
 // which may lie a pixel or two off on broad blobs (the refinement may crop again, up to three times, and an
 // offset it could not refine claims a pixel's variance less); otherwise it is the nominal overlap's
 // phase-correlation peak, refined once on one crop (`reuse`, when given, is the crop at its whole pixel).
+// Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; the
+// representative nearest the nominal offset is taken. `response` gets the correlation peak.
+Eigen::Vector2d WholeFrameShift(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                                double highpass_sigma_px, double& response) {
+  const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())), static_cast<int>(std::min(a.rows(), b.rows())));
+  const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
+  const auto [e, peak] = PhaseShift(HighPass(View(a)(common), highpass_sigma_px, logarithm).value,
+                                    HighPass(View(b)(common), highpass_sigma_px, logarithm).value);
+  response = peak;
+  Eigen::Vector2d offset = e;
+  offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
+  offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+  return offset;
+}
+
 void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
                       const RegistrationOptions& options, bool searched, std::optional<Overlap> reuse,
                       PairRegistration& pair) {
@@ -727,17 +742,7 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
     pair.response = response;
     offset = nominal_whole.cast<double>() + e;
   } else {
-    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
-    // representative nearest the nominal offset.
-    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
-                          static_cast<int>(std::min(a.rows(), b.rows())));
-    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
-    pair.response = response;
-    offset = e;
-    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
-    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+    offset = WholeFrameShift(a, b, nominal_px, options.highpass_sigma_px, pair.response);
   }
   if ((offset - nominal_px).cwiseAbs().maxCoeff() > limit) {
     pair.rejection = "the correlation's shift is farther from the nominal one than max_correction allows";
@@ -785,17 +790,7 @@ PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen:
     pair.response = pair.candidates.front().peak;
     offset = pair.candidates.front().offset_px;
   } else {
-    // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; take the
-    // representative nearest the nominal offset.
-    const cv::Rect common(0, 0, static_cast<int>(std::min(a.cols(), b.cols())),
-                          static_cast<int>(std::min(a.rows(), b.rows())));
-    const bool logarithm = MatchingDomain(View(a)(common), View(b)(common));
-    const auto [e, response] = PhaseShift(HighPass(View(a)(common), options.highpass_sigma_px, logarithm).value,
-                                          HighPass(View(b)(common), options.highpass_sigma_px, logarithm).value);
-    pair.response = response;
-    offset = e;
-    offset.x() += common.width * std::round((nominal_px.x() - e.x()) / common.width);
-    offset.y() += common.height * std::round((nominal_px.y() - e.y()) / common.height);
+    offset = WholeFrameShift(a, b, nominal_px, options.highpass_sigma_px, pair.response);
     if (((offset - nominal_px).cwiseAbs() - search_px).maxCoeff() > 0.0) {
       pair.rejection = "the correlation's shift lies outside the search window";
       return pair;

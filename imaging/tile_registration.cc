@@ -187,24 +187,39 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
   // correlates the same frames again, and only the first pass stands.
   const bool search_again = options.crop_to_overlap;
-  if (search_again && !result.stage.Any()) {
-    std::vector<int> again;
-    for (size_t k = 0; k < result.pairs.size(); ++k) {
-      if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
-    }
+  // The listed pairs searched again, widened, within `window` of `centre(pair)` (in parallel); `judge(first,
+  // second)` may refuse the second result and says why a pair still fails. Each keeps the stage's nominal offset.
+  const auto search_pairs = [&](const std::vector<int>& again,
+                                const std::function<Eigen::Vector2d(const PairRegistration&)>& centre,
+                                const Eigen::Vector2d& window,
+                                const std::function<void(const PairRegistration&, PairRegistration&)>& judge) {
     result.pairs_searched_again += static_cast<int>(again.size());
     std::vector<PairRegistration> second(again.size());
     run([&](int j) {
       if (j >= static_cast<int>(again.size())) return;
       const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
       PairRegistration& pair = second[static_cast<size_t>(j)];
-      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], first.nominal_px,
-                        first_window, options);
+      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], centre(first), window,
+                        options);
       pair.a = first.a;
       pair.b = first.b;
-      if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
+      judge(first, pair);
     });
-    for (size_t j = 0; j < again.size(); ++j) result.pairs[static_cast<size_t>(again[j])] = second[j];
+    for (size_t j = 0; j < again.size(); ++j) {
+      PairRegistration& pair = result.pairs[static_cast<size_t>(again[j])];
+      second[j].nominal_px = pair.nominal_px;  // the stage's, as for every pair; the search window says the rest
+      pair = second[j];
+    }
+  };
+  if (search_again && !result.stage.Any()) {
+    std::vector<int> again;
+    for (size_t k = 0; k < result.pairs.size(); ++k) {
+      if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
+    }
+    search_pairs(again, [](const PairRegistration& first) { return first.nominal_px; }, first_window,
+                 [](const PairRegistration& first, PairRegistration& pair) {
+                   if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
+                 });
     result.stage = EstimateStageModel(tiles, result.pairs);
   }
   if (search_again && result.stage.Any()) {
@@ -223,16 +238,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       const PairRegistration& pair = result.pairs[k];
       if (!pair.accepted || disagreement(pair) > 0.0) again.push_back(static_cast<int>(k));
     }
-    result.pairs_searched_again += static_cast<int>(again.size());
-    std::vector<PairRegistration> second(again.size());
-    run([&](int j) {
-      if (j >= static_cast<int>(again.size())) return;
-      const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
-      PairRegistration& pair = second[static_cast<size_t>(j)];
-      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], predicted(first),
-                        tolerance, options);
-      pair.a = first.a;
-      pair.b = first.b;
+    search_pairs(again, predicted, tolerance, [&](const PairRegistration& first, PairRegistration& pair) {
       if (pair.accepted && disagreement(pair) > 0.0) {
         pair.accepted = false;
         pair.rejection = "refined outside the stage model's tolerance";
@@ -242,11 +248,6 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       pair.rejection = (first.accepted ? DisagreementText(off, tolerance) : first.rejection) +
                        "; searched again within the stage model's tolerance: " + pair.rejection;
     });
-    for (size_t j = 0; j < again.size(); ++j) {
-      PairRegistration& pair = result.pairs[static_cast<size_t>(again[j])];
-      second[j].nominal_px = pair.nominal_px;  // the stage's, as for every pair; the search window says the rest
-      pair = second[j];
-    }
     // Estimated again from every pair that now stands.
     if (!again.empty()) result.stage = EstimateStageModel(tiles, result.pairs);
   }
