@@ -56,6 +56,7 @@ void Run(SimulateBatchArgs args) {
   truth["stitched_frame"] = args.stitched_frame;
   truth["hidden_effect"] = args.options.hidden_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.options.hidden_effect);
   truth["effect_size"] = args.options.effect_size;
+  truth["drift_tau_min"] = args.options.drift_tau_min;
   truth["mean_error_um"] = sim.truth.mean_error_um;
   truth["max_error_um"] = sim.truth.max_error_um;
   const std::vector<std::string> names = sim.truth.layout.FreeNames();
@@ -499,6 +500,10 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--effect-size", args->options.effect_size,
                   "size of the hidden effect; 0 = default: thermal_drift 3 um/min, higher_order 80 um, reference_anchor "
                   "30 mm, z_coupling 500 urad, outliers 80 um, scale 300 ppm")
+      ->capture_default_str();
+  sub->add_option("--drift-tau-min", args->options.drift_tau_min,
+                  "thermal_drift: 0 drifts linearly in t; > 0 a warm-up B (1 - exp(-t/tau)) with this time constant (min)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--height-step-mm", args->options.height_step_mm,
                   "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")

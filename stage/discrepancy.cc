@@ -112,7 +112,12 @@ struct Candidate {
   LinearScore linear;
   std::vector<std::string> coefficient_names;  // higher_order, z_coupling
   std::vector<int> flagged;                    // outliers: observation indices
+  double tau_s = 0.0;                          // thermal_drift: 0 linear, else the warm-up's time constant
 };
+
+// How far a drift of initial rate 1 has gone after t: t itself (linear), or tau (1 - exp(-t/tau)), the warm-up
+// rho(t) = A + B (1 - exp(-t/tau)) of FACTS (000:5810) with B = rate * tau (A is the model's constant).
+double DriftShape(double t, double tau) { return tau > 0 ? tau * (1.0 - std::exp(-t / tau)) : t; }
 
 void Test(Candidate& c, double m, double alpha_each) {
   const LinearScore& l = c.linear;
@@ -283,7 +288,8 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
 struct Applied {
   DiagnosisStep step;
   std::vector<std::string> coefficient_names;            // higher_order, z_coupling
-  Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();  // thermal_drift
+  Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();  // thermal_drift: its initial rate
+  double tau_s = 0.0;                                    // thermal_drift: 0 linear, else a warm-up's time constant
   double scale = 0.0;                                    // scale
   std::vector<int> flagged;                              // outliers: indices into the original identification set
   int extra = 0;                                         // parameters it added
@@ -297,9 +303,9 @@ struct Problem {
   std::vector<int> original;  // index of each identification observation in the original set
 };
 
-MeasurementSet Undrifted(const MeasurementSet& set, const Eigen::Vector3d& v) {
+MeasurementSet Undrifted(const MeasurementSet& set, const Eigen::Vector3d& v, double tau) {
   if (set.t_s.empty()) return set;
-  return Changed(set, [&](Observation& o, size_t i) { o.command -= v * set.t_s[i]; });
+  return Changed(set, [&](Observation& o, size_t i) { o.command -= v * DriftShape(set.t_s[i], tau); });
 }
 
 MeasurementSet Unscaled(const MeasurementSet& set, double kappa) {
@@ -319,7 +325,10 @@ Problem Build(const ParameterLayout& layout, const MeasurementSet& identify, con
     if (e == "higher_order") RaiseOrder(p.layout, a.step.component);
     if (e == "z_coupling") AddPitchAndRoll(p.layout);
     if (e == "reference_anchor") p.anchor = Anchor::kFirstTile;
-    if (e == "thermal_drift") p.identify = Undrifted(p.identify, a.drift_mm_per_s), p.validate = Undrifted(p.validate, a.drift_mm_per_s);
+    if (e == "thermal_drift") {
+      p.identify = Undrifted(p.identify, a.drift_mm_per_s, a.tau_s);
+      p.validate = Undrifted(p.validate, a.drift_mm_per_s, a.tau_s);
+    }
     if (e == "scale") p.identify = Unscaled(p.identify, a.scale), p.validate = Unscaled(p.validate, a.scale);
     if (e == "outliers") dropped.insert(dropped.end(), a.flagged.begin(), a.flagged.end());
   }
@@ -432,11 +441,30 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     column_candidate("reference_anchor", "", columns);
   }
   if (!identify.t_s.empty() && !IsApplied(applied, "thermal_drift")) {
-    Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3);
-    for (size_t i = 0; i < identify.observations.size(); ++i) {
-      for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -identify.t_s[i];
+    const auto drift_columns = [&](double tau) {
+      Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3);
+      for (size_t i = 0; i < identify.observations.size(); ++i) {
+        for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -DriftShape(identify.t_s[i], tau);
+      }
+      return columns;
+    };
+    column_candidate("thermal_drift", "", drift_columns(0.0));
+    const LinearScore& linear = candidates.back().linear;
+    // A warm-up settling within the measurements: the time constant from a grid, counted as one more parameter. It
+    // competes only when it beats the linear drift (its limit for a long time constant) by an F-test of its own.
+    Candidate warm_up{{"thermal_drift", "warm-up"}, {}, {}, {}, 0.0};
+    for (double tau_min : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
+      const LinearScore score = ScoreColumns(r0, jb, drift_columns(tau_min * 60.0));
+      if (warm_up.tau_s == 0.0 || score.rss < warm_up.linear.rss) warm_up.linear = score, warm_up.tau_s = tau_min * 60.0;
     }
-    column_candidate("thermal_drift", "", columns);
+    warm_up.linear.extra += 1;
+    warm_up.linear.rank += 1;
+    const double dof = static_cast<double>(rows - warm_up.linear.rank);
+    if (dof > 0 && warm_up.linear.rss > 0 && linear.rss > warm_up.linear.rss) {
+      const double f = (linear.rss - warm_up.linear.rss) / (warm_up.linear.rss / dof);
+      const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<double>(1.0, dof), f));
+      if (p < alpha) candidates.push_back(std::move(warm_up));
+    }
   }
   if (!identify.anchors.empty() && !IsApplied(applied, "scale")) {  // a scale about the first tile needs one
     Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 1);
@@ -484,17 +512,24 @@ Applied MakeApplied(const Candidate& c, const Problem& p, const IdentificationRe
         "removes them.", a.step.size, a.step.size_u);
   } else if (effect == "thermal_drift") {
     a.drift_mm_per_s = Eigen::Vector3d(l.effect[0], l.effect[1], l.effect[2]);
+    a.tau_s = c.tau_s;
     Eigen::Index axis = 0;
     a.drift_mm_per_s.cwiseAbs().maxCoeff(&axis);
     const Eigen::Vector3d v = a.drift_mm_per_s * 6e4;  // um/min
-    a.step.component = std::string(1, "xyz"[axis]);
+    a.step.component = std::string(1, "xyz"[axis]) + (a.tau_s > 0 ? " warm-up" : "");
     a.step.size = v[axis];
     a.step.size_u = l.effect_u[axis] * 6e4;
     a.step.size_unit = "um/min";
-    a.step.explanation = fmt::format(
-        "The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, "
-        "{:.2f}, {:.2f} um/min), as a stage or column warming up would (000:7130). Removing a drift linear in t takes the "
-        "time-correlated residuals away.", a.step.size, a.step.size_u, a.step.component, v.x(), v.y(), v.z());
+    a.step.explanation =
+        a.tau_s > 0
+            ? fmt::format("The stitching-free centres drift with measurement time as a warm-up settles, rho(t) = A + B (1 - "
+                          "exp(-t/tau)) (000:5810): initial rate {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, {:.2f}, "
+                          "{:.2f} um/min), time constant about {:.1f} min, better than a drift linear in t.",
+                          a.step.size, a.step.size_u, std::string(1, "xyz"[axis]), v.x(), v.y(), v.z(), a.tau_s / 60.0)
+            : fmt::format("The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: "
+                          "{:.2f}, {:.2f}, {:.2f} um/min), as a stage or column warming up would (000:7130). Removing a "
+                          "drift linear in t takes the time-correlated residuals away.",
+                          a.step.size, a.step.size_u, a.step.component, v.x(), v.y(), v.z());
   } else if (effect == "scale") {
     a.scale = -l.effect[0];  // the column is -(s - a): its coefficient undoes the scale
     a.step.size = a.scale * 1e6;

@@ -112,7 +112,7 @@ bool FvmBatchOptions::Hides(std::string_view effect) const {
 
 void FvmBatchOptions::Check() const {
   if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0 ||
-      !(height_step_mm >= 0) || !(effect_size >= 0)) {
+      !(height_step_mm >= 0) || !(effect_size >= 0) || !(drift_tau_min >= 0)) {
     throw std::invalid_argument("simulation sizes must be non-negative");
   }
   const std::vector<std::string> names = HiddenEffectNames();
@@ -215,7 +215,8 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
     for (size_t i = 0; i < commands.size(); ++i) {
       const double t = options.seconds_per_centre * static_cast<double>(i);
       placement.ids.push_back(static_cast<int>(i) + 1);
-      placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * t);
+      const double drift_s = options.drift_tau_min > 0 ? options.drift_tau_min * 60.0 * (1.0 - std::exp(-t / (options.drift_tau_min * 60.0))) : t;
+      placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * drift_s);
       Eigen::Vector3d stitched = frame.Stitched(stage::Forward(layout, values, commands[i]));
       if (scale != 0.0) stitched.head<2>() = anchor.head<2>() + (1.0 + scale) * (stitched - anchor).head<2>();
       placement.stitched.push_back(noisy(stitched));

@@ -43,6 +43,9 @@ struct FvmBatchOptions {
   //   scale           stitched distances scaled about the first tile, a lens scale error (300 ppm)
   std::string hidden_effect;
   double effect_size = 0.0;
+  // thermal_drift: 0 drifts linearly in t; > 0 is a warm-up B (1 - exp(-t/tau)) with this time constant (min) and
+  // the same initial rate (FACTS 000:5810).
+  double drift_tau_min = 0.0;
   bool Hides(std::string_view effect) const;  // `effect` is one of hidden_effect's names
   void Check() const;                  // throws std::invalid_argument
 };

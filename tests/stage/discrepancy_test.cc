@@ -190,6 +190,29 @@ TEST(Discrepancy, FlagsOutliersWithoutSwamping) {
   EXPECT_LE(false_flags, 1) << "good centres flagged among " << outliers << " outliers in 20 batches";
 }
 
+// A warm-up (FACTS 000:5810) that settles within a placement, time constant 2 min, against a drift linear in t of
+// the same initial rate (6 um/min): each is named as what it is. The warm-up needs one parameter more and an F-test
+// of its own against the linear drift before it competes.
+TEST(Discrepancy, TellsAWarmUpFromALinearDrift) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    for (double tau_min : {0.0, 2.0}) {
+      artefacts::FvmBatchOptions options;
+      options.seed = seed;
+      options.stitched_frame = StitchedFrame::kTranslated;
+      options.hidden_effect = "thermal_drift";
+      options.effect_size = 6.0;
+      options.drift_tau_min = tau_min;
+      const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(options);
+      const Diagnosis d = Diagnose(FvmModelLayout("27"), artefacts::Observations(sim.batch, sim.batch.identify),
+                                   artefacts::Observations(sim.batch, sim.batch.validate));
+      ASSERT_TRUE(d.effect.has_value()) << "seed " << seed;
+      EXPECT_EQ(*d.effect, "thermal_drift");
+      EXPECT_EQ(d.component, tau_min > 0 ? "x warm-up" : "x") << "seed " << seed << ", tau " << tau_min << " min";
+      EXPECT_LE(d.steps.front().validation_after.mean_mm, 0.4 * d.validation_before.mean_mm) << "seed " << seed;
+    }
+  }
+}
+
 TEST(Discrepancy, ResidualAnalysisPointsAtWhatIsWrong) {
   EXPECT_THAT(DiagnoseCase({"outliers", "27"}, 1).findings, ::testing::Contains(::testing::HasSubstr("largest residual")));
   EXPECT_THAT(DiagnoseCase({"reference_anchor", "27"}, 3).findings, ::testing::Contains(::testing::HasSubstr("off on average")));
