@@ -6,7 +6,8 @@
 //   higher_order      a component needs the next polynomial order (one candidate per component: xTx, yRz, ...)
 //   z_coupling        pitch and roll (xRx, xRy, yRx, yRy) that only height changes reveal
 //   reference_anchor  each stitched measurement is anchored at the stage error of its own first tile
-//   thermal_drift     stitching-free centres drift with measurement time (needs the t column)
+//   thermal_drift     stitching-free centres drift with measurement time (needs the t column): linearly, or as a
+//                     warm-up A + B (1 - exp(-t/tau)) when that beats the linear drift by its own F-test
 //   scale             stitched distances are scaled about the first tile (lens or stitching scale)
 //   outliers          centres far outside the noise: failed sphere fits
 //   frame_rotation    each stitched measurement keeps the orientation the stage had at its first tile
