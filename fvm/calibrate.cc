@@ -46,6 +46,11 @@ Judged Judge(const stage::Calibration* calibration, const stage::MeasurementSet&
           stage::Validate(calibration, set.observations, set.anchors, frame)};
 }
 
+// The shown measurements without compensation and with the calibration: what the JSON and the report quote.
+struct BeforeAfter {
+  Judged before, after;
+};
+
 // What the first-tile figure did with each measurement's turn, for people.
 std::string TurnText(const stage::ValidationStats& s, stage::StitchedFrame frame) {
   if (s.turn == "model") return "each placement turned by the model's " + JoinNames(s.turn_coefficients);
@@ -96,12 +101,12 @@ void PrintParameters(const stage::IdentificationResult& r) {
 }
 
 ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResult& r, const stage::MeasurementSet& shown,
-                      const std::string& shown_what) {
+                      const std::string& shown_what, const BeforeAfter& judged) {
   ReportData data;
   data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, args.batch);
   const stage::StitchedFrame frame = args.settings.Frame();
-  const Judged judged_before = Judge(nullptr, shown, frame), judged_after = Judge(&r.calibration, shown, frame);
-  const stage::ValidationStats& before = judged_before.first_tile;
+  const Judged& judged_after = judged.after;
+  const stage::ValidationStats& before = judged.before.first_tile;
   const stage::ValidationStats& after = judged_after.first_tile;
   const auto frame_free = [](const stage::FrameFreeStats& s) {
     return fmt::format("{:.2f} rms / {:.2f} max um (predicted rms {:.2f})", s.rms_mm * 1e3, s.max_mm * 1e3, s.predicted_rms_mm * 1e3);
@@ -158,10 +163,14 @@ void Run(const CalibrateArgs& args) {
   const stage::ValidationStats id_before = stage::Validate(nullptr, identify.observations, identify.anchors);
   doc["identification"]["before_mean_um"] = id_before.mean_mm * 1e3;
   std::optional<stage::MeasurementSet> validate;
-  if (!batch.validate.empty()) {
-    validate = artefacts::Observations(batch, batch.validate);
-    const stage::StitchedFrame frame = args.settings.Frame();
-    doc["validation"] = ValidationJson(Judge(nullptr, *validate, frame), Judge(&result.calibration, *validate, frame), frame);
+  if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
+  // Validation placements when the batch has them, else the identification ones (report only), judged once.
+  const stage::MeasurementSet& shown = validate ? *validate : identify;
+  const stage::StitchedFrame frame = args.settings.Frame();
+  std::optional<BeforeAfter> judged;
+  if (validate || !args.report.empty()) judged = BeforeAfter{Judge(nullptr, shown, frame), Judge(&result.calibration, shown, frame)};
+  if (validate) {
+    doc["validation"] = ValidationJson(judged->before, judged->after, frame);
     doc["validation"]["placements"] = batch.validate;
     doc["validation"]["distance_error_max_um"] = {
         {"before", MaxAbs(stage::DistanceErrors(nullptr, validate->observations)) * 1e3},
@@ -169,8 +178,8 @@ void Run(const CalibrateArgs& args) {
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
-    const stage::MeasurementSet& shown = validate ? *validate : identify;
-    WriteReport(args.report, MakeReport(args, result, shown, validate ? "validation placements" : "identification placements"));
+    WriteReport(args.report,
+                MakeReport(args, result, shown, validate ? "validation placements" : "identification placements", *judged));
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));

@@ -15,6 +15,7 @@
 #include <Eigen/LU>
 
 #include "stage/linear_dependence.h"
+#include "stage/pose.h"
 
 namespace fvm::stage {
 namespace {
@@ -27,12 +28,6 @@ constexpr double kPi = std::numbers::pi;
 Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges,
                             Eigen::Vector3d* mirror);
 namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
 
 // Which station parameters are estimated: global index per coordinate, -1 when held.
 struct Layout {

@@ -15,6 +15,12 @@ Pose Pose::FromEulerXyzDegrees(const Eigen::Vector3d& translation, const Eigen::
   return Pose{translation, aa.axis() * aa.angle()};
 }
 
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
 Eigen::Matrix3d Pose::Rotation() const {
   Eigen::Matrix3d r;
   ceres::AngleAxisToRotationMatrix(rotation.data(), ceres::ColumnMajorAdapter3x3(r.data()));

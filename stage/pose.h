@@ -16,6 +16,9 @@ struct Pose {
   Eigen::Matrix3d Rotation() const;
 };
 
+// The cross-product matrix [v]x: Skew(v) w = v x w. A small rotation w moves a point at d by w x d = -Skew(d) w.
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
+
 // Coordinates in the posed frame of a point given in the parent frame: R^T (p - t). The pose may be given as
 // six scalars (translation, rotation vector) so Ceres can estimate it.
 template <typename T>

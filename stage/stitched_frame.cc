@@ -71,13 +71,12 @@ FirstTileFrame MakeFirstTileFrame(StitchedFrame frame, const ParameterLayout& la
 Eigen::Vector3d TurnDisplacement(const Eigen::Vector3d& rotation, const Eigen::Vector3d& arm) { return -rotation.cross(arm); }
 
 TurnFit FitTurn(const std::vector<Eigen::Vector3d>& residuals, const std::vector<Eigen::Vector3d>& arms) {
-  // -w x d = d x w = [d]x w: one 3 x 3 block per observation.
+  // -w x d = d x w = Skew(d) w: one 3 x 3 block per observation.
   const Eigen::Index n = static_cast<Eigen::Index>(residuals.size());
   Eigen::MatrixXd a(3 * n, 3);
   Eigen::VectorXd b(3 * n);
   for (Eigen::Index k = 0; k < n; ++k) {
-    const Eigen::Vector3d& d = arms[static_cast<size_t>(k)];
-    a.block<3, 3>(3 * k, 0) << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+    a.block<3, 3>(3 * k, 0) = Skew(arms[static_cast<size_t>(k)]);
     b.segment<3>(3 * k) = residuals[static_cast<size_t>(k)];
   }
   // Directions with less than a percent of the measurement's lever arm (a flat bar's turn about its own length,

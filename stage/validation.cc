@@ -164,7 +164,7 @@ FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector
     for (Eigen::Index i = 0; i < n; ++i) {
       const Eigen::Vector3d d = p.col(i) - centroid;
       rigid.block<3, 3>(3 * i, 0).setIdentity();
-      rigid.block<3, 3>(3 * i, 3) << 0, d.z(), -d.y(), -d.z(), 0, d.x(), d.y(), -d.x(), 0;
+      rigid.block<3, 3>(3 * i, 3) = -Skew(d);  // a small rotation w about the centroid moves d by w x d
     }
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(rigid);
     const Eigen::MatrixXd q = Eigen::MatrixXd(qr.householderQ()).leftCols(6);
