@@ -10,6 +10,9 @@
 #include "stage/io/calibration_file.h"
 #include "core/exit_codes.h"
 #include "fvm/calibration_run.h"
+#include "fvm/scan_input.h"
+#include "artefacts/scan_observations.h"
+#include "stage/calibration.h"
 #include "fvm/commands.h"
 #include "fvm/report.h"
 #include "stage/validation.h"
@@ -19,6 +22,9 @@ namespace {
 
 struct CalibrateArgs {
   std::string batch;
+  std::vector<std::string> scans;  // stitched calibration scans instead of a batch
+  double pixel_mm = 0.0, pixel_u_mm = 0.0;
+  std::string validate;            // --scan: an artefact batch whose validation placements judge the result
   std::string model = "27";
   std::string terms;
   std::string output;
@@ -100,10 +106,10 @@ void PrintParameters(const stage::IdentificationResult& r) {
   }
 }
 
-ReportData MakeReport(const CalibrateArgs& args, const stage::IdentificationResult& r, const stage::MeasurementSet& shown,
-                      const std::string& shown_what, const BeforeAfter& judged) {
+ReportData MakeReport(const CalibrateArgs& args, const std::string& source, const stage::IdentificationResult& r,
+                      const stage::MeasurementSet& shown, const std::string& shown_what, const BeforeAfter& judged) {
   ReportData data;
-  data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, args.batch);
+  data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, source);
   const stage::StitchedFrame frame = args.settings.Frame();
   const Judged& judged_after = judged.after;
   const stage::ValidationStats& before = judged.before.first_tile;
@@ -150,7 +156,42 @@ void FailIfNotConverged(const stage::IdentificationResult& result) {
   }
 }
 
+// The validation rows of the table, from the JSON that scripts get.
+void PrintValidation(const nlohmann::json& v) {
+  const auto row = [](const std::string& what, const nlohmann::json& s, const std::string& mean, bool predicted) {
+    fmt::print("  {:<34} {:>8} {:>8.2f} {:>8.2f}", what, mean, s["rms_um"].get<double>(), s["max_um"].get<double>());
+    fmt::print("{}\n", predicted ? fmt::format("   (predicted rms {:.2f})", s["predicted_rms_um"].get<double>()) : "");
+  };
+  fmt::print("  validation, {} centres; first what no choice of frame changes:\n", v["centres"].get<int>());
+  row("rigid fit per placement, before", v["before"]["rigid"], "", false);
+  row("rigid fit per placement, after", v["rigid"], "", true);
+  row(fmt::format("distances ({} pairs), before", v["distances"]["count"].get<int>()), v["before"]["distances"], "", false);
+  row("distances, after", v["distances"], "", true);
+  fmt::print("  then each placement in its first tile's frame ({}: {}):\n", v["stitched_frame"].get<std::string>(),
+             v["turn_note"].get<std::string>());
+  row("first tile, before", v["before"], fmt::format("{:.2f}", v["before"]["mean_um"].get<double>()), false);
+  row("first tile, after", v, fmt::format("{:.2f}", v["mean_um"].get<double>()), true);
+  fmt::print("  largest distance error on validation: {:.1f} um before, {:.2f} um after\n",
+             v["distance_error_max_um"]["before"].get<double>(), v["distance_error_max_um"]["after"].get<double>());
+}
+
+// The validation block of the JSON: held-out placements before and after, in the given frame.
+nlohmann::json ValidationDocument(const stage::Calibration& calibration, const stage::MeasurementSet& shown,
+                                  const BeforeAfter& judged, stage::StitchedFrame frame) {
+  nlohmann::json v = ValidationJson(judged.before, judged.after, frame);
+  v["distance_error_max_um"] = {{"before", MaxAbs(stage::DistanceErrors(nullptr, shown.observations)) * 1e3},
+                                {"after", MaxAbs(stage::DistanceErrors(&calibration, shown.observations)) * 1e3}};
+  return v;
+}
+
+void RunScans(const CalibrateArgs& args);
+
 void Run(const CalibrateArgs& args) {
+  if (args.batch.empty() == args.scans.empty()) {
+    throw CLI::ValidationError("BATCH", "give a BATCH directory, or stitched calibration scans with --scan LAYOUT (not both)");
+  }
+  if (!args.scans.empty()) return RunScans(args);
+  if (!args.validate.empty()) throw CLI::ValidationError("--validate", "is for --scan: a batch validates on its own placements");
   const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult result = IdentifyModel(args.model, args.terms, identify, args.settings);
@@ -170,16 +211,13 @@ void Run(const CalibrateArgs& args) {
   std::optional<BeforeAfter> judged;
   if (validate || !args.report.empty()) judged = BeforeAfter{Judge(nullptr, shown, frame), Judge(&result.calibration, shown, frame)};
   if (validate) {
-    doc["validation"] = ValidationJson(judged->before, judged->after, frame);
+    doc["validation"] = ValidationDocument(result.calibration, *validate, *judged, frame);
     doc["validation"]["placements"] = batch.validate;
-    doc["validation"]["distance_error_max_um"] = {
-        {"before", MaxAbs(stage::DistanceErrors(nullptr, validate->observations)) * 1e3},
-        {"after", MaxAbs(stage::DistanceErrors(&result.calibration, validate->observations)) * 1e3}};
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
-    WriteReport(args.report,
-                MakeReport(args, result, shown, validate ? "validation placements" : "identification placements", *judged));
+    WriteReport(args.report, MakeReport(args, args.batch, result, shown,
+                                        validate ? "validation placements" : "identification placements", *judged));
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
@@ -199,24 +237,154 @@ void Run(const CalibrateArgs& args) {
              id_before.max_mm * 1e3);
   fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}\n", "identification, after", result.mean_mm * 1e3, result.rms_mm * 1e3,
              result.max_mm * 1e3);
-  if (validate) {
-    const auto& v = doc["validation"];
-    const auto row = [](const std::string& what, const nlohmann::json& s, const std::string& mean, bool predicted) {
-      fmt::print("  {:<34} {:>8} {:>8.2f} {:>8.2f}", what, mean, s["rms_um"].get<double>(), s["max_um"].get<double>());
-      fmt::print("{}\n", predicted ? fmt::format("   (predicted rms {:.2f})", s["predicted_rms_um"].get<double>()) : "");
-    };
-    fmt::print("  validation, {} centres; first what no choice of frame changes:\n", v["centres"].get<int>());
-    row("rigid fit per placement, before", v["before"]["rigid"], "", false);
-    row("rigid fit per placement, after", v["rigid"], "", true);
-    row(fmt::format("distances ({} pairs), before", v["distances"]["count"].get<int>()), v["before"]["distances"], "", false);
-    row("distances, after", v["distances"], "", true);
-    fmt::print("  then each placement in its first tile's frame ({}: {}):\n", v["stitched_frame"].get<std::string>(),
-               v["turn_note"].get<std::string>());
-    row("first tile, before", v["before"], fmt::format("{:.2f}", v["before"]["mean_um"].get<double>()), false);
-    row("first tile, after", v, fmt::format("{:.2f}", v["mean_um"].get<double>()), true);
-    fmt::print("  largest distance error on validation: {:.1f} um before, {:.2f} um after\n",
-               v["distance_error_max_um"]["before"].get<double>(), v["distance_error_max_um"]["after"].get<double>());
+  if (validate) PrintValidation(doc["validation"]);
+  if (!args.output.empty()) fmt::print("\ncalibration written to {}\n", args.output);
+  if (!args.report.empty()) fmt::print("report written to {}/index.html\n", args.report);
+  FailIfNotConverged(result);
+}
+
+// The standard uncertainty (k = 1) of the xy stage error a calibration predicts, rms over an 11 x 11 grid of the
+// box the scans cover, um: the figure that compares weightings and the pixel size's share.
+double PredictedXyUm(const stage::Calibration& calibration, const std::vector<artefacts::RegisteredScan>& scans) {
+  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
+  for (const auto& scan : scans) {
+    for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
   }
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i <= 10; ++i) {
+    for (int j = 0; j <= 10; ++j) {
+      const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * i / 10.0, lo.y() + (hi.y() - lo.y()) * j / 10.0, lo.z());
+      const Eigen::Matrix3d c = stage::Correct(calibration, q).covariance;
+      sum += c(0, 0) + c(1, 1);
+      ++count;
+    }
+  }
+  return std::sqrt(sum / count) * 1e3;
+}
+
+void RunScans(const CalibrateArgs& args) {
+  if (!(args.pixel_mm > 0.0) || !std::isfinite(args.pixel_mm)) {
+    throw InputError("--scan needs --pixel-mm: the size of a camera pixel on the part (mm), e.g. 0.00275 for the 5x "
+                     "lens's 2.82 mm field on 1024 px; it sets the scale of every registered offset");
+  }
+  if (!(args.pixel_u_mm >= 0.0) || !std::isfinite(args.pixel_u_mm)) throw InputError("--pixel-u-mm: give a standard uncertainty >= 0 (mm)");
+  const std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(args.scans, args.pixel_mm);
+  const stage::MeasurementSet set = artefacts::ScanDisplacements(scans, args.pixel_mm);
+  if (set.observations.empty()) {
+    throw InputError("no pair of neighbouring tiles registered in any scan (first: " +
+                     scans.front().registration.pairs.front().rejection +
+                     "): the tiles need a texture that registers, and encoder readings of their centres");
+  }
+  stage::IdentificationResult result = IdentifyModel(args.model, args.terms, set, args.settings);
+  stage::Calibration& cal = result.calibration;
+  // Identify scaled the covariance by the whole residual, and never below the registrations' covariances; scale it
+  // by the residuals' white part instead (SplitScanResiduals), below 1 too: a pair's covariance carries a floor of
+  // 0.005 px against resampling bias, which textured tiles of a real scan beat by a factor of two or three.
+  const artefacts::ScanResidualSplit split = artefacts::SplitScanResiduals(set, result.residuals);
+  const double applied = std::max(result.weighted_rms, 1.0), white = split.white_ratio;
+  cal.covariance *= (white * white) / (applied * applied);
+  const double without_pixel_um = PredictedXyUm(cal, scans);
+  // The pixel size scales every displacement: its uncertainty moves the coefficients along the fit's sensitivity
+  // to it (linear, so one refit at p + u gives it exactly).
+  if (args.pixel_u_mm > 0.0) {
+    const stage::MeasurementSet scaled = artefacts::ScanDisplacements(scans, args.pixel_mm + args.pixel_u_mm);
+    const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, args.settings.ToOptions(scaled));
+    const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(again.calibration.values.data(), static_cast<Eigen::Index>(again.calibration.values.size())) -
+                              Eigen::Map<const Eigen::VectorXd>(cal.values.data(), static_cast<Eigen::Index>(cal.values.size()));
+    cal.covariance += g * g.transpose();
+  }
+  const double predicted_um = PredictedXyUm(cal, scans);
+  // What treating the chained positions as independent points of equal weight would have predicted.
+  const stage::MeasurementSet positions = artefacts::ScanPositions(scans, args.pixel_mm);
+  stage::IdentificationOptions chained_options = args.settings.ToOptions(positions);
+  chained_options.anchor = stage::Anchor::kFirstTile;
+  const stage::IdentificationResult chained = stage::Identify(ModelLayout(args.model, args.terms), positions.observations, chained_options);
+
+  nlohmann::json doc = stage::CalibrationToJson(result);
+  doc["stitched_frame"] = args.settings.stitched_frame;
+  doc["pixel_mm"] = args.pixel_mm;
+  doc["pixel_u_mm"] = args.pixel_u_mm;
+  int tiles = 0, pairs = 0, registered = 0;
+  for (const auto& scan : scans) {
+    nlohmann::json j = {{"name", scan.name}, {"tiles", scan.encoder_mm.size()}, {"pairs", scan.registration.pairs.size()},
+                        {"searched_again", scan.registration.pairs_searched_again}};
+    int ok = 0;
+    for (const auto& pair : scan.registration.pairs) {
+      if (pair.accepted) {
+        ++ok;
+      } else {
+        j["rejected"].push_back({{"tiles", {pair.a + 1, pair.b + 1}}, {"reason", pair.rejection}});
+      }
+    }
+    j["registered"] = ok;
+    tiles += static_cast<int>(scan.encoder_mm.size());
+    pairs += static_cast<int>(scan.registration.pairs.size());
+    registered += ok;
+    doc["scans"].push_back(j);
+  }
+  const double misfit_um = split.misfit_mm * 1e3;
+  doc["predicted_xy_u_um"] = {{"pair_weights", predicted_um},
+                              {"pair_weights_without_pixel_size", without_pixel_um},
+                              {"independent_positions", PredictedXyUm(chained.calibration, scans)},
+                              {"model_misfit_along_scans", misfit_um},
+                              {"combined", std::hypot(predicted_um, misfit_um)},
+                              {"white_residual_ratio", split.white_ratio},
+                              {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover: "
+                                       "from the coefficients' covariance (pair weights, the white part of the "
+                                       "residuals), and what the model leaves along the scans (misfit), combined"}};
+  std::optional<stage::MeasurementSet> validate;
+  std::optional<BeforeAfter> judged;
+  const stage::StitchedFrame frame = args.settings.Frame();
+  if (!args.validate.empty()) {
+    const artefacts::Batch batch = artefacts::ReadBatch(args.validate);
+    std::vector<std::string> names = batch.validate;
+    if (names.empty()) {
+      for (const auto& p : batch.placements) names.push_back(p.name);
+    }
+    validate = artefacts::Observations(batch, names);
+    judged = BeforeAfter{Judge(nullptr, *validate, frame), Judge(&cal, *validate, frame)};
+    doc["validation"] = ValidationDocument(cal, *validate, *judged, frame);
+    doc["validation"]["batch"] = args.validate;
+    doc["validation"]["placements"] = names;
+  }
+  const std::string source = fmt::format("{} scans ({})", scans.size(), JoinNames(args.scans));
+  if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
+  if (!args.report.empty()) {
+    if (!judged) throw InputError("--report with --scan needs --validate BATCH: the report shows held-out placements");
+    WriteReport(args.report, MakeReport(args, source, result, *validate, "validation placements of " + args.validate, *judged));
+  }
+  if (args.json) {
+    fmt::print("{}\n", doc.dump(2));
+    FailIfNotConverged(result);
+    return;
+  }
+  fmt::print("fvm calibrate: model {} ({} chain, eq. 1) on {}\n", cal.model, cal.layout.chain().code, source);
+  for (const auto& j : doc["scans"]) {
+    fmt::print("  {}: {} tiles, {} of {} neighbour pairs registered\n", j["name"].get<std::string>(), j["tiles"].get<int>(),
+               j["registered"].get<int>(), j["pairs"].get<int>());
+    if (j.contains("rejected")) {
+      for (const auto& r : j["rejected"]) {
+        fmt::print("    tiles {}-{} not used: {}\n", r["tiles"][0].get<int>(), r["tiles"][1].get<int>(), r["reason"].get<std::string>());
+      }
+    }
+  }
+  fmt::print("  {} tiles, {} of {} pairs registered; pixel {:.6g} mm (u {:.2g} mm); frame: the first tile of {}, {}\n", tiles,
+             registered, pairs, args.pixel_mm, args.pixel_u_mm, scans.front().name, args.settings.stitched_frame);
+  fmt::print("  solver: {} in {} iterations; condition number {:.3g}\n", result.converged ? "converged" : "NOT converged",
+             result.iterations, result.condition_number);
+  PrintParameters(result);
+  fmt::print("\n  registered displacements after the fit: rms {:.3f} um (weighted rms {:.2f}: 1 = as the registrations' own "
+             "covariances say)\n", result.rms_mm * 1e3, result.weighted_rms);
+  fmt::print("  the residuals' white part is {:.2f} x the registrations' covariance; chained along the scans they leave "
+             "{:.3f} um rms that the model cannot take\n", split.white_ratio, misfit_um);
+  fmt::print("  predicted xy stage-error uncertainty over the scanned box (k=1): {:.3f} um rms from the coefficients",
+             predicted_um);
+  if (args.pixel_u_mm > 0.0) fmt::print(" ({:.3f} um without the pixel size's)", without_pixel_um);
+  fmt::print(", {:.3f} um with the misfit\n", std::hypot(predicted_um, misfit_um));
+  fmt::print("  the same positions as independent points of equal weight: {:.3f} um (the chain's correlation ignored)\n",
+             doc["predicted_xy_u_um"]["independent_positions"].get<double>());
+  if (validate) PrintValidation(doc["validation"]);
   if (!args.output.empty()) fmt::print("\ncalibration written to {}\n", args.output);
   if (!args.report.empty()) fmt::print("report written to {}/index.html\n", args.report);
   FailIfNotConverged(result);
@@ -229,8 +397,19 @@ void RegisterCalibrate(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "calibrate", "identify the YXFZ stage model (9/15/27/42 parameters) from a batch of stitched / stitching-free pairs");
   sub->add_option("BATCH", args->batch, "batch directory: <placement>.stitched.csv + <placement>.free.csv pairs, "
-                                        "optional batch.json {\"identify\": [...], \"validate\": [...]}")
-      ->required();
+                                        "optional batch.json {\"identify\": [...], \"validate\": [...]}");
+  sub->add_option("--scan", args->scans,
+                   "instead of a batch: a stitched calibration scan of any textured part (repeat: row, column, "
+                   "diagonal; fvm tiles plan --calibration-scan): layout CSV file,row,col,x,y[,z] in scan order, x,y,z "
+                   "the encoder reading of each tile's centre (mm), tiles grey 8/16-bit images. Each pair of "
+                   "neighbours registered is a displacement the stage model must explain, turned with the stage; a "
+                   "scan cannot tell the pixel size from xTx1, yTy1 (give --pixel-mm) nor constant offsets and turns, "
+                   "and a scan at one height cannot tell pitch and roll (scan again at a second height)");
+  sub->add_option("--pixel-mm", args->pixel_mm, "--scan: the pixel size on the part (mm): the scale of every offset");
+  sub->add_option("--pixel-u-mm", args->pixel_u_mm, "--scan: its standard uncertainty (mm), propagated into the result");
+  sub->add_option("--validate", args->validate,
+                  "--scan: an artefact batch of the same stage; its validation placements (all, without batch.json) "
+                  "judge the scan calibration as they judge a batch's");
   sub->add_option("--model", args->model, "published model: 9 (eq. 15), 15 (order 0), 27 (order 1), 42 (order 2)")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
@@ -242,7 +421,9 @@ void RegisterCalibrate(CLI::App& app) {
   sub->add_flag("--json", args->json, "print the calibration JSON on stdout instead of the table");
   args->settings.AddOptions(*sub);
   sub->footer("Exit 3 when the solver did not converge (the calibration is still written).\n"
-              "Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json");
+              "Examples:\n  fvm calibrate samples/bar17 --model 27 -o stage.json\n"
+              "  fvm calibrate --scan s/row.csv --scan s/column.csv --scan s/diagonal.csv --pixel-mm 0.00275 --model 27 "
+              "-o stage.json --validate samples/bar17");
   sub->callback([args] { Run(*args); });
 }
 

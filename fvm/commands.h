@@ -52,6 +52,8 @@ void RegisterTiles(CLI::App& app);
 void RegisterStitch(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
 void RegisterSimulate(CLI::App& app);
+// fvm simulate scan -o DIR (fvm/simulate_scan.cc), under `simulate`.
+void RegisterSimulateScan(CLI::App* simulate);
 
 // fvm verify DATA.csv --chain XFYZ --order N --tool X,Y,Z [-o MACHINE.json] (fvm/verify.cc).
 void RegisterVerify(CLI::App& app);

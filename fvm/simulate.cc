@@ -53,6 +53,8 @@ void Run(SimulateBatchArgs args) {
   truth["pitch_error_um"] = args.options.pitch_error_um;
   truth["same_start"] = args.options.same_start;
   truth["height_step_mm"] = args.options.height_step_mm;
+  truth["periodic_um"] = args.options.periodic_um;
+  truth["period_mm"] = args.options.period_mm;
   truth["stitched_frame"] = args.stitched_frame;
   truth["hidden_effect"] = args.options.hidden_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.options.hidden_effect);
   truth["effect_size"] = args.options.effect_size;
@@ -505,6 +507,11 @@ void RegisterSimulate(CLI::App& app) {
                   "thermal_drift: 0 drifts linearly in t; > 0 a warm-up B (1 - exp(-t/tau)) with this time constant (min)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  sub->add_option("--periodic-um", args->options.periodic_um,
+                  "a lead screw's cyclic error along X and Y that no polynomial model takes (um; 0: none)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--period-mm", args->options.period_mm, "its period")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--height-step-mm", args->options.height_step_mm,
                   "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")
       ->capture_default_str();
@@ -518,6 +525,7 @@ void RegisterSimulate(CLI::App& app) {
   sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
   sub->callback([args] { Run(*args); });
   RegisterSimulateTracker(simulate);
+  RegisterSimulateScan(simulate);
 }
 
 }  // namespace fvm::cli

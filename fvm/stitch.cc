@@ -68,23 +68,8 @@ void RunStitch(const StitchArgs& args) {
   imaging::CheckLayoutComplete(layout);
   const std::filesystem::path dir = std::filesystem::path(args.layout).parent_path();
 
-  std::vector<imaging::TileImage> images;
   imaging::TilePixelType pixel_type = imaging::TilePixelType::kFloat;
-  for (const auto& tile : layout.tiles) {
-    const std::filesystem::path file = dir / tile.file;  // an absolute tile path replaces dir
-    try {
-      images.push_back(imaging::ReadTileImage(file, images.empty() ? &pixel_type : nullptr));
-    } catch (const InputError& e) {
-      throw InputError(fmt::format("{}:{}: tile row {} col {}: {}", layout.source, tile.line, tile.row, tile.col,
-                                   e.what()));
-    }
-    if (images.back().rows() != images.front().rows() || images.back().cols() != images.front().cols()) {
-      throw InputError(fmt::format("{}:{}: tile {} is {} x {} px but {} is {} x {}; all tiles of a layout come from "
-                                   "one camera and lens: check the file",
-                                   layout.source, tile.line, tile.file, images.back().cols(), images.back().rows(),
-                                   layout.tiles.front().file, images.front().cols(), images.front().rows()));
-    }
-  }
+  const std::vector<imaging::TileImage> images = imaging::ReadLayoutImages(layout, dir, &pixel_type);
   if (height_map && pixel_type != imaging::TilePixelType::kFloat) {
     throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
                                  "float tiles in mm (or write the mosaic as .tif)",

@@ -55,6 +55,11 @@ struct PlanArgs {
   std::string output;
   std::string free_output;
   bool json = false;
+  bool calibration_scan = false;  // paths for fvm calibrate --scan instead of a region's grid
+  std::string travel = "200x200";
+  double length_mm = imaging::CalibrationScanOptions{}.length_mm;
+  std::string heights = "-50";
+  std::string scan_dir;
 };
 
 std::vector<Feature> LoadFeatures(const PlanArgs& args) {
@@ -118,6 +123,77 @@ std::string Duration(double seconds) {
 
 std::string Bytes(double bytes) { return fmt::format("{:.2f} GB", bytes / 1e9); }
 
+// --calibration-scan: a row, a column and a diagonal over the travel (and again at further heights), each written as
+// a layout for fvm calibrate --scan, with their tiles, time and data.
+void RunCalibrationScanPlan(const PlanArgs& args, const imaging::TilePlanOptions& options) {
+  imaging::CalibrationScanOptions scan;
+  const std::string travel = args.travel.find('x') == std::string::npos ? "" : args.travel.substr(0, args.travel.find('x')) + "," + args.travel.substr(args.travel.find('x') + 1);
+  const auto wh = ParseNumbers(travel, 2, "--travel " + args.travel, "200x200 (mm; stage coordinates -W..0, -H..0)");
+  scan.travel_min_mm = {-wh[0], -wh[1]};
+  scan.travel_max_mm = {0.0, 0.0};
+  scan.length_mm = args.length_mm;
+  scan.heights_mm.clear();
+  std::stringstream list(args.heights);
+  for (std::string h; std::getline(list, h, ',');) scan.heights_mm.push_back(ParseNumbers(h, 1, "--heights", "-50,-40")[0]);
+  const std::vector<imaging::ScanPath> paths = imaging::PlanCalibrationScans(scan, options);
+  nlohmann::ordered_json out;
+  out["fov_mm"] = options.fov_mm;
+  out["overlap"] = options.overlap;
+  out["step_mm"] = options.fov_mm * (1.0 - options.overlap);
+  out["paths"] = nlohmann::ordered_json::array();
+  imaging::ScanCost total;
+  for (const imaging::ScanPath& path : paths) {
+    const imaging::ScanCost cost = imaging::EstimateScan(static_cast<int>(path.tiles.size()), options);
+    total.tiles += cost.tiles;
+    total.seconds += cost.seconds;
+    total.bytes += cost.bytes;
+    std::string layout;
+    if (!args.scan_dir.empty()) {
+      std::vector<imaging::TileLayoutEntry> entries;
+      for (const imaging::Tile& t : path.tiles) {
+        imaging::TileLayoutEntry e;
+        e.file = fmt::format("{}/tile_{:03d}.tif", path.name, t.index);
+        e.row = t.row;
+        e.col = t.col;
+        e.stage_mm = t.centre_mm;
+        e.stage_z_mm = path.z_mm;
+        entries.push_back(e);
+      }
+      layout = (std::filesystem::path(args.scan_dir) / (path.name + ".csv")).string();
+      std::filesystem::create_directories(args.scan_dir);
+      WriteFileAtomically(layout, imaging::FormatTileLayout(entries));
+    }
+    out["paths"].push_back({{"name", path.name},
+                            {"tiles", cost.tiles},
+                            {"from_mm", {path.tiles.front().centre_mm.x(), path.tiles.front().centre_mm.y(), path.z_mm}},
+                            {"to_mm", {path.tiles.back().centre_mm.x(), path.tiles.back().centre_mm.y(), path.z_mm}},
+                            {"seconds", cost.seconds},
+                            {"bytes", cost.bytes},
+                            {"layout", layout.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(layout)}});
+  }
+  out["total"] = {{"tiles", total.tiles}, {"seconds", total.seconds}, {"bytes", total.bytes}};
+  if (args.json) {
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  fmt::print("calibration scans: field {} mm, overlap {:.4g} % (step {:.4f} mm per axis), paths of {} mm\n", options.fov_mm,
+             options.overlap * 100, options.fov_mm * (1.0 - options.overlap), args.length_mm);
+  fmt::print("  {:<12} {:>6} {:>24} {:>24} {:>9} {:>9}\n", "path", "tiles", "first tile (mm)", "last tile (mm)", "time h", "GB");
+  for (const auto& p : out["paths"]) {
+    const auto point = [](const nlohmann::ordered_json& v) {
+      return fmt::format("{:.2f}, {:.2f}, {:.1f}", v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    };
+    fmt::print("  {:<12} {:>6} {:>24} {:>24} {:>9.2f} {:>9.2f}\n", p["name"].get<std::string>(), p["tiles"].get<int>(),
+               point(p["from_mm"]), point(p["to_mm"]), p["seconds"].get<double>() / 3600.0, p["bytes"].get<double>() / 1e9);
+  }
+  fmt::print("  {:<12} {:>6} {:>24} {:>24} {:>9.2f} {:>9.2f}\n", "total", total.tiles, "", "", total.seconds / 3600.0,
+             total.bytes / 1e9);
+  fmt::print("Measure each path stitched and export its tiles with the encoder reading of each tile's centre; then\n"
+             "  fvm calibrate --scan row.csv --scan column.csv --scan diagonal.csv --pixel-mm P --model 27 -o stage.json\n"
+             "A second height (--heights -50,-40: a part with two levels, or on a spacer) lets the scans tell pitch and roll.\n");
+  if (args.scan_dir.empty()) fmt::print("(give --scan-dir DIR to write the layouts)\n");
+}
+
 void RunPlan(const PlanArgs& args) {
   imaging::TilePlanOptions options;
   options.fov_mm = args.fov_mm > 0.0 ? args.fov_mm : imaging::FindLens(args.lens).fov_mm;
@@ -132,6 +208,7 @@ void RunPlan(const PlanArgs& args) {
     options.pixels_y = static_cast<int>(wh[1]);
   }
   options.Check();
+  if (args.calibration_scan) return RunCalibrationScanPlan(args, options);
   if (!args.features.empty() && !args.artefact.empty()) {
     throw InputError("give --features or --artefact, not both");
   }
@@ -490,6 +567,15 @@ void RegisterTiles(CLI::App& app) {
       ->capture_default_str();
   plan->add_option("-o,--layout", plan_args->output, "write the stitched layout CSV file,row,col,x,y");
   plan->add_option("--free-layout", plan_args->free_output, "write the stitching-free layout CSV file,row,col,x,y");
+  plan->add_flag("--calibration-scan", plan_args->calibration_scan,
+                 "plan stitched calibration scans for fvm calibrate --scan instead: a row along X, a column along Y and "
+                 "a diagonal through the travel's centre (any textured part; no artefact)");
+  plan->add_option("--travel", plan_args->travel, "--calibration-scan: the stage travel WxH (mm), coordinates -W..0, -H..0")
+      ->capture_default_str();
+  plan->add_option("--length-mm", plan_args->length_mm, "--calibration-scan: length of each path")->capture_default_str();
+  plan->add_option("--heights", plan_args->heights, "--calibration-scan: encoder z of each set of paths (mm), e.g. -50,-40")
+      ->capture_default_str();
+  plan->add_option("--scan-dir", plan_args->scan_dir, "--calibration-scan: write each path's layout (file,row,col,x,y,z) here");
   plan->add_flag("--json", plan_args->json,
                  "print one JSON document {\"fov_mm\", \"overlap\", \"step_mm\", \"region\", \"stitched\": {\"rows\", "
                  "\"cols\", \"tiles\", \"seconds\", \"bytes\"}, \"stitching_free\": {\"tiles\", \"seconds\", \"bytes\", "
@@ -500,7 +586,9 @@ void RegisterTiles(CLI::App& app) {
       "takes column after column from -X to +X, each from +Y to -Y. A stitching-free scan takes only the grid tiles "
       "that hold each feature whole.\n"
       "Example (the published 6 x 6 grid, 225 vs 49 tiles):\n  fvm tiles plan --lens 10x --artefact grid6x6 "
-      "--overlap 13");
+      "--overlap 13\n"
+      "Calibration scans over 150 mm with the 5x lens:\n  fvm tiles plan --calibration-scan --lens 5x --overlap 25 "
+      "--scan-dir scans");
   plan->callback([plan_args] { RunPlan(*plan_args); });
 
   auto synth_args = std::make_shared<SynthArgs>();

@@ -46,6 +46,12 @@ std::vector<std::pair<int, int>> MinimalRuns(double a, double b, int n, double f
   return runs;
 }
 
+std::string PathTooLongMessage(double length, double span) {
+  char text[200];
+  std::snprintf(text, sizeof text, "calibration scan: a path of %.1f mm does not fit a travel of %.1f mm; give a shorter --length-mm", length, span);
+  return text;
+}
+
 }  // namespace
 
 const std::vector<Lens>& Lenses() {
@@ -181,6 +187,47 @@ ScanCost EstimateScan(int tiles, const TilePlanOptions& options) {
   cost.seconds = tiles * options.seconds_per_tile;
   cost.bytes = static_cast<double>(tiles) * options.pixels_x * options.pixels_y * options.bytes_per_pixel;
   return cost;
+}
+
+void CalibrationScanOptions::Check() const {
+  const Eigen::Vector2d span = travel_max_mm - travel_min_mm;
+  if (!(span.minCoeff() > 0.0) || !span.allFinite()) throw InputError("calibration scan: give a travel of positive size, e.g. 200x200");
+  if (!(length_mm > 0.0) || length_mm > span.minCoeff()) {
+    throw InputError(PathTooLongMessage(length_mm, span.minCoeff()));
+  }
+  if (heights_mm.empty()) throw InputError("calibration scan: give at least one height");
+}
+
+std::vector<ScanPath> PlanCalibrationScans(const CalibrationScanOptions& scan, const TilePlanOptions& options) {
+  scan.Check();
+  options.Check();
+  const double step = options.fov_mm * (1.0 - options.overlap);
+  const Eigen::Vector2d centre = 0.5 * (scan.travel_min_mm + scan.travel_max_mm);
+  // Steps along a path of `length` at `step` per axis: the first tile's centre half a length before the centre.
+  const auto straight = [&](const std::string& name, const Eigen::Vector2d& direction, double length, double z, int kind) {
+    ScanPath path{name, {}, z};
+    const int count = 1 + static_cast<int>(std::ceil(length / step - 1e-9));
+    const Eigen::Vector2d start = centre - 0.5 * step * (count - 1) * direction;
+    for (int k = 0; k < count; ++k) {
+      Tile t;
+      t.index = k;
+      t.row = kind == 1 ? 0 : k;
+      t.col = kind == 2 ? 0 : k;
+      t.centre_mm = start + step * k * direction;
+      path.tiles.push_back(t);
+    }
+    return path;
+  };
+  std::vector<ScanPath> paths;
+  for (size_t h = 0; h < scan.heights_mm.size(); ++h) {
+    const std::string suffix = h == 0 ? "" : "-z" + std::to_string(h + 1);
+    const double z = scan.heights_mm[h];
+    paths.push_back(straight("row" + suffix, {1.0, 0.0}, scan.length_mm, z, 1));
+    paths.push_back(straight("column" + suffix, {0.0, -1.0}, scan.length_mm, z, 2));
+    // Per axis a step of `step`: the diagonal's length along each axis is length / sqrt(2).
+    paths.push_back(straight("diagonal" + suffix, {1.0, -1.0}, scan.length_mm / std::sqrt(2.0), z, 3));
+  }
+  return paths;
 }
 
 }  // namespace fvm::imaging

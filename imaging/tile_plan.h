@@ -93,6 +93,24 @@ StitchingFreePlan PlanStitchingFree(const TileGrid& grid, const std::vector<Feat
 // Throws InputError naming `what` (e.g. "--overlap") for text that is none of these, and for 0 or >= 100 %.
 double ParseOverlap(std::string_view text, std::string_view what);
 
+// Calibration scans (fvm tiles plan --calibration-scan, fvm calibrate --scan): straight paths of tiles over the
+// travel, each overlapping the one before it, measured stitched. Their registrations carry the stage error at every
+// tile. The row runs along X and the column along Y through the travel's centre, the diagonal from its upper left
+// to its lower right, each `length_mm` long, and again at every further height. A diagonal's tiles step by
+// fov (1 - overlap) along both axes: neighbours share an overlap^2 corner of the field.
+struct CalibrationScanOptions {
+  Eigen::Vector2d travel_min_mm{-200.0, -200.0}, travel_max_mm{0.0, 0.0};
+  double length_mm = 150.0;
+  std::vector<double> heights_mm{-50.0};  // the encoder z of each set of paths
+  void Check() const;                     // throws InputError for a path longer than the travel, no heights
+};
+struct ScanPath {
+  std::string name;                       // "row", "column", "diagonal"; "-z2" ... for further heights
+  std::vector<Tile> tiles;                // scan order; row/col: 0 k (row), k 0 (column), k k (diagonal)
+  double z_mm = 0.0;
+};
+std::vector<ScanPath> PlanCalibrationScans(const CalibrationScanOptions& scan, const TilePlanOptions& options);
+
 struct ScanCost {
   int tiles = 0;
   double seconds = 0.0;

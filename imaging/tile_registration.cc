@@ -121,6 +121,80 @@ std::string DisagreementText(const Eigen::Vector2d& off, const Eigen::Vector2d& 
   return text;
 }
 
+// one(k) for every k in [0, count): on OpenCV's pool, or in turn.
+void ForEach(int count, bool parallel, const std::function<void(int)>& one) {
+  const auto range_of = [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) one(k);
+  };
+  if (parallel) {
+    cv::parallel_for_(cv::Range(0, count), range_of);
+  } else {
+    range_of(cv::Range(0, count));
+  }
+}
+
+// The first pass over pairs whose tiles (a, b) are set, each in its own slot, so the result does not depend on the
+// thread count: the nominal overlap (RegisterPair), or for a thin one the widened search within `window` at once.
+void RegisterFirstPass(const std::vector<TileImage>& images, const std::vector<Eigen::Vector2d>& nominal,
+                       std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window,
+                       const RegistrationOptions& options, const std::function<void(int done, int total)>& on_pair_registered) {
+  std::atomic<int> registered{0};
+  const int total = static_cast<int>(pairs.size());
+  ForEach(total, options.parallel, [&](int k) {
+    PairRegistration& pair = pairs[static_cast<size_t>(k)];
+    const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
+    const Eigen::Vector2d nominal_px = nominal[b] - nominal[a];
+    const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
+                                  static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
+    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, window, options)
+                                               : RegisterPair(images[a], images[b], nominal_px, options);
+    pair.a = static_cast<int>(a);
+    pair.b = static_cast<int>(b);
+    if (on_pair_registered) on_pair_registered(++registered, total);
+  });
+}
+
+// The listed pairs searched again, widened, within `window` of `centre(pair)` (in parallel); `judge(first,
+// second)` may refuse the second result and says why a pair still fails. Each keeps the stage's nominal offset.
+void SearchAgain(const std::vector<TileImage>& images, std::vector<PairRegistration>& pairs, const std::vector<int>& again,
+                 const std::function<Eigen::Vector2d(const PairRegistration&)>& centre, const Eigen::Vector2d& window,
+                 const RegistrationOptions& options,
+                 const std::function<void(const PairRegistration&, PairRegistration&)>& judge) {
+  std::vector<PairRegistration> second(again.size());
+  ForEach(static_cast<int>(again.size()), options.parallel, [&](int j) {
+    const PairRegistration& first = pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
+    PairRegistration& pair = second[static_cast<size_t>(j)];
+    pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], centre(first), window, options);
+    pair.a = first.a;
+    pair.b = first.b;
+    judge(first, pair);
+  });
+  for (size_t j = 0; j < again.size(); ++j) {
+    PairRegistration& pair = pairs[static_cast<size_t>(again[j])];
+    second[j].nominal_px = pair.nominal_px;  // the stage's, as for every pair; the search window says the rest
+    pair = second[j];
+  }
+}
+
+// Rejected pairs: searched again within the first window around their nominal offsets.
+int SearchFailedAgain(const std::vector<TileImage>& images, std::vector<PairRegistration>& pairs,
+                      const Eigen::Vector2d& window, const RegistrationOptions& options) {
+  std::vector<int> again;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    if (!pairs[k].accepted) again.push_back(static_cast<int>(k));
+  }
+  SearchAgain(images, pairs, again, [](const PairRegistration& first) { return first.nominal_px; }, window, options,
+              [](const PairRegistration& first, PairRegistration& pair) {
+                if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
+              });
+  return static_cast<int>(again.size());
+}
+
+Eigen::Vector2d FirstWindow(const std::vector<TileImage>& images, const RegistrationOptions& options) {
+  return options.search_fraction *
+         Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
+}
+
 }  // namespace
 
 void SetImagingThreads(int threads) {
@@ -149,35 +223,8 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       result.pairs.push_back(pair);
     }
   }
-  // Pairs are independent: each writes only its own slot, so the result does not depend on the thread count.
-  std::atomic<int> registered{0};
-  const int total = static_cast<int>(result.pairs.size());
-  const auto run = [&](const std::function<void(int)>& one) {
-    const auto range_of = [&](const cv::Range& range) {
-      for (int k = range.start; k < range.end; ++k) one(k);
-    };
-    const cv::Range all(0, static_cast<int>(result.pairs.size()));
-    if (options.parallel) {
-      cv::parallel_for_(all, range_of);
-    } else {
-      range_of(all);
-    }
-  };
-  const Eigen::Vector2d first_window =
-      options.search_fraction *
-      Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
-  run([&](int k) {
-    PairRegistration& pair = result.pairs[static_cast<size_t>(k)];
-    const size_t a = static_cast<size_t>(pair.a), b = static_cast<size_t>(pair.b);
-    const Eigen::Vector2d nominal_px = tiles[b].nominal_px - tiles[a].nominal_px;
-    const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
-                                  static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
-    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, first_window, options)
-                                               : RegisterPair(images[a], images[b], nominal_px, options);
-    pair.a = static_cast<int>(a);
-    pair.b = static_cast<int>(b);
-    if (on_pair_registered) on_pair_registered(++registered, total);
-  });
+  const Eigen::Vector2d first_window = FirstWindow(images, options);
+  RegisterFirstPass(images, nominal, result.pairs, first_window, options, on_pair_registered);
 
   // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
   // again, widened, within a few repeatabilities of the model's offset (MIST's constrained second search). When
@@ -187,39 +234,8 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
   // correlates the same frames again, and only the first pass stands.
   const bool search_again = options.crop_to_overlap;
-  // The listed pairs searched again, widened, within `window` of `centre(pair)` (in parallel); `judge(first,
-  // second)` may refuse the second result and says why a pair still fails. Each keeps the stage's nominal offset.
-  const auto search_pairs = [&](const std::vector<int>& again,
-                                const std::function<Eigen::Vector2d(const PairRegistration&)>& centre,
-                                const Eigen::Vector2d& window,
-                                const std::function<void(const PairRegistration&, PairRegistration&)>& judge) {
-    result.pairs_searched_again += static_cast<int>(again.size());
-    std::vector<PairRegistration> second(again.size());
-    run([&](int j) {
-      if (j >= static_cast<int>(again.size())) return;
-      const PairRegistration& first = result.pairs[static_cast<size_t>(again[static_cast<size_t>(j)])];
-      PairRegistration& pair = second[static_cast<size_t>(j)];
-      pair = SearchPair(images[static_cast<size_t>(first.a)], images[static_cast<size_t>(first.b)], centre(first), window,
-                        options);
-      pair.a = first.a;
-      pair.b = first.b;
-      judge(first, pair);
-    });
-    for (size_t j = 0; j < again.size(); ++j) {
-      PairRegistration& pair = result.pairs[static_cast<size_t>(again[j])];
-      second[j].nominal_px = pair.nominal_px;  // the stage's, as for every pair; the search window says the rest
-      pair = second[j];
-    }
-  };
   if (search_again && !result.stage.Any()) {
-    std::vector<int> again;
-    for (size_t k = 0; k < result.pairs.size(); ++k) {
-      if (!result.pairs[k].accepted) again.push_back(static_cast<int>(k));
-    }
-    search_pairs(again, [](const PairRegistration& first) { return first.nominal_px; }, first_window,
-                 [](const PairRegistration& first, PairRegistration& pair) {
-                   if (!pair.accepted) pair.rejection = first.rejection + "; searched, widened: " + pair.rejection;
-                 });
+    result.pairs_searched_again += SearchFailedAgain(images, result.pairs, first_window, options);
     result.stage = EstimateStageModel(tiles, result.pairs);
   }
   if (search_again && result.stage.Any()) {
@@ -238,7 +254,8 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
       const PairRegistration& pair = result.pairs[k];
       if (!pair.accepted || disagreement(pair) > 0.0) again.push_back(static_cast<int>(k));
     }
-    search_pairs(again, predicted, tolerance, [&](const PairRegistration& first, PairRegistration& pair) {
+    result.pairs_searched_again += static_cast<int>(again.size());
+    SearchAgain(images, result.pairs, again, predicted, tolerance, options, [&](const PairRegistration& first, PairRegistration& pair) {
       if (pair.accepted && disagreement(pair) > 0.0) {
         pair.accepted = false;
         pair.rejection = "refined outside the stage model's tolerance";
@@ -259,6 +276,30 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   const Eigen::Vector2d& repeatability = model.repeatability_px;
   result.stage_sigma_px = repeatability.minCoeff() > 0.0 ? repeatability.maxCoeff() : options.stage_sigma_px;
   result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px);
+  return result;
+}
+
+}  // namespace fvm::imaging
+
+namespace fvm::imaging {
+
+ChainRegistration RegisterTileChain(const std::vector<TileImage>& images, const std::vector<Eigen::Vector2d>& nominal_px,
+                                    const RegistrationOptions& options,
+                                    const std::function<void(int done, int total)>& on_pair_registered) {
+  if (images.size() != nominal_px.size()) throw std::invalid_argument("RegisterTileChain: one image per tile");
+  if (images.size() < 2) throw std::invalid_argument("RegisterTileChain: a chain needs two tiles or more");
+  options.Check();
+  ChainRegistration result;
+  for (size_t k = 0; k + 1 < images.size(); ++k) {
+    PairRegistration pair;
+    pair.a = static_cast<int>(k);
+    pair.b = static_cast<int>(k + 1);
+    result.pairs.push_back(pair);
+  }
+  const Eigen::Vector2d first_window = FirstWindow(images, options);
+  RegisterFirstPass(images, nominal_px, result.pairs, first_window, options, on_pair_registered);
+  if (options.crop_to_overlap) result.pairs_searched_again = SearchFailedAgain(images, result.pairs, first_window, options);
+  result.positions = SolveTilePositions(nominal_px, result.pairs, options.stage_sigma_px);
   return result;
 }
 

@@ -59,6 +59,20 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
                                     const RegistrationOptions& options,
                                     const std::function<void(int done, int total)>& on_pair_registered = {});
 
+// A scan path: tiles in scan order, each overlapping the one before it (a row, a column or a diagonal of a
+// calibration scan, fvm tiles plan --calibration-scan). Each consecutive pair is registered as a grid's pairs are
+// (nominal overlap first, thin overlaps and failures searched widened within options.search_fraction); positions
+// are chained from tile 0 (SolveTilePositions with options.stage_sigma_px). A chain has no rows and columns to
+// learn a stage model from, and needs none: the nominal offsets come from the encoders, a pixel or two from true.
+struct ChainRegistration {
+  std::vector<PairRegistration> pairs;  // (k, k + 1) for k = 0 .. n - 2
+  TilePositions positions;
+  int pairs_searched_again = 0;
+};
+ChainRegistration RegisterTileChain(const std::vector<TileImage>& images, const std::vector<Eigen::Vector2d>& nominal_px,
+                                    const RegistrationOptions& options,
+                                    const std::function<void(int done, int total)>& on_pair_registered = {});
+
 // Threads of OpenCV's pool, which registration, mosaics and focus stacks run on; 0: all cores. Process-wide.
 void SetImagingThreads(int threads);
 

@@ -84,6 +84,10 @@ struct PreparedObservation {
   int anchor = -1;                  // index into the prepared anchors, or -1
   const AxisChain* chain = nullptr;  // the layout's chain with this observation's tool offset
   Eigen::Matrix3d whiten = Eigen::Matrix3d::Identity();  // L^-1 of its covariance L L^T; identity: equal weights
+  Eigen::Matrix3d colour = Eigen::Matrix3d::Identity();  // L: back from whitened residuals to millimetres
+  int components = 3;                                    // observed coordinates (Whitening)
+  std::optional<Eigen::Vector3d> from;                   // a displacement's start (Observation::from)
+  SparseTermDerivative from_derivative;
 };
 
 struct PreparedAnchor {
@@ -128,12 +132,30 @@ AnchorFrame EvaluateAnchor(const ParameterLayout& layout, const AxisChain& chain
 
 // The residual of one observation, whitened, and its Jacobians w.r.t. the free coefficients (unscaled) and the
 // pose (unscaled, when estimated). `anchor`: the stitched frame of its placement, or null (the model's P itself).
-Eigen::Vector3d ObservationResidual(const ParameterLayout& layout, const double* all, const InstrumentMap& instrument,
-                                    const PreparedObservation& o, const AnchorFrame* anchor, Eigen::Matrix3Xd* jacobian,
+Eigen::Vector3d ObservationResidual(const ParameterLayout& layout, const double* free, const double* all,
+                                    const Prepared& p, const InstrumentMap& instrument, const PreparedObservation& o,
+                                    const AnchorFrame* anchor, Eigen::Matrix3Xd* jacobian,
                                     Eigen::Matrix<double, 3, kPoseParameters>* pose_jacobian) {
   Eigen::Matrix3Xd j;
   Eigen::Vector3d part = EvaluatePoint(layout, *o.chain, all, o.command, o.derivative, jacobian ? &j : nullptr);
-  if (anchor) {
+  if (o.from) {
+    // A displacement seen in the camera's frame: T (F(b) - F(a)) with T the mean turn of its two ends. The overlap
+    // of two registered tiles lies midway between their centres, where the camera's orientation is the mean of
+    // theirs to first order.
+    Eigen::Matrix3Xd ja;
+    const Eigen::Vector3d start = EvaluatePoint(layout, *o.chain, all, *o.from, o.from_derivative, jacobian ? &ja : nullptr);
+    const Eigen::Vector3d move = part - start;
+    const Eigen::Vector3d* reference = p.frame_reference ? &*p.frame_reference : nullptr;
+    std::vector<Eigen::Matrix3d> ta_j, tb_j;
+    const Eigen::Matrix3d ta = FirstTileTurn(p.frame, layout, free, *o.from, reference, jacobian ? &ta_j : nullptr);
+    const Eigen::Matrix3d tb = FirstTileTurn(p.frame, layout, free, o.command, reference, jacobian ? &tb_j : nullptr);
+    const Eigen::Matrix3d turn = 0.5 * (ta + tb);
+    part = turn * move;
+    if (jacobian) {
+      j = turn * (j - ja);
+      for (size_t k = 0; k < ta_j.size(); ++k) j.col(static_cast<Eigen::Index>(k)) += 0.5 * (ta_j[k] + tb_j[k]) * move;
+    }
+  } else if (anchor) {
     const Eigen::Vector3d arm = part - anchor->origin;
     part = anchor->first_tile + anchor->turn * arm;
     if (jacobian) {
@@ -188,7 +210,7 @@ class BlockCost final : public ceres::CostFunction {
     Eigen::Matrix<double, 3, kPoseParameters> pose_jacobian;
     for (size_t k = 0; k < block_.size(); ++k) {
       const Eigen::Vector3d r =
-          ObservationResidual(layout_, all.data(), instrument, *block_[k], anchor ? &*anchor : nullptr,
+          ObservationResidual(layout_, free.data(), all.data(), prepared_, instrument, *block_[k], anchor ? &*anchor : nullptr,
                               want_coefficients ? &jacobian : nullptr, want_pose ? &pose_jacobian : nullptr);
       for (int c = 0; c < 3; ++c) residuals[3 * k + static_cast<size_t>(c)] = r[c];
       if (want_coefficients) {
@@ -238,13 +260,41 @@ std::string FormatValue(const ParameterLayout::Coefficient& c, double si) {
   return fmt::format("{:.3g} {}", si * unit.per_si, unit.name);
 }
 
-// L^-1 of a covariance L L^T, so that |L^-1 r|^2 is the Mahalanobis distance of r.
-Eigen::Matrix3d Whitening(const Eigen::Matrix3d& covariance, int index) {
-  const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
-  if (llt.info() != Eigen::Success || !covariance.allFinite()) {
+// L^-1 of a covariance L L^T, so that |L^-1 r|^2 is the Mahalanobis distance of r, and L. A coordinate of infinite
+// variance is not observed: its rows and columns of both stay zero, and it counts no equation.
+struct Whitened {
+  Eigen::Matrix3d whiten = Eigen::Matrix3d::Zero(), colour = Eigen::Matrix3d::Zero();
+  int components = 0;
+};
+Whitened Whitening(const Eigen::Matrix3d& covariance, int index) {
+  std::vector<int> observed;
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isinf(covariance(c, c))) observed.push_back(c);
+  }
+  const Eigen::Index k = static_cast<Eigen::Index>(observed.size());
+  Eigen::MatrixXd block(k, k);
+  for (Eigen::Index a = 0; a < k; ++a) {
+    for (Eigen::Index b = 0; b < k; ++b) block(a, b) = covariance(observed[static_cast<size_t>(a)], observed[static_cast<size_t>(b)]);
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(block);
+  bool crossed = false;  // an unobserved coordinate must not covary with an observed one
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) crossed = crossed || (a != b && std::isinf(covariance(a, a)) && covariance(a, b) != 0.0);
+  }
+  if (k == 0 || llt.info() != Eigen::Success || !block.allFinite() || crossed) {
     throw std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
   }
-  return llt.matrixL().solve(Eigen::Matrix3d::Identity());
+  const Eigen::MatrixXd l = llt.matrixL();
+  const Eigen::MatrixXd l_inverse = l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(k, k));
+  Whitened w;
+  w.components = static_cast<int>(k);
+  for (Eigen::Index a = 0; a < k; ++a) {
+    for (Eigen::Index b = 0; b < k; ++b) {
+      w.whiten(observed[static_cast<size_t>(a)], observed[static_cast<size_t>(b)]) = l_inverse(a, b);
+      w.colour(observed[static_cast<size_t>(a)], observed[static_cast<size_t>(b)]) = l(a, b);
+    }
+  }
+  return w;
 }
 
 Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& observations,
@@ -260,16 +310,25 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
   }
   if (options.anchor == Anchor::kFirstTile) {
     for (const Eigen::Vector3d& a : options.anchors) p.anchors.push_back({a, layout.TermDerivativeEntries(a)});
-    p.frame = options.frame;
-    if (!options.anchors.empty()) p.frame_reference = options.anchors.front();
   }
+  p.frame = options.frame;
+  if (!options.anchors.empty()) p.frame_reference = options.anchors.front();
   for (const Observation& o : observations) p.weighted = p.weighted || !o.covariance.isZero(0.0);
   for (size_t i = 0; i < observations.size(); ++i) {
     const Observation& o = observations[i];
     PreparedObservation po{o.command, o.measured, layout.TermDerivativeEntries(o.command), -1,
-                           &p.chains[static_cast<size_t>(o.tool)], Eigen::Matrix3d::Identity()};
-    if (options.anchor == Anchor::kFirstTile) po.anchor = o.group;
-    if (p.weighted) po.whiten = Whitening(o.covariance, static_cast<int>(i));
+                           &p.chains[static_cast<size_t>(o.tool)]};
+    if (options.anchor == Anchor::kFirstTile && !o.from) po.anchor = o.group;
+    if (o.from) {
+      po.from = o.from;
+      po.from_derivative = layout.TermDerivativeEntries(*o.from);
+    }
+    if (p.weighted) {
+      const Whitened w = Whitening(o.covariance, static_cast<int>(i));
+      po.whiten = w.whiten;
+      po.colour = w.colour;
+      po.components = w.components;
+    }
     p.observations.push_back(std::move(po));
   }
   p.has_pose = options.instrument != InstrumentPose::kNone;
@@ -302,7 +361,7 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
   for (Eigen::Index i = 0; i < m; ++i) {
     const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
     residual->segment<3>(3 * i) = ObservationResidual(
-        layout, all.data(), instrument, o, o.anchor >= 0 ? &anchors[static_cast<size_t>(o.anchor)] : nullptr,
+        layout, free.data(), all.data(), p, instrument, o, o.anchor >= 0 ? &anchors[static_cast<size_t>(o.anchor)] : nullptr,
         jacobian ? &j : nullptr, jacobian && p.estimate_pose ? &pose_j : nullptr);
     if (!jacobian) continue;
     jacobian->block(3 * i, 0, 3, n) = j;
@@ -373,10 +432,14 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   const int m = static_cast<int>(observations.size());
   const bool estimate_pose = options.instrument == InstrumentPose::kEstimated;
   const int pose_count = estimate_pose ? kPoseParameters : 0;
-  if (3 * m < input_layout.NumFree() + pose_count) {
+  int equations = 0;  // observed coordinates: three a point, fewer where a covariance leaves one unobserved
+  for (const Observation& o : observations) {
+    for (int c = 0; c < 3; ++c) equations += std::isinf(o.covariance(c, c)) ? 0 : 1;
+  }
+  if (equations < input_layout.NumFree() + pose_count) {
     throw std::invalid_argument(fmt::format(
         "{} points give {} equations, fewer than the {} coefficients of the model{}: measure more points or choose a "
-        "smaller model", m, 3 * m, input_layout.NumFree(), estimate_pose ? " and the 6 of the instrument pose" : ""));
+        "smaller model", m, equations, input_layout.NumFree(), estimate_pose ? " and the 6 of the instrument pose" : ""));
   }
   if (options.instrument != InstrumentPose::kNone && input_layout.chain().instrument) {
     throw std::invalid_argument("the chain already carries an instrument pose: give it as the identification's pose instead");
@@ -442,7 +505,9 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       fixed[static_cast<size_t>(d.column)] = true;
       std::string why;
       if (d.on.empty()) {
-        why = options.anchor != Anchor::kFirstTile ? "no effect on these data"
+        const bool displacements = std::all_of(observations.begin(), observations.end(), [](const Observation& o) { return o.from.has_value(); });
+        why = displacements ? "no effect on these data: displacements between tiles do not see a constant offset"
+              : options.anchor != Anchor::kFirstTile ? "no effect on these data"
               : options.frame == StitchedFrame::kRotated
                   ? "no effect on these data: every measurement is seen from its own first tile, offset and turned "
                     "with the stage there, which cancels it"
@@ -483,7 +548,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(nk);
       start = -ldlt.solve(gk);  // the linearised least-squares solution: where LM starts
       const double rss = std::max(0.0, r0_squared - gk.dot(ldlt.solve(gk)));
-      const double dof = std::max(1.0, 3.0 * m - static_cast<double>(k));
+      const double dof = std::max(1.0, static_cast<double>(equations - k));
       const double sigma = variance_factor(rss, dof);
       const Eigen::MatrixXd covariance = sigma * sigma * ldlt.solve(Eigen::MatrixXd::Identity(k, k));
       // Of the coefficients the data cannot determine, fix the one we would keep last (KeepingOrder): when
@@ -598,14 +663,13 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   Linearise(layout, values, pose6.data(), prepared, &whitened, nullptr);
   for (int i = 0; i < m; ++i) {
     const PreparedObservation& o = prepared.observations[static_cast<size_t>(i)];
-    result.residuals.push_back(prepared.weighted ? Eigen::Vector3d(o.whiten.triangularView<Eigen::Lower>().solve(whitened.segment<3>(3 * i)))
-                                                 : Eigen::Vector3d(whitened.segment<3>(3 * i)));
+    result.residuals.push_back(o.colour * whitened.segment<3>(3 * i));  // unobserved coordinates: 0
   }
   const ResidualSummary summary = Summarize(result.residuals);
   result.mean_mm = summary.mean_mm;
   result.rms_mm = summary.rms_mm;
   result.max_mm = summary.max_mm;
-  const double dof = std::max(1.0, 3.0 * m - n - pose_count);
+  const double dof = std::max(1.0, static_cast<double>(equations - n - pose_count));
   double plain_squared = 0.0;
   for (const Eigen::Vector3d& r : result.residuals) plain_squared += r.squaredNorm();
   result.calibration.sigma_mm = std::max(std::sqrt(plain_squared / dof), options.noise_floor_mm);

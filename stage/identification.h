@@ -13,6 +13,7 @@
 // reported with the reason, so every model order converges to the best fit its identifiable part allows.
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,15 @@ struct Observation {
   int group = 0;                                       // which measurement (placement) it belongs to
   // Covariance of `measured`, mm^2. All zero (the default) for every observation: equal weights. Otherwise every
   // observation needs a positive-definite one and the fit minimises the Mahalanobis distances.
+  // A component of infinite variance (with no covariance to the others) is not observed at all: a grey tile shows
+  // no height, so a registered pair of grey tiles measures x and y only.
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   int tool = 0;  // which tool offset (IdentificationOptions::tool_offsets) it was measured with
+  // A displacement instead of a point: a registered pair of neighbouring tiles of a stitched scan. `measured` is
+  // how far the instrument saw the part move from stage position `from` to `command`, in its camera's frame; the
+  // model predicts T (F(command) - F(from)) with T the mean of the two positions' turns relative to the frame
+  // reference (stitched_frame.h; identity in the translated frame). It needs no anchor: a displacement has none.
+  std::optional<Eigen::Vector3d> from;
 };
 
 // Observations with what identification, validation and diagnosis need to know about them.
@@ -66,9 +74,11 @@ struct IdentificationOptions {
   // Tool offsets (mm, last tool axis' frame) that observations refer to by `tool`; empty: the chain's own. With
   // two or more, the rank analysis sees the lever arms they add.
   std::vector<Eigen::Vector3d> tool_offsets;
-  std::vector<Eigen::Vector3d> anchors;     // kFirstTile: first-tile stage coordinates of each group
+  std::vector<Eigen::Vector3d> anchors;     // kFirstTile: first-tile stage coordinates of each group; the first
+                                            // is the frame reference of displacements in any anchoring
   // kFirstTile: whether each measurement's stitched frame turns with the stage at its first tile, relative to the
   // first group's (stitched_frame.h). Measurements that share a start share the turn, which the model absorbs.
+  // Displacement observations (Observation::from) turn the same way, relative to the first anchor.
   StitchedFrame frame = StitchedFrame::kTranslated;
   std::string loss = "none";                // "none", "huber" or "cauchy" on each point's Euclidean error
   double loss_scale_mm = 0.005;             // where the robust loss starts to bend

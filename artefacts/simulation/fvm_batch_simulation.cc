@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "artefacts/geometry/artefact.h"
+#include "artefacts/simulation/stage_truth.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/identification.h"
 #include "stage/inverse_model.h"
@@ -111,6 +112,7 @@ bool FvmBatchOptions::Hides(std::string_view effect) const {
 }
 
 void FvmBatchOptions::Check() const {
+  if (!(periodic_um >= 0) || !(period_mm > 0)) throw std::invalid_argument("the periodic error must be >= 0 um over a period > 0 mm");
   if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0 ||
       !(height_step_mm >= 0) || !(effect_size >= 0) || !(drift_tau_min >= 0)) {
     throw std::invalid_argument("simulation sizes must be non-negative");
@@ -173,6 +175,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   }
   const ParameterLayout& layout = out.truth.layout;
   const std::vector<double>& values = out.truth.values;
+  const StageTruth stage{layout, values, options.periodic_um, options.period_mm};
 
   // The uncalibrated bar: one set of pitch deviations for the whole batch (it is one physical artefact).
   std::normal_distribution<double> pitch(0.0, options.pitch_error_um * 1e-3);
@@ -206,9 +209,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
       const Eigen::Vector3d& b = bar[i];
       const Eigen::Vector3d truth(pose.start.x() + c * b.x() - s * b.y(), pose.start.y() + s * b.x() + c * b.y(),
                                   -50.0 + b.z() + (tilt_along + rise_per_mm) * b.x());
-      const stage::InverseResult command = stage::Inverse(layout, values.data(), truth);
-      if (!command.converged) throw std::runtime_error("simulation: the stage model could not be inverted");
-      commands.push_back(command.command);
+      commands.push_back(stage.Inverse(truth));
     }
     const Eigen::Vector3d anchor = stage::FirstTile(commands);
     const stage::FirstTileFrame frame = stage::MakeFirstTileFrame(options.stitched_frame, layout, values.data(), anchor, nullptr);
@@ -217,7 +218,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
       placement.ids.push_back(static_cast<int>(i) + 1);
       const double drift_s = options.drift_tau_min > 0 ? options.drift_tau_min * 60.0 * (1.0 - std::exp(-t / (options.drift_tau_min * 60.0))) : t;
       placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * drift_s);
-      Eigen::Vector3d stitched = frame.Stitched(stage::Forward(layout, values, commands[i]));
+      Eigen::Vector3d stitched = frame.Stitched(stage.Forward(commands[i]));
       if (scale != 0.0) stitched.head<2>() = anchor.head<2>() + (1.0 + scale) * (stitched - anchor).head<2>();
       placement.stitched.push_back(noisy(stitched));
       placement.t_s.push_back(t);

@@ -27,6 +27,8 @@ struct FvmBatchOptions {
   bool same_start = true;              // identification placements share their first calotte's spot
   double pitch_error_um = 5.0;         // the bar is uncalibrated: its calottes deviate from 10 mm pitch
   double seconds_per_centre = 20.0;    // measurement time per calotte (the t column)
+  // A lead screw's cyclic error along X and Y that no polynomial model takes (stage_truth.h); 0: none.
+  double periodic_um = 0.0, period_mm = 25.0;
   double height_step_mm = 0.0;         // the bar lies on a wedge: it rises by -step, 0, +step over its length, in turn
   // Rotated by default: the instrument registers tiles by translation only, so its mosaic keeps the orientation of
   // the first tile, turned with the stage there. Translated leaves the turn out (the convention before).

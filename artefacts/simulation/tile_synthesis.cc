@@ -1,5 +1,6 @@
 #include "artefacts/simulation/tile_synthesis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -11,7 +12,7 @@ void TileCameraOptions::Check() const {
     throw std::invalid_argument("tiles: components >= 1, max frequency in (0, 0.5]");
   }
   if (!(wave_spread_deg >= 0.0 && wave_spread_deg <= 360.0)) throw std::invalid_argument("tiles: spread in [0, 360]");
-  if (!(vignetting >= 0.0 && vignetting < 1.0) || !(noise >= 0.0) || !(contrast >= 0.0)) {
+  if (!(vignetting >= 0.0 && vignetting < 1.0) || !(noise >= 0.0) || !(contrast >= 0.0) || !(electrons_per_count >= 0.0)) {
     throw std::invalid_argument("tiles: vignetting in [0, 1), noise and contrast >= 0");
   }
 }
@@ -40,21 +41,29 @@ TileScene::TileScene(const TileCameraOptions& options, std::mt19937_64& random) 
 
 imaging::TileImage TileScene::Photograph(const Eigen::Vector2d& top_left_px, int width, int height,
                                          std::mt19937_64& random) const {
-  // sin(a + b) = sin a cos b + cos a sin b: each wave is a rank-2 outer product of a column and a row factor,
-  // so a tile costs two multiply-adds per pixel and wave, and sin/cos only per row and column.
-  // Row-major so that each row update below is one contiguous, vectorised pass.
+  return Photograph(Eigen::Matrix2d::Identity(), top_left_px, width, height, random);
+}
+
+imaging::TileImage TileScene::Photograph(const Eigen::Matrix2d& axes, const Eigen::Vector2d& origin_px, int width,
+                                         int height, std::mt19937_64& random) const {
+  // A wave's phase at pixel (x, y) is a x + b y + c under an affine map, and sin(a x + (b y + c)) = sin(a x)
+  // cos(b y + c) + cos(a x) sin(b y + c): each wave is a rank-2 outer product of a column and a row factor, so a
+  // tile costs two multiply-adds per pixel and wave, and sin/cos only per row and column. Row-major so that each
+  // row update below is one contiguous, vectorised pass.
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   RowMajor texture = RowMajor::Zero(height, width);
   Eigen::VectorXd sy(height), cy(height);
   Eigen::RowVectorXd sx(width), cx(width);
   for (const Wave& w : waves_) {
+    const Eigen::Vector2d f = 2.0 * std::numbers::pi * Eigen::Vector2d(w.fx, w.fy);
+    const double along_x = f.dot(axes.col(0)), along_y = f.dot(axes.col(1)), offset = f.dot(origin_px) + w.phase;
     for (int y = 0; y < height; ++y) {
-      const double b = 2.0 * std::numbers::pi * w.fy * (top_left_px.y() + y) + w.phase;
+      const double b = along_y * y + offset;
       sy(y) = std::sin(b);
       cy(y) = std::cos(b);
     }
     for (int x = 0; x < width; ++x) {
-      const double a = 2.0 * std::numbers::pi * w.fx * (top_left_px.x() + x);
+      const double a = along_x * x;
       sx(x) = std::sin(a);
       cx(x) = std::cos(a);
     }
@@ -66,8 +75,15 @@ imaging::TileImage TileScene::Photograph(const Eigen::Vector2d& top_left_px, int
     for (int x = 0; x < width; ++x) {
       const double u = (x + 0.5) / width - 0.5, v = (y + 0.5) / height - 0.5;
       const double gain = 1.0 - options_.vignetting * 2.0 * (u * u + v * v);  // 2 (u^2 + v^2) = 1 at corners
-      image(y, x) = static_cast<float>(gain * (options_.level + texture(y, x)) +
-                                       options_.noise * options_.contrast * normal(random));
+      double t = texture(y, x);
+      if (options_.blobs) {
+        const double crest = std::max(0.0, t / options_.contrast - 1.5);
+        t = 4.0 * options_.contrast * crest * crest;
+      }
+      const double counts = gain * (options_.level + t);
+      double sigma = options_.noise * options_.contrast;
+      if (options_.electrons_per_count > 0.0) sigma = std::hypot(sigma, std::sqrt(std::max(counts, 0.0) / options_.electrons_per_count));
+      image(y, x) = static_cast<float>(counts + sigma * normal(random));
     }
   }
   return image;

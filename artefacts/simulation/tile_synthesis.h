@@ -27,6 +27,12 @@ struct TileCameraOptions {
   double level = 30000.0, contrast = 6000.0;
   double vignetting = 0.3;  // the gain falls by this fraction from the tile's centre to its corners
   double noise = 0.03;      // sensor noise, a fraction of `contrast`
+  // Shot noise: a count is this many photo-electrons, so a pixel of c counts scatters by sqrt(c / it) counts on
+  // top of `noise`; 0 leaves it out.
+  double electrons_per_count = 0.0;
+  // Blobs instead of a texture that fills the field: only the crests of the sum of waves above 1.5 of its
+  // standard deviation show, as bright spots of `contrast` scale on a dark `level` (a sparse sample).
+  bool blobs = false;
   void Check() const;       // throws std::invalid_argument
 };
 
@@ -39,6 +45,10 @@ class TileScene {
   TileScene(const TileCameraOptions& options, std::mt19937_64& random);
   // A width x height tile whose pixel (0, 0) samples the texture at top_left_px; noise drawn from `random`.
   imaging::TileImage Photograph(const Eigen::Vector2d& top_left_px, int width, int height,
+                                std::mt19937_64& random) const;
+  // The same with the camera turned or scaled against the scene: pixel (x, y) samples the texture at
+  // origin_px + axes (x, y). A sum of waves stays separable in x and y under any affine map, so this costs the same.
+  imaging::TileImage Photograph(const Eigen::Matrix2d& axes, const Eigen::Vector2d& origin_px, int width, int height,
                                 std::mt19937_64& random) const;
 
  private:

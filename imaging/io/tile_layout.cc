@@ -12,14 +12,17 @@ namespace fvm::imaging {
 
 TileLayout ReadTileLayout(const std::filesystem::path& path) {
   CsvOptions options;
-  options.expected_header = "file,row,col[,x,y]";
+  options.expected_header = "file,row,col[,x,y[,z]]";
   options.max_rows = static_cast<std::size_t>(kMaxLayoutTiles);
   const CsvTable table = ReadCsv(path, options);
   const int file = table.Require("file"), row = table.Require("row"), col = table.Require("col");
-  const int x = table.Optional("x"), y = table.Optional("y");
+  const int x = table.Optional("x"), y = table.Optional("y"), z = table.Optional("z");
   if ((x < 0) != (y < 0)) {
     throw InputError(table.name() + ":" + std::to_string(table.header_line()) +
                      ": the header has only one of x, y; give both or neither");
+  }
+  if (z >= 0 && x < 0) {
+    throw InputError(table.name() + ":" + std::to_string(table.header_line()) + ": the header has z without x, y; give all three");
   }
   TileLayout layout;
   layout.source = table.name();
@@ -32,6 +35,7 @@ TileLayout ReadTileLayout(const std::filesystem::path& path) {
     entry.row = static_cast<int>(table.Int(record, row, 0, kMaxTilesPerAxis - 1));
     entry.col = static_cast<int>(table.Int(record, col, 0, kMaxTilesPerAxis - 1));
     if (x >= 0) entry.stage_mm = Eigen::Vector2d(table.Double(record, x), table.Double(record, y));
+    if (z >= 0) entry.stage_z_mm = table.Double(record, z);
     const auto [it, fresh] = seen.emplace(std::make_pair(entry.row, entry.col), record.line);
     if (!fresh) {
       table.Fail(record, "tile row " + std::to_string(entry.row) + " col " + std::to_string(entry.col) +
@@ -80,15 +84,38 @@ void CheckLayoutComplete(const TileLayout& layout) {
   }
 }
 
+std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir, TilePixelType* type) {
+  std::vector<TileImage> images;
+  for (const auto& tile : layout.tiles) {
+    const std::string where = layout.source + ":" + std::to_string(tile.line) + ": tile row " + std::to_string(tile.row) +
+                              " col " + std::to_string(tile.col) + ": ";
+    try {
+      images.push_back(ReadTileImage(dir / tile.file, images.empty() ? type : nullptr));
+    } catch (const InputError& e) {
+      throw InputError(where + e.what());
+    }
+    const TileImage& first = images.front();
+    if (images.back().rows() != first.rows() || images.back().cols() != first.cols()) {
+      throw InputError(where + tile.file + " is " + std::to_string(images.back().cols()) + " x " +
+                       std::to_string(images.back().rows()) + " px but " + layout.tiles.front().file + " is " +
+                       std::to_string(first.cols()) + " x " + std::to_string(first.rows()) +
+                       "; all tiles of a layout come from one camera and lens: check the file");
+    }
+  }
+  return images;
+}
+
 std::string FormatTileLayout(const std::vector<TileLayoutEntry>& tiles) {
   const bool with_stage = std::all_of(tiles.begin(), tiles.end(), [](const auto& t) { return t.stage_mm.has_value(); });
-  std::string out = with_stage ? "file,row,col,x,y\n" : "file,row,col\n";
+  const bool with_z = with_stage && std::all_of(tiles.begin(), tiles.end(), [](const auto& t) { return t.stage_z_mm.has_value(); });
+  std::string out = with_z ? "file,row,col,x,y,z\n" : with_stage ? "file,row,col,x,y\n" : "file,row,col\n";
   for (const auto& tile : tiles) {
     std::vector<std::string> fields = {tile.file, std::to_string(tile.row), std::to_string(tile.col)};
     if (with_stage) {
       fields.push_back(FormatFixed(tile.stage_mm->x(), 6));
       fields.push_back(FormatFixed(tile.stage_mm->y(), 6));
     }
+    if (with_z) fields.push_back(FormatFixed(*tile.stage_z_mm, 6));
     out += CsvLine(fields);
   }
   return out;

@@ -1,5 +1,5 @@
 #pragma once
-// Tile layout files (ARCHITECTURE.md section 3): CSV `file,row,col[,x,y]`, '#' comment lines allowed; file names
+// Tile layout files (ARCHITECTURE.md section 3): CSV `file,row,col[,x,y[,z]]`, '#' comment lines allowed; file names
 // relative to the layout's directory; row 0 is the highest Y and column 0 the lowest X (tile_plan.h); x, y the
 // nominal stage position of the tile's centre in mm, optional. `fvm tiles plan` writes it, `fvm stitch` reads it.
 
@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 
@@ -22,6 +24,7 @@ struct TileLayoutEntry {
   int row = 0;
   int col = 0;
   std::optional<Eigen::Vector2d> stage_mm;  // tile centre
+  std::optional<double> stage_z_mm;         // the encoder's z there (calibration scans), optional
   int line = 0;                             // line of the layout file, for messages
 };
 
@@ -33,12 +36,18 @@ struct TileLayout {
 
 // Throws InputError "FILE:LINE: problem; what to do" on a missing file, a header without file,row,col, a short or
 // non-numeric row, an index outside 0 .. kMaxTilesPerAxis - 1, a grid of more than kMaxLayoutTiles, x without y,
-// a (row, col) given twice, or no tiles. Columns other than file,row,col,x,y are ignored.
+// z without x and y, a (row, col) given twice, or no tiles. Columns other than file,row,col,x,y,z are ignored.
 TileLayout ReadTileLayout(const std::filesystem::path& path);
 
 // Throws InputError naming the first missing (row, col) when the tiles do not fill the rows x cols rectangle:
 // registration needs every neighbour it is told about; and when the grid or a tile is outside the bounds above.
 void CheckLayoutComplete(const TileLayout& layout);
+
+// The tiles' images in layout order, file names relative to `dir` (an absolute name replaces it); `type`, when
+// given, receives the first tile's pixel type. Throws InputError "LAYOUT:LINE: tile row R col C: ..." when one
+// cannot be read, or is not the size of the first (one camera and lens make every tile of a layout).
+std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir,
+                                        TilePixelType* type = nullptr);
 
 // The CSV text, 6 decimals of mm for x, y; file names quoted when they hold a comma or a quote.
 std::string FormatTileLayout(const std::vector<TileLayoutEntry>& tiles);

@@ -1,0 +1,110 @@
+#include "artefacts/scan_observations.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+
+namespace fvm::artefacts {
+namespace {
+
+// Pixel frame (x right, y down) to stage millimetres (x right, y up).
+Eigen::Vector3d Millimetres(const Eigen::Vector2d& px, double pixel_mm) { return {px.x() * pixel_mm, -px.y() * pixel_mm, 0.0}; }
+
+constexpr double kUnobserved = std::numeric_limits<double>::infinity();
+
+void AddScan(stage::MeasurementSet& set, const RegisteredScan& scan) {
+  set.groups.push_back(scan.name);
+  set.anchors.push_back(scan.encoder_mm.front());
+}
+
+}  // namespace
+
+stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm) {
+  stage::MeasurementSet set;
+  for (size_t s = 0; s < scans.size(); ++s) {
+    const RegisteredScan& scan = scans[s];
+    AddScan(set, scan);
+    for (const imaging::PairRegistration& pair : scan.registration.pairs) {
+      if (!pair.accepted) continue;
+      stage::Observation o;
+      o.from = scan.encoder_mm[static_cast<size_t>(pair.a)];
+      o.command = scan.encoder_mm[static_cast<size_t>(pair.b)];
+      o.measured = Millimetres(pair.offset_px, pixel_mm);
+      o.group = static_cast<int>(s);
+      // The offset's covariance in px^2 is the information's inverse; flipping y flips the sign of the xy term.
+      const Eigen::Matrix2d px2 = pair.information.inverse();
+      o.covariance << px2(0, 0), -px2(0, 1), 0.0, -px2(1, 0), px2(1, 1), 0.0, 0.0, 0.0, kUnobserved;
+      o.covariance.topLeftCorner<2, 2>() *= pixel_mm * pixel_mm;
+      set.observations.push_back(o);
+      set.labels.push_back(scan.name + ":" + std::to_string(pair.a + 1) + "-" + std::to_string(pair.b + 1));
+    }
+  }
+  return set;
+}
+
+stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, double pixel_mm) {
+  stage::MeasurementSet set;
+  for (size_t s = 0; s < scans.size(); ++s) {
+    const RegisteredScan& scan = scans[s];
+    AddScan(set, scan);
+    const imaging::TilePositions& p = scan.registration.positions;
+    for (size_t k = 0; k < scan.encoder_mm.size(); ++k) {
+      if (!p.registered[k] || p.anchor[k] != 0) continue;  // only what chains from the first tile
+      stage::Observation o;
+      o.command = scan.encoder_mm[k];
+      o.measured = scan.encoder_mm.front() + Millimetres(p.positions_px[k] - p.positions_px.front(), pixel_mm);
+      o.measured.z() = o.command.z();
+      o.group = static_cast<int>(s);
+      // Equal weights, heights unobserved: a variance far below the scatter, so that the fit's variance factor is
+      // the residuals' own (Identify never takes it below 1).
+      o.covariance = Eigen::Vector3d(1e-12, 1e-12, kUnobserved).asDiagonal();
+      set.observations.push_back(o);
+      set.labels.push_back(scan.name + ":" + std::to_string(k + 1));
+    }
+  }
+  return set;
+}
+
+ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
+  ScanResidualSplit out;
+  double white = 0.0, misfit = 0.0;
+  int differences = 0, points = 0;
+  std::vector<Eigen::Vector2d> chained;  // positions of the current run of consecutive pairs
+  const auto close_run = [&] {
+    if (chained.size() < 2) return chained.clear();
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& p : chained) mean += p;
+    mean /= static_cast<double>(chained.size());
+    for (const Eigen::Vector2d& p : chained) misfit += (p - mean).squaredNorm();
+    points += static_cast<int>(chained.size());
+    chained.clear();
+  };
+  // Whitened residuals of the current run: their second differences see white noise (variance 6 per coordinate)
+  // and hardly a smooth misfit (a cycle of n pairs shrinks by (2 pi / n)^2).
+  std::vector<Eigen::Vector2d> run;
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const stage::Observation& o = set.observations[i];
+    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
+    if (!continues) {
+      close_run();
+      chained.push_back(Eigen::Vector2d::Zero());
+      run.clear();
+    }
+    const Eigen::Vector2d r = residuals[i].head<2>();
+    chained.push_back(chained.back() + r);
+    const Eigen::Matrix2d l = o.covariance.topLeftCorner<2, 2>().llt().matrixL();
+    const Eigen::Vector2d w = l.triangularView<Eigen::Lower>().solve(r);
+    run.push_back(w);
+    if (run.size() >= 3) {
+      white += (run[run.size() - 1] - 2.0 * run[run.size() - 2] + run[run.size() - 3]).squaredNorm();
+      differences += 2;
+    }
+  }
+  close_run();
+  out.white_ratio = differences > 0 ? std::sqrt(white / (6.0 * differences)) : 0.0;
+  out.misfit_mm = points > 0 ? std::sqrt(misfit / points) : 0.0;
+  return out;
+}
+
+}  // namespace fvm::artefacts

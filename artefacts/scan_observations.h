@@ -1,0 +1,48 @@
+#pragma once
+// The registrations of stitched calibration scans as observations of the stage (issue 21): the same estimator as
+// an artefact batch's pairs, with a tile where a batch has a calotte. A stitched scan is the chain of registrations
+// from its first tile; its stitching-free coordinates are the encoder readings.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "imaging/tile_registration.h"
+#include "stage/identification.h"
+
+namespace fvm::artefacts {
+
+struct RegisteredScan {
+  std::string name;
+  std::vector<Eigen::Vector3d> encoder_mm;  // tile centres, scan order
+  imaging::ChainRegistration registration;
+};
+
+// One displacement observation per accepted pair of neighbours (Observation::from = the earlier tile's encoder
+// reading, command = the later one's): measured (o_x p, -o_y p) from the registered offset o (px, y down) and the
+// pixel size p, weighted by the pair's own information (px^-2, so p^2 times its inverse, y flipped). The
+// registrations of a chain are independent pair by pair, where the positions chained from them are not. Heights are
+// not observed (grey tiles). One group per scan, anchored at its first tile: the first scan's is the frame reference.
+stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm);
+
+// The same registrations as the chained positions a stitched export holds, e_0 + p (position_k - position_0), each
+// taken as an independent point of equal weight: what fitting the scan like an artefact batch would do, without the
+// correlation along the chain. Only to show what the correlation changes.
+stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, double pixel_mm);
+
+// What a fit to ScanDisplacements leaves, told apart by how it behaves along each chain. Registration noise is
+// independent pair to pair; what the model cannot take (a lead screw's cycle, a higher order) changes smoothly from
+// pair to pair and does not random-walk when the displacements are chained. Scaling the coefficients' covariance by
+// all of the residual, as a fit to independent points does, would treat the smooth part as noise that accumulates
+// along 70 tiles, and claim ten times the error the calibration has.
+struct ScanResidualSplit {
+  // The white part against the registrations' own covariances, from the second differences of consecutive
+  // whitened residuals (1: as the registrations say). What scales the covariance.
+  double white_ratio = 0.0;
+  // The smooth part: the residuals chained into positions along each scan, rms about each scan's mean, per point
+  // (xy, mm). What a prediction between the scans should add to the covariance's share.
+  double misfit_mm = 0.0;
+};
+ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals);
+
+}  // namespace fvm::artefacts

@@ -1,0 +1,68 @@
+#include "artefacts/simulation/scan_simulation.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "stage/stitched_frame.h"
+
+namespace fvm::artefacts {
+
+TileCameraOptions ScanTexture(const std::string& name) {
+  TileCameraOptions camera;
+  camera.components = 64;
+  camera.max_frequency = 0.25;
+  camera.level = 20000.0;
+  camera.contrast = 5000.0;
+  camera.vignetting = 0.2;
+  camera.noise = 0.002;               // read noise
+  camera.electrons_per_count = 4.0;   // shot noise: about 70 counts at the mean level
+  if (name == "ground") return camera;
+  if (name == "milled") {
+    camera.wave_angle_deg = 80.0;     // marks nearly along X: the waves' crests run across them
+    camera.wave_spread_deg = 20.0;
+    return camera;
+  }
+  if (name == "blobs") {
+    camera.blobs = true;
+    camera.level = 2000.0;
+    return camera;
+  }
+  throw std::invalid_argument("unknown texture '" + name + "': use ground, milled or blobs");
+}
+
+void ScanSimulationOptions::Check() const {
+  if (tile_px < 16) throw std::invalid_argument("scan simulation: tiles of at least 16 px");
+  if (!(pixel_mm > 0.0)) throw std::invalid_argument("scan simulation: the pixel size must be positive");
+  camera.Check();
+}
+
+std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vector<imaging::ScanPath>& paths,
+                                         const ScanSimulationOptions& options) {
+  options.Check();
+  std::mt19937_64 random(options.seed);
+  const TileScene scene(options.camera, random);  // one part under every path
+  const double p = options.pixel_mm, half = 0.5 * options.tile_px;
+  std::vector<SimulatedScan> scans;
+  for (const imaging::ScanPath& path : paths) {
+    SimulatedScan scan;
+    scan.name = path.name;
+    for (const imaging::Tile& tile : path.tiles) {
+      const Eigen::Vector3d e(tile.centre_mm.x(), tile.centre_mm.y(), path.z_mm);
+      // Pixel (x, y) is at d = ((x + 0.5 - half) p, -(y + 0.5 - half) p, 0) from the optical axis; the scene's
+      // pixel frame has X = x_part / p, Y = -y_part / p. So the scene point of pixel (x, y) is
+      // (F / p with y negated) + A (x + 0.5 - half, y + 0.5 - half), A the camera's xy block with y flipped twice.
+      const Eigen::Vector3d f = truth.Forward(e);
+      const Eigen::Matrix3d c = truth.Camera(e);
+      Eigen::Matrix2d axes;
+      axes << c(0, 0), -c(0, 1), -c(1, 0), c(1, 1);
+      const Eigen::Vector2d origin = Eigen::Vector2d(f.x() / p, -f.y() / p) + axes * Eigen::Vector2d(0.5 - half, 0.5 - half);
+      scan.encoder_mm.push_back(e);
+      scan.images.push_back(scene.Photograph(axes, origin, options.tile_px, options.tile_px, random));
+    }
+    scans.push_back(std::move(scan));
+  }
+  return scans;
+}
+
+}  // namespace fvm::artefacts

@@ -1,0 +1,42 @@
+#pragma once
+// Stitched calibration scans of a textured part on a stage with known errors (issue 21): every pixel of every tile
+// shows the part where the stage really puts it, not a shifted copy of a nominal tile. A tile at encoder reading e
+// sees, at its pixel offset d from the optical axis (camera frame, mm), the part point F(e) + C(e) d: the stage's
+// forward model (eq. 1) and the camera's orientation in the part frame (stage/stitched_frame.h), so the tiles turn
+// with the stage's guideways as a real scan's do. The texture is a TileScene drawn once for the whole part.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "artefacts/simulation/stage_truth.h"
+#include "artefacts/simulation/tile_synthesis.h"
+#include "imaging/io/tile_image.h"
+#include "imaging/tile_plan.h"
+
+namespace fvm::artefacts {
+
+// Textures as `fvm simulate scan --texture` names them: "ground" (isotropic, fills the field), "milled" (a lay:
+// waves within 20 degrees of one direction, so registration is weak along the marks), "blobs" (sparse spots).
+TileCameraOptions ScanTexture(const std::string& name);  // throws std::invalid_argument naming the choices
+
+struct ScanSimulationOptions {
+  int tile_px = 1024;        // square tiles
+  double pixel_mm = 0.0;     // the lens' field / tile_px
+  TileCameraOptions camera;  // texture, vignetting, noise
+  std::uint64_t seed = 1;
+  void Check() const;  // throws std::invalid_argument
+};
+
+struct SimulatedScan {
+  std::string name;
+  std::vector<Eigen::Vector3d> encoder_mm;  // tile centres as the encoders read them, scan order
+  std::vector<imaging::TileImage> images;
+};
+
+// Renders the paths' tiles on the stage (counts as floats; 16-bit images when written).
+std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vector<imaging::ScanPath>& paths,
+                                         const ScanSimulationOptions& options);
+
+}  // namespace fvm::artefacts

@@ -1,0 +1,17 @@
+#pragma once
+// The stitched calibration scans `fvm calibrate --scan` reads: layouts `file,row,col,x,y[,z]` whose rows are the
+// tiles in scan order with their encoder readings (mm, tile centre), and the tiles themselves; registered as
+// chains (imaging::RegisterTileChain).
+
+#include <string>
+#include <vector>
+
+#include "artefacts/scan_observations.h"
+
+namespace fvm::cli {
+
+// Throws InputError naming the layout and line: a scan shorter than two tiles, encoder readings missing, or a step
+// between consecutive tiles longer than the field of view (readings in pixels, or tiles that cannot overlap).
+std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<std::string>& layouts, double pixel_mm);
+
+}  // namespace fvm::cli
