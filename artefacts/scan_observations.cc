@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -105,6 +106,29 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   out.white_ratio = differences > 0 ? std::sqrt(white / (6.0 * differences)) : 0.0;
   out.misfit_mm = points > 0 ? std::sqrt(misfit / points) : 0.0;
   return out;
+}
+
+ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const std::vector<RegisteredScan>& scans,
+                                  double pixel_mm, double pixel_u_mm, stage::IdentificationOptions options) {
+  stage::MeasurementSet set = ScanDisplacements(scans, pixel_mm);
+  options.anchors = set.anchors;
+  stage::IdentificationResult result = stage::Identify(layout, set.observations, options);
+  // Identify scaled the covariance by the whole residual, and never below the registrations' covariances; scale it
+  // by the residuals' white part instead, below 1 too: a pair's covariance carries a floor of 0.005 px against
+  // resampling bias, which the textured tiles of a scan beat by a factor of two or three.
+  const ScanResidualSplit split = SplitScanResiduals(set, result.residuals);
+  const double applied = std::max(result.weighted_rms, 1.0);
+  stage::Calibration& cal = result.calibration;
+  cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
+  if (pixel_u_mm > 0.0) {
+    const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
+    const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);
+    const auto n = static_cast<Eigen::Index>(cal.values.size());
+    const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(again.calibration.values.data(), n) -
+                              Eigen::Map<const Eigen::VectorXd>(cal.values.data(), n);
+    cal.covariance += g * g.transpose();
+  }
+  return {std::move(result), split, std::move(set)};
 }
 
 }  // namespace fvm::artefacts

@@ -45,4 +45,16 @@ struct ScanResidualSplit {
 };
 ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals);
 
+// The stage model from the scans' displacements, one estimator with the artefact batch's (stage::Identify with
+// `options`, whose frame and first anchor the scans' set supplies): the coefficients' covariance scaled by the
+// residuals' white part instead of all of them, and, with a pixel size uncertainty, widened by the fit's
+// sensitivity to the pixel size (one refit at p + u: the fit is linear in the scale of its data).
+struct ScanCalibration {
+  stage::IdentificationResult result;
+  ScanResidualSplit split;
+  stage::MeasurementSet set;  // the displacements fitted
+};
+ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const std::vector<RegisteredScan>& scans,
+                                  double pixel_mm, double pixel_u_mm, stage::IdentificationOptions options);
+
 }  // namespace fvm::artefacts

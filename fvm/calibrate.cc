@@ -270,36 +270,38 @@ void RunScans(const CalibrateArgs& args) {
   }
   if (!(args.pixel_u_mm >= 0.0) || !std::isfinite(args.pixel_u_mm)) throw InputError("--pixel-u-mm: give a standard uncertainty >= 0 (mm)");
   const std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(args.scans, args.pixel_mm);
-  const stage::MeasurementSet set = artefacts::ScanDisplacements(scans, args.pixel_mm);
-  if (set.observations.empty()) {
+  bool any = false;
+  for (const auto& scan : scans) {
+    for (const auto& pair : scan.registration.pairs) any = any || pair.accepted;
+  }
+  if (!any) {
     throw InputError("no pair of neighbouring tiles registered in any scan (first: " +
                      scans.front().registration.pairs.front().rejection +
                      "): the tiles need a texture that registers, and encoder readings of their centres");
   }
-  stage::IdentificationResult result = IdentifyModel(args.model, args.terms, set, args.settings);
+  const stage::ParameterLayout layout = ModelLayout(args.model, args.terms);
+  // Without the pixel size's share first, to say how much it adds.
+  const auto identify = [&](double pixel_u_mm) {
+    try {
+      artefacts::ScanCalibration c = artefacts::IdentifyFromScans(layout, scans, args.pixel_mm, pixel_u_mm,
+                                                                  args.settings.ToOptions(stage::MeasurementSet{}));
+      c.result.calibration.model = ModelName(args.model, args.terms);
+      return c;
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("model ") + ModelName(args.model, args.terms) + ": " + e.what());
+    }
+  };
+  artefacts::ScanCalibration fitted = identify(args.pixel_u_mm);
+  stage::IdentificationResult& result = fitted.result;
+  const artefacts::ScanResidualSplit& split = fitted.split;
   stage::Calibration& cal = result.calibration;
-  // Identify scaled the covariance by the whole residual, and never below the registrations' covariances; scale it
-  // by the residuals' white part instead (SplitScanResiduals), below 1 too: a pair's covariance carries a floor of
-  // 0.005 px against resampling bias, which textured tiles of a real scan beat by a factor of two or three.
-  const artefacts::ScanResidualSplit split = artefacts::SplitScanResiduals(set, result.residuals);
-  const double applied = std::max(result.weighted_rms, 1.0), white = split.white_ratio;
-  cal.covariance *= (white * white) / (applied * applied);
-  const double without_pixel_um = PredictedXyUm(cal, scans);
-  // The pixel size scales every displacement: its uncertainty moves the coefficients along the fit's sensitivity
-  // to it (linear, so one refit at p + u gives it exactly).
-  if (args.pixel_u_mm > 0.0) {
-    const stage::MeasurementSet scaled = artefacts::ScanDisplacements(scans, args.pixel_mm + args.pixel_u_mm);
-    const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, args.settings.ToOptions(scaled));
-    const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(again.calibration.values.data(), static_cast<Eigen::Index>(again.calibration.values.size())) -
-                              Eigen::Map<const Eigen::VectorXd>(cal.values.data(), static_cast<Eigen::Index>(cal.values.size()));
-    cal.covariance += g * g.transpose();
-  }
+  const double without_pixel_um = args.pixel_u_mm > 0.0 ? PredictedXyUm(identify(0.0).result.calibration, scans) : 0.0;
   const double predicted_um = PredictedXyUm(cal, scans);
   // What treating the chained positions as independent points of equal weight would have predicted.
   const stage::MeasurementSet positions = artefacts::ScanPositions(scans, args.pixel_mm);
   stage::IdentificationOptions chained_options = args.settings.ToOptions(positions);
   chained_options.anchor = stage::Anchor::kFirstTile;
-  const stage::IdentificationResult chained = stage::Identify(ModelLayout(args.model, args.terms), positions.observations, chained_options);
+  const stage::IdentificationResult chained = stage::Identify(layout, positions.observations, chained_options);
 
   nlohmann::json doc = stage::CalibrationToJson(result);
   doc["stitched_frame"] = args.settings.stitched_frame;
@@ -346,6 +348,7 @@ void RunScans(const CalibrateArgs& args) {
     judged = BeforeAfter{Judge(nullptr, *validate, frame), Judge(&cal, *validate, frame)};
     doc["validation"] = ValidationDocument(cal, *validate, *judged, frame);
     doc["validation"]["batch"] = args.validate;
+    doc["validation"]["note"] = "grey tiles show no heights: z terms stay at 0; the 3-D figures keep the stage's z errors, the distances hardly see them";
     doc["validation"]["placements"] = names;
   }
   const std::string source = fmt::format("{} scans ({})", scans.size(), JoinNames(args.scans));
@@ -384,7 +387,11 @@ void RunScans(const CalibrateArgs& args) {
   fmt::print(", {:.3f} um with the misfit\n", std::hypot(predicted_um, misfit_um));
   fmt::print("  the same positions as independent points of equal weight: {:.3f} um (the chain's correlation ignored)\n",
              doc["predicted_xy_u_um"]["independent_positions"].get<double>());
-  if (validate) PrintValidation(doc["validation"]);
+  if (validate) {
+    PrintValidation(doc["validation"]);
+    fmt::print("  grey tiles show no heights: the scans leave the z terms at 0, so the 3-D figures above keep the stage's\n"
+               "  z errors; the distances, which z hardly changes on a flat artefact, judge the scan calibration\n");
+  }
   if (!args.output.empty()) fmt::print("\ncalibration written to {}\n", args.output);
   if (!args.report.empty()) fmt::print("report written to {}/index.html\n", args.report);
   FailIfNotConverged(result);

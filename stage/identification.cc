@@ -506,7 +506,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       std::string why;
       if (d.on.empty()) {
         const bool displacements = std::all_of(observations.begin(), observations.end(), [](const Observation& o) { return o.from.has_value(); });
-        why = displacements ? "no effect on these data: displacements between tiles do not see a constant offset"
+        why = displacements ? "no effect on these data: displacements between tiles, seen from the first tile, show no constant offset or turn"
               : options.anchor != Anchor::kFirstTile ? "no effect on these data"
               : options.frame == StitchedFrame::kRotated
                   ? "no effect on these data: every measurement is seen from its own first tile, offset and turned "

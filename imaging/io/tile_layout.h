@@ -24,8 +24,8 @@ struct TileLayoutEntry {
   int row = 0;
   int col = 0;
   std::optional<Eigen::Vector2d> stage_mm;  // tile centre
-  std::optional<double> stage_z_mm;         // the encoder's z there (calibration scans), optional
   int line = 0;                             // line of the layout file, for messages
+  std::optional<double> stage_z_mm;         // the encoder's z there (calibration scans), optional
 };
 
 struct TileLayout {

@@ -1,5 +1,6 @@
-// Calibration from stitched scans of a textured part (issue 21): tiles rendered where a stage with known errors
-// puts every pixel, registered as a chain, identified from the displacements between neighbours.
+// Calibration from stitched scans of a textured part (issue 21): tiles rendered where a stage with known errors puts
+// every pixel (artefacts/simulation/scan_simulation.h), registered as chains, identified from the displacements
+// between neighbours. The truth carries a lead screw's cycle (0.3 um) that no polynomial model takes.
 
 #include <gtest/gtest.h>
 
@@ -7,32 +8,36 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <random>
+#include <string>
 
 #include "artefacts/scan_observations.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "artefacts/simulation/scan_simulation.h"
+#include "stage/calibration.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/identification.h"
-#include "stage/calibration.h"
-#include <cstdlib>
 
 namespace fvm::artefacts {
 namespace {
 
-constexpr double kFov5xMm = 2.82;  // FACTS: 5x lens, field of view
+constexpr double kFov5xMm = 2.82;  // FACTS: the 5x lens' field of view
 
-StageTruth PublishedSizeStage(unsigned seed, double periodic_um) {
+StageTruth PublishedSizeStage(unsigned seed) {
   FvmBatchOptions batch;
   batch.seed = seed;
   batch.validation_placements = 0;
   const FvmBatchTruth t = SimulateFvmBatch(batch).truth;  // 125 um mean error, guideways turning tens of urad
-  return StageTruth{t.layout, t.values, periodic_um, 25.0};
+  return StageTruth{t.layout, t.values, 0.3, 25.0};
 }
 
-std::vector<RegisteredScan> ScanAndRegister(const StageTruth& truth, const std::vector<double>& heights, int tile_px,
-                                            double* pixel_mm) {
+struct Scanned {
+  std::vector<RegisteredScan> scans;
+  double pixel_mm = 0.0;
+};
+
+// A row, a column and a diagonal of 150 mm at each height, 5x lens, 25 % overlap, ground texture.
+Scanned ScanAndRegister(const StageTruth& truth, const std::vector<double>& heights, int tile_px) {
   imaging::CalibrationScanOptions plan;
   plan.heights_mm = heights;
   imaging::TilePlanOptions lens;
@@ -42,99 +47,159 @@ std::vector<RegisteredScan> ScanAndRegister(const StageTruth& truth, const std::
   options.tile_px = tile_px;
   options.pixel_mm = kFov5xMm / tile_px;
   options.camera = ScanTexture("ground");
-  if (getenv("VIG")) options.camera.vignetting = atof(getenv("VIG"));
-  *pixel_mm = options.pixel_mm;
-  std::vector<RegisteredScan> registered;
+  Scanned out;
+  out.pixel_mm = options.pixel_mm;
   for (SimulatedScan& scan : SimulateScans(truth, imaging::PlanCalibrationScans(plan, lens), options)) {
     std::vector<Eigen::Vector2d> nominal;
     for (const Eigen::Vector3d& e : scan.encoder_mm) {
       nominal.push_back(Eigen::Vector2d(e.x() - scan.encoder_mm[0].x(), scan.encoder_mm[0].y() - e.y()) / options.pixel_mm);
     }
-    registered.push_back({scan.name, scan.encoder_mm, imaging::RegisterTileChain(scan.images, nominal, {})});
+    out.scans.push_back({scan.name, scan.encoder_mm, imaging::RegisterTileChain(scan.images, nominal, {})});
   }
-  return registered;
+  return out;
 }
 
-// The xy stage error a calibration predicts against the truth's, over validation positions spread over the scanned
-// square, once the rigid motion in xy (offset and turn about z) that no image can tell is removed: rms and max, um.
+stage::IdentificationOptions RotatedFrame() {
+  stage::IdentificationOptions options;
+  options.frame = stage::StitchedFrame::kRotated;
+  return options;
+}
+
+// The xy stage error a calibration predicts against the truth's at 200 positions over the scanned square, once the
+// rigid motion in xy (offset, turn about z) that no image can tell is removed, by a least-squares fit written here.
 struct XyComparison {
   double rms_um = 0, max_um = 0;
 };
 XyComparison CompareInXy(const stage::Calibration& cal, const StageTruth& truth, double z) {
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> coordinate(-170.0, -30.0);
-  std::vector<Eigen::Vector2d> q, d;
+  Eigen::MatrixXd a(400, 3);
+  Eigen::VectorXd b(400);
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d p(coordinate(random), coordinate(random), z);
-    q.push_back(p.head<2>());
-    d.push_back((truth.Forward(p) - stage::Forward(cal.layout, cal.values, p)).head<2>());
+    const Eigen::Vector3d q(coordinate(random), coordinate(random), z);
+    a.row(2 * i) << 1, 0, -q.y();
+    a.row(2 * i + 1) << 0, 1, q.x();
+    b.segment<2>(2 * i) = (truth.Forward(q) - stage::Forward(cal.layout, cal.values, q)).head<2>();
   }
-  // d ~ t + theta (-y, x): least squares, written out here.
-  Eigen::MatrixXd a(2 * q.size(), 3);
-  Eigen::VectorXd b(2 * q.size());
-  for (size_t i = 0; i < q.size(); ++i) {
-    a.row(2 * i) << 1, 0, -q[i].y();
-    a.row(2 * i + 1) << 0, 1, q[i].x();
-    b.segment<2>(2 * i) = d[i];
-  }
-  const Eigen::VectorXd rigid = a.colPivHouseholderQr().solve(b);
-  const Eigen::VectorXd r = b - a * rigid;
+  const Eigen::VectorXd r = b - a * a.colPivHouseholderQr().solve(b);
   XyComparison out;
-  for (size_t i = 0; i < q.size(); ++i) {
+  for (int i = 0; i < 200; ++i) {
     const double e = r.segment<2>(2 * i).norm() * 1e3;
-    out.rms_um += e * e;
+    out.rms_um += e * e / 200.0;
     out.max_um = std::max(out.max_um, e);
   }
-  out.rms_um = std::sqrt(out.rms_um / q.size());
+  out.rms_um = std::sqrt(out.rms_um);
   return out;
 }
 
-TEST(ScanCalibration, DisplacementsBetweenNeighboursRecoverTheStageInXY) {
-  const StageTruth truth = PublishedSizeStage(getenv("SEED") ? atoi(getenv("SEED")) : 1, getenv("PER") ? atof(getenv("PER")) : 0.3);
-  double pixel_mm = 0;
-  const std::vector<RegisteredScan> scans = ScanAndRegister(truth, {-50.0}, getenv("PX") ? atoi(getenv("PX")) : 192, &pixel_mm);
-  int accepted = 0, pairs = 0;
-  for (const RegisteredScan& s : scans) {
-    for (const auto& p : s.registration.pairs) accepted += p.accepted, ++pairs;
-  }
-  EXPECT_EQ(accepted, pairs);
-  if (getenv("PAIRS")) {
-    for (const RegisteredScan& sc : scans) {
-      double sx = 0, sy = 0, mx = 0, my = 0; int n = 0;
-      for (const auto& p : sc.registration.pairs) {
-        const Eigen::Vector3d a = sc.encoder_mm[p.a], b = sc.encoder_mm[p.b];
-        const Eigen::Matrix3d t = 0.5 * (truth.Camera(a).inverse() + truth.Camera(b).inverse());
-        const Eigen::Vector3d pred = t * (truth.Forward(b) - truth.Forward(a));
-        const Eigen::Vector2d meas(p.offset_px.x() * pixel_mm, -p.offset_px.y() * pixel_mm);
-        const Eigen::Vector2d d = (meas - pred.head<2>()) * 1e3;
-        sx += d.x(); sy += d.y(); mx += d.x()*d.x(); my += d.y()*d.y(); ++n;
-      }
-      std::printf("%s: mean %.4f %.4f um, rms %.4f %.4f um\n", sc.name.c_str(), sx/n, sy/n, std::sqrt(mx/n), std::sqrt(my/n));
+// Registration against the geometry written out here: b's offset in a's pixels is the part's displacement seen by
+// the camera, (C_a^-1 + C_b^-1) / 2 (F(b) - F(a)), and the stage's turn of tens of urad over a 2 mm step (0.1 um)
+// is seen: leaving it out fits worse.
+TEST(ScanCalibration, RegisteredOffsetsAreTheDisplacementsTurnedWithTheCamera) {
+  const StageTruth truth = PublishedSizeStage(1);
+  const Scanned s = ScanAndRegister(truth, {-50.0}, 192);
+  double turned = 0, unturned = 0;
+  int n = 0;
+  for (const RegisteredScan& scan : s.scans) {
+    for (const imaging::PairRegistration& p : scan.registration.pairs) {
+      ASSERT_TRUE(p.accepted) << scan.name << " " << p.a << ": " << p.rejection;
+      const Eigen::Vector3d a = scan.encoder_mm[static_cast<size_t>(p.a)], b = scan.encoder_mm[static_cast<size_t>(p.b)];
+      const Eigen::Vector3d move = truth.Forward(b) - truth.Forward(a);
+      const Eigen::Vector3d seen = 0.5 * (truth.Camera(a).inverse() + truth.Camera(b).inverse()) * move;
+      const Eigen::Vector2d measured(p.offset_px.x() * s.pixel_mm, -p.offset_px.y() * s.pixel_mm);
+      turned += (measured - seen.head<2>()).squaredNorm();
+      unturned += (measured - move.head<2>()).squaredNorm();
+      ++n;
     }
   }
-  stage::IdentificationOptions options;
-  options.frame = stage::StitchedFrame::kRotated;
-  const stage::MeasurementSet set = ScanDisplacements(scans, pixel_mm);
-  options.anchors = set.anchors;
-  const stage::IdentificationResult fit = stage::Identify(stage::FvmModelLayout("27"), set.observations, options);
-  const XyComparison turned = CompareInXy(fit.calibration, truth, -50.0);
+  const double turned_um = std::sqrt(turned / n) * 1e3, unturned_um = std::sqrt(unturned / n) * 1e3;
+  // Registration of these 192 px tiles (14.7 um pixels) is good to about 0.005 px: 0.07 um.
+  EXPECT_LT(turned_um, 0.1);
+  EXPECT_LT(turned_um, 0.7 * unturned_um) << "unturned " << unturned_um << " um";
+}
 
-  stage::IdentificationOptions naive_options = options;
-  naive_options.anchor = stage::Anchor::kFirstTile;
-  const stage::MeasurementSet positions = ScanPositions(scans, pixel_mm);
-  const stage::IdentificationResult naive = stage::Identify(stage::FvmModelLayout("27"), positions.observations, naive_options);
-  const XyComparison chained = CompareInXy(naive.calibration, truth, -50.0);
-  std::printf("displacements: %.3f rms %.3f max um; chained positions: %.3f rms %.3f max um; fit rms %.3f um, weighted %.2f\n",
-              turned.rms_um, turned.max_um, chained.rms_um, chained.max_um, fit.rms_mm * 1e3, fit.weighted_rms);
+// The target of issue 21 at a test's size (384 px tiles: 7.3 um pixels, where 1024 px have 2.75 um): the stage error in xy within 1 um rms and 2 um max (the published 2-D
+// method: 3 um max over 100 mm) where the chained positions, fitted as independent points, leave more; and the
+// prediction (coefficients from the white part of the residuals, plus the misfit along the scans) not below 0.8 of
+// what is seen.
+TEST(ScanCalibration, DisplacementsBetweenNeighboursRecoverTheStageInXY) {
+  const StageTruth truth = PublishedSizeStage(1);
+  const Scanned s = ScanAndRegister(truth, {-50.0}, 384);
+  const ScanCalibration fit = IdentifyFromScans(stage::FvmModelLayout("27"), s.scans, s.pixel_mm, 0.0, RotatedFrame());
+  const XyComparison turned = CompareInXy(fit.result.calibration, truth, -50.0);
+
+  stage::IdentificationOptions chained_options = RotatedFrame();
+  chained_options.anchor = stage::Anchor::kFirstTile;
+  const stage::MeasurementSet positions = ScanPositions(s.scans, s.pixel_mm);
+  chained_options.anchors = positions.anchors;
+  const stage::IdentificationResult chained = stage::Identify(stage::FvmModelLayout("27"), positions.observations, chained_options);
+  const XyComparison independent = CompareInXy(chained.calibration, truth, -50.0);
+
+  EXPECT_LT(turned.rms_um, 1.0);
+  EXPECT_LT(turned.max_um, 2.0);
+  EXPECT_LT(turned.rms_um, independent.rms_um);
   double u2 = 0;
   for (int i = 0; i < 100; ++i) {
-    const Eigen::Vector3d q(-170 + 14 * (i % 10), -170 + 14 * (i / 10), -50);
-    const Eigen::Matrix3d c = stage::Correct(fit.calibration, q).covariance;
-    u2 += c(0, 0) + c(1, 1);
+    const Eigen::Matrix3d c = stage::Correct(fit.result.calibration, Eigen::Vector3d(-170 + 14 * (i % 10), -170 + 14 * (i / 10), -50)).covariance;
+    u2 += (c(0, 0) + c(1, 1)) / 100.0;
   }
-  std::printf("predicted %.3f um\n", std::sqrt(u2 / 100) * 1e3);
-  if (getenv("FIXED")) for (const auto& f : fit.fixed) std::printf("  fixed %s: %s\n", f.name.c_str(), f.reason.c_str());
-  EXPECT_LT(turned.rms_um, 1.0);
+  const double predicted_um = std::hypot(std::sqrt(u2) * 1e3, fit.split.misfit_mm * 1e3);
+  EXPECT_GT(predicted_um, 0.8 * turned.rms_um);
+  EXPECT_LT(predicted_um, 5.0 * turned.rms_um) << "a prediction this large says little";
+  // The cycle of 0.3 um the model cannot take shows as misfit along the scans, of its size.
+  EXPECT_GT(fit.split.misfit_mm * 1e3, 0.1);
+  EXPECT_LT(fit.split.misfit_mm * 1e3, 0.4);
+}
+
+bool Fixed(const stage::IdentificationResult& r, const std::string& name) {
+  return std::any_of(r.fixed.begin(), r.fixed.end(), [&](const stage::FixedCoefficient& f) { return f.name == name; });
+}
+
+// A scan at one height cannot tell pitch and roll from positioning and squareness (their Abbe arm is the same
+// everywhere); scans at two heights can. The pixel size sets the scale of xTx1 and yTy1: its uncertainty widens them.
+TEST(ScanCalibration, ASecondHeightMakesPitchAndRollIdentifiable) {
+  const StageTruth truth = PublishedSizeStage(2);
+  const Scanned one = ScanAndRegister(truth, {-50.0}, 128);
+  const Scanned two = ScanAndRegister(truth, {-50.0, -40.0}, 128);
+  const stage::ParameterLayout layout = stage::FvmModelLayout("27");
+  const ScanCalibration flat = IdentifyFromScans(layout, one.scans, one.pixel_mm, 0.0, RotatedFrame());
+  const ScanCalibration stepped = IdentifyFromScans(layout, two.scans, two.pixel_mm, 0.0, RotatedFrame());
+  for (const char* name : {"xRy1", "yRx1"}) {
+    EXPECT_TRUE(Fixed(flat.result, name)) << name;
+    EXPECT_FALSE(Fixed(stepped.result, name)) << name;
+  }
+  // 10 ppm of pixel size: 1.5 um over 150 mm, on xTx1 (plausible size over the half travel of 100 mm).
+  const ScanCalibration scaled = IdentifyFromScans(layout, one.scans, one.pixel_mm, 1e-5 * one.pixel_mm, RotatedFrame());
+  const int slot = flat.result.calibration.layout.FreeIndexOf("xTx1");
+  const double u0 = std::sqrt(flat.result.calibration.covariance(slot, slot));
+  const double u1 = std::sqrt(scaled.result.calibration.covariance(slot, slot));
+  const double expected = 1e-5 * 100.0;  // 10 ppm of the 100 mm the first-order coefficient spans
+  EXPECT_NEAR(std::sqrt(u1 * u1 - u0 * u0), expected, 0.1 * expected) << u0 << " " << u1;
+}
+
+// White noise as the registrations state it comes out at a white ratio of 1 and no misfit; a smooth cycle comes out
+// as misfit of its own size and hardly as white noise.
+TEST(ScanCalibration, ResidualsSplitIntoWhiteNoiseAndMisfit) {
+  stage::MeasurementSet set;
+  std::vector<Eigen::Vector3d> white, smooth;
+  std::mt19937_64 random(3);
+  std::normal_distribution<double> normal(0.0, 1e-4);
+  for (int k = 0; k < 600; ++k) {
+    stage::Observation o;
+    o.from = Eigen::Vector3d(2.0 * k, 0, 0);
+    o.command = Eigen::Vector3d(2.0 * (k + 1), 0, 0);
+    o.covariance = Eigen::Vector3d(1e-8, 1e-8, INFINITY).asDiagonal();
+    set.observations.push_back(o);
+    white.emplace_back(normal(random), normal(random), 0.0);
+    // A cycle of 0.3 um in position over 12 pairs: displacements of 0.3 (cos(w (k+1)) - cos(w k)) um.
+    const double w = 2.0 * M_PI / 12.0;
+    smooth.emplace_back(3e-4 * (std::cos(w * (k + 1)) - std::cos(w * k)), 0.0, 0.0);
+  }
+  const ScanResidualSplit noise = SplitScanResiduals(set, white);
+  EXPECT_NEAR(noise.white_ratio, 1.0, 0.06);  // 1200 second differences
+  const ScanResidualSplit cycle = SplitScanResiduals(set, smooth);
+  EXPECT_NEAR(cycle.misfit_mm, 3e-4 / std::sqrt(2.0), 0.1 * 3e-4);
+  EXPECT_LT(cycle.white_ratio, 0.5 * 3e-4 / 1e-4);
 }
 
 }  // namespace
