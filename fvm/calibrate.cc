@@ -325,6 +325,13 @@ void RunScans(const CalibrateArgs& args) {
     registered += ok;
     doc["scans"].push_back(j);
   }
+  // What no image of a scan can tell, whatever the rank analysis finds on these data (it takes the pixel size as
+  // given): the scale of the pixels, and the camera's turn against the stage axes.
+  doc["cannot_tell"] = {
+      {{"what", "the pixel size"}, {"aliases", {"xTx1", "yTy1"}},
+       {"fixed_by", "--pixel-mm (its uncertainty --pixel-u-mm propagates), or one known length"}},
+      {{"what", "the camera's rotation against the stage axes"}, {"aliases", {"xRz0", "yRz0", "xWy0"}},
+       {"fixed_by", "the first tile's frame: the result is in it (stitched_frame.h), as an artefact calibration's is"}}};
   const double misfit_um = split.misfit_mm * 1e3;
   doc["predicted_xy_u_um"] = {{"pair_weights", predicted_um},
                               {"pair_weights_without_pixel_size", without_pixel_um},
@@ -377,6 +384,8 @@ void RunScans(const CalibrateArgs& args) {
   fmt::print("  solver: {} in {} iterations; condition number {:.3g}\n", result.converged ? "converged" : "NOT converged",
              result.iterations, result.condition_number);
   PrintParameters(result);
+  fmt::print("\n  no scan can tell the pixel size from xTx1, yTy1 (taken from --pixel-mm), nor the camera's turn against\n"
+             "  the stage axes from the constant yaw and squareness xRz0, yRz0, xWy0 (the result is in the first tile's frame)\n");
   fmt::print("\n  registered displacements after the fit: rms {:.3f} um (weighted rms {:.2f}: 1 = as the registrations' own "
              "covariances say)\n", result.rms_mm * 1e3, result.weighted_rms);
   fmt::print("  the residuals' white part is {:.2f} x the registrations' covariance; chained along the scans they leave "

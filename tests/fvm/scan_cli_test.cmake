@@ -1,0 +1,80 @@
+# Calibration from stitched scans as a user runs it (issue 21): plan the paths, simulate them, calibrate, and bad
+# input. Variables: FVM (the executable), WORK (a scratch directory).
+
+include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+# 1. The plan: 30 mm paths of the 5x lens at 25 % overlap step 2.115 mm: 1 + ceil(30 / 2.115) = 16 tiles along the row
+# and the column, 1 + ceil(21.2 / 2.115) = 12 along the diagonal (2.115 mm per axis).
+run(0 tiles plan --calibration-scan --lens 5x --overlap 25 --length-mm 30 --heights -50,-40 --scan-dir ${WORK}/plan --json)
+string(JSON paths LENGTH "${OUT}" paths)
+string(JSON row GET "${OUT}" paths 0 tiles)
+string(JSON diagonal GET "${OUT}" paths 2 tiles)
+string(JSON second GET "${OUT}" paths 3 name)
+if(NOT paths EQUAL 6 OR NOT row EQUAL 16 OR NOT diagonal EQUAL 12 OR NOT second STREQUAL "row-z2")
+  message(FATAL_ERROR "calibration scan plan: ${paths} paths, ${row} tiles along the row, ${diagonal} on the diagonal, "
+                      "fourth '${second}'")
+endif()
+file(STRINGS ${WORK}/plan/column.csv lines)
+list(GET lines 0 header)
+list(GET lines 1 first)
+if(NOT header STREQUAL "file,row,col,x,y,z" OR NOT first MATCHES "^column/tile_000.tif,0,0,-100.000000,-84.1[0-9]*,-50.000000$")
+  message(FATAL_ERROR "column layout: header '${header}', first tile '${first}'")
+endif()
+
+# 2. Simulated scans of a known stage, calibrated from them: every pair registers, the fit sees the turn, the
+# offsets a displacement cannot see are named.
+run(0 simulate scan -o ${WORK}/s --seed 1 --tile-px 128 --length-mm 30 --validation 20)
+expect_files("fvm simulate scan" ${WORK}/s row.csv column.csv diagonal.csv truth.json validation.free.csv validation.true.csv
+             row/tile_000.tif diagonal/tile_011.tif)
+file(READ ${WORK}/s/truth.json truth)
+string(JSON pixel GET "${truth}" pixel_mm)
+set(scans --scan ${WORK}/s/row.csv --scan ${WORK}/s/column.csv --scan ${WORK}/s/diagonal.csv)
+run(0 calibrate ${scans} --pixel-mm ${pixel} --model 15 --json -o ${WORK}/cal.json)
+expect_json_keys("calibrate --scan" "${OUT}" scans/0/registered predicted_xy_u_um/combined
+                 predicted_xy_u_um/independent_positions predicted_xy_u_um/model_misfit_along_scans pixel_mm)
+foreach(k 0 1 2)
+  string(JSON registered GET "${OUT}" scans ${k} registered)
+  string(JSON pairs GET "${OUT}" scans ${k} pairs)
+  if(NOT registered EQUAL pairs)
+    message(FATAL_ERROR "scan ${k}: ${registered} of ${pairs} pairs registered")
+  endif()
+endforeach()
+if(NOT OUT MATCHES "\"xTx0\"" OR NOT EXISTS ${WORK}/cal.json)
+  message(FATAL_ERROR "calibrate --scan: the offsets a displacement cannot see are not named, or no calibration:\n${OUT}")
+endif()
+run(0 calibrate ${scans} --pixel-mm ${pixel} --pixel-u-mm 0.00001 --model 15)
+if(NOT OUT MATCHES "without the pixel size's" OR NOT OUT MATCHES "16 tiles, 15 of 15 neighbour pairs registered")
+  message(FATAL_ERROR "calibrate --scan table:\n${OUT}")
+endif()
+run(0 correct --calibration ${WORK}/cal.json ${WORK}/s/validation.free.csv -o ${WORK}/v.csv)
+
+# 3. Bad input: named, non-zero, nothing written.
+file(WRITE ${WORK}/s/one.csv "file,row,col,x,y,z\nrow/tile_000.tif,0,0,-115,-100,-50\n")
+run(1 calibrate --scan ${WORK}/s/one.csv --pixel-mm ${pixel} -o ${WORK}/bad.json)
+if(NOT ERR MATCHES "one.csv: a scan of one tile" OR EXISTS ${WORK}/bad.json)
+  message(FATAL_ERROR "a one-tile scan:\n${ERR}")
+endif()
+file(WRITE ${WORK}/s/noxy.csv "file,row,col\nrow/tile_000.tif,0,0\nrow/tile_001.tif,0,1\n")
+run(1 calibrate --scan ${WORK}/s/noxy.csv --pixel-mm ${pixel} -o ${WORK}/bad.json)
+if(NOT ERR MATCHES "noxy.csv:2: no encoder reading" OR EXISTS ${WORK}/bad.json)
+  message(FATAL_ERROR "encoder readings missing:\n${ERR}")
+endif()
+# Encoder readings in pixels: a step of 192 "mm" between overlapping tiles.
+file(WRITE ${WORK}/s/pixels.csv "file,row,col,x,y\nrow/tile_000.tif,0,0,0,0\nrow/tile_001.tif,0,1,96,0\n")
+run(1 calibrate --scan ${WORK}/s/pixels.csv --pixel-mm ${pixel} -o ${WORK}/bad.json)
+if(NOT ERR MATCHES "pixels.csv:3: tile 2 is 96, 0 mm from the one before, more than the field" OR EXISTS ${WORK}/bad.json)
+  message(FATAL_ERROR "encoder readings in pixels:\n${ERR}")
+endif()
+# Tiles that do not register: the same image at every position.
+file(WRITE ${WORK}/s/same.csv "file,row,col,x,y\nrow/tile_000.tif,0,0,-115,-100\nrow/tile_000.tif,0,1,-112.885,-100\nrow/tile_000.tif,0,2,-110.77,-100\n")
+run(1 calibrate --scan ${WORK}/s/same.csv --pixel-mm ${pixel} -o ${WORK}/bad.json)
+if(NOT ERR MATCHES "no pair of neighbouring tiles registered" OR EXISTS ${WORK}/bad.json)
+  message(FATAL_ERROR "tiles that do not register:\n${ERR}")
+endif()
+run(1 calibrate ${scans} -o ${WORK}/bad.json)
+if(NOT ERR MATCHES "--scan needs --pixel-mm" OR EXISTS ${WORK}/bad.json)
+  message(FATAL_ERROR "no pixel size:\n${ERR}")
+endif()
+run(2 calibrate ${WORK}/s ${scans} --pixel-mm ${pixel})
