@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace fvm::artefacts {
 namespace {
@@ -26,7 +27,11 @@ stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans
   for (size_t s = 0; s < scans.size(); ++s) {
     const RegisteredScan& scan = scans[s];
     AddScan(set, scan);
-    for (const imaging::PairRegistration& pair : scan.registration.pairs) {
+    if (!scan.height_steps.empty() && scan.height_steps.size() != scan.registration.pairs.size()) {
+      throw std::invalid_argument("scan " + scan.name + ": one height step per registered pair, or none");
+    }
+    for (size_t k = 0; k < scan.registration.pairs.size(); ++k) {
+      const imaging::PairRegistration& pair = scan.registration.pairs[k];
       if (!pair.accepted) continue;
       stage::Observation o;
       o.from = scan.encoder_mm[static_cast<size_t>(pair.a)];
@@ -37,6 +42,11 @@ stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans
       const Eigen::Matrix2d px2 = pair.information.inverse();
       o.covariance << px2(0, 0), -px2(0, 1), 0.0, -px2(1, 0), px2(1, 1), 0.0, 0.0, 0.0, kUnobserved;
       o.covariance.topLeftCorner<2, 2>() *= pixel_mm * pixel_mm;
+      if (!scan.height_steps.empty() && scan.height_steps[k].pixels > 0) {
+        const imaging::HeightStep& step = scan.height_steps[k];
+        o.measured.z() = step.mean;
+        o.covariance(2, 2) = std::max(step.variance, 1e-12);  // never below 1 nm
+      }
       set.observations.push_back(o);
       set.labels.push_back(scan.name + ":" + std::to_string(pair.a + 1) + "-" + std::to_string(pair.b + 1));
     }

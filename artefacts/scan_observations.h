@@ -16,13 +16,18 @@ struct RegisteredScan {
   std::string name;
   std::vector<Eigen::Vector3d> encoder_mm;  // tile centres, scan order
   imaging::ChainRegistration registration;
+  // Height-map tiles (heights in mm of the part relative to each tile's focal plane): the z step of each pair, how
+  // far the stage rose from a to b, imaging::OverlapHeightStep(a, b, offset); empty for grey tiles, which show no
+  // height.
+  std::vector<imaging::HeightStep> height_steps;
 };
 
 // One displacement observation per accepted pair of neighbours (Observation::from = the earlier tile's encoder
 // reading, command = the later one's): measured (o_x p, -o_y p) from the registered offset o (px, y down) and the
 // pixel size p, weighted by the pair's own information (px^-2, so p^2 times its inverse, y flipped). The
-// registrations of a chain are independent pair by pair, where the positions chained from them are not. Heights are
-// not observed (grey tiles). One group per scan, anchored at its first tile: the first scan's is the frame reference.
+// registrations of a chain are independent pair by pair, where the positions chained from them are not. z is the
+// pair's height step where the scan has them, else not observed (grey tiles). One group per scan, anchored at its
+// first tile: the first scan's is the frame reference.
 stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm);
 
 // The same registrations as the chained positions a stitched export holds, e_0 + p (position_k - position_0), each

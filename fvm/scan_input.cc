@@ -30,8 +30,9 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<st
       }
       scan.encoder_mm.emplace_back(tile.stage_mm->x(), tile.stage_mm->y(), tile.stage_z_mm.value_or(0.0));
     }
+    imaging::TilePixelType type = imaging::TilePixelType::kFloat;
     const std::vector<imaging::TileImage> images =
-        imaging::ReadLayoutImages(layout, std::filesystem::path(path).parent_path());
+        imaging::ReadLayoutImages(layout, std::filesystem::path(path).parent_path(), &type);
     const double field_mm = std::min(images.front().cols(), images.front().rows()) * pixel_mm;
     std::vector<Eigen::Vector2d> nominal;
     for (size_t k = 0; k < layout.tiles.size(); ++k) {
@@ -50,6 +51,13 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<st
     Progress progress("registering " + scan.name, static_cast<int>(images.size()) - 1, ShowProgress());
     scan.registration = imaging::RegisterTileChain(images, nominal, {}, [&](int, int) { progress.Advance(); });
     progress.Finish();
+    if (type == imaging::TilePixelType::kFloat) {  // height maps: the z step of every registered pair too
+      for (const imaging::PairRegistration& pair : scan.registration.pairs) {
+        scan.height_steps.push_back(pair.accepted ? imaging::OverlapHeightStep(images[static_cast<size_t>(pair.a)],
+                                                                               images[static_cast<size_t>(pair.b)], pair.offset_px)
+                                                  : imaging::HeightStep{});
+      }
+    }
     scans.push_back(std::move(scan));
   }
   return scans;

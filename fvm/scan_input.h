@@ -1,7 +1,8 @@
 #pragma once
 // The stitched calibration scans `fvm calibrate --scan` reads: layouts `file,row,col,x,y[,z]` whose rows are the
 // tiles in scan order with their encoder readings (mm, tile centre), and the tiles themselves; registered as
-// chains (imaging::RegisterTileChain).
+// chains (imaging::RegisterTileChain). Float tiles are height maps (mm, relative to each tile's focal plane): each
+// registered pair then measures the stage's z step too, from the overlap.
 
 #include <string>
 #include <vector>

@@ -39,6 +39,7 @@ struct SimulateScanArgs {
   double length_mm = 150.0;
   std::string heights = "-50";
   std::string texture = "ground";
+  std::string tiles = "grey";
   double periodic_um = -1.0;  // < 0: the truth file's, else kDefaultPeriodicUm
   double period_mm = 25.0;
   int validation = 200;
@@ -117,6 +118,7 @@ void Run(const SimulateScanArgs& args) {
   options.tile_px = args.tile_px;
   options.pixel_mm = lens.fov_mm / args.tile_px;
   options.seed = args.seed;
+  options.heights = args.tiles == "heights";
   try {
     options.camera = artefacts::ScanTexture(args.texture);
   } catch (const std::invalid_argument& e) {
@@ -134,7 +136,7 @@ void Run(const SimulateScanArgs& args) {
     std::vector<imaging::TileLayoutEntry> entries;
     for (size_t k = 0; k < path.tiles.size(); ++k) {
       const std::string file = fmt::format("{}/tile_{:03d}.tif", path.name, k);
-      imaging::WriteTileImage(dir / file, s.images[k], imaging::TilePixelType::kUint16);
+      imaging::WriteTileImage(dir / file, s.images[k], options.heights ? imaging::TilePixelType::kFloat : imaging::TilePixelType::kUint16);
       imaging::TileLayoutEntry e;
       e.file = file;
       e.row = path.tiles[k].row;
@@ -183,6 +185,7 @@ void Run(const SimulateScanArgs& args) {
   j["lens"] = lens.name;
   j["tile_px"] = args.tile_px;
   j["texture"] = args.texture;
+  j["tiles"] = args.tiles;
   j["seed"] = args.seed;
   for (const auto& p : paths) j["scans"].push_back({{"name", p.name}, {"tiles", p.tiles.size()}, {"z_mm", p.z_mm}});
   WriteFileAtomically(dir / "truth.json", j.dump(2) + "\n");
@@ -214,6 +217,11 @@ void RegisterSimulateScan(CLI::App* simulate) {
   sub->add_option("--heights", args->heights, "encoder z of each set of paths (mm), e.g. -50,-40 for a second height")->capture_default_str();
   sub->add_option("--texture", args->texture, "ground (fills the field), milled (a lay), blobs (sparse spots)")
       ->check(CLI::IsMember({"ground", "milled", "blobs"}))
+      ->capture_default_str();
+  sub->add_option("--tiles", args->tiles,
+                  "grey: 16-bit images; heights: float TIFF height maps (mm, the part seen from each tile's focal "
+                  "plane), whose overlaps give the stage's z steps too")
+      ->check(CLI::IsMember({"grey", "heights"}))
       ->capture_default_str();
   sub->add_option("--periodic-um", args->periodic_um,
                   "a lead screw's cyclic error along X and Y the model cannot take (um); default: the truth file's, "

@@ -34,6 +34,9 @@ TileCameraOptions ScanTexture(const std::string& name) {
 void ScanSimulationOptions::Check() const {
   if (tile_px < 16) throw std::invalid_argument("scan simulation: tiles of at least 16 px");
   if (!(pixel_mm > 0.0)) throw std::invalid_argument("scan simulation: the pixel size must be positive");
+  if (heights && !(height_texture_um > 0.0 && height_noise_um >= 0.0)) {
+    throw std::invalid_argument("scan simulation: height texture > 0 and noise >= 0 um");
+  }
   camera.Check();
 }
 
@@ -41,7 +44,16 @@ std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vec
                                          const ScanSimulationOptions& options) {
   options.Check();
   std::mt19937_64 random(options.seed);
-  const TileScene scene(options.camera, random);  // one part under every path
+  TileCameraOptions camera = options.camera;
+  if (options.heights) {  // the same waves, as heights in mm: no illumination, no shot noise
+    camera.level = 0.0;
+    camera.contrast = options.height_texture_um * 1e-3;
+    camera.noise = options.height_noise_um / options.height_texture_um;
+    camera.vignetting = 0.0;
+    camera.electrons_per_count = 0.0;
+    camera.blobs = false;
+  }
+  const TileScene scene(camera, random);  // one part under every path
   const double p = options.pixel_mm, half = 0.5 * options.tile_px;
   std::vector<SimulatedScan> scans;
   for (const imaging::ScanPath& path : paths) {
@@ -58,7 +70,17 @@ std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vec
       axes << c(0, 0), -c(0, 1), -c(1, 0), c(1, 1);
       const Eigen::Vector2d origin = Eigen::Vector2d(f.x() / p, -f.y() / p) + axes * Eigen::Vector2d(0.5 - half, 0.5 - half);
       scan.encoder_mm.push_back(e);
-      scan.images.push_back(scene.Photograph(axes, origin, options.tile_px, options.tile_px, random));
+      imaging::TileImage image = scene.Photograph(axes, origin, options.tile_px, options.tile_px, random);
+      if (options.heights) {
+        // The face lies at the scan's z; the focal plane is at F_z(e), tilted by the camera's pitch and roll.
+        for (int y = 0; y < options.tile_px; ++y) {
+          for (int x = 0; x < options.tile_px; ++x) {
+            const double dx = (x + 0.5 - half) * p, dy = -(y + 0.5 - half) * p;
+            image(y, x) += static_cast<float>(path.z_mm - f.z() - (c(2, 0) * dx + c(2, 1) * dy));
+          }
+        }
+      }
+      scan.images.push_back(std::move(image));
     }
     scans.push_back(std::move(scan));
   }

@@ -25,6 +25,10 @@ struct ScanSimulationOptions {
   int tile_px = 1024;        // square tiles
   double pixel_mm = 0.0;     // the lens' field / tile_px
   TileCameraOptions camera;  // texture, vignetting, noise
+  // Height-map tiles instead of grey ones: the part's texture as heights of this standard deviation (um) on a face
+  // at the scan's z, seen from each tile's focal plane (mm, float: z_part - F_z(e) - (C d)_z), with this noise.
+  bool heights = false;
+  double height_texture_um = 1.0, height_noise_um = 0.01;
   std::uint64_t seed = 1;
   void Check() const;  // throws std::invalid_argument
 };

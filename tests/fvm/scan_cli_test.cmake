@@ -50,6 +50,15 @@ if(NOT OUT MATCHES "without the pixel size's" OR NOT OUT MATCHES "16 tiles, 15 o
 endif()
 run(0 correct --calibration ${WORK}/cal.json ${WORK}/s/validation.free.csv -o ${WORK}/v.csv)
 
+# Height-map tiles (float TIFF): their overlaps give the z steps, so the straightness in z is no longer fixed.
+run(0 simulate scan -o ${WORK}/h --seed 1 --tile-px 128 --length-mm 30 --validation 5 --tiles heights)
+run(0 calibrate --scan ${WORK}/h/row.csv --scan ${WORK}/h/column.csv --scan ${WORK}/h/diagonal.csv --pixel-mm ${pixel}
+    --model 27 --json)
+string(JSON fixed GET "${OUT}" fixed)
+if(fixed MATCHES "\"xTz1\"" OR NOT fixed MATCHES "\"xTz0\"")
+  message(FATAL_ERROR "height-map scans: xTz1 should be identified, xTz0 not:\n${fixed}")
+endif()
+
 # 3. Bad input: named, non-zero, nothing written.
 file(WRITE ${WORK}/s/one.csv "file,row,col,x,y,z\nrow/tile_000.tif,0,0,-115,-100,-50\n")
 run(1 calibrate --scan ${WORK}/s/one.csv --pixel-mm ${pixel} -o ${WORK}/bad.json)
