@@ -205,6 +205,14 @@ void RegisterSimulateScan(CLI::App* simulate) {
       "scan", "stitched calibration scans (row, column, diagonal) of a textured part on a stage with known errors: "
               "tiles rendered where the stage really puts every pixel, layouts with encoder readings, truth.json, "
               "validation positions");
+  AddDetails(sub,
+      "Plans a row along X, a column along Y and a diagonal through the travel (fvm tiles plan --calibration-scan) "
+      "and renders every tile where the stage really puts each pixel: at F(e) + C(e) d for pixel offset d from the "
+      "optical axis, so the tiles turn with the guideways. The part is one texture for all paths; 16-bit counts "
+      "with shot and read noise, or height maps. Writes DIR/<path>.csv (file,row,col,x,y,z: encoder readings of the "
+      "tile centres, mm), DIR/<path>/tile_NNN.tif, DIR/truth.json (the stage, pixel size, texture) and "
+      "DIR/validation.free.csv / validation.true.csv (positions as the encoders read them, and where the stage "
+      "really puts the optical axis).");
   sub->add_option("-o,--output", args->output, "directory to write")->required();
   sub->add_option("--calibration-truth", args->truth_file,
                   "the stage: a truth.json of fvm simulate fvm-batch, or a calibration file; default: the stage of "
