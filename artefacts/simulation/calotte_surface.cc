@@ -141,7 +141,7 @@ CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfa
       v += options.spike_height_mm * (2 * uniform(spike_rng) - 1);
     }
     const bool missing = options.missing_fraction > 0 && uniform(missing_rng) < options.missing_fraction;
-    map.z_mm[i] = state[i] == kTooSteep || missing ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v);
+    map.z_mm[i] = state[i] == kTooSteep || missing ? std::numeric_limits<double>::quiet_NaN() : v;
   }
 
   for (const PlacedCalotte& c : placed) out.truth.push_back(Calotte{c.id, c.centre, c.radius});

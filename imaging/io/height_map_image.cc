@@ -182,7 +182,7 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
   for (std::size_t i = 0; i < n; ++i) {
     const bool invalid = !std::isfinite(raw[i]) || (options.invalid_value && raw[i] == *options.invalid_value) ||
                          (!coverage.empty() && coverage[i] == 0.0);
-    map.z_mm[i] = invalid ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z_offset + z_scale * raw[i]);
+    map.z_mm[i] = invalid ? std::numeric_limits<double>::quiet_NaN() : z_offset + z_scale * raw[i];
   }
   return map;
 }

@@ -350,7 +350,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
     // ISO 5436-2 scales every type the same way; floats usually carry increment 1 and offset 0.
     const double z_m = cz.offset + cz.increment * raw[i];
     const bool ok = (valid.empty() || valid[i]) && std::isfinite(z_m);
-    map.z_mm[i] = ok ? static_cast<float>(z_m * kMmPerMetre) : std::numeric_limits<float>::quiet_NaN();
+    map.z_mm[i] = ok ? z_m * kMmPerMetre : std::numeric_limits<double>::quiet_NaN();
   }
   return map;
 }

@@ -15,27 +15,13 @@
 #include "artefacts/io/centre_export.h"
 #include "imaging/io/x3p.h"
 #include "tests/artefacts/test_support.h"
+#include "tests/fvm/run_fvm.h"
 
 namespace fvm {
 namespace {
 
-struct FvmRun {
-  int status = 0;
-  std::string out, err;
-};
-
-FvmRun RunFvm(const testing::TempDir& dir, const std::string& arguments) {
-  const std::string err_file = (dir / "stderr.txt").string();
-  const std::string command = std::string(FVM_EXE) + " " + arguments + " 2>" + err_file;
-  FvmRun run;
-  FILE* pipe = popen(command.c_str(), "r");
-  char buffer[4096];
-  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) run.out.append(buffer, n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.err = testing::ReadText(err_file);
-  return run;
-}
+using testing::FvmRun;
+using testing::RunFvm;
 
 TEST(FitCli, Grid6x6X3pToCentreExport) {
   testing::TempDir dir;

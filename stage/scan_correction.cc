@@ -1,0 +1,109 @@
+#include "stage/scan_correction.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <limits>
+
+#include "core/input_error.h"
+#include "stage/identification.h"
+
+namespace fvm::stage {
+namespace {
+
+// The axes whose coordinate some term of the model takes: beyond their travel the polynomials extrapolate.
+std::array<bool, 3> AxesWithTerms(const ParameterLayout& layout) {
+  std::array<bool, 3> axes{};
+  for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
+    axes[static_cast<std::size_t>(layout.chain().ArgumentAxis(c.term))] = true;
+  }
+  return axes;
+}
+
+}  // namespace
+
+std::vector<std::size_t> PointsOutsideTravel(const ParameterLayout& layout, const std::vector<Eigen::Vector3d>& points,
+                                             const Eigen::Vector3d& origin_mm) {
+  const std::array<bool, 3> axes = AxesWithTerms(layout);
+  std::vector<std::size_t> outside;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    const Eigen::Vector3d q = points[i] + origin_mm;
+    for (int k = 0; k < 3; ++k) {
+      const Travel& t = layout.travel()[static_cast<std::size_t>(k)];
+      if (axes[static_cast<std::size_t>(k)] && (q[k] < t.min || q[k] > t.max)) {
+        outside.push_back(i);
+        break;
+      }
+    }
+  }
+  return outside;
+}
+
+ScanCorrector::ScanCorrector(const Calibration& calibration, const ScanCorrectionOptions& options,
+                             const std::vector<Eigen::Vector3d>& file_points)
+    : calibration_(calibration), options_(options) {
+  if (!options.first_tile_frame) return;
+  std::vector<Eigen::Vector3d> stage_points;
+  for (const Eigen::Vector3d& p : file_points) {
+    if (p.allFinite()) stage_points.push_back(p + options.origin_mm);
+  }
+  if (stage_points.empty()) throw InputError("no valid point, so no first tile to start the stitched frame at");
+  first_tile_.emplace(calibration, *options.first_tile_frame, FirstTile(stage_points));
+}
+
+CorrectedPoint ScanCorrector::Correct(const Eigen::Vector3d& file_point) const {
+  const Eigen::Vector3d q = file_point + options_.origin_mm;
+  CorrectedPoint out = first_tile_ ? first_tile_->Correct(q) : stage::Correct(calibration_, q);
+  out.position -= options_.origin_mm;
+  return out;
+}
+
+Eigen::Vector3d ScanCorrector::Position(const Eigen::Vector3d& file_point) const {
+  const Eigen::Vector3d q = file_point + options_.origin_mm;
+  const Eigen::Vector3d p = first_tile_ ? (*first_tile_)(q) : Forward(calibration_.layout, calibration_.values, q);
+  return p - options_.origin_mm;
+}
+
+ScanCorrectionSummary CorrectScanInPlace(const ScanCorrector& corrector, std::vector<Eigen::Vector3d>& points,
+                                         std::vector<Eigen::Vector3d>* u, int threads) {
+  if (u) u->assign(points.size(), Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  const auto join = [](ScanCorrectionSummary a, const ScanCorrectionSummary& b) {
+    a.corrected += b.corrected;
+    a.invalid += b.invalid;
+    a.largest_shift_mm = std::max(a.largest_shift_mm, b.largest_shift_mm);
+    return a;
+  };
+  // Each point is independent and the result of each is the same whatever thread computes it: same bits for any
+  // thread count.
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  return arena.execute([&] { return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), 4096), ScanCorrectionSummary{},
+      [&](const tbb::blocked_range<std::size_t>& range, ScanCorrectionSummary s) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          Eigen::Vector3d& p = points[i];
+          if (!p.allFinite()) {
+            ++s.invalid;
+            continue;
+          }
+          Eigen::Vector3d moved;
+          if (u) {
+            const CorrectedPoint c = corrector.Correct(p);
+            moved = c.position;
+            (*u)[i] = c.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+          } else {
+            moved = corrector.Position(p);
+          }
+          s.largest_shift_mm = std::max(s.largest_shift_mm, (moved - p).norm());
+          p = moved;
+          ++s.corrected;
+        }
+        return s;
+      },
+      join); });
+}
+
+}  // namespace fvm::stage
