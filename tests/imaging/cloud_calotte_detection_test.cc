@@ -91,9 +91,9 @@ TEST(CloudCalotteDetection, RejectsWhatIsNoCalotteWithTheMapsReasons) {
   o.spike_height_mm = 0.02;
   const artefacts::CalotteCloud scene = artefacts::RenderCalotteCloud(artefacts::SingleCalotte(1.0), o, 40000);
   PointCloud cloud = scene.cloud;
-  // A scratch 3 mm long, 0.05 mm wide, 20 um deep, well away from the calotte.
+  // A scratch 2 mm long, 0.05 mm wide, 20 um deep, beside the calotte.
   for (Eigen::Vector3d& p : cloud.points) {
-    if (std::abs(p.y() - (-4.5 - 1.35)) < 0.025 && std::abs(p.x() - 12.3) < 1.5) p.z() -= 0.02;
+    if (std::abs(p.y() - (-4.5 - 1.35)) < 0.025 && std::abs(p.x() - 12.3) < 1.0) p.z() -= 0.02;
   }
   const CloudCalotteDetection found = DetectCalottesInCloud(cloud, {}, "scratched.ply");
   ASSERT_EQ(found.detection.calottes.size(), 1u);
