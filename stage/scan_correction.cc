@@ -47,12 +47,10 @@ ScanCorrector::ScanCorrector(const Calibration& calibration, const ScanCorrectio
                              const std::vector<Eigen::Vector3d>& file_points)
     : calibration_(calibration), options_(options) {
   if (!options.first_tile_frame) return;
-  std::vector<Eigen::Vector3d> stage_points;
-  for (const Eigen::Vector3d& p : file_points) {
-    if (p.allFinite()) stage_points.push_back(p + options.origin_mm);
+  if (std::none_of(file_points.begin(), file_points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); })) {
+    throw InputError("no valid point, so no first tile to start the stitched frame at");
   }
-  if (stage_points.empty()) throw InputError("no valid point, so no first tile to start the stitched frame at");
-  first_tile_.emplace(calibration, *options.first_tile_frame, FirstTile(stage_points));
+  first_tile_.emplace(calibration, *options.first_tile_frame, FirstTile(file_points, options.origin_mm));
 }
 
 CorrectedPoint ScanCorrector::Correct(const Eigen::Vector3d& file_point) const {

@@ -57,6 +57,20 @@ if(NOT OUT MATCHES "valid points  5 of 6")
   message(FATAL_ERROR "info text output:\n${OUT}")
 endif()
 
+# Float64 heights keep their digits (issue 17: -808.368571682830 mm came back as -808.3686): the JSON prints the
+# shortest text of the double the file holds.
+string(REPLACE "<Datum>1e-06</Datum>" "<Datum>-0.808368571682830</Datum>" precise "${xml}")
+file(MAKE_DIRECTORY ${WORK}/precise)
+file(WRITE ${WORK}/precise/main.xml "${precise}")
+string(MD5 digest "${precise}")
+file(WRITE ${WORK}/precise/md5checksum.hex "${digest} *main.xml\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/precise.x3p --format=zip main.xml md5checksum.hex
+                WORKING_DIRECTORY ${WORK}/precise)
+run(0 info ${WORK}/precise.x3p --json)
+if(NOT OUT MATCHES "\"z_min_mm\": -808\\.36857168283[0-9]*[,\n]")
+  message(FATAL_ERROR "info --json on float64 heights: ${OUT}")
+endif()
+
 # An all-invalid surface is a valid file: no valid points, and no height range (null).
 string(REGEX REPLACE "<Datum>[^<]*</Datum>" "<Datum/>" nothing "${xml}")
 file(MAKE_DIRECTORY ${WORK}/nan)
