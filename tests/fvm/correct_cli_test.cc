@@ -51,10 +51,10 @@ nlohmann::json CorrectCli::report_;
 // The corrected centres of a centre export, by id.
 std::vector<artefacts::CentreRecord> Centres(const std::filesystem::path& csv) { return artefacts::ReadCentreExport(csv).centres; }
 
-// Points spread over the part of the stage the sample's placements cover (stage coordinates, mm), seeded.
+// Points spread over the sample's calibrated travel (x, y in -200..0 mm), seeded.
 std::vector<Eigen::Vector3d> StagePoints(int n, unsigned seed) {
   std::mt19937_64 random(seed);
-  std::uniform_real_distribution<double> x(-80.0, 80.0), y(-80.0, 80.0), z(-0.4, 0.4);
+  std::uniform_real_distribution<double> x(-190.0, -10.0), y(-190.0, -10.0), z(-0.4, 0.4);
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < n; ++i) points.emplace_back(x(random), y(random), z(random));
   return points;
@@ -180,8 +180,8 @@ TEST_F(CorrectCli, HeightMapPointsEqualTheCentreCorrectionTo1nm) {
   map.size_y = 17;
   map.dx_mm = 0.0125;
   map.dy_mm = 0.0125;
-  map.x0_mm = -31.25;
-  map.y0_mm = 12.5;
+  map.x0_mm = -131.25;
+  map.y0_mm = -87.5;
   for (int iy = 0; iy < map.size_y; ++iy) {
     for (int ix = 0; ix < map.size_x; ++ix) {
       map.z_mm.push_back(0.0123 * std::sin(0.7 * ix + 1.3 * iy) - 0.004 + 1e-9 * ix * iy);
@@ -283,8 +283,8 @@ TEST_F(CorrectCli, ResampledHeightMapAndItsUncertainties) {
   imaging::HeightMap map;
   map.size_x = map.size_y = 41;
   map.dx_mm = map.dy_mm = 0.01;
-  map.x0_mm = 10.0;
-  map.y0_mm = -20.0;
+  map.x0_mm = -90.0;
+  map.y0_mm = -120.0;
   for (int iy = 0; iy < map.size_y; ++iy) {
     for (int ix = 0; ix < map.size_x; ++ix) map.z_mm.push_back(0.002 * ix * map.dx_mm - 0.001 * iy * map.dy_mm);
   }
@@ -327,28 +327,28 @@ TEST_F(CorrectCli, ResampledHeightMapAndItsUncertainties) {
 // export onto the stage; --extrapolate corrects anyway.
 TEST_F(CorrectCli, OutOfTravelPointsAreNamedUnlessExtrapolated) {
   const testing::TempDir dir;
-  const auto in = dir.Write("far.xyz", "1 2 0\n250 2 0\n3 -400 0\n");
+  const auto in = dir.Write("far.xyz", "-100 -50 0\n250 -50 0\n-30 -400 0\n");
   const auto out = dir / "far.ply";
   testing::FvmRun run = RunFvm(dir, "correct --calibration " + calibration_ + " " + in.string() + " -o " + out.string());
   EXPECT_EQ(run.status, 1);
   EXPECT_THAT(run.err, HasSubstr("2 of its points lie outside the travel"));
-  EXPECT_THAT(run.err, HasSubstr("point 2 at stage (250.0000, 2.0000, 0.0000) mm"));
+  EXPECT_THAT(run.err, HasSubstr("point 2 at stage (250.0000, -50.0000, 0.0000) mm"));
   EXPECT_THAT(run.err, HasSubstr("point 3 at stage"));
   EXPECT_FALSE(std::filesystem::exists(out));
   run = RunFvm(dir, "correct --calibration " + calibration_ + " " + in.string() + " -o " + out.string() + " --extrapolate --json");
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_EQ(nlohmann::json::parse(run.out)["outside_travel"], 2);
 
-  // The same point given relative to an origin at (-60, 40, 0): equal to the point given in stage coordinates,
-  // moved back by the origin.
-  const auto corner = dir.Write("corner.xyz", "61 -38 0.1\n");
-  const auto stage = dir.Write("stage.xyz", "1 2 0.1\n");
+  // The same point given relative to an origin at (-150, -80, 0): equal to the point given in stage
+  // coordinates, moved back by the origin.
+  const auto corner = dir.Write("corner.xyz", "50 30 0.1\n");
+  const auto stage = dir.Write("stage.xyz", "-100 -50 0.1\n");
   ASSERT_EQ(RunFvm(dir, "correct --calibration " + calibration_ + " " + corner.string() + " -o " + (dir / "c.xyz").string() +
-                            " --origin=-60,40,0").status, 0);
+                            " --origin=-150,-80,0").status, 0);
   ASSERT_EQ(RunFvm(dir, "correct --calibration " + calibration_ + " " + stage.string() + " -o " + (dir / "s.xyz").string()).status, 0);
   const Eigen::Vector3d c = imaging::ReadPointCloud(dir / "c.xyz").points.at(0);
   const Eigen::Vector3d s = imaging::ReadPointCloud(dir / "s.xyz").points.at(0);
-  EXPECT_LT((c + Eigen::Vector3d(-60, 40, 0) - s).norm(), 1e-9);
+  EXPECT_LT((c + Eigen::Vector3d(-150, -80, 0) - s).norm(), 1e-9);
 }
 
 TEST_F(CorrectCli, BadInputFailsClearlyAndWritesNothing) {
@@ -370,7 +370,7 @@ TEST_F(CorrectCli, BadInputFailsClearlyAndWritesNothing) {
                "no-xyz.ply");
   expect_fails(dir.Write("all-nan.xyz", "nan nan nan\ninf 1 2\n"), "no valid point");
   // NaN and infinite points are skipped and counted, as height maps' invalid points are.
-  const auto some_nan = dir.Write("some-nan.xyz", "1 2 0\nnan nan nan\n3 4 inf\n5 6 0.1\n");
+  const auto some_nan = dir.Write("some-nan.xyz", "-100 -50 0\nnan nan nan\n-99 -48 inf\n-98 -46 0.1\n");
   const testing::FvmRun run = RunFvm(dir, "correct --calibration " + calibration_ + " " + some_nan.string() + " -o " +
                                               (dir / "some-nan.xyz.out.xyz").string() + " --json");
   ASSERT_EQ(run.status, 0) << run.err;
@@ -383,7 +383,7 @@ TEST_F(CorrectCli, BadInputFailsClearlyAndWritesNothing) {
   ASSERT_NE(at, std::string::npos);
   other.replace(at, 6, "\"XFYZ\"");
   const auto other_path = dir.Write("other-chain.json", other);
-  const auto scan = dir.Write("scan.xyz", "1 2 0\n");
+  const auto scan = dir.Write("scan.xyz", "-100 -50 0\n");
   const testing::FvmRun other_run =
       RunFvm(dir, "correct --calibration " + other_path.string() + " " + scan.string() + " -o " + out.string());
   EXPECT_EQ(other_run.status, 1);
