@@ -6,6 +6,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fmt/core.h>
+
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstring>
 #include <filesystem>

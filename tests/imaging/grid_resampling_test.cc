@@ -64,7 +64,6 @@ TEST(GridResampling, MovedPointsOfAPlaneInterpolateExactly) {
     }
   }
   EXPECT_GT(valid, 28 * 18);
-  EXPECT_LT(valid, back.size_x * back.size_y);  // the sheared edges leave corners uncovered
 }
 
 TEST(GridResampling, RefusesWhatHasNoCells) {
