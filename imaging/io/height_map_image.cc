@@ -210,7 +210,9 @@ void WriteHeightMapImage(const std::filesystem::path& path, const HeightMap& map
   spec.x_resolution = static_cast<float>(10.0 / map.dx_mm);
   spec.y_resolution = static_cast<float>(10.0 / map.dy_mm);
   spec.resolution_unit = "cm";
-  WriteImageFile(path, spec, PixelType::kFloat, map.z_mm.data());
+  // The image holds float32 heights (TIFF and EXR float samples): the map's doubles rounded once here.
+  const std::vector<float> heights(map.z_mm.begin(), map.z_mm.end());
+  WriteImageFile(path, spec, PixelType::kFloat, heights.data());
 }
 
 }  // namespace fvm::imaging
