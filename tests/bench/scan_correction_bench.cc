@@ -21,14 +21,10 @@ namespace {
 
 // A first-order model (27 coefficients) with a covariance, over the published stage's travel.
 Calibration Model27() {
-  Calibration cal;
-  cal.model = "27";
-  cal.layout = testing::FullLayout(AxisChain::FvmStage(), testing::FvmTravel(), 1);
-  cal.values = testing::RandomCoefficients(cal.layout, 1);
-  const Eigen::Index n = cal.layout.NumFree();
-  Eigen::MatrixXd a = Eigen::MatrixXd::Random(n, n) * 1e-4;
-  cal.covariance = a * a.transpose() * 1e-6;
-  return cal;
+  const ParameterLayout layout = testing::FullLayout(AxisChain::FvmStage(), testing::FvmTravel(), 1);
+  const Eigen::Index n = layout.NumFree();
+  const Eigen::MatrixXd a = Eigen::MatrixXd::Random(n, n) * 1e-4;
+  return Calibration{"27", layout, testing::RandomCoefficients(layout, 1), a * a.transpose() * 1e-6, 5e-4, std::nullopt};
 }
 
 std::vector<Eigen::Vector3d> Cloud(std::size_t n) {

@@ -354,6 +354,39 @@ TEST_F(CorrectCli, OutOfTravelPointsAreNamedUnlessExtrapolated) {
   EXPECT_LT((c + Eigen::Vector3d(-150, -80, 0) - s).norm(), 1e-9);
 }
 
+// --layout: each tile moved by one shift, the centre correction of its stage position (x, y from the layout, the
+// tile's median height); a height-map tile stays a height map.
+TEST_F(CorrectCli, LayoutMovesEachTileByTheModelAtItsPosition) {
+  const testing::TempDir dir;
+  dir.Write("a.xyz", "0 0 0.01\n0.5 0 0.02\n0 0.5 0.03\n");
+  imaging::HeightMap tile;
+  tile.size_x = tile.size_y = 3;
+  tile.dx_mm = tile.dy_mm = 0.25;
+  tile.z_mm = {0.0, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 0.007, 0.008};
+  imaging::WriteX3p(dir / "b.x3p", tile);
+  const auto layout = dir.Write("layout.csv", "file,row,col,x,y\na.xyz,0,0,-120,-40\nb.x3p,0,1,-117.5,-40\n");
+  const auto out = dir / "corrected";
+  const testing::FvmRun run = RunFvm(dir, "correct --calibration " + calibration_ + " --layout " + layout.string() +
+                                              " -o " + out.string() + " --json");
+  ASSERT_EQ(run.status, 0) << run.err;
+  const nlohmann::json doc = nlohmann::json::parse(run.out);
+  ASSERT_EQ(doc["tiles"].size(), 2u);
+  const stage::Calibration cal = stage::ReadCalibration(calibration_);
+  const Eigen::Vector3d centre_a(-120, -40, 0.02), centre_b(-117.5, -40, 0.004);
+  const Eigen::Vector3d shift_a = stage::Correct(cal, centre_a).position - centre_a;
+  const Eigen::Vector3d shift_b = stage::Correct(cal, centre_b).position - centre_b;
+  const imaging::PointCloud a = imaging::ReadPointCloud(out / "a.xyz");
+  ASSERT_EQ(a.points.size(), 3u);
+  EXPECT_LT((a.points[1] - Eigen::Vector3d(0.5, 0, 0.02) - shift_a).norm(), 1e-9);
+  const imaging::HeightMap b = imaging::ReadX3p(out / "b.x3p");
+  EXPECT_NEAR(b.x0_mm, shift_b.x(), 1e-9);
+  EXPECT_NEAR(b.y0_mm, shift_b.y(), 1e-9);
+  EXPECT_NEAR(b.at(2, 2), 0.008 + shift_b.z(), 1e-9);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(doc["tiles"][1]["shift_um"][k].get<double>(), shift_b[k] * 1e3, 1e-9);
+  EXPECT_GT(doc["largest_per_point_um"].get<double>(), 0.0);  // a tile of 0.5 mm: the model changes across it
+  EXPECT_THAT(testing::ReadText(out / "shifts.csv"), HasSubstr("file,x,y,z,dx_um"));
+}
+
 TEST_F(CorrectCli, BadInputFailsClearlyAndWritesNothing) {
   const testing::TempDir dir;
   const auto out = dir / "out.ply";

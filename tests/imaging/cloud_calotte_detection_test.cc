@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdio>
 
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/simulation/calotte_surface.h"
@@ -41,6 +42,8 @@ TEST(CloudCalotteDetection, OneCalotteWithinTwoTenthsOfAMicrometre) {
   EXPECT_THAT(found.method, HasSubstr("grid projection"));
   ASSERT_EQ(found.detection.calottes.size(), 1u);
   const SphereFit& fit = found.detection.calottes[0].fit;
+  std::printf("centre %.2f nm and radius %.2f nm from the truth, %zu points fitted\n",
+              (fit.centre_mm - scene.truth[0].centre).norm() * 1e6, (fit.radius_mm - 1.0) * 1e6, fit.inliers);
   EXPECT_LT((fit.centre_mm - scene.truth[0].centre).norm(), 2e-4);
   EXPECT_LT(std::abs(fit.radius_mm - 1.0), 2e-4);
   EXPECT_TRUE(fit.converged);
