@@ -105,6 +105,10 @@ void RunOneScan(const ScanCorrectionArgs& args, const stage::Calibration& cal) {
         "or write a cloud (.ply, .pcd, .xyz)",
         args.output, map_in ? FormatShortest(surface.height_map->dx_mm) : std::string("0.01")));
   }
+  if (args.resample_mm > 0.0 && !map_in && !surface.cloud->IsOrganised()) {
+    throw InputError(args.input + ": only a height map or an organised cloud can be resampled on a grid; an "
+                                  "unorganised cloud has no cells to interpolate in: leave out --resample");
+  }
   imaging::PointCloud cloud = map_in ? imaging::HeightMapToCloud(*surface.height_map) : std::move(*surface.cloud);
   surface = {};  // the map's heights are in the cloud now: hold one copy
   const std::vector<std::size_t> outside = CheckTravel(args, cal, cloud, args.input);
