@@ -229,19 +229,11 @@ void Run(const CorrectArgs& args) {
                                  "corrected with its {} stage model (fvm calibrate)",
                                  args.calibration, cal.layout.chain().code, stage::AxisChain::FvmStage().code));
   }
-  ScanCorrectionArgs scan;
-  scan.calibration = args.calibration;
-  scan.input = args.input;
-  scan.output = args.output;
-  scan.layout = args.layout;
-  scan.resample_mm = args.resample_mm;
-  scan.extrapolate = args.extrapolate;
-  scan.json = args.json;
-  scan.read = args.read.ToOptions();
-  scan.options.origin_mm = args.origin.empty() ? Eigen::Vector3d::Zero()
-                                               : ParseVector3(args.origin, "--origin", "--origin 12.5,-30,0");
-  if (args.frame == "first-tile") scan.options.first_tile_frame = stage::ParseStitchedFrame(args.stitched_frame);
-  scan.threads = ThreadCount();
+  stage::ScanCorrectionOptions options;
+  if (!args.origin.empty()) options.origin_mm = ParseVector3(args.origin, "--origin", "--origin 12.5,-30,0");
+  if (args.frame == "first-tile") options.first_tile_frame = stage::ParseStitchedFrame(args.stitched_frame);
+  const ScanCorrectionArgs scan{args.calibration, args.input,       args.output, args.layout,          args.resample_mm,
+                                args.extrapolate, args.json,        ThreadCount(), args.read.ToOptions(), options};
   RunScanCorrection(scan, cal);
 }
 
