@@ -86,13 +86,19 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
       if (!fields.empty() && !ParseDouble(fields[0])) {  // a header naming the columns
         for (int axis = 0; axis < 3; ++axis) {
           const std::string wanted(1, static_cast<char>('x' + axis));
+          columns[axis] = -1;
           for (size_t i = 0; i < fields.size(); ++i) {
             const std::string field = AsciiLower(fields[i]);
             if (field == wanted || field.rfind(wanted + "_", 0) == 0 || field.rfind(wanted + " ", 0) == 0 ||
-                field.rfind(wanted + "(", 0) == 0) {
+                field.rfind(wanted + "(", 0) == 0 || field.rfind(wanted + "[", 0) == 0) {
               columns[axis] = static_cast<int>(i);
               break;
             }
+          }
+          // A header that names its columns but not this one: the cloud has no such coordinate.
+          if (columns[axis] < 0) {
+            throw InputError(where + ": the header names no column '" + wanted + "' (it has " +
+                             QuotedForMessage(line) + "); a cloud needs x, y and z: name them, or leave the header out");
           }
         }
         continue;

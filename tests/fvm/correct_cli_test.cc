@@ -404,6 +404,7 @@ TEST_F(CorrectCli, BadInputFailsClearlyAndWritesNothing) {
   expect_fails(dir.Write("no-xyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nproperty float b\n"
                                        "property float c\nend_header\n1 2 3\n"),
                "no-xyz.ply");
+  expect_fails(dir.Write("no-z.xyz", "x y intensity\n-100 -50 3\n"), "no column 'z'");
   expect_fails(dir.Write("all-nan.xyz", "nan nan nan\ninf 1 2\n"), "no valid point");
   // NaN and infinite points are skipped and counted, as height maps' invalid points are.
   const auto some_nan = dir.Write("some-nan.xyz", "-100 -50 0\nnan nan nan\n-99 -48 inf\n-98 -46 0.1\n");
