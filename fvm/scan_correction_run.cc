@@ -148,7 +148,9 @@ void RunOneScan(const ScanCorrectionArgs& args, const stage::Calibration& cal) {
   } else {
     uncertainty_where = std::string(*out_format == imaging::SurfaceFormat::kXyz ? "columns" : "properties") +
                         " u_x, u_y, u_z of " + args.output;
-    imaging::WritePointCloud(args.output, cloud, UncertaintyFields(u));
+    const std::string comment = fmt::format("corrected by fvm with {} (model {}); frame: {}", args.calibration, cal.model,
+                                            FrameName(args));
+    imaging::WritePointCloud(args.output, cloud, UncertaintyFields(u), comment);
   }
 
   if (args.json) {

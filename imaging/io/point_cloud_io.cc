@@ -151,7 +151,8 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, const PointCloudRea
   return ReadPointCloud(path, PointCloudFormatOf(path), options);
 }
 
-void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<PointField>& extra) {
+void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<PointField>& extra,
+                     const std::string& comment) {
   if (cloud.width < 0 || cloud.height < 0 ||
       cloud.points.size() != static_cast<std::size_t>(cloud.width) * static_cast<std::size_t>(cloud.height)) {
     throw std::invalid_argument("WritePointCloud: points.size() is not width * height");
@@ -164,6 +165,7 @@ void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud,
   const PointCloudFormat format = PointCloudFormatOf(path);
   if (format == PointCloudFormat::kXyz) {
     std::string text = "# fvm point cloud: x y z in mm, nan marks a missing point\n";
+    if (!comment.empty()) text += "# " + comment + "\n";
     if (cloud.IsOrganised()) {
       text += "# grid " + std::to_string(cloud.width) + " x " + std::to_string(cloud.height) + "\n";
     }

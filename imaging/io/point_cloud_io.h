@@ -42,8 +42,9 @@ struct PointField {
 
 // Binary PCD or PLY with double coordinates, or XYZ text with round-trip exact numbers, by the extension.
 // Organised clouds stay organised. `extra` fields become further double properties (PLY), fields (PCD) or
-// columns under a header line naming them (XYZ). Written atomically.
+// columns under a header line naming them (XYZ). `comment` (one line) goes into an XYZ file's '#' header; PCL's
+// PLY and PCD writers have no place for it. Written atomically.
 void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud,
-                     const std::vector<PointField>& extra = {});
+                     const std::vector<PointField>& extra = {}, const std::string& comment = "");
 
 }  // namespace fvm::imaging

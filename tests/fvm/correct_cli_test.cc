@@ -170,6 +170,7 @@ TEST_F(CorrectCli, EveryCloudFormatEqualsTheCentreCorrectionTo1nm) {
         const std::string text = testing::ReadText(centres_out);
         EXPECT_THAT(text, HasSubstr("# frame: " + frame));
         for (std::size_t i = 0; i < points.size(); ++i) EXPECT_GT(rows[i][3], 0.0);
+        EXPECT_THAT(testing::ReadText(out), HasSubstr("frame: " + frame));
       }
     }
   }
