@@ -41,20 +41,27 @@ std::string TravelText(const stage::ParameterLayout& layout) {
 
 // Points whose stage coordinates lie outside the calibrated travel: refused, naming them, unless --extrapolate.
 std::vector<std::size_t> CheckTravel(const ScanCorrectionArgs& args, const stage::Calibration& cal,
-                                     const imaging::PointCloud& cloud, const std::string& name) {
+                                     const imaging::PointCloud& cloud, const std::string& name,
+                                     const std::vector<std::string>& tile_names = {}) {
   const std::vector<std::size_t> outside = stage::PointsOutsideTravel(cal.layout, cloud.points, args.options.origin_mm);
   if (outside.empty() || args.extrapolate) return outside;
   std::string named;
   for (std::size_t k = 0; k < std::min(outside.size(), kNamedPoints); ++k) {
     const std::size_t i = outside[k];
-    named += fmt::format("\n  {} at stage {} mm", PointName(cloud, i), Point3(cloud.points[i] + args.options.origin_mm));
+    named += fmt::format("\n  {} at stage {} mm", tile_names.empty() ? PointName(cloud, i) : "tile " + tile_names[i],
+                         Point3(cloud.points[i] + args.options.origin_mm));
   }
   if (outside.size() > kNamedPoints) named += fmt::format("\n  and {} more", outside.size() - kNamedPoints);
+  const std::string fix = tile_names.empty()
+                              ? "If the file's coordinates are not stage coordinates (an origin at the dataset's "
+                                "corner), give the stage position of its origin with --origin X,Y,Z; to correct them "
+                                "anyway, add --extrapolate"
+                              : "The layout's x, y must be the tiles' stage positions (encoder readings); to correct "
+                                "them anyway, add --extrapolate";
   throw InputError(fmt::format(
-      "{}: {} of its points lie outside the travel {} was identified on ({}), where the model only extrapolates:{}\n"
-      "If the file's coordinates are not stage coordinates (an origin at the dataset's corner), give the stage "
-      "position of its origin with --origin X,Y,Z; to correct them anyway, add --extrapolate",
-      name, outside.size(), args.calibration, TravelText(cal.layout), named));
+      "{}: {} of its {} lie outside the travel {} was identified on ({}), where the model only extrapolates:{}\n{}",
+      name, outside.size(), tile_names.empty() ? "points" : "tiles", args.calibration, TravelText(cal.layout), named,
+      fix));
 }
 
 std::vector<imaging::PointField> UncertaintyFields(const std::vector<Eigen::Vector3d>& u) {
@@ -222,7 +229,9 @@ void RunLayout(const ScanCorrectionArgs& args, const stage::Calibration& cal) {
   const imaging::PointCloud centre_cloud = imaging::MakeUnorganisedCloud(centres);
   ScanCorrectionArgs stage_args = args;
   stage_args.options.origin_mm.setZero();  // layout positions are stage positions
-  const std::vector<std::size_t> outside = CheckTravel(stage_args, cal, centre_cloud, args.layout);
+  std::vector<std::string> tile_names;
+  for (const TileShift& t : shifts) tile_names.push_back(t.file);
+  const std::vector<std::size_t> outside = CheckTravel(stage_args, cal, centre_cloud, args.layout, tile_names);
   const stage::ScanCorrector corrector(cal, stage_args.options, centres);
   double largest_per_point = 0.0;
   for (TileShift& t : shifts) {
