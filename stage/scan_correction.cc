@@ -45,7 +45,8 @@ std::vector<std::size_t> PointsOutsideTravel(const ParameterLayout& layout, cons
 
 ScanCorrector::ScanCorrector(const Calibration& calibration, const ScanCorrectionOptions& options,
                              const std::vector<Eigen::Vector3d>& file_points)
-    : calibration_(calibration), options_(options) {
+    : calibration_(calibration), options_(options), all_(calibration.layout.coefficients().size()) {
+  calibration.layout.Expand(calibration.values.data(), all_.data());
   if (!options.first_tile_frame) return;
   if (std::none_of(file_points.begin(), file_points.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); })) {
     throw InputError("no valid point, so no first tile to start the stitched frame at");
@@ -55,15 +56,37 @@ ScanCorrector::ScanCorrector(const Calibration& calibration, const ScanCorrectio
 
 CorrectedPoint ScanCorrector::Correct(const Eigen::Vector3d& file_point) const {
   const Eigen::Vector3d q = file_point + options_.origin_mm;
-  CorrectedPoint out = first_tile_ ? first_tile_->Correct(q) : stage::Correct(calibration_, q);
+  CorrectedPoint out;
+  if (first_tile_) {
+    out = first_tile_->Correct(q);
+  } else {
+    // stage::Correct without its allocations: the 3 x 21 term Jacobian times the sparse term derivative, then
+    // J Cov J^T.
+    const ParameterLayout& layout = calibration_.layout;
+    double e[kNumErrorTerms];
+    layout.TermValues(all_.data(), q, e);
+    const Eigen::Matrix<double, 3, kNumErrorTerms> tj =
+        TermJacobian(layout.chain(), e, q, &out.position, layout.AxesWithErrors());
+    const Eigen::Index n = layout.NumFree();
+    if (calibration_.covariance.rows() == n) {
+      Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxCoefficients> j = Eigen::MatrixXd::Zero(3, n);
+      for (const ParameterLayout::TermDerivativeEntry& d : layout.TermDerivativeEntries(q)) {
+        j.col(d.slot) += tj.col(d.term) * d.value;
+      }
+      const Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxCoefficients> jc = j * calibration_.covariance;
+      out.covariance = jc * j.transpose();
+    }
+  }
   out.position -= options_.origin_mm;
   return out;
 }
 
 Eigen::Vector3d ScanCorrector::Position(const Eigen::Vector3d& file_point) const {
   const Eigen::Vector3d q = file_point + options_.origin_mm;
-  const Eigen::Vector3d p = first_tile_ ? (*first_tile_)(q) : Forward(calibration_.layout, calibration_.values, q);
-  return p - options_.origin_mm;
+  if (first_tile_) return (*first_tile_)(q) - options_.origin_mm;
+  double e[kNumErrorTerms];
+  calibration_.layout.TermValues(all_.data(), q, e);
+  return ChainForward(calibration_.layout.chain(), e, q) - options_.origin_mm;
 }
 
 ScanCorrectionSummary CorrectScanInPlace(const ScanCorrector& corrector, std::vector<Eigen::Vector3d>& points,

@@ -51,6 +51,9 @@ class ScanCorrector {
   const Calibration& calibration_;
   ScanCorrectionOptions options_;
   std::optional<FirstTileCompensation> first_tile_;
+  // Every coefficient's value, free and fixed, expanded once: the stage frame evaluates the model per point
+  // without expanding it again (the same arithmetic as Forward and ForwardJacobian, so the same bits).
+  std::vector<double> all_;
 };
 
 struct ScanCorrectionSummary {
