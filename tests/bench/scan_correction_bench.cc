@@ -45,12 +45,23 @@ void BM_ScanCorrection(benchmark::State& state) {
     state.PauseTiming();
     points = cloud;
     state.ResumeTiming();
-    benchmark::DoNotOptimize(CorrectScanInPlace(corrector, points, uncertainties ? &u : nullptr));
+    benchmark::DoNotOptimize(
+        CorrectScanInPlace(corrector, points, uncertainties ? &u : nullptr, static_cast<int>(state.range(2))));
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
   state.counters["u"] = uncertainties;
+  state.counters["threads"] = static_cast<double>(state.range(2));
 }
-BENCHMARK(BM_ScanCorrection)->Args({10'000'000, 1})->Args({10'000'000, 0})->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+// Points, uncertainties (1) or positions only (0), threads (0: all cores; 1: its CPU time is the whole work, which
+// a loaded machine does not change).
+BENCHMARK(BM_ScanCorrection)
+    ->Args({10'000'000, 1, 0})
+    ->Args({10'000'000, 0, 0})
+    ->Args({10'000'000, 1, 1})
+    ->Args({10'000'000, 0, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 // What fvm correct does per centre of a centre export: the correction with its covariance and the CSV line.
 void BM_CentreCsvPath(benchmark::State& state) {
