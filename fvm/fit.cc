@@ -20,6 +20,7 @@
 #include "fvm/surface_read_args.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/calotte_numbering.h"
+#include "imaging/cloud_calotte_detection.h"
 #include "imaging/height_map.h"
 #include "imaging/point_cloud.h"
 #include "imaging/io/surface_file.h"
@@ -41,17 +42,17 @@ struct FitArgs {
   SurfaceReadArgs read;  // as fvm info
 };
 
-imaging::HeightMap ReadMap(const FitArgs& args) {
+// What fit searched: a height map (a file's, or an organised cloud's grid), or an unorganised cloud.
+struct Searched {
+  std::optional<imaging::HeightMap> map;
+  std::optional<imaging::PointCloud> cloud;
+};
+
+Searched ReadSearched(const FitArgs& args) {
   imaging::Surface surface = imaging::ReadSurface(args.file, args.read.ToOptions());
-  if (surface.height_map) return std::move(*surface.height_map);
-  if (!surface.cloud->IsOrganised()) {
-    throw InputError(
-        fmt::format("{}: an unorganised point cloud ({} points); finding calottes needs the points on "
-                    "a grid: export the measurement as a height map (X3P, AL3D, TIFF) or an organised "
-                    "cloud",
-                    args.file, surface.cloud->points.size()));
-  }
-  return imaging::CloudToHeightMap(*surface.cloud, args.file);
+  if (surface.height_map) return {std::move(surface.height_map), std::nullopt};
+  if (!surface.cloud->IsOrganised()) return {std::nullopt, std::move(surface.cloud)};
+  return {imaging::CloudToHeightMap(*surface.cloud, args.file), std::nullopt};
 }
 
 std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
@@ -64,7 +65,7 @@ double Round(double v, double per_unit) { return std::round(v * per_unit) / per_
 
 void RunFit(const FitArgs& args) {
   const std::optional<artefacts::Artefact> artefact = NamedArtefact(args.artefact);
-  const imaging::HeightMap map = ReadMap(args);
+  const Searched searched = ReadSearched(args);
 
   imaging::CalotteDetectionOptions options;
   options.fit.fixed_radius_mm = args.radius_mm;
@@ -87,9 +88,16 @@ void RunFit(const FitArgs& args) {
   }
 
   imaging::CalotteDetection detection;
+  std::string method = "height map";  // how the calottes were found, said in the export, the JSON and the table
   std::optional<imaging::LayoutMatch> layout;
   try {
-    detection = imaging::DetectCalottes(map, options);
+    if (searched.map) {
+      detection = imaging::DetectCalottes(*searched.map, options);
+    } else {
+      imaging::CloudCalotteDetection found = imaging::DetectCalottesInCloud(*searched.cloud, options, args.file);
+      detection = std::move(found.detection);
+      method = found.method;
+    }
     if (detection.calottes.empty()) {
       std::string why;
       for (std::size_t i = 0; i < std::min<std::size_t>(detection.rejected.size(), 5); ++i) {
@@ -118,7 +126,7 @@ void RunFit(const FitArgs& args) {
 
   artefacts::CentreExport out;
   out.source = args.output;
-  out.comments.push_back("fvm fit " + args.file);
+  out.comments.push_back("fvm fit " + args.file + " (" + method + ")");
   out.comments.push_back(fmt::format(
       "{} calottes{}; sphere fit with the {} residual{}; face noise {:.3f} um", detection.calottes.size(),
       artefact ? " of " + artefact->name + ", numbered by its layout" : "", args.residual,
@@ -159,6 +167,7 @@ void RunFit(const FitArgs& args) {
            {"at_border", c.at_border}});
     }
     doc["file"] = args.file;
+    doc["method"] = method;
     doc["artefact"] = artefact ? nlohmann::ordered_json(artefact->name) : nlohmann::ordered_json(nullptr);
     doc["face"] = {{"slope_x", detection.face.b},
                    {"slope_y", detection.face.c},
@@ -178,9 +187,14 @@ void RunFit(const FitArgs& args) {
     return;
   }
 
-  fmt::print("{}: {} x {} points of {:.3g} x {:.3g} um; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n", args.file,
-             map.size_x, map.size_y, map.dx_mm * 1e3, map.dy_mm * 1e3, detection.face.sigma_mm * 1e3,
-             detection.face.b * 1e3, detection.face.c * 1e3);
+  if (searched.map) {
+    fmt::print("{}: {} x {} points of {:.3g} x {:.3g} um; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n", args.file,
+               searched.map->size_x, searched.map->size_y, searched.map->dx_mm * 1e3, searched.map->dy_mm * 1e3,
+               detection.face.sigma_mm * 1e3, detection.face.b * 1e3, detection.face.c * 1e3);
+  } else {
+    fmt::print("{}: unorganised cloud, calottes found by {}; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n",
+               args.file, method, detection.face.sigma_mm * 1e3, detection.face.b * 1e3, detection.face.c * 1e3);
+  }
   if (layout) {
     fmt::print("{} layout: turned {:.3f} deg, scale {:.6f}, {:.2f} um rms from nominal\n", artefact->name,
                layout->rotation_rad * 180 / M_PI, layout->scale, layout->rms_mm * 1e3);
@@ -218,11 +232,15 @@ void RegisterFit(CLI::App& app) {
   AddDetails(sub,
       "Finds the calottes (spherical dimples) in a height map: levels the face they are cut into, takes the round "
       "depressions below it, and fits a sphere to the points of each by least squares with outliers trimmed. "
+      "An unorganised point cloud (PLY, PCD, XYZ as MeasureSuite, Gwyddion or CloudCompare export it) seen from "
+      "above (2.5D) is projected onto a grid of about four points per cell to find the face and the dimples with "
+      "the same screening, then each sphere is fitted to the cloud's own points with the same estimator; the "
+      "output says which method was used. A cloud of one calotte in its face gives that calotte. "
       "With --artefact the calottes get the artefact's numbers (1..36 row by row for grid6x6, 1..17 along bar17), "
       "matched to its nominal layout. Prints centre, radius, form deviation (RMS) and the centre's standard "
       "uncertainty per calotte; -o writes the centre export (CSV id,x,y,z,radius,form_rms in mm) that fvm "
       "calibrate reads. Reads what fvm info reads.");
-  sub->add_option("FILE", args->file, "height map (X3P, AL3D, TIFF/EXR/PNG) or organised point cloud")->required();
+  sub->add_option("FILE", args->file, "height map (X3P, AL3D, TIFF/EXR/PNG) or point cloud (PLY, PCD, XYZ)")->required();
   sub->add_option("--artefact", args->artefact, "number the calottes as this artefact does: grid6x6 or bar17");
   sub->add_option("-o,--output", args->output, "write the centre export (CSV) here");
   sub->add_flag("--json", args->json,
@@ -248,7 +266,7 @@ void RegisterFit(CLI::App& app) {
       ->check(CLI::IsMember({"height", "orthogonal"}))
       ->default_str("height");
   args->read.AddOptions(*sub);
-  sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv");
+  sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv\n         fvm fit calotte.ply --json");
   sub->callback([args] { RunFit(*args); });
 }
 

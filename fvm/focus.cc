@@ -100,7 +100,7 @@ void RunFocus(const FocusArgs& args) {
   WriteMap(args.output, map);
   if (!args.quality_output.empty()) {
     imaging::HeightMap quality = map;
-    quality.z_mm = result.quality;
+    quality.z_mm.assign(result.quality.begin(), result.quality.end());
     quality.source = "focus quality (peak over mean focus measure)";
     WriteMap(args.quality_output, quality);
   }

@@ -38,9 +38,6 @@ struct Summary {
   bool organised = false;
 };
 
-// Heights are floats: print the shortest decimal that is that float (0.1, not 0.10000000149011612).
-double FloatValue(double v) { return *ParseDouble(FormatShortest(static_cast<float>(v))); }
-
 Summary SummariseMap(const imaging::HeightMap& map) {
   Summary s;
   s.kind = "height_map";
@@ -56,8 +53,8 @@ Summary SummariseMap(const imaging::HeightMap& map) {
   const imaging::HeightMapStats stats = imaging::ComputeStats(map);
   s.valid_points = stats.valid_points;
   if (stats.valid_points > 0) {
-    s.z_min = FloatValue(stats.z_min_mm);
-    s.z_max = FloatValue(stats.z_max_mm);
+    s.z_min = stats.z_min_mm;
+    s.z_max = stats.z_max_mm;
     s.x_min = map.x0_mm;
     s.x_max = map.x0_mm + (map.size_x - 1) * map.dx_mm;
     s.y_min = map.y0_mm;

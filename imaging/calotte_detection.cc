@@ -53,7 +53,7 @@ Eigen::Vector3d LeastSquaresPlane(const std::vector<Eigen::Vector3d>& points, co
 
 FacePlane FitFace(const HeightMap& map, std::uint64_t seed) {
   std::size_t valid = 0;
-  for (const float z : map.z_mm) valid += std::isfinite(z);
+  for (const double z : map.z_mm) valid += std::isfinite(z);
   if (valid == 0) throw InputError("the height map holds no valid point (all NaN); nothing to find calottes in");
   const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(valid) / kFaceSamples))));
   // Coordinates relative to the map's middle keep the 3 x 3 normal equations well conditioned.
@@ -62,7 +62,7 @@ FacePlane FitFace(const HeightMap& map, std::uint64_t seed) {
   std::vector<Eigen::Vector3d> samples;
   for (int iy = 0; iy < map.size_y; iy += stride) {
     for (int ix = 0; ix < map.size_x; ix += stride) {
-      const float z = map.at(ix, iy);
+      const double z = map.at(ix, iy);
       if (std::isfinite(z)) samples.emplace_back(map.x0_mm + ix * map.dx_mm - xm, map.y0_mm + iy * map.dy_mm - ym, z);
     }
   }
@@ -191,7 +191,7 @@ CalotteDetection DetectCalottes(const HeightMap& map, const CalotteDetectionOpti
     const double y = map.y0_mm + iy * map.dy_mm;
     const double row_face = face.a + face.c * y;
     for (int ix = 0; ix < map.size_x; ++ix) {
-      const float z = map.at(ix, iy);
+      const double z = map.at(ix, iy);
       row[ix] = std::isfinite(z) && row_face + face.b * (map.x0_mm + ix * map.dx_mm) - z > out.min_depth_mm ? 255 : 0;
     }
   }

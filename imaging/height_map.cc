@@ -10,7 +10,7 @@ HeightMapStats ComputeStats(const HeightMap& map) {
   HeightMapStats stats;
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
-  for (float z : map.z_mm) {
+  for (double z : map.z_mm) {
     if (!std::isfinite(z)) continue;
     ++stats.valid_points;
     lo = std::min(lo, static_cast<double>(z));

@@ -54,7 +54,7 @@ PointCloud HeightMapToCloud(const HeightMap& map) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int iy = 0; iy < map.size_y; ++iy) {
     for (int ix = 0; ix < map.size_x; ++ix) {
-      const float z = map.at(ix, iy);
+      const double z = map.at(ix, iy);
       cloud.points.emplace_back(std::isfinite(z)
                                     ? Eigen::Vector3d(map.x0_mm + ix * map.dx_mm, map.y0_mm + iy * map.dy_mm, z)
                                     : Eigen::Vector3d(nan, nan, nan));
@@ -105,7 +105,7 @@ HeightMap CloudToHeightMap(const PointCloud& cloud, const std::string& name) {
   map.source = cloud.source;
   map.z_mm.reserve(cloud.points.size());
   for (const Eigen::Vector3d& p : cloud.points) {
-    map.z_mm.push_back(IsValid(p) ? static_cast<float>(p.z()) : std::numeric_limits<float>::quiet_NaN());
+    map.z_mm.push_back(IsValid(p) ? p.z() : std::numeric_limits<double>::quiet_NaN());
   }
   return map;
 }

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <array>
 #include <cmath>
@@ -381,16 +382,20 @@ void IdentificationOptions::Check() const {
   }
 }
 
-Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions) {
-  if (positions.empty()) throw std::invalid_argument("a measurement without points has no first tile");
-  Eigen::Vector2d corner = positions[0].head<2>();
-  for (const Eigen::Vector3d& p : positions) corner = Eigen::Vector2d(std::min(corner.x(), p.x()), std::max(corner.y(), p.y()));
-  // Its height is that of the part under it: the point nearest the corner (a tilted part is not at its mean z there).
-  const Eigen::Vector3d* nearest = &positions[0];
+Eigen::Vector3d FirstTile(std::span<const Eigen::Vector3d> positions, const Eigen::Vector3d& offset) {
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d corner(inf, -inf);
   for (const Eigen::Vector3d& p : positions) {
-    if ((p.head<2>() - corner).squaredNorm() < (nearest->head<2>() - corner).squaredNorm()) nearest = &p;
+    if (p.allFinite()) corner = Eigen::Vector2d(std::min(corner.x(), p.x()), std::max(corner.y(), p.y()));
   }
-  return Eigen::Vector3d(corner.x(), corner.y(), nearest->z());
+  if (!corner.allFinite()) throw std::invalid_argument("a measurement without points has no first tile");
+  // Its height is that of the part under it: the point nearest the corner (a tilted part is not at its mean z there).
+  const Eigen::Vector3d* nearest = nullptr;
+  for (const Eigen::Vector3d& p : positions) {
+    if (!p.allFinite()) continue;
+    if (!nearest || (p.head<2>() - corner).squaredNorm() < (nearest->head<2>() - corner).squaredNorm()) nearest = &p;
+  }
+  return Eigen::Vector3d(corner.x(), corner.y(), nearest->z()) + offset;
 }
 
 Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout) {

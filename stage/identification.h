@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <string>
+#include <span>
 #include <vector>
 
 #include "stage/calibration.h"
@@ -125,8 +126,10 @@ Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free,
                               const Eigen::Vector3d* anchor = nullptr);
 
 // The first tile of a measurement that covers these stage positions: the instrument starts at lowest x and
-// highest y (000:7264); z is that of the position nearest to that corner.
-Eigen::Vector3d FirstTile(const std::vector<Eigen::Vector3d>& positions);
+// highest y (000:7264); z is that of the position nearest to that corner. Positions are `offset` + each point
+// (a scan whose file origin is not the stage's); points that are not finite are left out, so a scan's invalid
+// points need no copy. Throws std::invalid_argument when no point is left.
+Eigen::Vector3d FirstTile(std::span<const Eigen::Vector3d> positions, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
 
 // A plausible size of each free coefficient: its term reaching 0.5 mm (translation) or 1 mrad (rotation,
 // squareness) at the far end of the travel. Scales the solver's parameters and judges identifiability.

@@ -20,6 +20,70 @@ struct PlacedCalotte {
   double opening;  // radius of the rim circle in the face
 };
 
+// The calottes where the options put them, the face they are cut into, and the region they span with the margin.
+struct Scene {
+  std::vector<PlacedCalotte> placed;
+  Eigen::Vector2d lo, hi;
+  double z0, slope_x, slope_y;
+  double FaceZ(double x, double y) const { return z0 + slope_x * x + slope_y * y; }
+};
+
+Scene PlaceCalottes(const Artefact& artefact, const CalotteSurfaceOptions& options) {
+  options.Check();
+  if (artefact.calottes.empty()) throw std::invalid_argument("height map: the artefact has no calottes");
+  const Eigen::Rotation2Dd turn(options.rotation_rad);
+  Scene scene;
+  scene.z0 = options.z0_mm;
+  scene.slope_x = options.slope_x;
+  scene.slope_y = options.slope_y;
+  const auto face_z = [&](double x, double y) { return scene.FaceZ(x, y); };
+  const Eigen::Vector3d normal = Eigen::Vector3d(-options.slope_x, -options.slope_y, 1.0).normalized();
+  std::vector<PlacedCalotte>& placed = scene.placed;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (const Calotte& c : artefact.calottes) {
+    const double depth = options.depth_mm > 0 ? options.depth_mm : c.radius_mm;
+    if (!(c.radius_mm > 0) || depth > c.radius_mm * (1 + 1e-12)) {
+      throw std::invalid_argument("height map: calotte " + std::to_string(c.id) +
+                                  ": depth must not exceed the radius (an undercut hole is invisible from above)");
+    }
+    const Eigen::Vector2d xy = turn * c.centre.head<2>() + options.offset_mm;
+    // The sphere's centre sits (radius - depth) above the face, along the face's normal.
+    const double above = c.radius_mm - std::min(depth, c.radius_mm);
+    const Eigen::Vector3d centre = Eigen::Vector3d(xy.x(), xy.y(), face_z(xy.x(), xy.y())) + above * normal;
+    placed.push_back({c.id, centre, c.radius_mm, std::sqrt(c.radius_mm * c.radius_mm - above * above)});
+    const double reach = c.radius_mm + 6 * options.burr_width_mm;
+    const Eigen::Vector2d span = Eigen::Vector2d::Constant(reach + options.margin_mm);
+    lo = lo.cwiseMin(xy - span);
+    hi = hi.cwiseMax(xy + span);
+  }
+  scene.lo = lo;
+  scene.hi = hi;
+  return scene;
+}
+
+// The first surface seen from +z at (x, y) of one calotte's neighbourhood: the ball's lower half when the vertical
+// line meets the hole (too steep for the optics beyond max_slope), else the face with the calotte's burr.
+void FirstSurface(const PlacedCalotte& c, const Scene& scene, const CalotteSurfaceOptions& options, double min_cos,
+                  double x, double y, double* z, std::uint8_t* state) {
+  const double rho2 = (x - c.centre.x()) * (x - c.centre.x()) + (y - c.centre.y()) * (y - c.centre.y());
+  const double face = scene.FaceZ(x, y);
+  if (rho2 < c.radius * c.radius) {
+    const double s = std::sqrt(c.radius * c.radius - rho2);
+    // The vertical line meets the hole when it enters the ball below the face and leaves it above: then
+    // the first surface from above is the ball's lower half.
+    if (c.centre.z() - s < face && c.centre.z() + s >= face) {
+      *z = c.centre.z() - s;
+      *state = s / c.radius < min_cos ? kTooSteep : kDimple;
+      return;
+    }
+  }
+  if (*state == kFace && options.burr_height_mm > 0) {
+    const double beyond = (std::sqrt(rho2) - c.opening) / options.burr_width_mm;
+    if (beyond >= 0) *z += options.burr_height_mm * std::exp(-0.5 * beyond * beyond);
+  }
+}
+
 }  // namespace
 
 void CalotteSurfaceOptions::Check() const {
@@ -47,31 +111,11 @@ Artefact SingleCalotte(double radius_mm) {
 }
 
 CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfaceOptions& options) {
-  options.Check();
-  if (artefact.calottes.empty()) throw std::invalid_argument("height map: the artefact has no calottes");
-  const Eigen::Rotation2Dd turn(options.rotation_rad);
-  const auto face_z = [&](double x, double y) { return options.z0_mm + options.slope_x * x + options.slope_y * y; };
-  const Eigen::Vector3d normal = Eigen::Vector3d(-options.slope_x, -options.slope_y, 1.0).normalized();
-
-  std::vector<PlacedCalotte> placed;
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector2d hi = -lo;
-  for (const Calotte& c : artefact.calottes) {
-    const double depth = options.depth_mm > 0 ? options.depth_mm : c.radius_mm;
-    if (!(c.radius_mm > 0) || depth > c.radius_mm * (1 + 1e-12)) {
-      throw std::invalid_argument("height map: calotte " + std::to_string(c.id) +
-                                  ": depth must not exceed the radius (an undercut hole is invisible from above)");
-    }
-    const Eigen::Vector2d xy = turn * c.centre.head<2>() + options.offset_mm;
-    // The sphere's centre sits (radius - depth) above the face, along the face's normal.
-    const double above = c.radius_mm - std::min(depth, c.radius_mm);
-    const Eigen::Vector3d centre = Eigen::Vector3d(xy.x(), xy.y(), face_z(xy.x(), xy.y())) + above * normal;
-    placed.push_back({c.id, centre, c.radius_mm, std::sqrt(c.radius_mm * c.radius_mm - above * above)});
-    const double reach = c.radius_mm + 6 * options.burr_width_mm;
-    const Eigen::Vector2d span = Eigen::Vector2d::Constant(reach + options.margin_mm);
-    lo = lo.cwiseMin(xy - span);
-    hi = hi.cwiseMax(xy + span);
-  }
+  const Scene scene = PlaceCalottes(artefact, options);
+  const std::vector<PlacedCalotte>& placed = scene.placed;
+  const Eigen::Vector2d& lo = scene.lo;
+  const Eigen::Vector2d& hi = scene.hi;
+  const auto face_z = [&](double x, double y) { return scene.FaceZ(x, y); };
 
   CalotteSurface out;
   imaging::HeightMap& map = out.map;
@@ -87,7 +131,7 @@ CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfa
   map.source = "rendered " + artefact.name;
   map.z_mm.resize(static_cast<size_t>(map.size_x) * static_cast<size_t>(map.size_y));
 
-  // Heights in double until the end: the float of the export is the only rounding (0.015 nm at 0.25 mm).
+  // Heights in double, as the map holds them.
   std::vector<double> z(map.z_mm.size());
   std::vector<std::uint8_t> state(map.z_mm.size(), kFace);
   const auto index = [&](int ix, int iy) { return static_cast<size_t>(iy) * static_cast<size_t>(map.size_x) + ix; };
@@ -107,23 +151,7 @@ CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfa
     for (int iy = iy0; iy <= iy1; ++iy) {
       for (int ix = ix0; ix <= ix1; ++ix) {
         const size_t i = index(ix, iy);
-        const double x = map.x0_mm + ix * map.dx_mm, y = map.y0_mm + iy * map.dy_mm;
-        const double rho2 = (x - c.centre.x()) * (x - c.centre.x()) + (y - c.centre.y()) * (y - c.centre.y());
-        const double face = face_z(x, y);
-        if (rho2 < c.radius * c.radius) {
-          const double s = std::sqrt(c.radius * c.radius - rho2);
-          // The vertical line meets the hole when it enters the ball below the face and leaves it above: then
-          // the first surface from above is the ball's lower half.
-          if (c.centre.z() - s < face && c.centre.z() + s >= face) {
-            z[i] = c.centre.z() - s;
-            state[i] = s / c.radius < min_cos ? kTooSteep : kDimple;
-            continue;
-          }
-        }
-        if (state[i] == kFace && options.burr_height_mm > 0) {
-          const double beyond = (std::sqrt(rho2) - c.opening) / options.burr_width_mm;
-          if (beyond >= 0) z[i] += options.burr_height_mm * std::exp(-0.5 * beyond * beyond);
-        }
+        FirstSurface(c, scene, options, min_cos, map.x0_mm + ix * map.dx_mm, map.y0_mm + iy * map.dy_mm, &z[i], &state[i]);
       }
     }
   }
@@ -141,10 +169,52 @@ CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfa
       v += options.spike_height_mm * (2 * uniform(spike_rng) - 1);
     }
     const bool missing = options.missing_fraction > 0 && uniform(missing_rng) < options.missing_fraction;
-    map.z_mm[i] = state[i] == kTooSteep || missing ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v);
+    map.z_mm[i] = state[i] == kTooSteep || missing ? std::numeric_limits<double>::quiet_NaN() : v;
   }
 
   for (const PlacedCalotte& c : placed) out.truth.push_back(Calotte{c.id, c.centre, c.radius});
+  return out;
+}
+
+}  // namespace fvm::artefacts
+
+namespace fvm::artefacts {
+
+CalotteCloud RenderCalotteCloud(const Artefact& artefact, const CalotteSurfaceOptions& options, std::size_t points) {
+  const Scene scene = PlaceCalottes(artefact, options);
+  const double min_cos = std::cos(options.max_slope_deg * M_PI / 180.0);
+  std::mt19937_64 place_rng(options.seed ^ 0x94d049bb133111ebULL);
+  std::mt19937_64 noise_rng(options.seed);
+  std::mt19937_64 missing_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::mt19937_64 spike_rng(options.seed ^ 0xc2b2ae3d27d4eb4fULL);
+  std::uniform_real_distribution<double> along_x(scene.lo.x(), scene.hi.x()), along_y(scene.lo.y(), scene.hi.y());
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  CalotteCloud out;
+  std::vector<Eigen::Vector3d> cloud;
+  cloud.reserve(points);
+  for (std::size_t k = 0; k < points; ++k) {
+    const double x = along_x(place_rng), y = along_y(place_rng);
+    double z = scene.FaceZ(x, y);
+    std::uint8_t state = kFace;
+    for (const PlacedCalotte& c : scene.placed) {
+      if (std::abs(x - c.centre.x()) > c.radius + 6 * options.burr_width_mm ||
+          std::abs(y - c.centre.y()) > c.radius + 6 * options.burr_width_mm) {
+        continue;
+      }
+      FirstSurface(c, scene, options, min_cos, x, y, &z, &state);
+    }
+    if (options.noise_sigma_mm > 0) z += options.noise_sigma_mm * noise(noise_rng);
+    if (options.spike_fraction > 0 && uniform(spike_rng) < options.spike_fraction) {
+      z += options.spike_height_mm * (2 * uniform(spike_rng) - 1);
+    }
+    const bool missing = options.missing_fraction > 0 && uniform(missing_rng) < options.missing_fraction;
+    if (state == kTooSteep || missing) continue;  // a cloud leaves out what the instrument did not measure
+    cloud.emplace_back(x, y, z);
+  }
+  out.cloud = imaging::MakeUnorganisedCloud(std::move(cloud));
+  out.cloud.source = "rendered " + artefact.name + " (unorganised)";
+  for (const PlacedCalotte& c : scene.placed) out.truth.push_back(Calotte{c.id, c.centre, c.radius});
   return out;
 }
 

@@ -11,6 +11,7 @@
 
 #include "artefacts/geometry/artefact.h"
 #include "imaging/height_map.h"
+#include "imaging/point_cloud.h"
 
 namespace fvm::artefacts {
 
@@ -48,6 +49,15 @@ struct CalotteSurface {
 };
 
 CalotteSurface RenderCalotteSurface(const Artefact& artefact, const CalotteSurfaceOptions& options);
+
+// The same surface as an unorganised cloud, as form-measurement exports hold it: `points` places drawn uniformly
+// over the region the map would cover (seeded), each with the first surface's height there, the same noise, spikes
+// and dropouts; points on flanks steeper than max_slope_deg are left out (the cloud has no NaN). Truth as above.
+struct CalotteCloud {
+  imaging::PointCloud cloud;
+  std::vector<Calotte> truth;
+};
+CalotteCloud RenderCalotteCloud(const Artefact& artefact, const CalotteSurfaceOptions& options, std::size_t points);
 
 // One calotte of the given radius with its centre's nominal position at the artefact origin (id 1).
 Artefact SingleCalotte(double radius_mm);

@@ -168,7 +168,7 @@ HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
       const bool bad = !std::isfinite(z_m) ||
                        (std::isfinite(invalid) && std::fabs(static_cast<double>(z_m) - invalid) <= invalid_tolerance);
       map.z_mm[iy * cols + ix] =
-          bad ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(static_cast<double>(z_m) * kMmPerMetre);
+          bad ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(z_m) * kMmPerMetre;
     }
   }
   return map;

@@ -182,7 +182,7 @@ HeightMap ReadHeightMapImage(const std::filesystem::path& path, const HeightMapI
   for (std::size_t i = 0; i < n; ++i) {
     const bool invalid = !std::isfinite(raw[i]) || (options.invalid_value && raw[i] == *options.invalid_value) ||
                          (!coverage.empty() && coverage[i] == 0.0);
-    map.z_mm[i] = invalid ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z_offset + z_scale * raw[i]);
+    map.z_mm[i] = invalid ? std::numeric_limits<double>::quiet_NaN() : z_offset + z_scale * raw[i];
   }
   return map;
 }
@@ -210,7 +210,9 @@ void WriteHeightMapImage(const std::filesystem::path& path, const HeightMap& map
   spec.x_resolution = static_cast<float>(10.0 / map.dx_mm);
   spec.y_resolution = static_cast<float>(10.0 / map.dy_mm);
   spec.resolution_unit = "cm";
-  WriteImageFile(path, spec, PixelType::kFloat, map.z_mm.data());
+  // The image holds float32 heights (TIFF and EXR float samples): the map's doubles rounded once here.
+  const std::vector<float> heights(map.z_mm.begin(), map.z_mm.end());
+  WriteImageFile(path, spec, PixelType::kFloat, heights.data());
 }
 
 }  // namespace fvm::imaging

@@ -86,13 +86,19 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
       if (!fields.empty() && !ParseDouble(fields[0])) {  // a header naming the columns
         for (int axis = 0; axis < 3; ++axis) {
           const std::string wanted(1, static_cast<char>('x' + axis));
+          columns[axis] = -1;
           for (size_t i = 0; i < fields.size(); ++i) {
             const std::string field = AsciiLower(fields[i]);
             if (field == wanted || field.rfind(wanted + "_", 0) == 0 || field.rfind(wanted + " ", 0) == 0 ||
-                field.rfind(wanted + "(", 0) == 0) {
+                field.rfind(wanted + "(", 0) == 0 || field.rfind(wanted + "[", 0) == 0) {
               columns[axis] = static_cast<int>(i);
               break;
             }
+          }
+          // A header that names its columns but not this one: the cloud has no such coordinate.
+          if (columns[axis] < 0) {
+            throw InputError(where + ": the header names no column '" + wanted + "' (it has " +
+                             QuotedForMessage(line) + "); a cloud needs x, y and z: name them, or leave the header out");
           }
         }
         continue;
@@ -145,19 +151,34 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, const PointCloudRea
   return ReadPointCloud(path, PointCloudFormatOf(path), options);
 }
 
-void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud) {
+void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<PointField>& extra,
+                     const std::string& comment) {
   if (cloud.width < 0 || cloud.height < 0 ||
       cloud.points.size() != static_cast<std::size_t>(cloud.width) * static_cast<std::size_t>(cloud.height)) {
     throw std::invalid_argument("WritePointCloud: points.size() is not width * height");
   }
+  for (const PointField& field : extra) {
+    if (field.values.size() != cloud.points.size()) {
+      throw std::invalid_argument("WritePointCloud: field " + field.name + " has not one value per point");
+    }
+  }
   const PointCloudFormat format = PointCloudFormatOf(path);
   if (format == PointCloudFormat::kXyz) {
     std::string text = "# fvm point cloud: x y z in mm, nan marks a missing point\n";
+    if (!comment.empty()) text += "# " + comment + "\n";
     if (cloud.IsOrganised()) {
       text += "# grid " + std::to_string(cloud.width) + " x " + std::to_string(cloud.height) + "\n";
     }
-    for (const Eigen::Vector3d& p : cloud.points) {
-      text += FormatShortest(p.x()) + " " + FormatShortest(p.y()) + " " + FormatShortest(p.z()) + "\n";
+    if (!extra.empty()) {
+      text += "x y z";
+      for (const PointField& field : extra) text += " " + field.name;
+      text += "\n";
+    }
+    for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+      const Eigen::Vector3d& p = cloud.points[i];
+      text += FormatShortest(p.x()) + " " + FormatShortest(p.y()) + " " + FormatShortest(p.z());
+      for (const PointField& field : extra) text += " " + FormatShortest(field.values[i]);
+      text += "\n";
     }
     WriteFileAtomically(path, text);
     return;
@@ -170,11 +191,18 @@ void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud)
     blob.fields.push_back({std::string(1, static_cast<char>('x' + axis)),
                            static_cast<std::uint32_t>(axis * sizeof(double)), CloudFieldType::kFloat64, 1});
   }
-  blob.point_step = 3 * sizeof(double);
+  for (std::size_t k = 0; k < extra.size(); ++k) {
+    blob.fields.push_back({extra[k].name, static_cast<std::uint32_t>((3 + k) * sizeof(double)), CloudFieldType::kFloat64, 1});
+  }
+  blob.point_step = static_cast<std::uint32_t>((3 + extra.size()) * sizeof(double));
   blob.row_step = blob.point_step * blob.width;
   blob.data.resize(cloud.points.size() * blob.point_step);
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-    std::memcpy(blob.data.data() + i * blob.point_step, cloud.points[i].data(), blob.point_step);
+    std::uint8_t* record = blob.data.data() + i * blob.point_step;
+    std::memcpy(record, cloud.points[i].data(), 3 * sizeof(double));
+    for (std::size_t k = 0; k < extra.size(); ++k) {
+      std::memcpy(record + (3 + k) * sizeof(double), &extra[k].values[i], sizeof(double));
+    }
   }
   const CloudCodec& codec = LoadCloudCodec("writing " + path.string());
   WriteThroughTemporary(path, [&](const std::filesystem::path& temporary) {

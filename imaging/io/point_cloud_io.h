@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "imaging/point_cloud.h"
 
@@ -33,8 +34,17 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, const PointCloudRea
 // writes it) restores an organised cloud when the point count matches.
 PointCloud ParseXyz(std::string_view text, const std::string& name, const PointCloudReadOptions& options = {});
 
+// A value per point beside x, y, z (a corrected cloud's standard uncertainties u_x, u_y, u_z, mm).
+struct PointField {
+  std::string name;
+  std::vector<double> values;  // one per point
+};
+
 // Binary PCD or PLY with double coordinates, or XYZ text with round-trip exact numbers, by the extension.
-// Organised clouds stay organised. Written atomically.
-void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud);
+// Organised clouds stay organised. `extra` fields become further double properties (PLY), fields (PCD) or
+// columns under a header line naming them (XYZ). `comment` (one line) goes into an XYZ file's '#' header; PCL's
+// PLY and PCD writers have no place for it. Written atomically.
+void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud,
+                     const std::vector<PointField>& extra = {}, const std::string& comment = "");
 
 }  // namespace fvm::imaging

@@ -76,6 +76,21 @@ bool IsPointCloudFormat(SurfaceFormat format) {
   return format == SurfaceFormat::kPcd || format == SurfaceFormat::kPly || format == SurfaceFormat::kXyz;
 }
 
+std::optional<SurfaceFormat> SurfaceFormatOfName(const std::filesystem::path& path) { return FromExtension(path); }
+
+void WriteHeightMap(const std::filesystem::path& path, const HeightMap& map) {
+  const std::optional<SurfaceFormat> format = FromExtension(path);
+  if (format == SurfaceFormat::kX3p) {
+    WriteX3p(path, map);
+  } else if (format == SurfaceFormat::kAl3d) {
+    WriteAl3d(path, map);
+  } else if (format == SurfaceFormat::kImage && AsciiLower(path.extension().string()) != ".png") {
+    WriteHeightMapImage(path, map);
+  } else {
+    throw InputError(path.string() + ": a height map is written as .x3p, .al3d, .tif, .tiff or .exr");
+  }
+}
+
 SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   const std::string head = ReadFileHead(path, 64);
   if (head.empty()) throw InputError(path.string() + ": the file is empty; export or copy it again");

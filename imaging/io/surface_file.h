@@ -20,6 +20,10 @@ enum class SurfaceFormat { kX3p, kAl3d, kImage, kPcd, kPly, kXyz };
 std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 
+// The format a file of this name is written in, by its extension alone (for outputs): .x3p, .al3d,
+// .tif/.tiff/.exr/.png, .pcd, .ply, .xyz/.csv/.txt/.asc/.pts; nullopt for anything else.
+std::optional<SurfaceFormat> SurfaceFormatOfName(const std::filesystem::path& path);
+
 // Throws InputError when the file is missing, empty, or neither its content nor its extension is one fvm reads.
 SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path);
 
@@ -40,5 +44,9 @@ struct Surface {
 
 // Throws InputError naming the file for anything wrong with it.
 Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions& options = {});
+
+// A height map written by the extension: X3P (float64 heights, D), AL3D (float32) or a float32 image (TIFF,
+// EXR). Atomically. Throws InputError for another extension.
+void WriteHeightMap(const std::filesystem::path& path, const HeightMap& map);
 
 }  // namespace fvm::imaging

@@ -350,7 +350,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
     // ISO 5436-2 scales every type the same way; floats usually carry increment 1 and offset 0.
     const double z_m = cz.offset + cz.increment * raw[i];
     const bool ok = (valid.empty() || valid[i]) && std::isfinite(z_m);
-    map.z_mm[i] = ok ? static_cast<float>(z_m * kMmPerMetre) : std::numeric_limits<float>::quiet_NaN();
+    map.z_mm[i] = ok ? z_m * kMmPerMetre : std::numeric_limits<double>::quiet_NaN();
   }
   return map;
 }
@@ -423,6 +423,20 @@ void X3pWriteOptions::Check() const {
   }
 }
 
+namespace {
+
+// The metres to write for a height of z_mm: the double the reader's z_m * 1000 turns back into z_mm exactly when
+// one exists (z / 1000 or a neighbour of it; for about 98 % of doubles), else the nearest, one ulp away.
+double MetresReadingBackAs(double z_mm) {
+  const double z_m = z_mm / kMmPerMetre;
+  for (const double candidate : {z_m, std::nextafter(z_m, -INFINITY), std::nextafter(z_m, INFINITY)}) {
+    if (candidate * kMmPerMetre == z_mm) return candidate;
+  }
+  return z_m;
+}
+
+}  // namespace
+
 std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
   options.Check();
   CheckMap(map);
@@ -441,7 +455,7 @@ std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
     valid[i] = std::isfinite(map.z_mm[i]);
     any_invalid = any_invalid || !valid[i];
     if (!valid[i]) continue;
-    const double z_m = static_cast<double>(map.z_mm[i]) / kMmPerMetre;
+    const double z_m = MetresReadingBackAs(map.z_mm[i]);
     if (IsInteger(options.z_type)) {
       const double steps = std::round(static_cast<double>(map.z_mm[i]) / options.z_increment_mm);
       if (steps < static_cast<double>(lowest) || steps > static_cast<double>(highest)) {

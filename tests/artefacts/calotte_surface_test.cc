@@ -105,10 +105,10 @@ TEST(CalotteSurface, NoiseDropoutsSpikesAndBurrsAsAsked) {
   // The same seed gives the same bytes; another seed other bytes.
   const CalotteSurface again = RenderCalotteSurface(SingleCalotte(0.25), o);
   ASSERT_EQ(again.map.z_mm.size(), s.map.z_mm.size());
-  EXPECT_EQ(std::memcmp(again.map.z_mm.data(), s.map.z_mm.data(), s.map.z_mm.size() * sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(again.map.z_mm.data(), s.map.z_mm.data(), s.map.z_mm.size() * sizeof(double)), 0);
   o.seed = 18;
   const CalotteSurface other = RenderCalotteSurface(SingleCalotte(0.25), o);
-  EXPECT_NE(std::memcmp(other.map.z_mm.data(), s.map.z_mm.data(), s.map.z_mm.size() * sizeof(float)), 0);
+  EXPECT_NE(std::memcmp(other.map.z_mm.data(), s.map.z_mm.data(), s.map.z_mm.size() * sizeof(double)), 0);
 }
 
 TEST(CalotteSurface, RejectsImpossibleOptions) {

@@ -13,29 +13,16 @@
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/simulation/calotte_surface.h"
 #include "artefacts/io/centre_export.h"
+#include "imaging/io/point_cloud_io.h"
 #include "imaging/io/x3p.h"
 #include "tests/artefacts/test_support.h"
+#include "tests/fvm/run_fvm.h"
 
 namespace fvm {
 namespace {
 
-struct FvmRun {
-  int status = 0;
-  std::string out, err;
-};
-
-FvmRun RunFvm(const testing::TempDir& dir, const std::string& arguments) {
-  const std::string err_file = (dir / "stderr.txt").string();
-  const std::string command = std::string(FVM_EXE) + " " + arguments + " 2>" + err_file;
-  FvmRun run;
-  FILE* pipe = popen(command.c_str(), "r");
-  char buffer[4096];
-  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) run.out.append(buffer, n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.err = testing::ReadText(err_file);
-  return run;
-}
+using testing::FvmRun;
+using testing::RunFvm;
 
 TEST(FitCli, Grid6x6X3pToCentreExport) {
   testing::TempDir dir;
@@ -99,6 +86,31 @@ TEST(FitCli, Grid6x6X3pToCentreExport) {
   ASSERT_EQ(table.status, 0) << table.err;
   EXPECT_THAT(table.out, ::testing::HasSubstr("grid6x6 layout: turned -0.500 deg"));
   EXPECT_THAT(table.out, ::testing::HasSubstr("\n  36  "));
+}
+
+// An unorganised cloud, as form-measurement software exports a calotte: found by grid projection, said so, and
+// fitted to its own points.
+TEST(FitCli, UnorganisedCloudOfOneCalotte) {
+  testing::TempDir dir;
+  artefacts::CalotteSurfaceOptions o;
+  o.margin_mm = 0.4;
+  o.offset_mm = Eigen::Vector2d(-100.0, -50.0);
+  o.max_slope_deg = 70.0;
+  o.noise_sigma_mm = 1e-4;
+  o.seed = 5;
+  const artefacts::CalotteCloud scene = artefacts::RenderCalotteCloud(artefacts::SingleCalotte(1.0), o, 40000);
+  const auto ply = dir / "calotte.ply";
+  imaging::WritePointCloud(ply, scene.cloud);
+  const FvmRun run = RunFvm(dir, "fit " + ply.string() + " --json -o " + (dir / "c.csv").string());
+  ASSERT_EQ(run.status, 0) << run.err;
+  const nlohmann::json doc = nlohmann::json::parse(run.out);
+  EXPECT_THAT(doc["method"].get<std::string>(), ::testing::HasSubstr("grid projection"));
+  ASSERT_EQ(doc["calottes"].size(), 1u);
+  const auto& c = doc["calottes"][0];
+  const Eigen::Vector3d found(c["x"].get<double>(), c["y"].get<double>(), c["z"].get<double>());
+  EXPECT_LT((found - scene.truth[0].centre).norm(), 2e-4);
+  EXPECT_NEAR(c["radius"].get<double>(), 1.0, 2e-4);
+  EXPECT_THAT(testing::ReadText(dir / "c.csv"), ::testing::HasSubstr("grid projection"));
 }
 
 TEST(FitCli, BadInputFailsWithoutOutput) {

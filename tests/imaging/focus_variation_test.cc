@@ -112,7 +112,7 @@ TEST(FocusVariation, ParallelMatchesSingleThreadBitForBit) {
   const imaging::FocusResult single = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, o);
   ASSERT_EQ(parallel.height.z_mm.size(), single.height.z_mm.size());
   for (std::size_t i = 0; i < single.height.z_mm.size(); ++i) {
-    ASSERT_EQ(std::memcmp(&parallel.height.z_mm[i], &single.height.z_mm[i], sizeof(float)), 0) << i;
+    ASSERT_EQ(std::memcmp(&parallel.height.z_mm[i], &single.height.z_mm[i], sizeof(double)), 0) << i;
     ASSERT_EQ(parallel.quality[i], single.quality[i]) << i;
   }
 }

@@ -2,7 +2,6 @@
 # md5checksum.hex, zipped by CMake), so the reader is checked against a file fvm did not write. Expects FVM, WORK
 # and SUPPORT (tests/fvm/cli_support.cmake).
 file(REMOVE_RECURSE ${WORK})
-file(MAKE_DIRECTORY ${WORK}/x3p)
 include(${SUPPORT})
 
 # 1. A 3 x 2 X3P surface: 2 um x 3 um pixels, heights in metres, one invalid (empty) point.
@@ -24,14 +23,19 @@ set(xml [=[<?xml version="1.0" encoding="UTF-8"?>
   <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>
 </p:ISO5436_2>
 ]=])
-file(WRITE ${WORK}/x3p/main.xml "${xml}")
-string(MD5 digest "${xml}")
-file(WRITE ${WORK}/x3p/md5checksum.hex "${digest} *main.xml\n")
-execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/surface.x3p --format=zip main.xml md5checksum.hex
-                WORKING_DIRECTORY ${WORK}/x3p RESULT_VARIABLE code)
-if(NOT code EQUAL 0)
-  message(FATAL_ERROR "cannot zip the test X3P")
-endif()
+# An X3P of this main.xml, with its checksum file, zipped by CMake into ${WORK}/<name>.x3p.
+function(zip_x3p name main_xml)
+  file(MAKE_DIRECTORY ${WORK}/${name})
+  file(WRITE ${WORK}/${name}/main.xml "${main_xml}")
+  string(MD5 digest "${main_xml}")
+  file(WRITE ${WORK}/${name}/md5checksum.hex "${digest} *main.xml\n")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/${name}.x3p --format=zip main.xml md5checksum.hex
+                  WORKING_DIRECTORY ${WORK}/${name} RESULT_VARIABLE code)
+  if(NOT code EQUAL 0)
+    message(FATAL_ERROR "cannot zip the test X3P ${name}")
+  endif()
+endfunction()
+zip_x3p(surface "${xml}")
 
 run(0 info ${WORK}/surface.x3p --json)
 string(JSON size_x GET "${OUT}" size_x)
@@ -57,14 +61,18 @@ if(NOT OUT MATCHES "valid points  5 of 6")
   message(FATAL_ERROR "info text output:\n${OUT}")
 endif()
 
+# Float64 heights keep their digits (issue 17: -808.368571682830 mm came back as -808.3686): the JSON prints the
+# shortest text of the double the file holds.
+string(REPLACE "<Datum>1e-06</Datum>" "<Datum>-0.808368571682830</Datum>" precise "${xml}")
+zip_x3p(precise "${precise}")
+run(0 info ${WORK}/precise.x3p --json)
+if(NOT OUT MATCHES "\"z_min_mm\": -808\\.36857168283[0-9]*[,\n]")
+  message(FATAL_ERROR "info --json on float64 heights: ${OUT}")
+endif()
+
 # An all-invalid surface is a valid file: no valid points, and no height range (null).
 string(REGEX REPLACE "<Datum>[^<]*</Datum>" "<Datum/>" nothing "${xml}")
-file(MAKE_DIRECTORY ${WORK}/nan)
-file(WRITE ${WORK}/nan/main.xml "${nothing}")
-string(MD5 digest "${nothing}")
-file(WRITE ${WORK}/nan/md5checksum.hex "${digest} *main.xml\n")
-execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/nan.x3p --format=zip main.xml md5checksum.hex
-                WORKING_DIRECTORY ${WORK}/nan)
+zip_x3p(nan "${nothing}")
 run(0 info ${WORK}/nan.x3p --json)
 string(JSON valid GET "${OUT}" valid_points)
 string(JSON z_type TYPE "${OUT}" z_min_mm)
@@ -84,11 +92,11 @@ if(NOT size_x EQUAL 3 OR NOT dx_type STREQUAL "NULL" OR NOT z_min EQUAL -9 OR NO
 endif()
 
 # 3. Bad input: the file is named, the exit code is non-zero.
-file(READ ${WORK}/x3p/main.xml edited)
+file(READ ${WORK}/surface/main.xml edited)
 string(REPLACE "<Datum>0</Datum>" "<Datum>7</Datum>" edited "${edited}")
-file(WRITE ${WORK}/x3p/main.xml "${edited}")
+file(WRITE ${WORK}/surface/main.xml "${edited}")
 execute_process(COMMAND ${CMAKE_COMMAND} -E tar cf ${WORK}/edited.x3p --format=zip main.xml md5checksum.hex
-                WORKING_DIRECTORY ${WORK}/x3p)
+                WORKING_DIRECTORY ${WORK}/surface)
 fails_naming("edited.x3p.*md5checksum.hex" info ${WORK}/edited.x3p --json)
 file(WRITE ${WORK}/empty.x3p "")
 fails_naming("empty.x3p" info ${WORK}/empty.x3p)

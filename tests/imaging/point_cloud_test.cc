@@ -255,6 +255,9 @@ TEST(PointCloudIo, XyzTextVariants) {
               AllOf(HasSubstr("bad.xyz:2"), HasSubstr("'five'")));
   EXPECT_THAT(InputErrorOf([] { ParseXyz("1 2 3\n4 5\n", "short.xyz"); }), HasSubstr("short.xyz:2"));
   EXPECT_THAT(InputErrorOf([] { ParseXyz("1,,3\n", "gap.csv"); }), HasSubstr("gap.csv:1"));
+  // A header that names its columns but no z: a cloud without z, not three columns taken on trust.
+  EXPECT_THAT(InputErrorOf([] { ParseXyz("# from a spreadsheet\nx,y,intensity\n1,2,3\n", "noz.csv"); }),
+              AllOf(HasSubstr("noz.csv:2"), HasSubstr("no column 'z'")));
   EXPECT_THAT(InputErrorOf([] { ParseXyz("# nothing\n\n", "none.xyz"); }), HasSubstr("no points"));
   EXPECT_THAT(InputErrorOf([] { ParseXyz("", "empty.xyz"); }), HasSubstr("no points"));
 }

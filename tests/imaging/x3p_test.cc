@@ -143,7 +143,7 @@ TEST(X3p, IntegerTypesQuantiseToTheIncrement) {
 
 TEST(X3p, AllInvalidMapRoundTrips) {
   HeightMap map = SampleMap(3, 2);
-  for (float& z : map.z_mm) z = NAN;
+  for (double& z : map.z_mm) z = NAN;
   const HeightMap back = ParseX3p(BuildX3p(map), "nan.x3p");
   EXPECT_EQ(ComputeStats(back).valid_points, 0u);
   ExpectSameHeights(map, back);
@@ -162,13 +162,42 @@ TEST(X3p, ReadsHandMadeInlineDataList) {
   EXPECT_DOUBLE_EQ(map.dy_mm, 0.003);
   EXPECT_DOUBLE_EQ(map.x0_mm, 1.0);
   EXPECT_DOUBLE_EQ(map.y0_mm, -2.0);
-  EXPECT_EQ(map.at(0, 0), 0.0015f);
+  EXPECT_DOUBLE_EQ(map.at(0, 0), 0.0015);
   EXPECT_TRUE(std::isnan(map.at(1, 0)));
-  EXPECT_EQ(map.at(2, 0), -0.00225f);
-  EXPECT_EQ(map.at(0, 1), 0.0f);
+  EXPECT_DOUBLE_EQ(map.at(2, 0), -0.00225);
+  EXPECT_EQ(map.at(0, 1), 0.0);
   EXPECT_TRUE(std::isnan(map.at(1, 1)));
-  EXPECT_EQ(map.at(2, 1), 0.04f);
+  EXPECT_DOUBLE_EQ(map.at(2, 1), 0.04);
   EXPECT_THAT(map.source, AllOf(HasSubstr("Alicona InfiniteFocus G5"), HasSubstr("2024-05-06")));
+}
+
+// Float64 heights keep float64 precision (issue 17: -808.368571682830 mm came back as -808.3686): read from an
+// inline DataList of the OpenGPS samples' form (empty <Datum/> for an invalid point), written as D, read again.
+TEST(X3p, Float64HeightsKeepTheirDigits) {
+  const std::string xml = MainXml("D", R"(<DataList>
+      <Datum>-0.808368571682830</Datum><Datum/><Datum>1.23456789012345e-05</Datum>
+      <Datum>0.1</Datum><Datum>-1e-09</Datum><Datum>0.000123456789123</Datum>
+    </DataList>)");
+  const HeightMap map = ParseX3p(Container(xml), "d.x3p");
+  const std::vector<double> expected_mm = {-808.368571682830, NAN, 1.23456789012345e-02, 100.0, -1e-06, 0.123456789123};
+  for (size_t i = 0; i < expected_mm.size(); ++i) {
+    if (std::isnan(expected_mm[i])) {
+      EXPECT_TRUE(std::isnan(map.z_mm[i]));
+      continue;
+    }
+    // Metres to mm is one multiplication by 1000: within an ulp or two of the decimal, 15 significant digits kept.
+    EXPECT_DOUBLE_EQ(map.z_mm[i], expected_mm[i]) << i;
+    EXPECT_NEAR(map.z_mm[i], expected_mm[i], std::abs(expected_mm[i]) * 1e-15) << i;
+  }
+  for (const bool binary : {true, false}) {
+    X3pWriteOptions options;
+    options.binary = binary;
+    const HeightMap back = ParseX3p(BuildX3p(map, options), "again.x3p");
+    for (size_t i = 0; i < map.z_mm.size(); ++i) {
+      if (std::isnan(map.z_mm[i])) continue;
+      EXPECT_DOUBLE_EQ(back.z_mm[i], map.z_mm[i]) << i;
+    }
+  }
 }
 
 TEST(X3p, ReadsHandMadeBinaryWithValidityBits) {
@@ -191,7 +220,7 @@ TEST(X3p, ReadsHandMadeBinaryWithValidityBits) {
     if (std::isnan(expected_um[i])) {
       EXPECT_TRUE(std::isnan(map.z_mm[i]));
     } else {
-      EXPECT_FLOAT_EQ(map.z_mm[i], static_cast<float>(expected_um[i] / 1000.0)) << i;
+      EXPECT_DOUBLE_EQ(map.z_mm[i], expected_um[i] / 1000.0) << i;  // int16 counts scale exactly into double
     }
   }
 }
