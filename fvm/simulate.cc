@@ -518,6 +518,7 @@ void RegisterSimulate(CLI::App& app) {
   sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
   sub->callback([args] { Run(*args); });
   RegisterSimulateTracker(simulate);
+  RegisterSimulateTestPiece(simulate);
 }
 
 }  // namespace fvm::cli
