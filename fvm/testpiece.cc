@@ -45,7 +45,7 @@ struct DesignArgs {
 
 void RunDesign(const DesignArgs& args) {
   const artefacts::TestPieceDescription piece = PieceOf(args.piece);
-  const std::vector<artefacts::NominalPoint> points = artefacts::NominalPoints(piece);
+  const std::vector<artefacts::PiecePoint> points = artefacts::PiecePoints(piece);
   if (points.empty()) throw InputError(fmt::format("{}: the piece has no probe points; give each feature \"points\"", args.piece));
   if (!args.output.empty()) artefacts::WriteNominalPoints(args.output, points);
   if (!args.cmm.empty()) {
@@ -55,7 +55,7 @@ void RunDesign(const DesignArgs& args) {
   if (!args.gcode.empty()) WriteFileAtomically(args.gcode, artefacts::CuttingProgram(piece));
   if (!args.describe.empty()) WriteFileAtomically(args.describe, artefacts::TestPieceJson(piece));
   std::map<std::string, int> per_series, per_kind;
-  for (const artefacts::NominalPoint& p : points) {
+  for (const artefacts::PiecePoint& p : points) {
     if (IsSeries(p.series)) ++per_series[p.series];
     ++per_kind[std::string(artefacts::FeatureKindName(p.kind))];
   }
@@ -250,9 +250,9 @@ struct SimulateArgs {
 
 void RunSimulate(const SimulateArgs& args) {
   const artefacts::TestPieceDescription piece = PieceOf(args.piece);
-  std::vector<artefacts::NominalPoint> points = artefacts::NominalPoints(piece);
+  std::vector<artefacts::PiecePoint> points = artefacts::PiecePoints(piece);
   if (args.only != "all") {
-    std::erase_if(points, [&](const artefacts::NominalPoint& p) {
+    std::erase_if(points, [&](const artefacts::PiecePoint& p) {
       return args.only == "pyramid" ? p.kind != artefacts::FeatureKind::kPyramid : !IsSeries(p.series);
     });
   }
@@ -276,7 +276,7 @@ void RunSimulate(const SimulateArgs& args) {
     // A noise-free grid over the whole piece (not only where features are): how well the identified machine
     // predicts the piece everywhere.
     const Eigen::Vector3d step = ParseVector3(args.validation, "--validation", "30,30,30");
-    std::vector<artefacts::NominalPoint> grid;
+    std::vector<artefacts::PiecePoint> grid;
     for (const artefacts::PlannedPoint& p : artefacts::PlanMesh(ws, step)) grid.push_back({"G" + p.id.substr(1), p.nominal, "", "", {}});
     artefacts::CmmSimulation exact = cmm;
     exact.sigma_mm = 0.0;

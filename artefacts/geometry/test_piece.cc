@@ -191,7 +191,7 @@ TestPieceDescription PublishedTestPiece() {
       const double y0 = s.north ? 265 : 0;
       PieceFeature h = Box(fmt::format("{}-{:.0f}", s.name, z), FeatureKind::kHole, {s.x - 2.5, y0, z - 2.5}, {s.x + 2.5, y0 + 5, z + 2.5});
       if (z > kBlock) h.host = fmt::format("C-{}{:02d}", s.north ? 'N' : 'S', s.tooth);
-      h.points = {{{s.x, s.north ? 270 : 0, z}, s.name}};
+      h.points = {{{s.x, s.north ? 270.0 : 0.0, z}, s.name}};
       f.push_back(h);
     }
   }
@@ -300,8 +300,8 @@ std::string TestPieceJson(const TestPieceDescription& piece) {
   return j.dump(1) + "\n";
 }
 
-std::vector<NominalPoint> NominalPoints(const TestPieceDescription& piece) {
-  std::vector<NominalPoint> out;
+std::vector<PiecePoint> PiecePoints(const TestPieceDescription& piece) {
+  std::vector<PiecePoint> out;
   for (const PieceFeature& f : piece.features) {
     for (const ProbePoint& p : f.points) {
       out.push_back({fmt::format("T{:04d}", out.size() + 1), piece.origin + p.position, p.series.empty() ? f.name : p.series, f.name, f.kind});
@@ -310,19 +310,19 @@ std::vector<NominalPoint> NominalPoints(const TestPieceDescription& piece) {
   return out;
 }
 
-void WriteNominalPoints(const std::string& path, const std::vector<NominalPoint>& points) {
+void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& points) {
   std::string out = "id,x,y,z,series\n";
-  for (const NominalPoint& p : points) {
+  for (const PiecePoint& p : points) {
     out += fmt::format("{},{},{},{},{}\n", p.id, FormatShortest(p.machine.x()), FormatShortest(p.machine.y()),
                        FormatShortest(p.machine.z()), p.series);
   }
   WriteFileAtomically(path, out);
 }
 
-std::string CmmProgram(const std::vector<NominalPoint>& points) {
+std::string CmmProgram(const std::vector<PiecePoint>& points) {
   std::string out = fmt::format("# fvm test piece: {} points; coordinates are the machine coordinates of the cut (mm)\n", points.size());
   out += "# POINT id X Y Z SERIES series FEATURE feature: probe the cone (or face) at that point; report id,xm,ym,zm\n";
-  for (const NominalPoint& p : points) {
+  for (const PiecePoint& p : points) {
     out += fmt::format("POINT {} X{:.3f} Y{:.3f} Z{:.3f} SERIES {} FEATURE {}\n", p.id, p.machine.x(), p.machine.y(), p.machine.z(),
                        p.series, p.feature);
   }

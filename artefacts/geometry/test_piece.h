@@ -64,23 +64,23 @@ std::string TestPieceJson(const TestPieceDescription& piece);
 
 // One nominal point of the piece in machine coordinates: id T0001... in feature order, the series it belongs to
 // or else its feature's name, its feature and kind.
-struct NominalPoint {
+struct PiecePoint {
   std::string id;
   Eigen::Vector3d machine = Eigen::Vector3d::Zero();
   std::string series;  // X1..Z3, or the feature's name
   std::string feature;
   FeatureKind kind = FeatureKind::kSlot;
 };
-std::vector<NominalPoint> NominalPoints(const TestPieceDescription& piece);
+std::vector<PiecePoint> PiecePoints(const TestPieceDescription& piece);
 
 // NOMINAL.csv: id,x,y,z,series (written atomically).
-void WriteNominalPoints(const std::string& path, const std::vector<NominalPoint>& points);
+void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& points);
 
 // The CMM program that measures the points: a plain text list a CMM operator or a DMIS translator can follow,
 //   # fvm test piece: N points, piece frame = machine frame of the cut
 //   POINT T0001 X5.000 Y5.000 Z180.000 SERIES X1 FEATURE C-S01
 // one line per point in measuring order.
-std::string CmmProgram(const std::vector<NominalPoint>& points);
+std::string CmmProgram(const std::vector<PiecePoint>& points);
 
 // The ISO 6983 tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
 // with a safe height above the envelope. A plain program for a simulator or a controller's dry run, not a CAM

@@ -39,13 +39,13 @@ Workspace PieceWorkspace(const TestPieceDescription& piece) {
   return ws;
 }
 
-TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<NominalPoint>& points,
+TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
                                   const CmmSimulation& cmm, TrackerReadings* noise_free) {
   // The cut is the tracker model with the CMM as the instrument at the datum and no tracker noise ...
   stage::AxisChain cut = chain;
   cut.instrument = cmm.datum;
   std::vector<PlannedPoint> planned;
-  for (const NominalPoint& p : points) planned.push_back({p.id, p.machine, ""});
+  for (const PiecePoint& p : points) planned.push_back({p.id, p.machine, ""});
   TrackerReadings exact = SimulateTrackerReadings(cut, truth, planned, stage::TrackerNoise::Preset("none"), cmm.seed);
   exact.cmm = true;
   // ... and the CMM's isotropic probing noise, from its own stream of the seed.

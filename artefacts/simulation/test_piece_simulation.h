@@ -36,7 +36,7 @@ struct CmmSimulation {
 
 // The CMM readings (cmm = true: id,x,y,z,xm,ym,zm) of the piece cut by `truth` on `chain` at `points`; the
 // noise-free readings go to `noise_free` when given.
-TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<NominalPoint>& points,
+TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
                                   const CmmSimulation& cmm, TrackerReadings* noise_free = nullptr);
 
 }  // namespace fvm::artefacts
