@@ -45,7 +45,7 @@ struct DesignArgs {
 
 void RunDesign(const DesignArgs& args) {
   const artefacts::TestPieceDescription piece = PieceOf(args.piece);
-  const std::vector<artefacts::PiecePoint> points = artefacts::PiecePoints(piece);
+  const std::vector<artefacts::PiecePoint> points = artefacts::NominalPoints(piece);
   if (points.empty()) throw InputError(fmt::format("{}: the piece has no probe points; give each feature \"points\"", args.piece));
   if (!args.output.empty()) artefacts::WriteNominalPoints(args.output, points);
   if (!args.cmm.empty()) {
@@ -250,7 +250,7 @@ struct SimulateArgs {
 
 void RunSimulate(const SimulateArgs& args) {
   const artefacts::TestPieceDescription piece = PieceOf(args.piece);
-  std::vector<artefacts::PiecePoint> points = artefacts::PiecePoints(piece);
+  std::vector<artefacts::PiecePoint> points = artefacts::NominalPoints(piece);
   if (args.only != "all") {
     std::erase_if(points, [&](const artefacts::PiecePoint& p) {
       return args.only == "pyramid" ? p.kind != artefacts::FeatureKind::kPyramid : !IsSeries(p.series);

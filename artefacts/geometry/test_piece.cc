@@ -300,7 +300,7 @@ std::string TestPieceJson(const TestPieceDescription& piece) {
   return j.dump(1) + "\n";
 }
 
-std::vector<PiecePoint> PiecePoints(const TestPieceDescription& piece) {
+std::vector<PiecePoint> NominalPoints(const TestPieceDescription& piece) {
   std::vector<PiecePoint> out;
   for (const PieceFeature& f : piece.features) {
     for (const ProbePoint& p : f.points) {

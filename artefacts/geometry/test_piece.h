@@ -71,7 +71,7 @@ struct PiecePoint {
   std::string feature;
   FeatureKind kind = FeatureKind::kSlot;
 };
-std::vector<PiecePoint> PiecePoints(const TestPieceDescription& piece);
+std::vector<PiecePoint> NominalPoints(const TestPieceDescription& piece);
 
 // NOMINAL.csv: id,x,y,z,series (written atomically).
 void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& points);
