@@ -3,7 +3,7 @@
 // as the laser-tracker verification (machine_verification.h), because to the kinematics a CMM-measured piece is a
 // tracker whose pose is the piece's datum. What the test piece adds:
 // - the iteration log, max / mean / min volumetric error after each solver iteration (002 Tables 8 and 9);
-// - per error term, whether the points recover it, its value at the far end of its axis and its uncertainty
+// - per error term, whether the points recover it, its largest deviation over its axis and its uncertainty
 //   (the geometric verification's question, answered by the rank of the Jacobian on the chosen points);
 // - the datum: the piece's rigid transform into the CMM frame, estimated with the errors; the rank treatment names
 //   the error-function terms it absorbs (the constants of the translation terms and, for rotations, the
@@ -20,9 +20,10 @@ namespace fvm::stage {
 struct TermRecovery {
   std::string error;           // ISO 230-1 name (EXX, ..., EC0Y) as 002 writes them
   std::string vdi;             // VDI 2617-3 name (xTx)
-  bool recoverable = false;    // every coefficient of the term is free (none fixed by the rank treatment)
-  bool partly = false;         // some but not all of its coefficients are fixed
-  double value = 0;            // at the far end of its axis' travel relative to the origin: um or urad
+  bool recoverable = false;    // every coefficient but the constant is free (none fixed by the rank treatment)
+  bool partly = false;         // some but not all are fixed (typically the linear part: the datum's turn)
+  double value = 0;            // largest deviation over its axis' travel from the origin (from the chord when
+                               // partly), signed: um or urad
   double u = 0;                // its standard uncertainty, same unit
   std::string reason;          // why not, from the rank treatment (the first fixed coefficient's reason)
 };
@@ -40,7 +41,7 @@ struct TestPieceVerification {
 TestPieceVerification VerifyTestPiece(const ParameterLayout& layout, const std::vector<Observation>& readings,
                                       IdentificationOptions options);
 
-// The 21 terms' recovery under an identification result (values relative to the axis' origin at its far end).
+// The 21 terms' recovery under an identification result.
 std::vector<TermRecovery> TermRecoveries(const IdentificationResult& identified);
 
 }  // namespace fvm::stage
