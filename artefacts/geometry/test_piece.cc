@@ -160,13 +160,13 @@ TestPieceDescription PublishedTestPiece() {
   // Four main slots 20 mm wide, 20 deep in the block's top; the two along Y carry Y1 and Y2 (002: Y1, Y2 in one
   // XY plane below Y3, apart in X).
   PieceFeature sx1 = Box("SX1", FeatureKind::kSlot, {15, 15, 80}, {285, 35, kBlock});
-  sx1.points = Line({20, 25, 80}, {10, 0, 0}, 27, "");
+  sx1.points = Line({20, 25, 80}, {10, 0, 0}, 26, "");
   PieceFeature sx2 = Box("SX2", FeatureKind::kSlot, {15, 235, 80}, {285, 255, kBlock});
-  sx2.points = Line({20, 245, 80}, {10, 0, 0}, 27, "");
+  sx2.points = Line({20, 245, 80}, {10, 0, 0}, 26, "");
   PieceFeature sy1 = Box("SY1", FeatureKind::kSlot, {15, 15, 80}, {35, 255, kBlock});
-  sy1.points = Line({25, 40, 80}, {0, 20, 0}, 11, "Y1");
+  sy1.points = Line({25, 25, 80}, {0, 20, 0}, 12, "Y1");
   PieceFeature sy2 = Box("SY2", FeatureKind::kSlot, {265, 15, 80}, {285, 255, kBlock});
-  sy2.points = Line({275, 40, 80}, {0, 20, 0}, 11, "Y2");
+  sy2.points = Line({275, 25, 80}, {0, 20, 0}, 12, "Y2");
   f.insert(f.end(), {sx1, sx2, sy1, sy2});
   // Three side slots on each of the faces y = 0 and x = 0, 6 mm high and 5 deep; the lowest on y = 0 carries X3
   // (002: X3 in X1's XZ plane, apart in Z).
