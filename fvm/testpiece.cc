@@ -25,6 +25,7 @@
 #include "fvm/machine_report.h"
 #include "fvm/option_parsing.h"
 #include "stage/io/calibration_file.h"
+#include "stage/series_extraction.h"
 #include "stage/test_piece_verification.h"
 
 namespace fvm::cli {
@@ -182,6 +183,23 @@ void RunVerify(const TestPieceVerifyArgs& args) {
       throw InputError(fmt::format("{}: the series alone: {}", args.nominal, e.what()));
     }
     geometric_from = fmt::format("series X1..Z3 ({} points)", on_series.size());
+    // The extraction formulas on the series, in the machine frame of the datum found (the CMM readings turned back
+    // by it): each error along its axis, zero-referenced at the axis' origin.
+    const Eigen::Matrix3d turn = r.pose.Rotation();
+    std::map<std::string, std::vector<stage::SeriesPoint>> by_series;
+    for (size_t i = 0; i < problem.readings.points.size(); ++i) {
+      const artefacts::TrackerReading& p = problem.readings.points[i];
+      const auto it = series.find(p.id);
+      if (it == series.end() || !IsSeries(it->second) || p.tool != 0) continue;
+      by_series[it->second].push_back({p.nominal, turn * p.measured + r.pose.translation - (p.nominal + problem.chain.tool_offset)});
+    }
+    doc["extraction"] = nlohmann::json::array();
+    for (const stage::ExtractedError& e : stage::ExtractGeometricErrors(by_series, problem.chain.tool_offset.z(), problem.workspace.min)) {
+      const bool angle = e.error[1] == 'A' || e.error[1] == 'B' || e.error[1] == 'C';
+      nlohmann::json values = nlohmann::json::array();
+      for (double x : e.value) values.push_back(x * (angle ? 1e6 : 1e3));
+      doc["extraction"].push_back({{"error", e.error}, {"coordinate_mm", e.coordinate}, {"value_um_or_urad", values}});
+    }
   }
   doc["geometric"] = TermsJson(geometric);
   doc["geometric_from"] = geometric_from;
