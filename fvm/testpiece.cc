@@ -35,6 +35,11 @@ artefacts::TestPieceDescription PieceOf(const std::string& path) {
   return path.empty() ? artefacts::PublishedTestPiece() : artefacts::ReadTestPiece(path);
 }
 
+// PIECE, the optional description both design and simulate take.
+void AddPieceArgument(CLI::App* sub, std::string& piece) {
+  sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece")->check(CLI::ExistingFile);
+}
+
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
 
 // ---------------------------------------------------------------------------------------------- design
@@ -310,7 +315,6 @@ void RunSimulate(const SimulateArgs& args) {
   t["seed"] = args.seed;
   t["errors"] = !args.errors.empty() ? args.errors : args.mean_error_um > 0 ? std::string("random") : std::string("002 Table 4");
   WriteFileAtomically(dir / "truth.json", t.dump(2) + "\n");
-  std::vector<stage::Observation> obs = artefacts::TrackerObservations(measured, nullptr);
   fmt::print("simulated the test piece into {}: {} points ({}), errors {}, CMM noise {} um, seed {}\n", args.output, points.size(),
              args.only, t["errors"].get<std::string>(), args.noise_um, args.seed);
 }
@@ -330,7 +334,7 @@ void RegisterTestPiece(CLI::App& app) {
              "Y1..Y3, Z1..Z3 (the geometric verification's series) or else the feature. A PIECE.json describes the envelope "
              "and features as boxes with probe points (format: README, The machined test piece); features that collide "
              "or leave the envelope are refused, each named.");
-  d->add_option("PIECE", design->piece, "piece description (JSON); default: the published piece")->check(CLI::ExistingFile);
+  AddPieceArgument(d, design->piece);
   d->add_option("-o,--output", design->output, "NOMINAL.csv to write");
   d->add_option("--cmm", design->cmm, "also write DIR/program.txt: the point list as a CMM program");
   d->add_option("--gcode", design->gcode, "also write the tool path that cuts the features (ISO G-code)");
@@ -374,7 +378,7 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
              "with normal noise), DIR/truth.json (the errors, datum, tool, noise) and with --validation a noise-free grid "
              "over the piece (validation.csv). Errors: 002 Table 4's test functions by default, --errors FILE.json "
              "(fvm simulate tracker's format), or a random machine that no polynomial represents (--mean-error-um).");
-  sub->add_option("PIECE", args->piece, "piece description (JSON); default: the published piece")->check(CLI::ExistingFile);
+  AddPieceArgument(sub, args->piece);
   sub->add_option("-o,--output", args->output, "directory to write")->required();
   auto* errors = sub->add_option("--errors", args->errors, "machine truth JSON")->check(CLI::ExistingFile);
   sub->add_option("--mean-error-um", args->mean_error_um, "a random machine (cubics + sines) of this mean volumetric error over the piece")
