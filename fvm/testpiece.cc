@@ -269,7 +269,14 @@ struct SimulateArgs {
   std::uint64_t seed = 1;
   double noise_um = 1.0, mean_error_um = 0.0;
   std::string chain = "XFYZ";
+  bool proposed = false;
 };
+
+// The series cut again with the tools that make the Z and Y yaws and the Z rotations observable: a boring bar whose
+// edge sits 30 mm off the spindle axis, spindle oriented (M19) at 0 and 180 deg, and a tool 50 mm longer.
+std::vector<Eigen::Vector3d> ProposedTools(const Eigen::Vector3d& tool) {
+  return {tool + Eigen::Vector3d(30, 0, 0), tool - Eigen::Vector3d(30, 0, 0), tool + Eigen::Vector3d(0, 0, 50)};
+}
 
 void RunSimulate(const SimulateArgs& args) {
   const artefacts::TestPieceDescription piece = PieceOf(args.piece);
@@ -290,10 +297,31 @@ void RunSimulate(const SimulateArgs& args) {
   cmm.sigma_mm = args.noise_um * 1e-3;
   cmm.seed = args.seed;
   artefacts::TrackerReadings measured = artefacts::SimulateTestPiece(chain, truth, points, cmm);
+  std::vector<artefacts::PiecePoint> nominal = points;
+  if (args.proposed) {
+    std::vector<artefacts::PiecePoint> series;
+    for (const artefacts::PiecePoint& p : points) {
+      if (IsSeries(p.series)) series.push_back(p);
+    }
+    const std::vector<Eigen::Vector3d> tools = ProposedTools(chain.tool_offset);
+    for (size_t k = 0; k < tools.size(); ++k) {
+      std::vector<artefacts::PiecePoint> again = series;
+      for (artefacts::PiecePoint& p : again) p.id += fmt::format("-t{}", k + 2);
+      stage::AxisChain other = chain;
+      other.tool_offset = tools[k];
+      artefacts::CmmSimulation c = cmm;
+      c.seed = cmm.seed + k + 1;
+      for (artefacts::TrackerReading r : artefacts::SimulateTestPiece(other, truth, again, c).points) {
+        r.tool = static_cast<int>(k) + 1;
+        measured.points.push_back(r);
+      }
+      nominal.insert(nominal.end(), again.begin(), again.end());
+    }
+  }
   measured.comments = {fmt::format("fvm simulate testpiece: {} points, CMM noise {} um, seed {}", points.size(), args.noise_um, args.seed)};
   std::filesystem::create_directories(args.output);
   const std::filesystem::path dir(args.output);
-  artefacts::WriteNominalPoints((dir / "nominal.csv").string(), points);
+  artefacts::WriteNominalPoints((dir / "nominal.csv").string(), nominal);
   artefacts::WriteTrackerReadings(dir / "measured.csv", measured);
   if (!args.validation.empty()) {
     // A noise-free grid over the whole piece (not only where features are): how well the identified machine
@@ -315,8 +343,13 @@ void RunSimulate(const SimulateArgs& args) {
   t["seed"] = args.seed;
   t["errors"] = !args.errors.empty() ? args.errors : args.mean_error_um > 0 ? std::string("random") : std::string("002 Table 4");
   WriteFileAtomically(dir / "truth.json", t.dump(2) + "\n");
-  fmt::print("simulated the test piece into {}: {} points ({}), errors {}, CMM noise {} um, seed {}\n", args.output, points.size(),
+  fmt::print("simulated the test piece into {}: {} points ({}), errors {}, CMM noise {} um, seed {}\n", args.output, measured.points.size(),
              args.only, t["errors"].get<std::string>(), args.noise_um, args.seed);
+  if (args.proposed) {
+    std::string tools = fmt::format("--tool {},{},{}", chain.tool_offset.x(), chain.tool_offset.y(), chain.tool_offset.z());
+    for (const Eigen::Vector3d& t : ProposedTools(chain.tool_offset)) tools += fmt::format(" --tool {},{},{}", t.x(), t.y(), t.z());
+    fmt::print("  the series cut again with three more tools (the `tool` column): verify with {}\n", tools);
+  }
 }
 
 }  // namespace
@@ -394,6 +427,9 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
   sub->add_option("--datum", args->datum, "the piece's pose on the CMM: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
       ->check(Parses([](const std::string& t) { ParsePose(t, "--datum"); }, "X,Y,Z,A,B,C"))
       ->capture_default_str();
+  sub->add_flag("--proposed-series", args->proposed,
+                "also cut the series X1..Z3 with an oriented boring bar 30 mm off the spindle axis (at 0 and 180 deg) and "
+                "a tool 50 mm longer: the series that recover ECZ, ECY, EAZ and EBZ");
   sub->add_option("--validation", args->validation, "also a noise-free grid with these steps SX,SY,SZ (mm) over the piece")
       ->check(Parses([](const std::string& t) { ParseVector3(t, "--validation", "30,30,30"); }, "SX,SY,SZ"));
   sub->footer("Example:\n  fvm simulate testpiece -o tp --seed 1 --validation 30,30,30\n  fvm simulate testpiece -o pyr --points pyramid");

@@ -53,6 +53,19 @@ foreach(part "Iterations" "Histogram of the volumetric errors" "Geometric verifi
   endif()
 endforeach()
 
+# The proposed series: cut again with an off-axis boring bar and a longer tool, ECZ becomes recoverable.
+run(0 simulate testpiece -o ${WORK}/proposed --points series --proposed-series)
+run(0 testpiece verify ${WORK}/proposed/measured.csv --order 2 --nominal ${WORK}/proposed/nominal.csv
+    --machine 300x270x180 --tool 0,0,100 --tool 30,0,100 --tool -30,0,100 --tool 0,0,150 --json)
+string(JSON ecz GET "${OUT}" geometric 17 error)
+string(JSON ecz_ok GET "${OUT}" geometric 17 recoverable)
+string(JSON ecz_value GET "${OUT}" geometric 17 value_um_or_urad)
+if(NOT ecz STREQUAL "ECZ" OR NOT ecz_ok)
+  message(FATAL_ERROR "the proposed series should recover ECZ: ${ecz} ${ecz_ok}")
+endif()
+# Table 4: ECZ(180) = 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad from z 0 (--machine: the series start at z 10).
+expect_near("ECZ at z 180 (urad)" "${ecz_value}" 1118 40 0)
+
 run(0 simulate testpiece -o ${WORK}/pyramid --points pyramid)
 run(0 testpiece verify ${WORK}/pyramid/measured.csv --basis legendre --order 2 --json)
 string(JSON points GET "${OUT}" points)
