@@ -236,33 +236,37 @@ TestPieceDescription ParseTestPiece(std::string_view json_text, const std::strin
     PieceFeature f;
     f.name = jf["name"].get<std::string>();
     const std::string fw = fmt::format("{}: feature {}", name, f.name);
-    const std::string kind = jf.value("kind", std::string());
-    bool known = false;
-    for (const KindName& k : kKinds) {
-      if (kind == k.name) {
-        f.kind = k.kind;
-        known = true;
-      }
-    }
-    if (!known) throw InputError(fw + ": \"kind\" must be slot, side_slot, hole, pyramid or crenellation");
-    if (!jf.contains("min_mm") || !jf.contains("max_mm")) throw InputError(fw + ": needs \"min_mm\" and \"max_mm\"");
-    f.min = Vector(jf["min_mm"], fw + ": min_mm");
-    f.max = Vector(jf["max_mm"], fw + ": max_mm");
-    if (jf.contains("host")) {
-      if (!jf["host"].is_string() || f.kind != FeatureKind::kHole) throw InputError(fw + ": \"host\" (text) belongs to holes only");
-      f.host = jf["host"].get<std::string>();
-    }
-    if (jf.contains("points")) {
-      if (!jf["points"].is_array()) throw InputError(fw + ": \"points\" must be an array of {\"x\", \"y\", \"z\"}");
-      for (const json& jp : jf["points"]) {
-        if (!jp.is_object() || !jp.contains("x") || !jp.contains("y") || !jp.contains("z") || !jp["x"].is_number() ||
-            !jp["y"].is_number() || !jp["z"].is_number()) {
-          throw InputError(fw + ": each point needs numbers \"x\", \"y\", \"z\" (mm)");
+    try {
+      const std::string kind = jf.value("kind", std::string());
+      bool known = false;
+      for (const KindName& k : kKinds) {
+        if (kind == k.name) {
+          f.kind = k.kind;
+          known = true;
         }
-        ProbePoint p{{jp["x"].get<double>(), jp["y"].get<double>(), jp["z"].get<double>()}, jp.value("series", std::string())};
-        if (!p.position.allFinite()) throw InputError(fw + ": a point is not finite");
-        f.points.push_back(p);
       }
+      if (!known) throw InputError(fw + ": \"kind\" must be slot, side_slot, hole, pyramid or crenellation");
+      if (!jf.contains("min_mm") || !jf.contains("max_mm")) throw InputError(fw + ": needs \"min_mm\" and \"max_mm\"");
+      f.min = Vector(jf["min_mm"], fw + ": min_mm");
+      f.max = Vector(jf["max_mm"], fw + ": max_mm");
+      if (jf.contains("host")) {
+        if (!jf["host"].is_string() || f.kind != FeatureKind::kHole) throw InputError(fw + ": \"host\" (text) belongs to holes only");
+        f.host = jf["host"].get<std::string>();
+      }
+      if (jf.contains("points")) {
+        if (!jf["points"].is_array()) throw InputError(fw + ": \"points\" must be an array of {\"x\", \"y\", \"z\"}");
+        for (const json& jp : jf["points"]) {
+          if (!jp.is_object() || !jp.contains("x") || !jp.contains("y") || !jp.contains("z") || !jp["x"].is_number() ||
+              !jp["y"].is_number() || !jp["z"].is_number()) {
+            throw InputError(fw + ": each point needs numbers \"x\", \"y\", \"z\" (mm)");
+          }
+          ProbePoint p{{jp["x"].get<double>(), jp["y"].get<double>(), jp["z"].get<double>()}, jp.value("series", std::string())};
+          if (!p.position.allFinite()) throw InputError(fw + ": a point is not finite");
+          f.points.push_back(p);
+        }
+      }
+    } catch (const json::exception& e) {  // a value of the wrong type ("kind": 3, "series": 1)
+      throw InputError(fmt::format("{}: {}; see fvm testpiece design --help for the format", fw, e.what()));
     }
     piece.features.push_back(f);
   }

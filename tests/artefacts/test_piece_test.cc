@@ -53,6 +53,12 @@ TEST(TestPiece, CollisionsAndEnvelopeErrorsNameTheFeatures) {
     EXPECT_NE(std::string(e.what()).find("pyramid P1 leaves the envelope: x from 40 to 120"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(ParseTestPiece(Describe(slot + "," + crossing), "p.json"));  // slots may cross
+  try {
+    ParseTestPiece(Describe(R"({"name": "Q", "kind": 3, "min_mm": [0, 0, 0], "max_mm": [1, 1, 1]})"), "p.json");
+    FAIL() << "a kind that is no text was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("p.json: feature Q"), std::string::npos) << e.what();
+  }
 }
 
 TEST(TestPiece, PerfectMachineMeasuresTheNominalPointsAtTheDatum) {
