@@ -223,6 +223,9 @@ void RunVerify(const TestPieceVerifyArgs& args) {
                                                        problem.validation ? &problem.validation_observations : nullptr,
                                                        problem.options.tool_offsets);
     data.title = fmt::format("fvm testpiece verify: {} {} order {} on {}", problem.chain.code, args.basis, args.order, args.data);
+    for (MachineReportData::Table& t : data.tables) {
+      if (t.heading == "Tracker pose") t.heading = "Datum: the piece in the CMM frame";
+    }
     MachineReportData::Table log{"Iterations", "Volumetric error after each solver iteration (0: the ideal machine at the initial datum).",
                                  {"iteration", "max (um)", "mean (um)", "min (um)"}, {}};
     for (size_t i = 0; i < v.iterations.size(); ++i) {
