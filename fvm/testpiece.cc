@@ -273,6 +273,7 @@ struct SimulateArgs {
   double noise_um = 1.0, mean_error_um = 0.0;
   std::string chain = "XFYZ";
   bool proposed = false;
+  bool json = false;
 };
 
 // The series cut again with the tools that make the Z and Y yaws and the Z rotations observable: a boring bar whose
@@ -346,6 +347,12 @@ void RunSimulate(const SimulateArgs& args) {
   t["seed"] = args.seed;
   t["errors"] = !args.errors.empty() ? args.errors : args.mean_error_um > 0 ? std::string("random") : std::string("002 Table 4");
   WriteFileAtomically(dir / "truth.json", t.dump(2) + "\n");
+  if (args.json) {
+    nlohmann::json j{{"output", args.output}, {"points", measured.points.size()}, {"errors", t["errors"]},
+                     {"cmm_noise_um", args.noise_um}, {"seed", args.seed}, {"datum", t["datum"]}};
+    fmt::print("{}\n", j.dump(2));
+    return;
+  }
   fmt::print("simulated the test piece into {}: {} points ({}), errors {}, CMM noise {} um, seed {}\n", args.output, measured.points.size(),
              args.only, t["errors"].get<std::string>(), args.noise_um, args.seed);
   if (args.proposed) {
@@ -430,6 +437,7 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
   sub->add_option("--datum", args->datum, "the piece's pose on the CMM: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
       ->check(Parses([](const std::string& t) { ParsePose(t, "--datum"); }, "X,Y,Z,A,B,C"))
       ->capture_default_str();
+  sub->add_flag("--json", args->json, "print what was written as JSON: output, points, errors, noise, seed, datum");
   sub->add_flag("--proposed-series", args->proposed,
                 "also cut the series X1..Z3 with an oriented boring bar 30 mm off the spindle axis (at 0 and 180 deg) and "
                 "a tool 50 mm longer: the series that recover ECZ, ECY, EAZ and EBZ");
