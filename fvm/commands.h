@@ -66,4 +66,9 @@ void RegisterUncertainty(CLI::App& app);
 // fvm diff REF.csv TEST.csv [--pairs a:b,...] [--xy] [--json] (fvm/diff.cc).
 void RegisterDiff(CLI::App& app);
 
+// fvm testpiece design|verify (fvm/testpiece.cc).
+void RegisterTestPiece(CLI::App& app);
+// fvm simulate testpiece, registered by fvm simulate (fvm/testpiece.cc).
+void RegisterSimulateTestPiece(CLI::App* simulate);
+
 }  // namespace fvm::cli

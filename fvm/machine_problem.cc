@@ -2,6 +2,8 @@
 
 #include <fmt/core.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <limits>
 
 #include "artefacts/tracker_observations.h"
@@ -103,6 +105,23 @@ stage::VerificationResult VerifyProblem(const MachineProblem& problem, const sta
   } catch (const std::invalid_argument& e) {
     throw InputError(fmt::format("{}: {}", problem.readings.source, e.what()));
   }
+}
+
+nlohmann::json ErrorJson(const stage::VolumetricError& e) {
+  return {{"mean_um", e.mean_um}, {"max_um", e.max_um}, {"min_um", e.min_um}};
+}
+
+nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance) {
+  const Eigen::Vector3d euler = pose.Rotation().eulerAngles(0, 1, 2) * 180.0 / M_PI;
+  nlohmann::json j{{"translation_mm", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
+                   {"rotation_vector_rad", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z()}},
+                   {"euler_xyz_deg", {euler.x(), euler.y(), euler.z()}}};
+  if (covariance != nullptr) {
+    const Eigen::Matrix<double, 6, 1> u = covariance->diagonal().cwiseMax(0.0).cwiseSqrt();
+    j["u_translation_um"] = {u[0] * 1e3, u[1] * 1e3, u[2] * 1e3};
+    j["u_rotation_urad"] = {u[3] * 1e6, u[4] * 1e6, u[5] * 1e6};
+  }
+  return j;
 }
 
 void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose) {

@@ -3,12 +3,14 @@
 // problem (chain, tool offsets, weights, workspace, pose held or estimated), with the same checks and messages.
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
+#include "fvm/machine_report.h"
 #include "stage/identification.h"
 #include "stage/machine_verification.h"
 #include "stage/tracker.h"
@@ -53,5 +55,19 @@ MachineProblem LoadMachineProblem(const MachineArgs& args);
 // tracker could not have made from the pose found.
 stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout);
 void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
+
+// {"mean_um", "max_um", "min_um"} of a volumetric error.
+nlohmann::json ErrorJson(const stage::VolumetricError& e);
+// An instrument pose (tracker, or a test piece's datum): translation, rotation vector, XYZ Euler angles, and the
+// standard uncertainties when `covariance` is given.
+nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance);
+
+// The report of a verification (fvm verify, fvm testpiece verify): the error functions with their bands, the
+// squareness, pose and fixed-term tables, every point's error before and after. `doc` is the command's JSON
+// ("chain", "order", "weights", "initial", "final", "validation", "pose" with "estimated").
+MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
+                                            const std::vector<stage::Observation>& observations,
+                                            const std::vector<stage::Observation>* validation,
+                                            const std::vector<Eigen::Vector3d>& tools);
 
 }  // namespace fvm::cli

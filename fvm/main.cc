@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterVerify(app);
   fvm::cli::RegisterMultilaterate(app);
   fvm::cli::RegisterUncertainty(app);
+  fvm::cli::RegisterTestPiece(app);
 
   try {
     app.parse(argc, argv);

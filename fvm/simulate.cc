@@ -526,6 +526,7 @@ void RegisterSimulate(CLI::App& app) {
   sub->callback([args] { Run(*args); });
   RegisterSimulateTracker(simulate);
   RegisterSimulateScan(simulate);
+  RegisterSimulateTestPiece(simulate);
 }
 
 }  // namespace fvm::cli

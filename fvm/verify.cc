@@ -34,23 +34,6 @@ struct VerifyArgs : MachineArgs {
   bool json = false;
 };
 
-nlohmann::json ErrorJson(const stage::VolumetricError& e) {
-  return {{"mean_um", e.mean_um}, {"max_um", e.max_um}, {"min_um", e.min_um}};
-}
-
-nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance) {
-  const Eigen::Vector3d euler = pose.Rotation().eulerAngles(0, 1, 2) * 180.0 / M_PI;
-  nlohmann::json j{{"translation_mm", {pose.translation.x(), pose.translation.y(), pose.translation.z()}},
-                   {"rotation_vector_rad", {pose.rotation.x(), pose.rotation.y(), pose.rotation.z()}},
-                   {"euler_xyz_deg", {euler.x(), euler.y(), euler.z()}}};
-  if (covariance != nullptr) {
-    const Eigen::Matrix<double, 6, 1> u = covariance->diagonal().cwiseMax(0.0).cwiseSqrt();
-    j["u_translation_um"] = {u[0] * 1e3, u[1] * 1e3, u[2] * 1e3};
-    j["u_rotation_urad"] = {u[3] * 1e6, u[4] * 1e6, u[5] * 1e6};
-  }
-  return j;
-}
-
 struct OrderFit {
   int order = 0;
   std::optional<stage::VerificationResult> result;
@@ -79,9 +62,12 @@ std::vector<std::string> Row(std::initializer_list<std::string> cells) { return 
 
 // The report's content: the error functions sampled over each axis' travel relative to the axis' origin, with
 // u from the covariance; the tables; the errors of every point.
-MachineReportData ReportOf(const VerifyArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
-                           const std::vector<stage::Observation>& observations,
-                           const std::vector<stage::Observation>* validation, const std::vector<Eigen::Vector3d>& tools) {
+}  // namespace
+
+MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
+                                            const std::vector<stage::Observation>& observations,
+                                            const std::vector<stage::Observation>* validation,
+                                            const std::vector<Eigen::Vector3d>& tools) {
   const stage::IdentificationResult& r = v.identified;
   const stage::Calibration& cal = r.calibration;
   MachineReportData data;
@@ -166,6 +152,8 @@ MachineReportData ReportOf(const VerifyArgs& args, const nlohmann::json& doc, co
   if (validation != nullptr) data.validation = PointErrors(v, *validation, tools);
   return data;
 }
+
+namespace {
 
 void Run(const VerifyArgs& args) {
   const MachineProblem problem = LoadMachineProblem(args);
@@ -252,7 +240,7 @@ void Run(const VerifyArgs& args) {
   }
 
   if (!args.report.empty()) {
-    WriteMachineReport(args.report, ReportOf(args, doc, v, observations, validation ? &problem.validation_observations : nullptr,
+    WriteMachineReport(args.report, MachineVerificationReport(args, doc, v, observations, validation ? &problem.validation_observations : nullptr,
                                              options.tool_offsets));
   }
   if (!args.output.empty()) {

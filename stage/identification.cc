@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <memory>
 #include <array>
 #include <cmath>
 #include <numeric>
@@ -370,6 +371,19 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
   }
 }
 
+// Calls `report` after every solver iteration (the state is current: update_state_every_iteration).
+class IterationLog : public ceres::IterationCallback {
+ public:
+  explicit IterationLog(std::function<void()> report) : report_(std::move(report)) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    report_();
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::function<void()> report_;
+};
+
 }  // namespace
 
 void IdentificationOptions::Check() const {
@@ -643,6 +657,19 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     solver.function_tolerance = 1e-10;
     solver.parameter_tolerance = 1e-10;
     solver.gradient_tolerance = 1e-14;
+    // The iteration log reads the parameters as the solver leaves them after each step.
+    std::unique_ptr<ceres::IterationCallback> log;
+    if (options.on_iteration) {
+      log = std::make_unique<IterationLog>([&] {
+        std::vector<double> values(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) values[static_cast<size_t>(i)] = scale[i] * parameters[static_cast<size_t>(i)];
+        std::array<double, kPoseParameters> pose6 = prepared.pose6;
+        for (int i = 0; i < pose_count; ++i) pose6[static_cast<size_t>(i)] += prepared.pose_scale[i] * pose_parameters[static_cast<size_t>(i)];
+        options.on_iteration(layout, values, Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])});
+      });
+      solver.update_state_every_iteration = true;
+      solver.callbacks.push_back(log.get());
+    }
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &problem, &summary);
     result.iterations = static_cast<int>(summary.iterations.size());

@@ -13,6 +13,7 @@
 // reported with the reason, so every model order converges to the best fit its identifiable part allows.
 
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
 #include <string>
 #include <span>
@@ -89,6 +90,10 @@ struct IdentificationOptions {
   double noise_floor_mm = 1e-5;             // never assume less noise than 10 nm per coordinate
   int max_iterations = 100;
   int num_threads = 0;                      // Jacobian evaluation threads; 0: all cores
+  // Called after each solver iteration with the layout being solved (the given one less what the rank treatment
+  // fixed), its current free coefficients and the instrument pose: what an iteration log needs (fvm testpiece
+  // verify prints max / mean / min per iteration, as 002 Tables 8-9 do). Empty: none.
+  std::function<void(const ParameterLayout& layout, const std::vector<double>& values, const Pose& pose)> on_iteration;
   void Check() const;  // throws std::invalid_argument
 };
 

@@ -81,7 +81,9 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
   Pose initial_pose = options.pose;
   if (options.instrument == InstrumentPose::kEstimated) {
     const ParameterLayout ideal(layout.chain(), layout.travel());
-    initial_pose = Identify(ideal, readings, options).pose;
+    IdentificationOptions ideal_options = options;
+    ideal_options.on_iteration = nullptr;  // the caller logs the verification, not the search for its start
+    initial_pose = Identify(ideal, readings, ideal_options).pose;
     options.pose = initial_pose;
   }
   VerificationResult result(Identify(layout, readings, options));

@@ -23,12 +23,15 @@ constexpr double kPi = std::numbers::pi;
 
 const char* const kCartesian[3] = {"xt", "yt", "zt"};
 const char* const kSpherical[3] = {"range", "azimuth", "elevation"};
+// A CMM-measured test piece (fvm testpiece): the piece's points in the CMM frame, Cartesian like a tracker's.
+const char* const kCmm[3] = {"xm", "ym", "zm"};
 
 struct Columns {
   int id = -1;
   int nominal[3] = {-1, -1, -1};
   int measured[3] = {-1, -1, -1};
   bool spherical = false;
+  bool cmm = false;
   int approach = -1;
   int tool = -1;
 };
@@ -48,9 +51,15 @@ Columns FindColumns(const CsvTable& table) {
   Columns c;
   c.id = table.Require("id");
   for (int axis = 0; axis < 3; ++axis) c.nominal[axis] = table.Require(std::string(1, "xyz"[axis]));
-  const std::string cartesian = Named(table, kCartesian);
-  const std::string spherical = Named(table, kSpherical);
+  const std::string cmm = Named(table, kCmm);
   const std::string where = fmt::format("{}:{}", table.name(), table.header_line());
+  if (!cmm.empty() && !Named(table, kCartesian).empty()) {
+    throw InputError(fmt::format("{}: the header names both tracker ({}) and CMM ({}) coordinates; give one set",
+                                 where, Named(table, kCartesian), cmm));
+  }
+  c.cmm = !cmm.empty();
+  const std::string cartesian = c.cmm ? cmm : Named(table, kCartesian);
+  const std::string spherical = Named(table, kSpherical);
   if (!cartesian.empty() && !spherical.empty()) {
     throw InputError(fmt::format("{}: the header names tracker coordinates both Cartesian ({}) and spherical ({}); "
                                  "give one set: xt,yt,zt (mm) or range,azimuth,elevation (mm, rad)",
@@ -62,7 +71,7 @@ Columns FindColumns(const CsvTable& table) {
                                  where));
   }
   c.spherical = !spherical.empty();
-  const char* const* names = c.spherical ? kSpherical : kCartesian;
+  const char* const* names = c.spherical ? kSpherical : c.cmm ? kCmm : kCartesian;
   for (int i = 0; i < 3; ++i) {
     c.measured[i] = table.Optional(names[i]);
     if (c.measured[i] < 0) {
@@ -138,6 +147,7 @@ TrackerReadings ReadTrackerReadings(const std::filesystem::path& path) {
   data.source = table.name();
   data.comments = table.comments();
   data.spherical = columns.spherical;
+  data.cmm = columns.cmm;
   data.points.reserve(table.rows().size());
   std::map<std::string, int, std::less<>> first_line_of_id;
   for (const CsvRow& row : table.rows()) {
@@ -181,7 +191,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
 
   std::string out = CsvComments(data.comments);
   std::vector<std::string> header = {"id", "x", "y", "z"};
-  for (const char* name : data.spherical ? kSpherical : kCartesian) header.emplace_back(name);
+  for (const char* name : data.spherical ? kSpherical : data.cmm ? kCmm : kCartesian) header.emplace_back(name);
   if (with_approach) header.emplace_back("approach");
   if (with_tool) header.emplace_back("tool");
   out += CsvLine(header);

@@ -7,6 +7,9 @@
 //   xt,yt,zt                   what the tracker read, Cartesian in the tracker's frame, mm
 //   or range,azimuth,elevation the same in the tracker's spherical coordinates, mm and rad (stage/tracker.h:
 //                              azimuth from +x towards +y, elevation from the xy plane towards +z)
+//   or xm,ym,zm                a CMM's measurement of a machined test piece (fvm testpiece), Cartesian in the
+//                              CMM frame, mm: to the kinematics a CMM-measured piece is a tracker whose pose is
+//                              the piece's datum
 // and optionally `approach` (text: the direction the fastest axis last moved in, e.g. +x) and `tool` (1, 2, ...:
 // which of the tool offsets given to `fvm verify --tool` the point was measured with; 1 when absent). Other columns are
 // ignored. Ids are text (P0001); each appears once. Column names match without regard to case; the CSV dialect
@@ -34,6 +37,7 @@ struct TrackerReadings {
   std::string source;                 // where it came from, for messages
   std::vector<std::string> comments;  // the '#' lines, without the '#'
   bool spherical = false;             // the file gave range,azimuth,elevation
+  bool cmm = false;                   // the file gave xm,ym,zm (and is written so)
   std::vector<TrackerReading> points;  // file order
 };
 

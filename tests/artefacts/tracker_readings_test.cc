@@ -56,6 +56,22 @@ TEST(TrackerReadings, CartesianRoundTripIsBitExact) {
   EXPECT_EQ(testing::ReadText(again), testing::ReadText(path));
 }
 
+// A CMM-measured test piece (fvm testpiece) reads xm,ym,zm as a tracker's Cartesian reading, is written back so,
+// and a file naming both sets is refused.
+TEST(TrackerReadings, CmmColumnsAreReadWrittenAndNotMixedWithTrackerOnes) {
+  testing::TempDir dir;
+  const auto path = dir.Write("meas.csv", "id,x,y,z,xm,ym,zm\nT0001,5,5,180,-9.96,23.01,275.03\n");
+  const TrackerReadings data = ReadTrackerReadings(path);
+  EXPECT_TRUE(data.cmm);
+  ASSERT_EQ(data.points.size(), 1u);
+  EXPECT_EQ(data.points[0].measured, Eigen::Vector3d(-9.96, 23.01, 275.03));
+  const auto again = dir / "again.csv";
+  WriteTrackerReadings(again, data);
+  EXPECT_THAT(testing::ReadText(again), HasSubstr("id,x,y,z,xm,ym,zm\n"));
+  const auto both = dir.Write("both.csv", "id,x,y,z,xm,ym,zm,xt,yt,zt\nA,0,0,0,1,2,3,4,5,6\n");
+  EXPECT_THAT(InputErrorOf([&] { ReadTrackerReadings(both); }), HasSubstr("both tracker (xt, yt, zt) and CMM (xm, ym, zm)"));
+}
+
 TEST(TrackerReadings, SphericalInputIsConvertedAsComputedByHand) {
   testing::TempDir dir;
   // range 1000 mm, azimuth 30 deg, elevation 45 deg: x = 1000 cos45 cos30 = 612.3724357, y = 1000 cos45 sin30 =

@@ -1,7 +1,7 @@
 # Checks the command line as a user sees it: honest help, version, and exit codes.
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
-set(COMMANDS calibrate correct compare diff diagnose simulate info fit focus tiles stitch verify multilaterate uncertainty)
+set(COMMANDS calibrate correct compare diff diagnose simulate info fit focus tiles stitch verify multilaterate uncertainty testpiece)
 run(0 --help)
 foreach(cmd ${COMMANDS})
   if(NOT OUT MATCHES "${cmd}")
@@ -85,7 +85,8 @@ endforeach()
 
 # Every built command (and sub-subcommand) ends its --help with an example; the summary heads its description.
 foreach(cmd calibrate correct compare diff diagnose simulate "simulate fvm-batch" info fit focus tiles
-    "tiles plan" "tiles synthesize" "tiles simulate" stitch multilaterate)
+    "tiles plan" "tiles synthesize" "tiles simulate" stitch multilaterate testpiece "testpiece design" "testpiece verify"
+    "simulate testpiece")
   separate_arguments(words UNIX_COMMAND "${cmd}")
   run(0 ${words} --help)
   if(NOT OUT MATCHES "Example[^\n]*:\n  fvm |Example: fvm ")
