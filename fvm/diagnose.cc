@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -19,6 +20,7 @@ namespace {
 struct DiagnoseArgs {
   std::string batch;
   std::string model = "27";
+  std::string terms;
   std::string report;
   double alpha = 0.01;
   bool json = false;
@@ -44,7 +46,7 @@ std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std
 
 ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
   ReportData data;
-  data.title = fmt::format("fvm diagnose: model {} on {}", args.model, args.batch);
+  data.title = fmt::format("fvm diagnose: model {} on {}", ModelName(args.model, args.terms), args.batch);
   std::string added;
   for (const stage::DiagnosisStep& s : d.steps) added += (added.empty() ? "adding " : ", then ") + s.effect;
   data.change = d.steps.empty() ? "(no effect accepted)" : added;
@@ -65,6 +67,12 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
     data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
     data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
   }
+  const auto held_out_um = [](const stage::ResidualSummary& s) { return s.count > 0 ? s.mean_mm * 1e3 : std::nan(""); };
+  data.steps.push_back({"base model", d.before.mean_mm * 1e3, held_out_um(d.validation_before)});
+  for (const stage::DiagnosisStep& s : d.steps) {
+    data.steps.push_back({"+ " + s.effect + (s.component.empty() ? "" : " " + s.component), s.after.mean_mm * 1e3,
+                          held_out_um(s.validation_after)});
+  }
   for (size_t k = 0; k < d.steps.size(); ++k) {
     const stage::DiagnosisStep& s = d.steps[k];
     data.summary.emplace_back(fmt::format("step {}: {}", k + 1, s.effect),
@@ -83,12 +91,12 @@ void Run(const DiagnoseArgs& args) {
   stage::DiagnosisOptions options;
   options.alpha = args.alpha;
   options.identification = args.settings.ToOptions(identify);
-  const stage::Diagnosis d = stage::Diagnose(ModelLayout(args.model, ""), identify, validate, options);
+  const stage::Diagnosis d = stage::Diagnose(ModelLayout(args.model, args.terms), identify, validate, options);
   if (!args.report.empty()) WriteReport(args.report, MakeReport(args, d, identify));
 
   nlohmann::json doc;
   doc["batch"] = args.batch;
-  doc["model"] = args.model;
+  doc["model"] = ModelName(args.model, args.terms);
   doc["effect"] = d.effect ? nlohmann::json(*d.effect) : nlohmann::json(nullptr);
   doc["component"] = d.component;
   doc["explanation"] = d.explanation;
@@ -123,7 +131,7 @@ void Run(const DiagnoseArgs& args) {
     fmt::print("{}\n", doc.dump(2));
     return;
   }
-  fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", args.model, args.batch,
+  fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", ModelName(args.model, args.terms), args.batch,
              identify.observations.size(), validate.observations.size());
   fmt::print("  residual analysis:\n");
   for (const std::string& f : d.findings) fmt::print("    - {}\n", f);
@@ -170,6 +178,7 @@ void RegisterDiagnose(CLI::App& app) {
   sub->add_option("--model", args->model, "base model: 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
+  sub->add_option("--terms", args->terms, "a base model of one's own instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
   sub->add_option("--alpha", args->alpha, "family-wise false-alarm probability of the selection")
       ->check(CLI::Range(1e-6, 0.5))
       ->capture_default_str();

@@ -1,5 +1,7 @@
 #include "fvm/option_parsing.h"
 
+#include <sstream>
+
 #include <fmt/core.h>
 
 #include <cmath>
@@ -28,6 +30,13 @@ std::vector<double> ParseNumbers(std::string_view text, size_t count, const std:
     throw InputError(fmt::format("{} '{}': give {} numbers separated by commas, e.g. {}", what, text, count, example));
   }
   return values;
+}
+
+std::vector<double> ParseNumberList(const std::string& text, const std::string& what, const std::string& example) {
+  std::vector<double> out;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) out.push_back(ParseNumbers(item, 1, what, example)[0]);
+  return out;
 }
 
 Eigen::Vector3d ParseVector3(std::string_view text, const std::string& what, const std::string& example) {

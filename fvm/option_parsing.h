@@ -16,6 +16,8 @@ namespace fvm::cli {
 
 // Exactly `count` finite numbers separated by commas.
 std::vector<double> ParseNumbers(std::string_view text, size_t count, const std::string& what, const std::string& example);
+// A comma-separated list of any length, e.g. the encoder heights "-50,-40" of calibration scans.
+std::vector<double> ParseNumberList(const std::string& text, const std::string& what, const std::string& example);
 Eigen::Vector3d ParseVector3(std::string_view text, const std::string& what, const std::string& example);
 // X,Y,Z (mm), A,B,C (XYZ Euler angles, deg): a tracker's pose in the machine frame.
 stage::Pose ParsePose(std::string_view text, const std::string& what);

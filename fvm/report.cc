@@ -301,6 +301,64 @@ std::string RenderParameters(const ReportData& data) {
   return plot.Finish();
 }
 
+// ---- the forward selection: mean residuals after each step ------------------------------------------------------
+
+std::string RenderSteps(const ReportData& data) {
+  const std::vector<ReportData::Step>& steps = data.steps;
+  const PLINT n = static_cast<PLINT>(steps.size());
+  double top = 0;
+  for (const ReportData::Step& s : steps) {
+    for (const double v : {s.identification_um, s.held_out_um}) {
+      if (std::isfinite(v)) top = std::max(top, v);
+    }
+  }
+  if (!(top > 0)) top = 1.0;
+  const double y_max = top * 1.25;  // headroom for the legend
+  const double y_tick = NiceCeil(y_max / 6);
+  SvgPlot plot(800, 560);
+  plvpor(0.1, 0.96, 0.2, 0.9);
+  plwind(-0.5, n - 0.5, 0, y_max);
+  Frame("", 0, 0, "", y_tick, 0);
+  Frame("bc", 0, 0, "bcnstv", y_tick, 0, false);
+  for (PLINT i = 0; i < n; ++i) {
+    plcol0(kInk);
+    plmtex("b", 1.2 + 1.1 * (i % 2), (i + 0.5) / n, 0.5, PlText(steps[static_cast<std::size_t>(i)].label).c_str());
+  }
+  pllab("", "mean 3-D residual (µm)", "The gap after each step of the selection");
+  const std::array<std::pair<double ReportData::Step::*, PLINT>, 2> series = {
+      std::pair{&ReportData::Step::held_out_um, kSeries0 + 0}, std::pair{&ReportData::Step::identification_um, kSeries0 + 1}};
+  for (const auto& [member, colour] : series) {
+    std::vector<PLFLT> x, y;
+    for (PLINT i = 0; i < n; ++i) {
+      const double v = steps[static_cast<std::size_t>(i)].*member;
+      if (!std::isfinite(v)) continue;
+      x.push_back(i);
+      y.push_back(v);
+    }
+    plcol0(colour);
+    plwidth(2.0);
+    plline(static_cast<PLINT>(x.size()), x.data(), y.data());
+    plwidth(1.0);
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      plptex(x[k], y[k] + 0.03 * y_max, 1, 0, 0.5, fmt::format("{:.3g}", y[k]).c_str());
+      plpoin(1, &x[k], &y[k], 17);
+    }
+  }
+  const std::array<const char*, 2> texts = {"held-out placements", "identification"};
+  const std::array<PLINT, 2> options = {PL_LEGEND_LINE | PL_LEGEND_SYMBOL, PL_LEGEND_LINE | PL_LEGEND_SYMBOL};
+  const std::array<PLINT, 2> text_colours = {kInk, kInk}, colours = {kSeries0 + 0, kSeries0 + 1}, styles = {1, 1};
+  const std::array<PLFLT, 2> widths = {2, 2}, symbol_scales = {1, 1};
+  const std::array<PLINT, 2> symbol_numbers = {1, 1};
+  const std::array<const char*, 2> symbols = {"#(728)", "#(728)"};
+  PLFLT legend_width, legend_height;
+  pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
+           PL_POSITION_TOP | PL_POSITION_RIGHT | PL_POSITION_INSIDE, 0.02, 0.03, 0.08, kBackground, kGrid, 1, 0, 0, 2,
+           options.data(), 1.0, 0.85, 2.0, 0.0, text_colours.data(), texts.data(), nullptr, nullptr, nullptr, nullptr,
+           colours.data(), styles.data(), widths.data(), colours.data(), symbol_scales.data(), symbol_numbers.data(),
+           symbols.data());
+  return plot.Finish();
+}
+
 // alt and caption name what separates before from after as {0} (ReportData::change).
 struct Figure {
   const char* file;
@@ -323,8 +381,14 @@ constexpr std::array<Figure, 3> kFigures = {{
      "panel per unit."},
 }};
 
+constexpr Figure kStepsFigure = {
+    "steps.svg", "Step by step", "Mean residuals of the identification data and the held-out placements after each step",
+    "Mean 3-D residual of the identification centres and of the held-out placements (which the selection never fits) "
+    "for the base model and after each effect added, in the order they were added."};
+
 std::string RenderHtml(const ReportData& data) {
   std::string html = HtmlHead(data.title.empty() ? "fvm report" : data.title) + HtmlKeyValueTable(data.summary);
+  if (!data.steps.empty()) html += HtmlFigure(kStepsFigure.file, kStepsFigure.heading, kStepsFigure.alt, kStepsFigure.caption);
   for (const Figure& f : kFigures) {
     const auto retell = [&](const char* text) { return fmt::format(fmt::runtime(text), data.change); };
     html += HtmlFigure(f.file, f.heading, retell(f.alt), retell(f.caption));
@@ -337,12 +401,14 @@ std::string RenderHtml(const ReportData& data) {
 void WriteReport(const fs::path& dir, const ReportData& data) {
   // Everything is drawn before DIR is touched, so a failure while plotting leaves nothing behind either. The page
   // goes last, so it never refers to a plot that is not there yet.
-  WriteReportFiles(dir, {
-                            {kFigures[0].file, RenderDistanceErrors(data)},
-                            {kFigures[1].file, RenderErrorVectors(data)},
-                            {kFigures[2].file, RenderParameters(data)},
-                            {"index.html", RenderHtml(data)},
-                        });
+  std::vector<std::pair<std::string, std::string>> files = {
+      {kFigures[0].file, RenderDistanceErrors(data)},
+      {kFigures[1].file, RenderErrorVectors(data)},
+      {kFigures[2].file, RenderParameters(data)},
+  };
+  if (!data.steps.empty()) files.emplace_back(kStepsFigure.file, RenderSteps(data));
+  files.emplace_back("index.html", RenderHtml(data));
+  WriteReportFiles(dir, files);
 }
 
 }  // namespace fvm::cli

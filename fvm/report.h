@@ -34,9 +34,17 @@ struct ReportData {
   // What separates "before" from "after" in titles, legends and captions: the compensation for `fvm calibrate`,
   // the added effect for `fvm diagnose`.
   std::string change = "compensation";
+  // `fvm diagnose`: the model after each step of the forward selection, the base model first. When given, the
+  // report gains steps.svg: both mean residuals, step by step.
+  struct Step {
+    std::string label;                       // "base model", "+ thermal_drift x", ...
+    double identification_um, held_out_um;   // mean 3-D residuals; held_out_um NaN when there are none
+  };
+  std::vector<Step> steps;
 };
 
-// Writes DIR/index.html and the SVG plots it shows (distance_errors.svg, error_vectors.svg, parameters.svg).
+// Writes DIR/index.html and the SVG plots it shows (distance_errors.svg, error_vectors.svg, parameters.svg, and
+// steps.svg when there are steps).
 // Creates DIR if needed; each file is written atomically, the page last, so it never shows a missing plot.
 // Throws fvm::InputError naming DIR when it cannot be written, and then leaves no file it created behind.
 // Not thread-safe: PLplot keeps its streams in process-wide state. The caller's current PLplot stream is kept.

@@ -22,6 +22,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
+#include "fvm/calibration_run.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "stage/fvm_stage_models.h"
@@ -47,12 +48,13 @@ void Run(SimulateBatchArgs args) {
 
   nlohmann::json truth;
   truth["what"] = "stage error model the batch was simulated with (fvm simulate fvm-batch)";
-  truth["model"] = args.options.truth_model;
+  truth["model"] = ModelName(args.options.truth_model, args.options.truth_terms);
   truth["seed"] = args.options.seed;
   truth["noise_um"] = args.options.noise_um;
   truth["pitch_error_um"] = args.options.pitch_error_um;
   truth["same_start"] = args.options.same_start;
   truth["height_step_mm"] = args.options.height_step_mm;
+  truth["serpentine"] = args.options.serpentine;
   truth["periodic_um"] = args.options.periodic_um;
   truth["period_mm"] = args.options.period_mm;
   truth["stitched_frame"] = args.stitched_frame;
@@ -73,7 +75,8 @@ void Run(SimulateBatchArgs args) {
   for (const auto& p : sim.batch.placements) centres += p.ids.size();
   fmt::print("simulated {} placements ({} centres) into {}: truth model {}, mean stage error {:.1f} um (max {:.1f} um), "
              "noise {} um, seed {}\n",
-             sim.batch.placements.size(), centres, args.output, args.options.truth_model, sim.truth.mean_error_um,
+             sim.batch.placements.size(), centres, args.output, ModelName(args.options.truth_model, args.options.truth_terms),
+             sim.truth.mean_error_um,
              sim.truth.max_error_um, args.options.noise_um, args.options.seed);
 }
 
@@ -478,6 +481,8 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--truth-model", args->options.truth_model, "stage error model of the truth")
       ->check(CLI::IsMember(stage::FvmModelNames()))
       ->capture_default_str();
+  sub->add_option("--truth-terms", args->options.truth_terms,
+                  "a truth of one's own form instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
   sub->add_option("--mean-error-um", args->options.mean_error_um, "mean stage error over the stage (um)")->capture_default_str();
   sub->add_option("--noise-um", args->options.noise_um, "centre noise per coordinate (um)")->capture_default_str();
   sub->add_option("--validation-placements", args->options.validation_placements, "number of validation placements")
@@ -501,7 +506,7 @@ void RegisterSimulate(CLI::App& app) {
           "EFFECT[,EFFECT...]"));
   sub->add_option("--effect-size", args->options.effect_size,
                   "size of the hidden effect; 0 = default: thermal_drift 3 um/min, higher_order 80 um, reference_anchor "
-                  "30 mm, z_coupling 500 urad, outliers 80 um, scale 300 ppm")
+                  "30 mm, z_coupling 500 urad (X; Y half), outliers 80 um, scale 300 ppm")
       ->capture_default_str();
   sub->add_option("--drift-tau-min", args->options.drift_tau_min,
                   "thermal_drift: 0 drifts linearly in t; > 0 a warm-up B (1 - exp(-t/tau)) with this time constant (min)")
@@ -515,6 +520,9 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--height-step-mm", args->options.height_step_mm,
                   "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")
       ->capture_default_str();
+  sub->add_flag("--serpentine", args->options.serpentine,
+                "measure every other placement from its last calotte back to its first, so that a drift shows at the "
+                "shared start (on a wedge, drift and pitch and roll are otherwise confounded)");
   sub->add_flag("--different-starts", args->different_starts,
                 "identification placements do not share their first calotte's spot (needs --anchor first-tile)");
   sub->add_option("--stitched-frame", args->stitched_frame,

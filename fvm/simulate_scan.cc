@@ -66,7 +66,8 @@ artefacts::StageTruth ReadStageTruth(const std::string& path, std::string* model
   *model = j["model"].get<std::string>();
   const auto layout = [&] {
     try {
-      return stage::FvmModelLayout(*model);
+      // "27", or "terms:<spec>" for a truth of one's own form (ModelName)
+      return model->starts_with("terms:") ? stage::ComposeLayout(model->substr(6)) : stage::FvmModelLayout(*model);
     } catch (const std::invalid_argument& e) {
       throw InputError(path + ": model: " + e.what());
     }
@@ -109,9 +110,7 @@ void Run(const SimulateScanArgs& args) {
   scan.travel_min_mm = {tx.min, ty.min};
   scan.travel_max_mm = {tx.max, ty.max};
   scan.length_mm = args.length_mm;
-  scan.heights_mm.clear();
-  std::stringstream list(args.heights);
-  for (std::string h; std::getline(list, h, ',');) scan.heights_mm.push_back(ParseNumbers(h, 1, "--heights", "-50,-40")[0]);
+  scan.heights_mm = ParseNumberList(args.heights, "--heights", "-50,-40");
   const std::vector<imaging::ScanPath> paths = imaging::PlanCalibrationScans(scan, plan_options);
 
   artefacts::ScanSimulationOptions options;

@@ -132,9 +132,7 @@ void RunCalibrationScanPlan(const PlanArgs& args, const imaging::TilePlanOptions
   scan.travel_min_mm = {-wh[0], -wh[1]};
   scan.travel_max_mm = {0.0, 0.0};
   scan.length_mm = args.length_mm;
-  scan.heights_mm.clear();
-  std::stringstream list(args.heights);
-  for (std::string h; std::getline(list, h, ',');) scan.heights_mm.push_back(ParseNumbers(h, 1, "--heights", "-50,-40")[0]);
+  scan.heights_mm = ParseNumberList(args.heights, "--heights", "-50,-40");
   const std::vector<imaging::ScanPath> paths = imaging::PlanCalibrationScans(scan, options);
   nlohmann::ordered_json out;
   out["fov_mm"] = options.fov_mm;

@@ -53,6 +53,7 @@ std::vector<double> ValuesByName(const ParameterLayout& from, const std::vector<
 
 struct LinearScore {
   double rss_base = 0, rss = 0;
+  double rows = 0;     // equations it was scored on
   int extra = 0;       // rank the candidate adds
   int rank = 0;        // rank of base + candidate
   Eigen::VectorXd effect;      // least-squares values of the candidate's columns (in the columns' units)
@@ -66,8 +67,9 @@ struct LinearScore {
 // noise: a false "effect". Only the part of a candidate that the base model leaves above 1e-4 of its norm counts
 // as new; centre noise of 0.5 um on coordinates of about 100 mm is 5e-6 of it, so this keeps a 20x margin.
 LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra) {
-  constexpr double kNewDirection = 1e-4;
+  constexpr double kNewDirection = 1e-2;
   LinearScore s;
+  s.rows = static_cast<double>(r0.size());
   Eigen::MatrixXd all(base.rows(), base.cols() + extra.cols());
   all << base, extra;
   Eigen::VectorXd norms = all.colwise().norm();
@@ -107,6 +109,18 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   return s;
 }
 
+// ScoreColumns without the equations of some observations: centres flagged as blunders, whose 80 um would otherwise
+// swamp the F-test of a 5 um effect (and pull its estimate).
+LinearScore ScoreColumnsWithout(const std::vector<int>& left_out, const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
+                                const Eigen::MatrixXd& extra) {
+  if (left_out.empty()) return ScoreColumns(r0, base, extra);
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < r0.size(); ++i) {
+    if (std::find(left_out.begin(), left_out.end(), static_cast<int>(i / 3)) == left_out.end()) rows.push_back(i);
+  }
+  return ScoreColumns(r0(rows), base(rows, Eigen::all), extra(rows, Eigen::all));
+}
+
 struct Candidate {
   EffectScore score;
   LinearScore linear;
@@ -119,8 +133,9 @@ struct Candidate {
 // rho(t) = A + B (1 - exp(-t/tau)) of FACTS (000:5810) with B = rate * tau (A is the model's constant).
 double DriftShape(double t, double tau) { return tau > 0 ? tau * (1.0 - std::exp(-t / tau)) : t; }
 
-void Test(Candidate& c, double m, double alpha_each) {
+void Test(Candidate& c, double alpha_each) {
   const LinearScore& l = c.linear;
+  const double m = l.rows;
   c.score.extra_parameters = l.extra;
   if (l.extra <= 0 || l.rss <= 0 || m - l.rank <= 0) return;
   const double d1 = l.extra, d2 = m - l.rank;
@@ -361,6 +376,17 @@ double RobustSigma(const std::vector<Eigen::Vector3d>& residuals, double floor_m
   return std::max(1.4826 * components[components.size() / 2], floor_mm);
 }
 
+// What sets observation i's residual apart from those of its neighbours in the same group (the calottes before and
+// after it along the bar): r_i less their mean, or less the one neighbour it has. Smooth along the bar, a missing
+// effect leaves little of it; a blunder leaves nearly all.
+Eigen::Vector3d Spike(const std::vector<Observation>& observations, const std::vector<Eigen::Vector3d>& residuals, size_t i) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int count = 0;
+  if (i > 0 && observations[i - 1].group == observations[i].group) sum += residuals[i - 1], ++count;
+  if (i + 1 < observations.size() && observations[i + 1].group == observations[i].group) sum += residuals[i + 1], ++count;
+  return count > 0 ? Eigen::Vector3d(residuals[i] - sum / count) : residuals[i];
+}
+
 // Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), found
 // one at a time: the worst is taken out and the model refitted before the next is judged, so that a large
 // blunder, which drags the fit towards itself, cannot make its good neighbours look bad. Indices into p.identify.
@@ -374,13 +400,22 @@ std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit,
   const boost::math::chi_squared_distribution<double> chi2(3.0);
   const double limit = boost::math::quantile(boost::math::complement(chi2, alpha / static_cast<double>(kept.size())));
   const size_t most = kept.size() / 5;  // beyond a fifth of the centres, the "outliers" are the model's failure
-  while (flagged.size() < most) {
+  while (flagged.size() < most && !residuals.empty()) {
     const double sigma = RobustSigma(residuals, base_options.noise_floor_mm);
-    size_t worst = 0;
-    for (size_t i = 1; i < residuals.size(); ++i) {
-      if (residuals[i].squaredNorm() > residuals[worst].squaredNorm()) worst = i;
+    // The worst centre beyond the limit whose error is mostly its own (Spike): a failed sphere fit moves one
+    // centre, while an effect the model lacks moves its neighbours along the bar with it.
+    std::vector<size_t> order(residuals.size());
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return residuals[a].squaredNorm() > residuals[b].squaredNorm(); });
+    size_t worst = residuals.size();
+    for (const size_t i : order) {
+      if (residuals[i].squaredNorm() / (sigma * sigma) <= limit) break;
+      if (Spike(kept, residuals, i).norm() > residuals[i].norm() / 3) {
+        worst = i;
+        break;
+      }
     }
-    if (residuals.empty() || residuals[worst].squaredNorm() / (sigma * sigma) <= limit) break;
+    if (worst == residuals.size()) break;
     flagged.push_back(index[worst]);
     kept.erase(kept.begin() + static_cast<long>(worst));
     index.erase(index.begin() + static_cast<long>(worst));
@@ -396,8 +431,30 @@ std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit,
   return flagged;
 }
 
+// d(residual)/d(drift rate) per coordinate: the centres move by rate * DriftShape(t).
+Eigen::MatrixXd DriftColumns(const MeasurementSet& set, double tau) {
+  Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(set.observations.size()), 3);
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -DriftShape(set.t_s[i], tau);
+  }
+  return columns;
+}
+
+// d(residual)/d(scale): stitched xy distances from the first tile grow by scale * (s - a).
+Eigen::MatrixXd ScaleColumn(const MeasurementSet& set) {
+  Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(set.observations.size()), 1);
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const Observation& o = set.observations[i];
+    const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
+    columns.block<2, 1>(3 * static_cast<Eigen::Index>(i), 0) = -(o.measured - a).head<2>();
+  }
+  return columns;
+}
+
 // Every candidate effect scored against the current fit (CoefficientColumns, ScoreColumns), but those already
-// applied once (an anchor, a drift, a scale, outliers cannot be added twice).
+// applied once (an anchor, a drift, a scale, outliers cannot be added twice). An applied drift or scale is a value
+// the data were corrected by, not a model term: its directions join the base here, so that a later candidate is
+// scored as if it could still move (a scale estimated alone takes part of a bend along x; with the bend it would not).
 std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationResult& fit, const ParameterLayout& base_layout,
                                        const std::vector<Applied>& applied, const IdentificationOptions& base_options,
                                        double alpha) {
@@ -405,9 +462,32 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
   const bool anchored = p.anchor == Anchor::kFirstTile;
   const Eigen::VectorXd r0 = Stack(fit.residuals);
   const ParameterLayout& fitted = fit.calibration.layout;
-  const Eigen::MatrixXd jb = CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), identify, anchored);
+  Eigen::MatrixXd jb = CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), identify, anchored);
+  for (const Applied& a : applied) {
+    Eigen::MatrixXd free_again;
+    if (a.step.effect == "thermal_drift" && !identify.t_s.empty()) free_again = DriftColumns(identify, a.tau_s);
+    if (a.step.effect == "scale" && !identify.anchors.empty()) free_again = ScaleColumn(identify);
+    if (free_again.cols() == 0) continue;
+    jb.conservativeResize(Eigen::NoChange, jb.cols() + free_again.cols());
+    jb.rightCols(free_again.cols()) = free_again;
+  }
   const Eigen::Index rows = r0.size();
   std::vector<Candidate> candidates;
+  // Blunders first: the other candidates are scored without them, so a large one cannot hide a small effect.
+  std::vector<int> blunders;
+  if (!IsApplied(applied, "outliers")) {
+    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p, fit, base_options, alpha)};
+    if (!c.flagged.empty()) {
+      Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(c.flagged.size()));
+      for (size_t k = 0; k < c.flagged.size(); ++k) {
+        for (int j = 0; j < 3; ++j) columns(3 * c.flagged[k] + j, 3 * static_cast<Eigen::Index>(k) + j) = 1.0;
+      }
+      c.linear = ScoreColumns(r0, jb, columns);
+      blunders = c.flagged;
+      candidates.push_back(std::move(c));
+    }
+  }
+  const auto score = [&](const Eigen::MatrixXd& columns) { return ScoreColumnsWithout(blunders, r0, jb, columns); };
   const auto coefficient_candidate = [&](const std::string& effect, const std::string& component,
                                          const std::function<void(ParameterLayout&)>& extend) {
     ParameterLayout extended = fitted;
@@ -418,7 +498,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     }
     if (added.empty()) return;
     const std::vector<double> values = ValuesByName(fitted, fit.calibration.values, extended);
-    candidates.push_back({{effect, component}, ScoreColumns(r0, jb, CoefficientColumns(extended, values, added, identify, anchored)), added, {}});
+    candidates.push_back({{effect, component}, score(CoefficientColumns(extended, values, added, identify, anchored)), added, {}});
   };
   for (int t = 0; t < kFirstSquarenessTerm; ++t) {
     const TermSpec& spec = p.layout.term(t);
@@ -428,7 +508,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
   }
   coefficient_candidate("z_coupling", "", AddPitchAndRoll);
   const auto column_candidate = [&](const std::string& effect, const std::string& component, const Eigen::MatrixXd& columns) {
-    candidates.push_back(Candidate{{effect, component}, ScoreColumns(r0, jb, columns), {}, {}});
+    candidates.push_back(Candidate{{effect, component}, score(columns), {}, {}});
   };
   if (!anchored && identify.anchors.size() >= 2) {
     // Free offsets per placement (the first one is the reference): the most general anchor difference.
@@ -441,25 +521,19 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     column_candidate("reference_anchor", "", columns);
   }
   if (!identify.t_s.empty() && !IsApplied(applied, "thermal_drift")) {
-    const auto drift_columns = [&](double tau) {
-      Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3);
-      for (size_t i = 0; i < identify.observations.size(); ++i) {
-        for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -DriftShape(identify.t_s[i], tau);
-      }
-      return columns;
-    };
+    const auto drift_columns = [&](double tau) { return DriftColumns(identify, tau); };
     column_candidate("thermal_drift", "", drift_columns(0.0));
     const LinearScore& linear = candidates.back().linear;
     // A warm-up settling within the measurements: the time constant from a grid, counted as one more parameter. It
     // competes only when it beats the linear drift (its limit for a long time constant) by an F-test of its own.
     Candidate warm_up{{"thermal_drift", "warm-up"}, {}, {}, {}, 0.0};
     for (double tau_min : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
-      const LinearScore score = ScoreColumns(r0, jb, drift_columns(tau_min * 60.0));
-      if (warm_up.tau_s == 0.0 || score.rss < warm_up.linear.rss) warm_up.linear = score, warm_up.tau_s = tau_min * 60.0;
+      const LinearScore l = score(drift_columns(tau_min * 60.0));
+      if (warm_up.tau_s == 0.0 || l.rss < warm_up.linear.rss) warm_up.linear = l, warm_up.tau_s = tau_min * 60.0;
     }
     warm_up.linear.extra += 1;
     warm_up.linear.rank += 1;
-    const double dof = static_cast<double>(rows - warm_up.linear.rank);
+    const double dof = warm_up.linear.rows - warm_up.linear.rank;
     if (dof > 0 && warm_up.linear.rss > 0 && linear.rss > warm_up.linear.rss) {
       const double f = (linear.rss - warm_up.linear.rss) / (warm_up.linear.rss / dof);
       const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<double>(1.0, dof), f));
@@ -467,24 +541,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     }
   }
   if (!identify.anchors.empty() && !IsApplied(applied, "scale")) {  // a scale about the first tile needs one
-    Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 1);
-    for (size_t i = 0; i < identify.observations.size(); ++i) {
-      const Observation& o = identify.observations[i];
-      const Eigen::Vector3d a = identify.anchors[static_cast<size_t>(o.group)];
-      columns.block<2, 1>(3 * static_cast<Eigen::Index>(i), 0) = -(o.measured - a).head<2>();
-    }
-    column_candidate("scale", "xy", columns);
-  }
-  if (!IsApplied(applied, "outliers")) {
-    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p, fit, base_options, alpha)};
-    if (!c.flagged.empty()) {
-      Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(c.flagged.size()));
-      for (size_t k = 0; k < c.flagged.size(); ++k) {
-        for (int j = 0; j < 3; ++j) columns(3 * c.flagged[k] + j, 3 * static_cast<Eigen::Index>(k) + j) = 1.0;
-      }
-      c.linear = ScoreColumns(r0, jb, columns);
-      candidates.push_back(std::move(c));
-    }
+    column_candidate("scale", "xy", ScaleColumn(identify));
   }
   return candidates;
 }
@@ -654,9 +711,8 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     // Alpha spending: step k may raise a false alarm with probability alpha / 2^k at most.
     const double alpha_step = options.alpha / std::pow(2.0, step);
     std::vector<Candidate> candidates = ScoreCandidates(problem, fit, layout, applied, base_options, alpha_step);
-    const double m = 3.0 * static_cast<double>(fit.residuals.size());
     const double alpha_each = alpha_step / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
-    for (Candidate& c : candidates) Test(c, m, alpha_each);
+    for (Candidate& c : candidates) Test(c, alpha_each);
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
       if (a.score.significant != b.score.significant) return a.score.significant;
       return a.score.delta_bic < b.score.delta_bic;

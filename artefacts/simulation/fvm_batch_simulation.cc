@@ -28,7 +28,8 @@ Eigen::Vector3d StageError(const ParameterLayout& layout, const std::vector<doub
 }
 
 FvmBatchTruth DrawTruth(const FvmBatchOptions& options, std::mt19937_64& rng) {
-  ParameterLayout layout = stage::FvmModelLayout(options.truth_model);
+  ParameterLayout layout =
+      options.truth_terms.empty() ? stage::FvmModelLayout(options.truth_model) : stage::ComposeLayout(options.truth_terms);
   const Eigen::VectorXd tau = stage::PlausibleSizes(layout);
   // Stage errors grow with travel from the home position: offsets stay small (10 um), the terms that vary
   // along the axes carry the error (000:7640: up to 180-200 um over 200 mm). The guideways turn the carriages by
@@ -167,7 +168,11 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
   }
   if (options.Hides("z_coupling")) {
     std::vector<std::pair<std::string, double>> pitch_roll;
-    for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) pitch_roll.emplace_back(term, signed_size(EffectSize(options, 500.0) * 1e-6));
+    // Only the sums xRx + yRx and xRy + yRy turn the tool against the part: Y's turns are half of X's, so that
+    // signs drawn at random never cancel them to nothing.
+    for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) {
+      pitch_roll.emplace_back(term, signed_size(EffectSize(options, 500.0) * 1e-6 * (term[0] == 'y' ? 0.5 : 1.0)));
+    }
     for (auto& [term, value] : pitch_roll) {
       if (out.truth.layout.term(*stage::FindErrorTerm(term)).present) value = 0.0;  // already there: leave it
     }
@@ -214,7 +219,8 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
     const Eigen::Vector3d anchor = stage::FirstTile(commands);
     const stage::FirstTileFrame frame = stage::MakeFirstTileFrame(options.stitched_frame, layout, values.data(), anchor, nullptr);
     for (size_t i = 0; i < commands.size(); ++i) {
-      const double t = options.seconds_per_centre * static_cast<double>(i);
+      const bool backwards = options.serpentine && p % 2 == 1;
+      const double t = options.seconds_per_centre * static_cast<double>(backwards ? commands.size() - 1 - i : i);
       placement.ids.push_back(static_cast<int>(i) + 1);
       const double drift_s = options.drift_tau_min > 0 ? options.drift_tau_min * 60.0 * (1.0 - std::exp(-t / (options.drift_tau_min * 60.0))) : t;
       placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * drift_s);

@@ -21,12 +21,17 @@ namespace fvm::artefacts {
 struct FvmBatchOptions {
   unsigned seed = 1;
   std::string truth_model = "27";      // a layout name of stage::FvmModelLayout
+  std::string truth_terms;             // or a model of one's own (stage::ComposeLayout), which then replaces it
   double mean_error_um = 125.0;        // mean stage error over the stage (paper: 141 um before compensation)
   double noise_um = 0.5;               // centre noise per coordinate, in both measurements
   int validation_placements = 10;      // 17 centres each (paper: 162 validation centres)
   bool same_start = true;              // identification placements share their first calotte's spot
   double pitch_error_um = 5.0;         // the bar is uncalibrated: its calottes deviate from 10 mm pitch
   double seconds_per_centre = 20.0;    // measurement time per calotte (the t column)
+  // Every other placement is measured from its last calotte back to its first. Along a bar, a drift and anything
+  // that grows along it (a height on a wedge, a scale) both grow with the index; measuring back makes the drift
+  // show at the shared start spot, where the other effects do not.
+  bool serpentine = false;
   // A lead screw's cyclic error along X and Y that no polynomial model takes (stage_truth.h); 0: none.
   double periodic_um = 0.0, period_mm = 25.0;
   double height_step_mm = 0.0;         // the bar lies on a wedge: it rises by -step, 0, +step over its length, in turn
@@ -40,7 +45,7 @@ struct FvmBatchOptions {
   //   thermal_drift   stitching-free centres drift with measurement time (3 um/min, mostly along x)
   //   higher_order    the truth gets the next polynomial order of xTx (80 um at the end of the travel)
   //   reference_anchor identification placements start apart: each is anchored at its own first tile (30 mm)
-  //   z_coupling      pitch and roll of X and Y (500 urad each); use with height_step_mm
+  //   z_coupling      pitch and roll of X (500 urad each) and of Y (half that); use with height_step_mm
   //   outliers        three failed sphere fits among the identification centres (80 um)
   //   scale           stitched distances scaled about the first tile, a lens scale error (300 ppm)
   std::string hidden_effect;
