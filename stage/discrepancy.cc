@@ -54,6 +54,7 @@ std::vector<double> ValuesByName(const ParameterLayout& from, const std::vector<
 struct LinearScore {
   double rss_base = 0, rss = 0;
   double rows = 0;     // equations it was scored on
+  double own = 0;      // the least share of a column's pattern (norm) that the base model cannot take
   int extra = 0;       // rank the candidate adds
   int rank = 0;        // rank of base + candidate
   Eigen::VectorXd effect;      // least-squares values of the candidate's columns (in the columns' units)
@@ -62,10 +63,11 @@ struct LinearScore {
 
 // Extra sum of squares of the candidate columns over the base model, on the linearised problem.
 //
-// A candidate column built from measured coordinates (a scale acts on s - a) carries their noise. When the base
-// model already spans its smooth part, what is left is that noise, and it correlates with the residual's own
-// noise: a false "effect". Only the part of a candidate that the base model leaves above 1e-4 of its norm counts
-// as new; centre noise of 0.5 um on coordinates of about 100 mm is 5e-6 of it, so this keeps a 20x margin.
+// Only the part of a candidate that the base model leaves above 1 % of its norm counts as new. Below that, its
+// estimate would rest on what the model does not describe rather than on the effect: a scale about a shared start
+// is the model's linear terms xTx1 and yTy1 but for the noise, the bar's pitch errors and the stage's own
+// non-polynomial error in the stitched coordinates it is built from (about 1e-4 of them), and fitted to that
+// remainder it comes out at 1e6 ppm.
 LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra) {
   constexpr double kNewDirection = 1e-2;
   LinearScore s;
@@ -83,8 +85,10 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   const Eigen::VectorXd r_base = r0 - q_base * (q_base.transpose() * r0);
   s.rss_base = r_base.squaredNorm();
   Eigen::MatrixXd unique = all.rightCols(extra.cols()) - q_base * (q_base.transpose() * all.rightCols(extra.cols()));
+  s.own = 1.0;
   for (Eigen::Index c = 0; c < unique.cols(); ++c) {
     if (unique.col(c).norm() < kNewDirection) unique.col(c).setZero();
+    else s.own = std::min(s.own, unique.col(c).norm());
   }
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> extra_qr(unique);
   extra_qr.setThreshold(kNewDirection);
@@ -377,14 +381,26 @@ double RobustSigma(const std::vector<Eigen::Vector3d>& residuals, double floor_m
 }
 
 // What sets observation i's residual apart from those of its neighbours in the same group (the calottes before and
-// after it along the bar): r_i less their mean, or less the one neighbour it has. Smooth along the bar, a missing
-// effect leaves little of it; a blunder leaves nearly all.
-Eigen::Vector3d Spike(const std::vector<Observation>& observations, const std::vector<Eigen::Vector3d>& residuals, size_t i) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  int count = 0;
-  if (i > 0 && observations[i - 1].group == observations[i].group) sum += residuals[i - 1], ++count;
-  if (i + 1 < observations.size() && observations[i + 1].group == observations[i].group) sum += residuals[i + 1], ++count;
-  return count > 0 ? Eigen::Vector3d(residuals[i] - sum / count) : residuals[i];
+// after it along the bar): r_i less their mean or, at the end of a bar, less the straight line through the two
+// before it. Smooth along the bar, a missing effect leaves little of it; a blunder leaves nearly all. `noise` is
+// its variance in units of one residual's (white noise): 1 + 1/2, or 1 + 4 + 1 for the straight line.
+struct Spike {
+  Eigen::Vector3d value;
+  double noise;
+};
+
+Spike SpikeOf(const std::vector<Observation>& observations, const std::vector<Eigen::Vector3d>& residuals, size_t i) {
+  const auto same = [&](long k) {
+    return k >= 0 && k < static_cast<long>(observations.size()) && observations[static_cast<size_t>(k)].group == observations[i].group;
+  };
+  const long n = static_cast<long>(i);
+  const auto r = [&](long k) { return residuals[static_cast<size_t>(k)]; };
+  if (same(n - 1) && same(n + 1)) return {residuals[i] - (r(n - 1) + r(n + 1)) / 2, 1.5};
+  if (same(n - 2) && same(n - 1)) return {residuals[i] - (2 * r(n - 1) - r(n - 2)), 6.0};
+  if (same(n + 2) && same(n + 1)) return {residuals[i] - (2 * r(n + 1) - r(n + 2)), 6.0};
+  if (same(n - 1)) return {residuals[i] - r(n - 1), 2.0};
+  if (same(n + 1)) return {residuals[i] - r(n + 1), 2.0};
+  return {residuals[i], 1.0};
 }
 
 // Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), found
@@ -402,15 +418,16 @@ std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit,
   const size_t most = kept.size() / 5;  // beyond a fifth of the centres, the "outliers" are the model's failure
   while (flagged.size() < most && !residuals.empty()) {
     const double sigma = RobustSigma(residuals, base_options.noise_floor_mm);
-    // The worst centre beyond the limit whose error is mostly its own (Spike): a failed sphere fit moves one
-    // centre, while an effect the model lacks moves its neighbours along the bar with it.
+    // The worst centre beyond the limit that also stands out from its neighbours by as much (SpikeOf): a failed
+    // sphere fit moves one centre, while an effect the model lacks moves its neighbours along the bar with it.
     std::vector<size_t> order(residuals.size());
     std::iota(order.begin(), order.end(), size_t{0});
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return residuals[a].squaredNorm() > residuals[b].squaredNorm(); });
     size_t worst = residuals.size();
     for (const size_t i : order) {
       if (residuals[i].squaredNorm() / (sigma * sigma) <= limit) break;
-      if (Spike(kept, residuals, i).norm() > residuals[i].norm() / 3) {
+      const Spike spike = SpikeOf(kept, residuals, i);
+      if (spike.value.squaredNorm() / (spike.noise * sigma * sigma) > limit) {
         worst = i;
         break;
       }
@@ -732,10 +749,18 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       const ResidualSummary next_validation = held_out(refit.calibration, next.validate);
       // Held-out placements must not get worse (beyond their own scatter): otherwise the effect fitted noise.
       if (validation.count > 0 && next_validation.mean_mm > 1.05 * validation.mean_mm) {
+        // Why it may fail: an effect whose pattern the model's terms nearly take is estimated from what little is
+        // its own. A drift along bars measured in order is the usual case, and the design is the cure.
+        const bool drift = c.score.effect == "thermal_drift";
         d.notes.push_back(fmt::format("step {}: {}{} fits the identification data better but makes the held-out placements "
-                                      "worse ({:.2f} -> {:.2f} um); the next candidate was tried",
+                                      "worse ({:.2f} -> {:.2f} um; {:.0f} % of its pattern is its own, the rest the model "
+                                      "can take){}; the next candidate was tried",
                                       step, c.score.effect, c.score.component.empty() ? "" : " " + c.score.component,
-                                      validation.mean_mm * 1e3, next_validation.mean_mm * 1e3));
+                                      validation.mean_mm * 1e3, next_validation.mean_mm * 1e3, 100 * c.linear.own,
+                                      drift ? ". A drift grows along each bar as its calottes are measured in order, like "
+                                              "anything else that grows along it; measuring every other placement "
+                                              "backwards shows the drift at the shared start"
+                                            : ""));
         continue;
       }
       if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem.layout, refit.calibration);

@@ -20,6 +20,8 @@ struct Case {
   std::string effect;
   std::string model;  // base model = the truth's model (the effect is what it lacks)
   double height_step_mm = 0.0;
+  bool serpentine = false;
+  std::string terms;  // a base model of one's own (stage::ComposeLayout) instead of `model`
 };
 
 // One effect hidden at a time: the exports keep the translated frame, since the turn of a stitched frame is itself
@@ -31,9 +33,11 @@ Diagnosis DiagnoseCase(const Case& c, unsigned seed, StitchedFrame frame = Stitc
   options.truth_model = c.model;
   options.hidden_effect = c.effect;
   options.height_step_mm = c.height_step_mm;
+  options.serpentine = c.serpentine;
+  options.truth_terms = c.terms;
   const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(options);
-  return Diagnose(FvmModelLayout(c.model), artefacts::Observations(sim.batch, sim.batch.identify),
-                  artefacts::Observations(sim.batch, sim.batch.validate));
+  return Diagnose(c.terms.empty() ? FvmModelLayout(c.model) : ComposeLayout(c.terms),
+                  artefacts::Observations(sim.batch, sim.batch.identify), artefacts::Observations(sim.batch, sim.batch.validate));
 }
 
 // Each effect hidden on top of a truth of the base model's form, at realistic sizes (see FvmBatchOptions): the
@@ -115,43 +119,64 @@ TEST(Discrepancy, NamesTheTurnOfTheStitchedFrame) {
   }
 }
 
-Diagnosis DiagnoseHidden(const std::string& effects, const std::string& model, unsigned seed, double height_step_mm = 0.0) {
-  return DiagnoseCase({effects, model, height_step_mm}, seed);
-}
-
 std::vector<std::string> Named(const Diagnosis& d) {
   std::vector<std::string> out;
   for (const DiagnosisStep& s : d.steps) out.push_back(s.effect);
   return out;
 }
 
-// Two effects at once, each pair the 27 model can show apart (scale hides in its linear terms when the placements
-// share a start, and z_coupling needs the 9 model on a wedge): both named, step by step, and the held-out gap at
-// least halved. Measured over all 15 pairs in the closing note of issue 14.
+// The design a pair of hidden effects needs, as in tests/bench/discrepancy_pairs.sh: the 27 model; the 15 model
+// where a scale is hidden (27's linear terms take a scale about a shared start exactly, and no data of one
+// instrument tell them apart); the 9 model on a 20 mm wedge where z_coupling is hidden (15 and 27 have pitch and
+// roll), measured serpentine (along a bar on a wedge, height and time grow together); both: the 15 model's
+// constant terms without pitch and roll.
+Case PairCase(const std::string& a, const std::string& b) {
+  const bool scale = a == "scale" || b == "scale", z = a == "z_coupling" || b == "z_coupling";
+  Case c{a + "," + b, scale ? "15" : "27"};
+  if (z) c.model = "9", c.height_step_mm = 20.0, c.serpentine = true;
+  if (z && scale) c.terms = "xTx:0,xTy:0,xTz:0,yTx:0,yTy:0,yTz:0,xRz:0,yRz:0,xWy:0,xWz:0,yWz:0";
+  return c;
+}
+
+// Every pair of the catalogue's six effects hidden together, three seeds each: both named, step by step, and the
+// held-out gap at least halved. The issue asks for 90 % (41 of 45); all 45 pass today, and two may fail before this
+// does (a seed whose effect lands near the noise).
 TEST(Discrepancy, NamesTwoEffectsHiddenTogether) {
-  const std::vector<std::string> effects{"thermal_drift", "higher_order", "reference_anchor", "outliers"};
+  const std::vector<std::string> effects = artefacts::HiddenEffectNames();
+  int cases = 0, passed = 0;
+  std::string failed;
   for (size_t a = 0; a < effects.size(); ++a) {
     for (size_t b = a + 1; b < effects.size(); ++b) {
       for (unsigned seed : {1u, 2u, 3u}) {
-        const Diagnosis d = DiagnoseHidden(effects[a] + "," + effects[b], "27", seed);
+        const Diagnosis d = DiagnoseCase(PairCase(effects[a], effects[b]), seed);
         const std::vector<std::string> named = Named(d);
-        EXPECT_THAT(named, ::testing::IsSupersetOf({effects[a], effects[b]})) << "seed " << seed << ": " << d.explanation;
-        EXPECT_LE(d.validation_after.mean_mm, 0.5 * d.validation_before.mean_mm) << effects[a] << "," << effects[b] << " seed " << seed;
-        ASSERT_FALSE(d.steps.empty());
-        EXPECT_EQ(*d.effect, d.steps.front().effect);  // the first effect stays where scripts read it
+        const bool both = std::count(named.begin(), named.end(), effects[a]) && std::count(named.begin(), named.end(), effects[b]);
+        const bool ok = both && d.validation_after.mean_mm <= 0.5 * d.validation_before.mean_mm;
+        ++cases;
+        passed += ok;
+        if (!ok) failed += " " + effects[a] + "," + effects[b] + "/" + std::to_string(seed);
+        if (!d.steps.empty()) EXPECT_EQ(*d.effect, d.steps.front().effect);  // the first effect stays where scripts read it
       }
     }
   }
+  EXPECT_EQ(cases, 45);
+  EXPECT_GE(passed, 43) << "failed:" << failed;
 }
 
-// When the best-scoring candidate makes the held-out placements worse, the next one is tried instead of stopping:
-// on a wedge with a misplaced start and pitch and roll, the drift fits the identification data but not the
-// held-out placements; anchor and pitch and roll explain both.
+// When the best-scoring candidate makes the held-out placements worse, the next one is tried instead of stopping. On
+// a wedge measured all in one direction, a drift and pitch and roll both grow along every bar: the drift fits the
+// identification data but not the held-out placements (its estimate rests on the little of its pattern that is its
+// own), pitch and roll explain both. Measured serpentine, the drift shows at the shared start and both are named.
 TEST(Discrepancy, TriesTheNextCandidateInsteadOfStopping) {
-  const Diagnosis d = DiagnoseHidden("reference_anchor,z_coupling", "9", 1, 20.0);
-  EXPECT_THAT(Named(d), ::testing::ElementsAre("reference_anchor", "z_coupling"));
-  EXPECT_THAT(d.notes, ::testing::Contains(::testing::HasSubstr("the next candidate was tried")));
-  EXPECT_LE(d.validation_after.mean_mm, 0.5 * d.validation_before.mean_mm);
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Diagnosis d = DiagnoseCase({"thermal_drift,z_coupling", "9", 20.0}, seed);
+    ASSERT_FALSE(d.steps.empty()) << "seed " << seed;
+    EXPECT_EQ(d.steps.front().effect, "z_coupling") << "seed " << seed;
+    EXPECT_THAT(d.notes, ::testing::Contains(::testing::HasSubstr("the next candidate was tried"))) << "seed " << seed;
+    EXPECT_THAT(d.notes, ::testing::Contains(::testing::HasSubstr("backwards"))) << "seed " << seed;  // the way out
+    const Diagnosis serpentine = DiagnoseCase({"thermal_drift,z_coupling", "9", 20.0, true}, seed);
+    EXPECT_THAT(Named(serpentine), ::testing::IsSupersetOf({"thermal_drift", "z_coupling"})) << "seed " << seed;
+  }
 }
 
 // Three 80 um failed sphere fits among 51 centres, over 20 seeds: every one flagged, and (taken out one at a time
