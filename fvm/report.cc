@@ -325,9 +325,15 @@ std::string RenderSteps(const ReportData& data) {
     plmtex("b", 1.2 + 1.1 * (i % 2), (i + 0.5) / n, 0.5, PlText(steps[static_cast<std::size_t>(i)].label).c_str());
   }
   pllab("", "mean 3-D residual (µm)", "The gap after each step of the selection");
-  const std::array<std::pair<double ReportData::Step::*, PLINT>, 2> series = {
-      std::pair{&ReportData::Step::held_out_um, kSeries0 + 0}, std::pair{&ReportData::Step::identification_um, kSeries0 + 1}};
-  for (const auto& [member, colour] : series) {
+  // Held-out values are written above their points, identification values below, so close ones stay apart.
+  struct Series {
+    double ReportData::Step::*member;
+    PLINT colour;
+    double label_offset;  // of y_max
+  };
+  const std::array<Series, 2> series = {Series{&ReportData::Step::held_out_um, kSeries0 + 0, 0.025},
+                                        Series{&ReportData::Step::identification_um, kSeries0 + 1, -0.06}};
+  for (const auto& [member, colour, label_offset] : series) {
     std::vector<PLFLT> x, y;
     for (PLINT i = 0; i < n; ++i) {
       const double v = steps[static_cast<std::size_t>(i)].*member;
@@ -340,22 +346,19 @@ std::string RenderSteps(const ReportData& data) {
     plline(static_cast<PLINT>(x.size()), x.data(), y.data());
     plwidth(1.0);
     for (std::size_t k = 0; k < x.size(); ++k) {
-      plptex(x[k], y[k] + 0.03 * y_max, 1, 0, 0.5, fmt::format("{:.3g}", y[k]).c_str());
+      plptex(x[k] + 0.04 * n, y[k] + label_offset * y_max, 1, 0, 0, fmt::format("{:.3g}", y[k]).c_str());
       plpoin(1, &x[k], &y[k], 17);
     }
   }
   const std::array<const char*, 2> texts = {"held-out placements", "identification"};
-  const std::array<PLINT, 2> options = {PL_LEGEND_LINE | PL_LEGEND_SYMBOL, PL_LEGEND_LINE | PL_LEGEND_SYMBOL};
+  const std::array<PLINT, 2> options = {PL_LEGEND_LINE, PL_LEGEND_LINE};
   const std::array<PLINT, 2> text_colours = {kInk, kInk}, colours = {kSeries0 + 0, kSeries0 + 1}, styles = {1, 1};
-  const std::array<PLFLT, 2> widths = {2, 2}, symbol_scales = {1, 1};
-  const std::array<PLINT, 2> symbol_numbers = {1, 1};
-  const std::array<const char*, 2> symbols = {"#(728)", "#(728)"};
+  const std::array<PLFLT, 2> widths = {2, 2};
   PLFLT legend_width, legend_height;
   pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
            PL_POSITION_TOP | PL_POSITION_RIGHT | PL_POSITION_INSIDE, 0.02, 0.03, 0.08, kBackground, kGrid, 1, 0, 0, 2,
            options.data(), 1.0, 0.85, 2.0, 0.0, text_colours.data(), texts.data(), nullptr, nullptr, nullptr, nullptr,
-           colours.data(), styles.data(), widths.data(), colours.data(), symbol_scales.data(), symbol_numbers.data(),
-           symbols.data());
+           colours.data(), styles.data(), widths.data(), nullptr, nullptr, nullptr, nullptr);
   return plot.Finish();
 }
 

@@ -184,6 +184,10 @@ if(NOT effect STREQUAL "thermal_drift" OR NOT EXISTS ${WORK}/drift-report/index.
    OR NOT before GREATER 5)
   message(FATAL_ERROR "diagnose on a drifting batch: ${effect}, held-out mean ${before} -> ${after} um")
 endif()
+file(READ ${WORK}/drift-report/index.html page)
+if(NOT EXISTS ${WORK}/drift-report/steps.svg OR NOT page MATCHES "steps.svg")
+  message(FATAL_ERROR "diagnose --report: no plot of the steps")
+endif()
 
 # Several effects at once: both named, in the order they were added.
 run(0 simulate fvm-batch -o ${WORK}/two --seed 1 --hidden-effect thermal_drift,outliers --stitched-frame translated)
@@ -194,6 +198,22 @@ string(JSON e0 GET "${OUT}" effects 0 effect)
 string(JSON e1 GET "${OUT}" effects 1 effect)
 if(NOT steps EQUAL 2 OR NOT "${e0};${e1}" MATCHES "outliers" OR NOT "${e0};${e1}" MATCHES "thermal_drift")
   message(FATAL_ERROR "diagnose with a drift and outliers named: ${e0}, ${e1} (${steps} steps)")
+endif()
+# A base model of one's own: the 15 model's constant terms without pitch and roll, on a wedge measured serpentine,
+# shows both a scale and pitch and roll (the 9 model's linear terms would take the scale).
+set(terms "xTx:0,xTy:0,xTz:0,yTx:0,yTy:0,yTz:0,xRz:0,yRz:0,xWy:0,xWz:0,yWz:0")
+run(0 simulate fvm-batch -o ${WORK}/custom --seed 2 --truth-terms ${terms} --hidden-effect z_coupling,scale
+    --height-step-mm 20 --serpentine --stitched-frame translated)
+file(READ ${WORK}/custom/truth.json truth)
+string(JSON model GET "${truth}" model)
+string(JSON serpentine GET "${truth}" serpentine)
+run(0 diagnose ${WORK}/custom --terms ${terms} --json)
+string(JSON e0 GET "${OUT}" effects 0 effect)
+string(JSON e1 GET "${OUT}" effects 1 effect)
+string(JSON diagnosed GET "${OUT}" model)
+if(NOT "${e0};${e1}" MATCHES "scale" OR NOT "${e0};${e1}" MATCHES "z_coupling" OR NOT model STREQUAL "terms:${terms}"
+   OR NOT diagnosed STREQUAL model OR NOT serpentine STREQUAL "ON")
+  message(FATAL_ERROR "diagnose --terms on a serpentine wedge: ${e0}, ${e1}; truth ${model} (${serpentine}), diagnosed ${diagnosed}")
 endif()
 fails_naming("unknown hidden effect 'bogus'" simulate fvm-batch -o ${WORK}/bogus --hidden-effect thermal_drift,bogus)
 
