@@ -17,11 +17,14 @@
 // held-out placements worse is accepted. Then the remaining candidates are scored against the new residuals, and
 // so on until none passes. Step k tests at alpha / 2^k, Bonferroni over its candidates, so the family-wise
 // false-alarm probability over all steps stays below alpha (the sum of alpha / 2^k). After each step, an earlier
-// effect that the later ones made redundant (its own F-test no longer significant) is dropped. When the
-// identification data fit to noise, the held-out placements are examined for turns about their first tiles
-// (frame_rotation): a chi-square of the fitted turns against what the calibration's covariance and the noise
-// predict for them. Outliers are found one at a time, refitting after each, so that a large blunder does not drag
-// good neighbours over the limit (swamping).
+// effect that the later ones made redundant (its own F-test no longer significant) is dropped; an accepted drift or
+// scale stays free while later candidates are scored. A candidate whose pattern the base model takes to within 1 %
+// is no effect of these data (a scale about a shared start is the model's linear terms). When the identification
+// data fit to noise, the held-out placements are examined for turns about their first tiles (frame_rotation): a
+// chi-square of the fitted turns against what the calibration's covariance and the noise predict for them.
+// Outliers are found one at a time, refitting after each, so that a large blunder does not drag good neighbours
+// over the limit (swamping); a centre must also stand out from its neighbours along the bar, which an effect the
+// model lacks moves with it; and the other candidates are scored without the flagged centres.
 
 #include <Eigen/Core>
 #include <optional>
