@@ -8,9 +8,11 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
@@ -51,6 +53,7 @@ struct PublishedStage {
   std::array<double, 15> offset{}, slope{};
   double ripple_mm = 0.0;
   double ripple_period_mm = 37.0;
+  double bend_mm = 0.0;  // xTx gains bend_mm (x / 100 mm)^2: a second order the 27 model lacks
 
   // `rotation_size`: offsets and slopes of the rotation terms (rad); squareness keeps 2e-4.
   static PublishedStage Draw(unsigned seed, double ripple_mm = 0.0, double rotation_size = 2e-4) {
@@ -78,7 +81,7 @@ struct PublishedStage {
     const auto wave = [&](double t, double phase) {
       return ripple_mm * std::sin(2 * std::numbers::pi * t / ripple_period_mm + phase);
     };
-    e.xTx = v[0] + wave(x, 0.3), e.xTy = v[1] + wave(x, 1.1), e.xTz = v[2] + wave(x, 2.0);
+    e.xTx = v[0] + wave(x, 0.3) + bend_mm * (x / 100.0) * (x / 100.0), e.xTy = v[1] + wave(x, 1.1), e.xTz = v[2] + wave(x, 2.0);
     e.xRx = v[3], e.xRy = v[4], e.xRz = v[5];
     e.yTx = v[6] + wave(y, 0.7), e.yTy = v[7] + wave(y, 1.9), e.yTz = v[8] + wave(y, 2.6);
     e.yRx = v[9], e.yRy = v[10], e.yRz = v[11];
@@ -125,6 +128,17 @@ struct PublishedMeasurements {
   MeasurementSet identify, validate;
 };
 
+// Effects beyond the stage model, written out here for the discrepancy workflow's tests: a scale of the stitched xy
+// distances about the first tile (a lens scale error), a drift of the stitching-free centres with measurement time
+// (20 s a calotte, from the start of each placement), and blunders (failed sphere fits) on stitching-free centres
+// of the second identification placement.
+struct PublishedEffects {
+  double scale = 0.0;
+  Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();
+  int blunders = 0;
+  double blunder_mm = 0.08;
+};
+
 // The three identification placements of the paper (along x, along y, oblique, from the corner at lowest x and
 // highest y) and `validation` random placements, measured on `stage`: the stitching-free centre is the command
 // plus noise, the stitched one the part coordinates (eq. 1) relative to the measurement's first tile, plus noise
@@ -132,8 +146,10 @@ struct PublishedMeasurements {
 // `turned`: the stitched export keeps the orientation the camera had at the first tile a, as an instrument that
 // registers tiles by translation does: s = a + R_Y R_X (at a) (P(q) - P(a)); otherwise s = a + P(q) - P(a).
 inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage, unsigned seed, double noise_mm,
-                                                      int validation = 10, bool apart = false, bool turned = false) {
+                                                      int validation = 10, bool apart = false, bool turned = false,
+                                                      const PublishedEffects& effects = {}) {
   std::mt19937_64 rng(seed * 7919u + 1u);
+  std::mt19937_64 blunder_rng(seed * 104729u + 7u);  // its own draws: without blunders, the same data as before
   std::normal_distribution<double> noise(0.0, 1.0);
   std::uniform_real_distribution<double> tilt(-1.5e-3, 1.5e-3), shift(0.0, 30.0), angle(-std::numbers::pi, std::numbers::pi),
       coordinate(-195.0, -5.0);
@@ -147,9 +163,25 @@ inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage
     // The stitched coordinates start at the first tile, where the stage's own error is not seen.
     const Eigen::Matrix3d turn = turned ? stage.CameraToStitched(anchor) : Eigen::Matrix3d::Identity();
     std::vector<Eigen::Vector3d> free;
-    for (const Eigen::Vector3d& q : commands) {
-      free.push_back(noisy(q));
-      set.observations.push_back({free.back(), noisy(anchor + turn * (stage.Part(q) - stage.Part(anchor))), group});
+    for (size_t i = 0; i < commands.size(); ++i) {
+      const Eigen::Vector3d& q = commands[i];
+      const double t = 20.0 * static_cast<double>(i);
+      free.push_back(noisy(q) + effects.drift_mm_per_s * t);
+      Eigen::Vector3d stitched = turn * (stage.Part(q) - stage.Part(anchor));
+      stitched.head<2>() *= 1.0 + effects.scale;
+      set.observations.push_back({free.back(), noisy(anchor + stitched), group});
+      set.t_s.push_back(t);
+    }
+    if (&set == &out.identify && group == 1 && effects.blunders > 0) {
+      std::vector<size_t> order(commands.size());
+      std::iota(order.begin(), order.end(), size_t{0});
+      std::shuffle(order.begin(), order.end(), blunder_rng);
+      std::normal_distribution<double> direction(0.0, 1.0);
+      const size_t first = set.observations.size() - commands.size();
+      for (int k = 0; k < effects.blunders; ++k) {
+        const Eigen::Vector3d d(direction(blunder_rng), direction(blunder_rng), direction(blunder_rng));
+        set.observations[first + order[static_cast<size_t>(k)]].command += effects.blunder_mm * d.normalized();
+      }
     }
     set.anchors.push_back(PublishedFirstTile(free));
     set.groups.push_back("placement " + std::to_string(group));
