@@ -403,9 +403,10 @@ Spike SpikeOf(const std::vector<Observation>& observations, const std::vector<Ei
   return {residuals[i], 1.0};
 }
 
-// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), found
-// one at a time: the worst is taken out and the model refitted before the next is judged, so that a large
-// blunder, which drags the fit towards itself, cannot make its good neighbours look bad. Indices into p.identify.
+// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), and as
+// improbable against their neighbours' (SpikeOf), found one at a time: the worst is taken out and the model
+// refitted before the next is judged, so that a large blunder, which drags the fit towards itself, cannot make its
+// good neighbours look bad. Indices into p.identify.
 std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit, const IdentificationOptions& base_options,
                               double alpha) {
   std::vector<int> flagged;
@@ -538,14 +539,13 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     column_candidate("reference_anchor", "", columns);
   }
   if (!identify.t_s.empty() && !IsApplied(applied, "thermal_drift")) {
-    const auto drift_columns = [&](double tau) { return DriftColumns(identify, tau); };
-    column_candidate("thermal_drift", "", drift_columns(0.0));
+    column_candidate("thermal_drift", "", DriftColumns(identify, 0.0));
     const LinearScore& linear = candidates.back().linear;
     // A warm-up settling within the measurements: the time constant from a grid, counted as one more parameter. It
     // competes only when it beats the linear drift (its limit for a long time constant) by an F-test of its own.
     Candidate warm_up{{"thermal_drift", "warm-up"}, {}, {}, {}, 0.0};
     for (double tau_min : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
-      const LinearScore l = score(drift_columns(tau_min * 60.0));
+      const LinearScore l = score(DriftColumns(identify, tau_min * 60.0));
       if (warm_up.tau_s == 0.0 || l.rss < warm_up.linear.rss) warm_up.linear = l, warm_up.tau_s = tau_min * 60.0;
     }
     warm_up.linear.extra += 1;
