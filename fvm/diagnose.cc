@@ -1,6 +1,7 @@
 // fvm diagnose BATCH --model N: the discrepancy workflow (stage/discrepancy.h) from the command line.
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <cmath>
 #include <map>
@@ -76,8 +77,9 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
   for (size_t k = 0; k < d.steps.size(); ++k) {
     const stage::DiagnosisStep& s = d.steps[k];
     data.summary.emplace_back(fmt::format("step {}: {}", k + 1, s.effect),
-                              fmt::format("held-out mean {:.2f} -> {:.2f} um; {}", s.validation_before.mean_mm * 1e3,
-                                          s.validation_after.mean_mm * 1e3, s.explanation));
+                              fmt::format("held-out mean {:.2f} -> {:.2f} um; {}{}", s.validation_before.mean_mm * 1e3,
+                                          s.validation_after.mean_mm * 1e3, s.explanation,
+                                          s.alternatives.empty() ? "" : fmt::format(" (These data fit {} exactly as well.)", fmt::join(s.alternatives, ", "))));
     data.parameters.push_back({s.effect + (s.component.empty() ? "" : " " + s.component), s.size, s.size_u, s.size_unit});
   }
   for (const std::string& note : d.notes) data.summary.emplace_back("note", note);
@@ -111,6 +113,7 @@ void Run(const DiagnoseArgs& args) {
                               {"component", s.component},
                               {"explanation", s.explanation},
                               {"size", {{"value", s.size}, {"u", s.size_u}, {"unit", s.size_unit}}},
+                              {"alternatives", s.alternatives},
                               {"before", SummaryJson(s.before)},
                               {"after", SummaryJson(s.after)},
                               {"validation", {{"before", SummaryJson(s.validation_before)}, {"after", SummaryJson(s.validation_after)}}}});
@@ -148,6 +151,9 @@ void Run(const DiagnoseArgs& args) {
                s.component.empty() ? "" : " (" + s.component + ")", s.size, s.size_u, s.size_unit,
                s.validation_before.mean_mm * 1e3, s.validation_after.mean_mm * 1e3);
     fmt::print("  {}\n", s.explanation);
+    if (!s.alternatives.empty()) {
+      fmt::print("  These data fit {} exactly as well: one cannot be told from the other here.\n", fmt::join(s.alternatives, ", "));
+    }
   }
   for (const std::string& note : d.notes) fmt::print("  note: {}\n", note);
   fmt::print("\n");

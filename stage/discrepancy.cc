@@ -257,8 +257,16 @@ struct TurnTest {
   std::vector<Eigen::Vector3d> residuals_after;  // with each placement's turn taken out
 };
 
+// A drift the data were corrected by. Its rates were estimated together with the model's coefficients, which along
+// bars measured in order trade off against them: the turn test takes their joint covariance, from the equations
+// of both on the identification data.
+struct DriftCorrection {
+  Eigen::MatrixXd model_columns, drift_columns;  // d(identification residual) / d(free coefficients), / d(rates)
+  double tau_s = 0.0;
+};
+
 TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
-                          double alpha_each) {
+                          const std::optional<DriftCorrection>& drift, double alpha_each) {
   TurnTest t;
   const ValidationStats v = Validate(&calibration, validate.observations, validate.anchors, frame);
   t.turns = PlacementTurns(calibration, v, validate.observations, validate.anchors);
@@ -276,12 +284,35 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
   Eigen::VectorXd yaw(n);
   Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
   const bool model = calibration.covariance.size() > 0;
+  // With a drift: the yaw's sensitivity to its three rates joins that to the coefficients, under their joint
+  // covariance.
+  Eigen::MatrixXd joint = calibration.covariance;
+  Eigen::MatrixXd drift_yaw = Eigen::MatrixXd::Zero(n, drift ? 3 : 0);
+  if (drift && model && !validate.t_s.empty()) {
+    Eigen::MatrixXd a(drift->model_columns.rows(), drift->model_columns.cols() + 3);
+    a << drift->model_columns, drift->drift_columns;
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a.transpose() * a);
+    joint = calibration.sigma_mm * calibration.sigma_mm * cod.pseudoInverse();
+    for (Eigen::Index g = 0; g < n; ++g) {
+      const PlacementTurn& turn = t.turns[static_cast<size_t>(g)];
+      for (size_t i = 0; i < turn.observations.size(); ++i) {
+        const double shift = -DriftShape(validate.t_s[turn.observations[i]], drift->tau_s);
+        drift_yaw.row(g) += shift * turn.solve.block<1, 3>(2, 3 * static_cast<Eigen::Index>(i));
+      }
+    }
+  }
+  const auto yaw_sensitivity = [&](Eigen::Index g) {
+    const PlacementTurn& turn = t.turns[static_cast<size_t>(g)];
+    Eigen::RowVectorXd row(turn.sensitivity.cols() + drift_yaw.cols());
+    row << turn.sensitivity.row(2), drift_yaw.row(g);
+    return row;
+  };
   for (Eigen::Index g = 0; g < n; ++g) {
     const PlacementTurn& a = t.turns[static_cast<size_t>(g)];
     yaw[g] = a.rotation.z();
     covariance(g, g) = a.noise(2, 2);
     for (Eigen::Index h = 0; h < n && model && a.sensitivity.size() > 0; ++h) {
-      covariance(g, h) += a.sensitivity.row(2).dot(calibration.covariance * t.turns[static_cast<size_t>(h)].sensitivity.row(2).transpose());
+      covariance(g, h) += yaw_sensitivity(g).dot(joint * yaw_sensitivity(h).transpose());
     }
   }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
@@ -769,6 +800,14 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       a.step.validation_before = validation;
       a.step.validation_after = next_validation;
       a.step.candidates = scores;
+      for (const Candidate& other : candidates) {
+        const double explained = c.linear.rss_base - c.linear.rss;
+        if (&other == &c || other.linear.extra != c.linear.extra || !other.score.significant ||
+            std::abs(other.linear.rss - c.linear.rss) > 1e-3 * explained) {
+          continue;
+        }
+        a.step.alternatives.push_back(other.score.effect + (other.score.component.empty() ? "" : " " + other.score.component));
+      }
       with.back() = a;
       applied = with;
       problem = next;
@@ -815,7 +854,15 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   if (turns_testable && step <= kMostSteps) {
     // The identification data fit to noise now: do the held-out placements turn about their first tiles?
     const double alpha_step = options.alpha / std::pow(2.0, step);
-    TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, alpha_step);
+    std::optional<DriftCorrection> drift;
+    for (const Applied& a : applied) {
+      if (a.step.effect != "thermal_drift") continue;
+      const ParameterLayout& fitted = fit.calibration.layout;
+      drift = DriftCorrection{CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), problem.identify,
+                                                 problem.anchor == Anchor::kFirstTile),
+                              DriftColumns(problem.identify, a.tau_s), a.tau_s};
+    }
+    TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, drift, alpha_step);
     if (applied.empty()) d.candidates.push_back(turn.score);
     if (turn.score.significant) {
       DiagnosisStep s;

@@ -67,6 +67,10 @@ struct DiagnosisStep {
   ResidualSummary before, after;                        // identification residuals
   ResidualSummary validation_before, validation_after;  // held-out placements
   std::vector<EffectScore> candidates;                  // as scored at this step, best first
+  // Other candidates that explain these data exactly as well (the same extra sum of squares with as many
+  // parameters): the data cannot tell them from this one, e.g. a scale and a linear positioning error of Y once X's
+  // is in the model. "effect component" each.
+  std::vector<std::string> alternatives;
 };
 
 struct Diagnosis {

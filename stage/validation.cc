@@ -107,6 +107,7 @@ std::vector<PlacementTurn> PlacementTurns(const Calibration& calibration, const 
     for (size_t i : t.observations) residuals.push_back(validation.residuals[i]);
     const TurnFit fit = FitTurn(residuals, t.arms);
     t.rotation = fit.rotation;
+    t.solve = fit.solve;
     t.noise = sigma2 * fit.solve * fit.solve.transpose();
     t.predicted = t.noise;
     if (covariance) {

@@ -57,6 +57,7 @@ struct PlacementTurn {
   Eigen::Matrix3d noise = Eigen::Matrix3d::Zero();       // rad^2, the noise's part alone
   Eigen::MatrixXd sensitivity;  // 3 x n: d(turn) / d(free coefficients); the model's errors are common to all
                                 // placements, so their turns are correlated through it
+  Eigen::MatrixXd solve;        // 3 x 3m: the turn from the placement's m stacked residuals (least squares)
   std::vector<size_t> observations;                      // indices into the validation's observations
   std::vector<Eigen::Vector3d> arms;                     // s - a of each
 };

@@ -45,23 +45,29 @@ run_case() {  # hidden seed -> prints "named effects|held-out before|after"
   "$fvm" simulate fvm-batch -o "$work/b" "${sim[@]}" >/dev/null
   "$fvm" diagnose "$work/b" "${fit[@]}" --json >"$work/d.json"
   jq -r '[([.effects[].effect] | join(",")), .validation.before.mean_um, .validation.after.mean_um,
-          ([.effects[] | select(.effect == "outliers") | .component] | join(","))] | join("|")' "$work/d.json"
+          ([.effects[] | select(.effect == "outliers") | .component] | join(",")),
+          ([.effects[].alternatives[]? | split(" ")[0]] | join(","))] | join("|")' "$work/d.json"
 }
 
 declare -A named_count pass_count
 total=0
 passed=0
+passed_alt=0
 printf '%-34s %4s  %-48s %9s %9s  %s\n' "hidden" "seed" "named" "before" "after" "pass"
 for ((a = 0; a < ${#effects[@]}; ++a)); do
   for ((b = a + 1; b < ${#effects[@]}; ++b)); do
     pair="${effects[a]},${effects[b]}"
     for seed in $seeds; do
-      IFS='|' read -r named before after _ <<<"$(run_case "$pair" "$seed")"
-      ok=0
-      if [[ ",$named," == *",${effects[a]},"* && ",$named," == *",${effects[b]},"* ]] &&
-        awk -v b="$before" -v a="$after" 'BEGIN { exit !(a <= 0.5 * b) }'; then ok=1; fi
+      IFS='|' read -r named before after _ alternatives <<<"$(run_case "$pair" "$seed")"
+      ok=0 ok_alt=0
+      halved=$(awk -v b="$before" -v a="$after" 'BEGIN { print (a <= 0.5 * b) }')
+      if [[ $halved == 1 && ",$named," == *",${effects[a]},"* && ",$named," == *",${effects[b]},"* ]]; then ok=1; fi
+      # Counting an effect the output offers as fitting the data exactly as well as a named one ("alternatives").
+      offered=",$named,$alternatives,"
+      if [[ $halved == 1 && "$offered" == *",${effects[a]},"* && "$offered" == *",${effects[b]},"* ]]; then ok_alt=1; fi
       total=$((total + 1))
       passed=$((passed + ok))
+      passed_alt=$((passed_alt + ok_alt))
       pass_count[$pair]=$((${pass_count[$pair]:-0} + ok))
       # The diagonal counts an effect named when hidden; off it, an effect named that was not hidden, on the rows
       # of both effects that were.
@@ -73,7 +79,8 @@ for ((a = 0; a < ${#effects[@]}; ++a)); do
           named_count[${effects[b]}:$e]=$((${named_count[${effects[b]}:$e]:-0} + 1))
         fi
       done
-      printf '%-34s %4s  %-48s %9.2f %9.2f  %s\n' "$pair" "$seed" "${named:-none}" "$before" "$after" "$ok"
+      printf '%-34s %4s  %-48s %9.2f %9.2f  %s%s\n' "$pair" "$seed" "${named:-none}" "$before" "$after" "$ok" \
+        "${alternatives:+  (as well: $alternatives)}"
     done
   done
 done
@@ -91,6 +98,7 @@ for ((a = 0; a + 1 < ${#effects[@]}; ++a)); do
   echo
 done
 echo "passed: $passed of $total ($(awk -v p="$passed" -v t="$total" 'BEGIN { printf "%.0f", 100 * p / t }') %)"
+echo "passed, counting effects offered as fitting exactly as well: $passed_alt of $total"
 echo
 echo "confusion matrix, $((5 * nseeds)) cases a row (the row's effect hidden with each other one): the diagonal counts the"
 echo "cases that named the row's effect; off the diagonal, the cases that named the column's effect although it was not hidden:"
