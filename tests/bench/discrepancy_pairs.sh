@@ -71,7 +71,7 @@ for ((a = 0; a < ${#effects[@]}; ++a)); do
       pass_count[$pair]=$((${pass_count[$pair]:-0} + ok))
       # The diagonal counts an effect named when hidden; off it, an effect named that was not hidden, on the rows
       # of both effects that were.
-      for e in ${named//,/ }; do
+      for e in $(tr ',' '\n' <<<"$named" | sort -u); do  # a case counts once, however many steps name it
         if [[ "$e" == "${effects[a]}" || "$e" == "${effects[b]}" ]]; then
           named_count[$e:$e]=$((${named_count[$e:$e]:-0} + 1))
         else
