@@ -21,7 +21,8 @@
 // scale stays free while later candidates are scored. A candidate whose pattern the base model takes to within 1 %
 // is no effect of these data (a scale about a shared start is the model's linear terms). When the identification
 // data fit to noise, the held-out placements are examined for turns about their first tiles (frame_rotation): a
-// chi-square of the fitted turns against what the calibration's covariance and the noise predict for them.
+// chi-square of the fitted turns against what the noise, the calibration's covariance (joint with a drift's, when
+// one was corrected) and the coefficients the data could not determine predict for them.
 // Outliers are found one at a time, refitting after each, so that a large blunder does not drag good neighbours
 // over the limit (swamping); a centre must also stand out from its neighbours along the bar, which an effect the
 // model lacks moves with it; and the other candidates are scored without the flagged centres.

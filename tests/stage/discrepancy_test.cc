@@ -78,7 +78,7 @@ TEST(Discrepancy, NamesTheComponentAndSizeOfTheEffect) {
 
 TEST(Discrepancy, CleanDataRarelyRaisesAnAlarm) {
   // The selection runs at a 1 % family-wise level per batch; over 60 clean batches of three model forms the
-  // expected count is below 1. The issue allows 5 % (3 of 60).
+  // expected count is below 1 (1 today). The issue allows 5 % (3 of 60).
   int alarms = 0, batches = 0;
   std::string named;
   for (const Case& c : {Case{"", "27"}, Case{"", "9", 20.0}, Case{"", "15"}}) {
