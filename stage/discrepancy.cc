@@ -268,14 +268,14 @@ struct DriftCorrection {
 // What the coefficients the identification data could not determine (fixed, e.g. pitch and roll on flat bars) add
 // to the covariance of the held-out yaws: their true values still act on placements the identification did not
 // cover. Without a truth to go by, each gets the mean square of the determined coefficients of its kind (rotation,
-// translation, squareness) and power as its variance: empirical Bayes, as large as its determined kin.
-Eigen::MatrixXd UndeterminedYawCovariance(const Calibration& calibration, const std::vector<PlacementTurn>& turns,
-                                          const MeasurementSet& validate) {
-  const Eigen::Index n = static_cast<Eigen::Index>(turns.size());
-  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
+// translation, squareness) and power as its variance: empirical Bayes, as large as its determined kin. Their yaw
+// sensitivities are those PlacementTurns gives for the calibration with them set free, in the same frame.
+Eigen::MatrixXd UndeterminedYawCovariance(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
+                                          Eigen::Index placements) {
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(placements, placements);
   const ParameterLayout& layout = calibration.layout;
   std::map<std::pair<int, int>, std::pair<double, int>> kin;  // (kind, power) -> (sum of squares, count)
-  std::vector<std::string> fixed;
+  std::vector<const ParameterLayout::Coefficient*> fixed;
   for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
     const std::pair<int, int> key{static_cast<int>(GetErrorTerm(c.term).kind), c.power};
     const int slot = layout.FreeIndexOf(c.name);
@@ -283,28 +283,23 @@ Eigen::MatrixXd UndeterminedYawCovariance(const Calibration& calibration, const 
       kin[key].first += std::pow(calibration.values[static_cast<size_t>(slot)], 2);
       ++kin[key].second;
     } else if (c.state == ParameterLayout::State::kFixed) {
-      fixed.push_back(c.name);
+      fixed.push_back(&c);
     }
   }
-  ParameterLayout freed = layout;
-  for (const std::string& name : fixed) freed.Free(name);
-  const std::vector<double> values = ValuesByName(layout, calibration.values, freed);
-  for (const std::string& name : fixed) {
-    const ParameterLayout::Coefficient& c = layout.coefficients()[static_cast<size_t>(layout.FindCoefficient(name))];
-    const auto it = kin.find({static_cast<int>(GetErrorTerm(c.term).kind), c.power});
+  if (fixed.empty()) return covariance;
+  Calibration freed = calibration;
+  for (const ParameterLayout::Coefficient* c : fixed) freed.layout.Free(c->name);
+  freed.values = ValuesByName(layout, calibration.values, freed.layout);
+  for (const ParameterLayout::Coefficient* c : fixed) freed.values[static_cast<size_t>(freed.layout.FreeIndexOf(c->name))] = c->value;
+  freed.covariance = Eigen::MatrixXd::Zero(freed.layout.NumFree(), freed.layout.NumFree());  // asks for the sensitivities
+  const ValidationStats v = Validate(&freed, validate.observations, validate.anchors, frame);
+  const std::vector<PlacementTurn> turns = PlacementTurns(freed, v, validate.observations, validate.anchors);
+  if (static_cast<Eigen::Index>(turns.size()) != placements) return covariance;
+  for (const ParameterLayout::Coefficient* c : fixed) {
+    const auto it = kin.find({static_cast<int>(GetErrorTerm(c->term).kind), c->power});
     if (it == kin.end()) continue;
-    const int column = freed.FreeIndexOf(name);
-    // d(yaw)/d(coefficient) per placement: the turn fit of the displacement it makes relative to the first tile.
-    Eigen::VectorXd yaw(n);
-    for (Eigen::Index g = 0; g < n; ++g) {
-      const PlacementTurn& turn = turns[static_cast<size_t>(g)];
-      const Eigen::Vector3d at_anchor = ForwardJacobian(freed, values.data(), validate.anchors[static_cast<size_t>(turn.group)]).col(column);
-      yaw[g] = 0;
-      for (size_t i = 0; i < turn.observations.size(); ++i) {
-        const Eigen::Vector3d q = validate.observations[turn.observations[i]].command;
-        yaw[g] += turn.solve.block<1, 3>(2, 3 * static_cast<Eigen::Index>(i)).dot(ForwardJacobian(freed, values.data(), q).col(column) - at_anchor);
-      }
-    }
+    Eigen::VectorXd yaw(placements);
+    for (Eigen::Index g = 0; g < placements; ++g) yaw[g] = turns[static_cast<size_t>(g)].sensitivity(2, freed.layout.FreeIndexOf(c->name));
     covariance += it->second.first / it->second.second * yaw * yaw.transpose();
   }
   return covariance;
@@ -360,7 +355,7 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
       covariance(g, h) += yaw_sensitivity(g).dot(joint * yaw_sensitivity(h).transpose());
     }
   }
-  if (model) covariance += UndeterminedYawCovariance(calibration, t.turns, validate);
+  if (model) covariance += UndeterminedYawCovariance(calibration, validate, frame, n);
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
   if (ldlt.info() != Eigen::Success || !(covariance.diagonal().minCoeff() > 0)) return t;
   const double chi2 = yaw.dot(ldlt.solve(yaw));
