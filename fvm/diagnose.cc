@@ -45,6 +45,11 @@ std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std
   return errors;
 }
 
+// A step's alternatives, for the text and the report alike.
+std::string AlternativesSentence(const stage::DiagnosisStep& s) {
+  return fmt::format("These data fit {} exactly as well: one cannot be told from the other here.", fmt::join(s.alternatives, ", "));
+}
+
 ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
   ReportData data;
   data.title = fmt::format("fvm diagnose: model {} on {}", ModelName(args.model, args.terms), args.batch);
@@ -79,7 +84,7 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
     data.summary.emplace_back(fmt::format("step {}: {}", k + 1, s.effect),
                               fmt::format("held-out mean {:.2f} -> {:.2f} um; {}{}", s.validation_before.mean_mm * 1e3,
                                           s.validation_after.mean_mm * 1e3, s.explanation,
-                                          s.alternatives.empty() ? "" : fmt::format(" (These data fit {} exactly as well.)", fmt::join(s.alternatives, ", "))));
+                                          s.alternatives.empty() ? "" : " " + AlternativesSentence(s)));
     data.parameters.push_back({s.effect + (s.component.empty() ? "" : " " + s.component), s.size, s.size_u, s.size_unit});
   }
   for (const std::string& note : d.notes) data.summary.emplace_back("note", note);
@@ -151,9 +156,7 @@ void Run(const DiagnoseArgs& args) {
                s.component.empty() ? "" : " (" + s.component + ")", s.size, s.size_u, s.size_unit,
                s.validation_before.mean_mm * 1e3, s.validation_after.mean_mm * 1e3);
     fmt::print("  {}\n", s.explanation);
-    if (!s.alternatives.empty()) {
-      fmt::print("  These data fit {} exactly as well: one cannot be told from the other here.\n", fmt::join(s.alternatives, ", "));
-    }
+    if (!s.alternatives.empty()) fmt::print("  {}\n", AlternativesSentence(s));
   }
   for (const std::string& note : d.notes) fmt::print("  note: {}\n", note);
   fmt::print("\n");
