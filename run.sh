@@ -30,8 +30,11 @@ if ((${#missing[@]})); then
   fi
 fi
 
-build_release() {
+configure_release() {
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+}
+build_release() {
+  configure_release
   cmake --build build
 }
 
@@ -59,7 +62,9 @@ fuzz() {
 case "$what" in
   build) build_release ;;
   sample)
-    build_release
+    # Only the executable and its format plugins: the sample needs no test, benchmark or fuzz target.
+    configure_release
+    cmake --build build --target fvm
     build/fvm/fvm calibrate samples/bar17 --model 27 -o build/sample-calibration.json --report build/sample-report
     ;;
   sanitize) sanitize ;;

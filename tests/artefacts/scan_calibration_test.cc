@@ -183,6 +183,7 @@ TEST(ScanCalibration, HeightMapTilesCalibrateZ) {
   const double before = z_error_um(nullptr), after = z_error_um(&fit.result.calibration);
   EXPECT_GT(before, 3.0);  // the stage's z error beyond a plane: 5 um rms on seed 1
   EXPECT_LT(after, 1.0) << "before " << before;
+  EXPECT_GE(fit.result.calibration.layout.FreeIndexOf("xTz1"), 0) << "xTz1 is a free coefficient of the fit";
   EXPECT_FALSE(Fixed(fit.result, "xTz1"));
 }
 

@@ -8,9 +8,11 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 
 #include "artefacts/geometry/test_piece.h"
 #include "artefacts/simulation/test_piece_simulation.h"
@@ -193,12 +195,14 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   IdentificationOptions options;
   options.instrument = InstrumentPose::kEstimated;
   options.num_threads = 1;
-  const auto recovered = [](const TestPieceVerification& v, const std::string& iso) {
-    for (const TermRecovery& t : v.terms) {
-      if (t.error == iso) return t.recoverable;
-    }
-    return false;
+  // The term by its ISO name; a name the verification does not report fails the test instead of reading as "not
+  // recovered".
+  const auto term = [](const TestPieceVerification& v, const std::string& iso) -> const TermRecovery& {
+    const auto t = std::find_if(v.terms.begin(), v.terms.end(), [&](const TermRecovery& r) { return r.error == iso; });
+    if (t == v.terms.end()) throw std::logic_error("no term named " + iso);
+    return *t;
   };
+  const auto recovered = [&](const TestPieceVerification& v, const std::string& iso) { return term(v, iso).recoverable; };
   artefacts::CmmSimulation cmm{Datum(), 0.001, 5};
   const AxisChain one = Xfyz();
   const TestPieceVerification plain =
@@ -222,11 +226,8 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   const TestPieceVerification proposed = VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
   for (const char* iso : {"ECZ", "ECY", "EAZ", "EBZ", "EBY"}) EXPECT_TRUE(recovered(proposed, iso)) << iso;
   // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in 002 Table 4.
-  for (const TermRecovery& t : proposed.terms) {
-    if (t.error == "ECZ") {
-      EXPECT_NEAR(t.value, 1118.0, 5 * t.u + 5.0);
-    }
-  }
+  const TermRecovery& ecz = term(proposed, "ECZ");
+  EXPECT_NEAR(ecz.value, 1118.0, 5 * ecz.u + 5.0);
 }
 
 
