@@ -18,8 +18,8 @@
 #include <thread>
 
 #include "stage/linear_dependence.h"
+#include "stage/residual_summary.h"
 #include "stage/stitched_frame.h"
-#include "stage/validation.h"
 
 namespace fvm::stage {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "stage/validation.h"
+#include "stage/residual_summary.h"
 
 namespace fvm::stage {
 namespace {

@@ -11,16 +11,10 @@
 
 #include "stage/calibration.h"
 #include "stage/identification.h"
+#include "stage/residual_summary.h"
 #include "stage/stitched_frame.h"
 
 namespace fvm::stage {
-
-// Count, mean, rms, largest and smallest of Euclidean residuals: the statistics every report of fvm quotes.
-struct ResidualSummary {
-  int count = 0;
-  double mean_mm = 0, rms_mm = 0, max_mm = 0, min_mm = 0;
-};
-ResidualSummary Summarize(const std::vector<Eigen::Vector3d>& residuals);
 
 struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
