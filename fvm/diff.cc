@@ -1,5 +1,5 @@
 // fvm diff: how far a test export of an artefact is from a reference export of it, calotte by calotte and as
-// distances between calottes (the measure of the published stitching-strategy study, 000:4777).
+// distances between calottes (the measure of the published stitching-strategy study, [Pérez 2019] Tables 1-2).
 
 #include <fmt/core.h>
 

@@ -658,7 +658,7 @@ void RegisterTiles(CLI::App& app) {
                        "\"diff_um\", \"pairs\", \"accepted_pairs\"}]}][, \"rendered\": {\"tile_px\", "
                        "\"pixel_um\", \"row_tiles\", \"pair_rms_px\", \"rejected_pairs\", \"seed\"}]}");
   strategies->footer("Cases: a all stitched; b only the end tiles; c the tile after the first missing; d a middle "
-                     "tile missing; e the tile before the last missing; f every other tile missing (000:4777).\n"
+                     "tile missing; e the tile before the last missing; f every other tile missing ([Pérez 2019] Tables 1-2).\n"
                      "Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm tiles simulate "
                      "--calibration stage.json --lens 10x --overlap 20 --render");
   strategies->callback([strategy_args] { RunStrategies(*strategy_args); });

@@ -1,5 +1,5 @@
 #pragma once
-// Volumetric verification of a machine tool from laser-tracker readings (seeds 000, 001, 003/004): identify the
+// Volumetric verification of a machine tool from laser-tracker readings ([Aguado 2016], [IJSIMM 2016], [Pérez 2017]): identify the
 // 21 error functions and the tracker pose from the readings at commanded points, and say how far the machine is
 // from where it should be before and after.
 //
@@ -17,7 +17,7 @@
 
 namespace fvm::stage {
 
-// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the seeds quote them.
+// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the published studies quote them.
 struct VolumetricError {
   int points = 0;
   double mean_um = 0, max_um = 0, min_um = 0;

@@ -2,7 +2,7 @@
 // The frame of a stitched measurement: one convention for the simulators, identification, validation, correction
 // and diagnosis.
 //
-// The instrument places the first tile of a stitched measurement at its encoder reading a (000:4826) and every
+// The instrument places the first tile of a stitched measurement at its encoder reading a ([Pérez 2019] 1.2) and every
 // later tile by registration against it. Registration finds translations only, so the mosaic keeps the orientation
 // in which the camera saw the part in that first tile. A part point P therefore shows up at
 //     s = a + T (P - F(a)),   T = C(a)^-1    (rotated: what the instrument does)

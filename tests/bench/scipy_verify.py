@@ -4,7 +4,7 @@ and the tracker pose) fitted with scipy.optimize.least_squares(method="lm") and 
 Jacobian, so that the whole `fvm verify` process can be timed against a plain Python fit of the same model on the
 same readings. Not a second implementation to trust: no rank analysis, no uncertainties, no validation.
 
-Model (FACTS section 2, 004:76; the convention of stage/axis_chain.h, small angles R = I + [e]x):
+Model ([Aguado 2016] eq. 1, last term X; the convention of stage/axis_chain.h, small angles R = I + [e]x):
     X_LT = R_LT^T ( R_X^-1 ( R_Y ( R_Z T + Z ) + Y - X ) - T_LT )
     X = (-x + xTx, xTy, xTz);  Y = (yTx - y xWy, y + yTy, yTz);  Z = (zTx - z xWz, zTy - z yWz, z + zTz)
 each term a Legendre series of order 3 in u = (q - mid-travel) / half-travel of its own axis, the squareness terms

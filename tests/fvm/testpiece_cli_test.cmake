@@ -1,5 +1,5 @@
 # fvm testpiece as a user runs it: the published piece's design (NOMINAL.csv, CMM program, G-code), a piece cut by
-# 002 Table 4's machine and measured with 1 um CMM noise, its verification's JSON contract and report, the
+# [Lorente 2021] Table 4's machine and measured with 1 um CMM noise, its verification's JSON contract and report, the
 # 167-point pyramid with Legendre, and bad input (a piece whose features collide) that exits 1 and writes nothing.
 # Variables: FVM (the executable), WORK (a scratch directory).
 
@@ -11,7 +11,7 @@ file(MAKE_DIRECTORY ${WORK})
 run(0 testpiece design -o ${WORK}/nominal.csv --cmm ${WORK}/cmm --gcode ${WORK}/piece.nc --describe ${WORK}/piece.json --json)
 string(JSON points GET "${OUT}" points)
 if(NOT points EQUAL 480)
-  message(FATAL_ERROR "the published piece has ${points} points, 002 measures 480")
+  message(FATAL_ERROR "the published piece has ${points} points, [Lorente 2021] measures 480")
 endif()
 expect_files("fvm testpiece design" ${WORK} nominal.csv piece.nc piece.json cmm/program.txt)
 file(STRINGS ${WORK}/nominal.csv header LIMIT_COUNT 1)
@@ -70,7 +70,7 @@ run(0 simulate testpiece -o ${WORK}/pyramid --points pyramid)
 run(0 testpiece verify ${WORK}/pyramid/measured.csv --basis legendre --order 2 --json)
 string(JSON points GET "${OUT}" points)
 if(NOT points EQUAL 167)
-  message(FATAL_ERROR "the pyramid has ${points} points, 002 measures 167")
+  message(FATAL_ERROR "the pyramid has ${points} points, [Lorente 2021] measures 167")
 endif()
 
 file(WRITE ${WORK}/bad.json [=[{"envelope_mm": [100, 100, 50], "features": [
