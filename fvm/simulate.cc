@@ -402,7 +402,7 @@ void RegisterSimulateTracker(CLI::App* simulate) {
   CLI::App* sub = simulate->add_subcommand(
       "tracker", "machine-tool verification: point plan, G-code and simulated laser-tracker readings with their truth");
   AddDetails(sub,
-             "Plans the points of a volumetric verification (mesh, cloud of eq. 18 or body diagonals; X fastest, "
+             "Plans the points of a volumetric verification (mesh, cloud of [IJSIMM 2016] eq. 18 or body diagonals; X fastest, "
              "serpentine) and writes points.csv and program.nc (ISO G-code with a dwell per point). With --seed N (a "
              "random machine, its errors cubics plus ball-screw and long-wave sines that no cubic represents, scaled "
              "to --mean-error-um) or --errors FILE.json (your own truth) it also writes readings.csv (the tracker "

@@ -1,5 +1,5 @@
-// fvm testpiece design|verify and fvm simulate testpiece: the machined test piece of [Lorente 2021]. The verification is
-// fvm verify's (fvm/machine_problem.h): a CMM-measured piece is a tracker whose pose is the piece's datum.
+// fvm testpiece design|verify and fvm simulate testpiece: the machined test piece of [Lorente 2021]. The verification
+// is fvm verify's (fvm/machine_problem.h): a CMM-measured piece is a tracker whose pose is the piece's datum.
 
 #include <fmt/core.h>
 
@@ -37,7 +37,7 @@ artefacts::TestPieceDescription PieceOf(const std::string& path) {
 
 // PIECE, the optional description both design and simulate take.
 void AddPieceArgument(CLI::App* sub, std::string& piece) {
-  sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece")->check(CLI::ExistingFile);
+  sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece of [Lorente 2021]")->check(CLI::ExistingFile);
 }
 
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
@@ -371,7 +371,7 @@ void RegisterTestPiece(CLI::App& app) {
              "  fvm simulate testpiece -o tp && fvm testpiece verify tp/measured.csv --basis chebyshev --order 2");
 
   auto design = std::make_shared<DesignArgs>();
-  CLI::App* d = tp->add_subcommand("design", "nominal probe points of a test piece (the published one without PIECE.json)");
+  CLI::App* d = tp->add_subcommand("design", "nominal probe points of a test piece (that of [Lorente 2021] without PIECE.json)");
   AddDetails(d,
              "Writes NOMINAL.csv id,x,y,z,series: machine coordinates (mm) of every probe point, `series` naming X1..X3, "
              "Y1..Y3, Z1..Z3 (the geometric verification's series) or else the feature. A PIECE.json describes the envelope "

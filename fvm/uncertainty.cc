@@ -512,7 +512,7 @@ void RegisterUncertainty(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
-  sub->add_option("--model", args->model, "microscope stage (DATA a batch): published model 9, 15, 27 or 42")
+  sub->add_option("--model", args->model, "microscope stage (DATA a batch): [Pérez 2019] model 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
   sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");

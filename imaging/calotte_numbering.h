@@ -6,9 +6,9 @@
 // hypothesis that brings the most found calottes within the tolerance of a nominal one wins; the transform is
 // then refined by least squares (Umeyama) over the matched pairs. A symmetric layout fits in several ways
 // (the 6 x 6 grid in four, the bar in two): the one whose rotation is nearest the expected one wins, as the
-// artefact is placed roughly as drawn (calotte 1 at lowest x, highest y: the first tile, [Pérez thesis] 5.7.2). When two
-// fits are equally near (a bar turned by 90 degrees), or a partial view fits in several places, numbering would
-// be a guess: it throws and says what to give.
+// artefact is placed roughly as drawn (calotte 1 at lowest x, highest y: the first tile, [Pérez thesis] 5.7.2). When
+// two fits are equally near (a bar turned by 90 degrees), or a partial view fits in several places, numbering would be
+// a guess: it throws and says what to give.
 
 #include <Eigen/Core>
 #include <vector>

@@ -6,8 +6,8 @@
 // lattice of step s = F (1 - overlap). The grid is anchored where the instrument starts: the first tile's top-left
 // corner is the region's (x0, y1) corner (lowest X, highest Y). Row 0 is the highest Y, column 0 the lowest X.
 // Scan order is column by column from -X to +X, and inside a column from +Y to -Y, every column starting again at
-// its top (a raster, not a serpentine): index = col * rows + row. This is the reading of [Pérez thesis] 5.7.2 ("first tile
-// at lowest X and highest Y; tiles taken from +Y to -Y and -X to +X") with Y as the fast axis.
+// its top (a raster, not a serpentine): index = col * rows + row. This is the reading of [Pérez thesis] 5.7.2 ("first
+// tile at lowest X and highest Y; tiles taken from +Y to -Y and -X to +X") with Y as the fast axis.
 
 #include <Eigen/Core>
 #include <string>
@@ -23,7 +23,7 @@ struct Lens {
 };
 
 // The Alicona G5 lenses of [Pérez thesis] Table 5.2. The 10x field is 1.62 mm as in that table; [Pérez 2019] says
-// 1.4 mm, but only 1.62 mm reproduces the published 225 stitched tiles (see tile_plan.cc).
+// 1.4 mm, but only 1.62 mm reproduces the published 225 stitched tiles ([Pérez thesis] 5.7.2) (see tile_plan.cc).
 const std::vector<Lens>& Lenses();
 // Throws InputError naming the known lenses when `name` is none of them ("10x" and "10" both work).
 const Lens& FindLens(std::string_view name);

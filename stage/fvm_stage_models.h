@@ -2,8 +2,8 @@
 // The published YXFZ stage models of the focus-variation microscope ([Pérez 2019] eqs. 1 and 15, [Pérez thesis]
 // 5.7.2), and layouts composed by the user.
 //
-// Convention: every model goes through eq. 1 (AxisChain::FvmStage(): stitching-free coordinates in, stitched
-// coordinates out), so signs follow eq. 1. Where eq. 15 prints (1 + yTy1) it is (1 - yTy1) here, the sign typo
+// Convention: every model goes through [Pérez 2019] eq. 1 (AxisChain::FvmStage(): stitching-free coordinates in,
+// stitched coordinates out), so signs follow eq. 1. Where eq. 15 prints (1 + yTy1) it is (1 - yTy1) here, the sign typo
 // README documents ("The models"); eq. 15's combined offsets xTx0 + yTx0 etc. are carried by xTx0, xTy0, xTz0 alone.
 //
 //   "15": the 12 translation and rotation components of X and Y and the 3 squareness terms, order 0.

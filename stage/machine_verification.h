@@ -1,7 +1,7 @@
 #pragma once
-// Volumetric verification of a machine tool from laser-tracker readings ([Aguado 2016], [IJSIMM 2016], [Pérez 2017]): identify the
-// 21 error functions and the tracker pose from the readings at commanded points, and say how far the machine is
-// from where it should be before and after.
+// Volumetric verification of a machine tool from laser-tracker readings ([Aguado 2016], [IJSIMM 2016], [Pérez 2017]):
+// identify the 21 error functions and the tracker pose from the readings at commanded points, and say how far the
+// machine is from where it should be before and after.
 //
 // Volumetric error = distance between a tracker reading and the model's prediction of the ideal machine (before)
 // or of the identified machine (after), in the tracker frame. Before, the pose is that of the ideal machine's best

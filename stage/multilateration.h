@@ -13,8 +13,8 @@
 // Schur complement). With known stations and ranges only there are no station parameters and every point is its
 // own 3-unknown Gauss-Newton solve, as the issue asks.
 //
-// Frame of a self-calibration ([Aguado 2016] Figure 4): station 1 at the origin, station 2 on +x, station 3 in the xy plane
-// (+y side); z follows by the right-hand rule. Ranges fix the scale. The starting stations (any frame) are moved
+// Frame of a self-calibration ([Aguado 2016] Figure 4): station 1 at the origin, station 2 on +x, station 3 in the xy
+// plane (+y side); z follows by the right-hand rule. Ranges fix the scale. The starting stations (any frame) are moved
 // into that frame first; results are in it.
 //
 // Rank. Before solving, the station parameters are examined on the Schur complement (the part of each

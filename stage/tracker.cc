@@ -41,7 +41,8 @@ TrackerNoise TrackerNoise::Preset(std::string_view name) {
     return t;
   }
   if (name == "adm") {
-    // [Aguado 2016] Table 3, tracker C (absolute distance meter): 20 um + 5 um/m across the beam, 16 um + 0.8 um/m along it.
+    // [Aguado 2016] Table 3, tracker C (absolute distance meter): 20 um + 5 um/m across the beam, 16 um + 0.8 um/m
+    // along it.
     t.azimuth_sigma_rad = t.elevation_sigma_rad = 5e-6;
     t.range_sigma_mm = 0.016;
     t.range_sigma_per_mm = 0.8e-6;

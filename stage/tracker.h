@@ -33,8 +33,8 @@ struct TrackerNoise {
   double azimuth_sigma_rad = 24e-6;
   double elevation_sigma_rad = 24e-6;
 
-  // "published" ([IJSIMM 2016] 5, [Aguado 2017]): 24 urad, 4 um + 0.8 um/m; "ifm" and "adm": the interferometer and absolute
-  // distance meter of [Aguado 2016] Table 3 as README documents them; "none": a perfect tracker. Throws
+  // "published" ([IJSIMM 2016] 5, [Aguado 2017]): 24 urad, 4 um + 0.8 um/m; "ifm" and "adm": the interferometer and
+  // absolute distance meter of [Aguado 2016] Table 3 as README documents them; "none": a perfect tracker. Throws
   // std::invalid_argument listing the presets.
   static TrackerNoise Preset(std::string_view name);
   static std::vector<std::string> PresetNames();
@@ -44,7 +44,8 @@ struct TrackerNoise {
   Eigen::Matrix3d Covariance(const Eigen::Vector3d& point) const;
   bool IsNoiseFree() const;
   // The reading of `point` (tracker frame, mm) with standard normal draws n_* scaled by the sigmas and added to its
-  // range, azimuth and elevation (eq. 22-24); `point` itself, bit for bit, when the tracker is noise-free.
+  // range, azimuth and elevation ([IJSIMM 2016] eqs. 22-24); `point` itself, bit for bit, when the tracker is
+  // noise-free.
   Eigen::Vector3d Perturb(const Eigen::Vector3d& point, double n_range, double n_azimuth, double n_elevation) const;
 };
 

@@ -2,9 +2,9 @@
 // How well a calibration predicts measurements it was not fitted to.
 //
 // Every validation measurement is referenced to its own first tile (the instrument anchors each stitched
-// measurement there, [Pérez 2019] 1.2) whatever anchoring identification used: a constant offset common to a measurement
-// is not a stage error the calibration can be blamed for. Its turn is (stitched_frame.h) where the model can tell
-// it; and the figures no frame changes (rigid fit per measurement, distances) judge the calibration beside it.
+// measurement there, [Pérez 2019] 1.2) whatever anchoring identification used: a constant offset common to a
+// measurement is not a stage error the calibration can be blamed for. Its turn is (stitched_frame.h) where the model
+// can tell it; and the figures no frame changes (rigid fit per measurement, distances) judge the calibration beside it.
 
 #include <Eigen/Core>
 #include <vector>

@@ -157,8 +157,8 @@ TestPieceDescription PublishedTestPiece() {
     e.points = {{{295, y + 5, kTop}, ""}};
     f.push_back(e);
   }
-  // Four main slots 20 mm wide, 20 deep in the block's top; the two along Y carry Y1 and Y2 ([Lorente 2021]: Y1, Y2 in one
-  // XY plane below Y3, apart in X).
+  // Four main slots 20 mm wide, 20 deep in the block's top; the two along Y carry Y1 and Y2 ([Lorente 2021]: Y1, Y2 in
+  // one XY plane below Y3, apart in X).
   PieceFeature sx1 = Box("SX1", FeatureKind::kSlot, {15, 15, 80}, {285, 35, kBlock});
   sx1.points = Line({20, 25, 80}, {10, 0, 0}, 26, "");
   PieceFeature sx2 = Box("SX2", FeatureKind::kSlot, {15, 235, 80}, {285, 255, kBlock});

@@ -1,8 +1,8 @@
 #pragma once
-// Volumetric verification of a three-axis machine tool with a laser tracker, simulated ([IJSIMM 2016] sections 4-5): the
-// point plan (mesh, cloud of eq. 18, body diagonals), the CNC program that visits it, a machine whose geometric
-// errors are known but are NOT the polynomials an identification fits, and the tracker readings of that machine
-// with the published noise (eq. 22-24).
+// Volumetric verification of a three-axis machine tool with a laser tracker, simulated ([IJSIMM 2016] sections 4-5):
+// the point plan (mesh, cloud of [IJSIMM 2016] eq. 18, body diagonals), the CNC program that visits it, a machine whose
+// geometric errors are known but are NOT the polynomials an identification fits, and the tracker readings of that
+// machine with the published noise ([IJSIMM 2016] eqs. 22-24).
 //
 // Randomness: every draw comes from std::mt19937_64 seeded with the caller's seed, turned into uniform doubles
 // (53 bits) and normal ones (Box-Muller) by this file's own code, not by std::*_distribution, whose algorithms the

@@ -246,7 +246,7 @@ TEST(TrackerSimulation, NoiseFreeReadingsAreTheChainInTheTrackerFrame) {
     const double displaced = (noisy.points[i].measured - nominal_in_tracker).norm();
     EXPECT_NEAR(displaced, VolumetricErrorMm(chain, truth, mesh[i].nominal), 1e-9);
   }
-  // All 96 points are visible from Table I position 4.
+  // All 96 points are visible from [IJSIMM 2016] Table I position 4.
   EXPECT_TRUE(PointsBeyondTrackerLimits(noisy, *chain.instrument).empty());
 }
 

@@ -1,5 +1,5 @@
-// The test piece's geometry: the published piece as [Lorente 2021] counts it, and descriptions that cannot be made refused
-// with the features named.
+// The test piece's geometry: the published piece as [Lorente 2021] counts it, and descriptions that cannot be made
+// refused with the features named.
 
 #include <gtest/gtest.h>
 

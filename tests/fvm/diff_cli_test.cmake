@@ -1,4 +1,4 @@
-# fvm diff as a user runs it, on the published stitching-strategy exports (samples/stitching-strategies).
+# fvm diff as a user runs it, on the stitching-strategy exports of [Pérez 2019] (samples/stitching-strategies).
 # Variables: FVM (the executable), SAMPLES (the samples directory), WORK (a scratch directory).
 
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)

@@ -27,6 +27,12 @@ if(NOT a STREQUAL b)
 endif()
 
 run(0 simulate testpiece -o ${WORK}/tp --validation 30,30,30)
+# truth.json names the default errors by their source's key (README, "References").
+file(READ ${WORK}/tp/truth.json truth)
+string(JSON errors GET "${truth}" errors)
+if(NOT errors STREQUAL "[Lorente 2021] Table 4")
+  message(FATAL_ERROR "truth.json errors: '${errors}', expected '[Lorente 2021] Table 4'")
+endif()
 run(0 testpiece verify ${WORK}/tp/measured.csv --basis chebyshev --order 2 --nominal ${WORK}/tp/nominal.csv
     --validate ${WORK}/tp/validation.csv --json --report ${WORK}/report)
 expect_json_keys("fvm testpiece verify" "${OUT}" points initial/mean_um initial/max_um initial/min_um final/mean_um

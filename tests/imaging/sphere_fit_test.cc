@@ -12,8 +12,8 @@
 namespace fvm::imaging {
 namespace {
 
-// Where the published 6 x 6 grid's calotte 1 lies on the stage ([Pérez 2019] Table 1, case a): coordinates of -150 mm test
-// that the fit keeps its digits far from the origin.
+// Where the published 6 x 6 grid's calotte 1 lies on the stage ([Pérez 2019] Table 1, case a): coordinates of -150 mm
+// test that the fit keeps its digits far from the origin.
 const Eigen::Vector3d kCentre(-154.5487, -115.4767, -50.3624);
 constexpr double kRadius = 0.25;  // the grid's calottes: 0.5 mm hemispherical holes ([Pérez 2019] 1.2)
 

@@ -38,7 +38,7 @@ TEST(AxisChain, RejectsMalformedCodesWithAReason) {
 }
 
 TEST(AxisChain, SquarenessCarriersFollowTheSeeds) {
-  // Published FVM model (eqs. 3-4): X carries xWy and xWz, Y carries yWz.
+  // Published FVM model ([Pérez 2019] eqs. 3-4): X carries xWy and xWz, Y carries yWz.
   EXPECT_THAT(AxisChain::FvmStage().squareness_carrier, ElementsAre(X, X, Y));
   // Machine tool ([Aguado 2016] eqs. 5-6): in XFYZ, Y carries xWy, Z carries xWz and yWz.
   EXPECT_THAT(AxisChain::Parse("XFYZ").squareness_carrier, ElementsAre(Y, Z, Z));

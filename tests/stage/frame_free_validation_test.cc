@@ -1,6 +1,6 @@
 // Judging a calibration by what no frame changes (stage/validation.h), on independent data whose stitched exports
-// turn with the stage at their first tile (eq. 1 written out in published_model.h): the rigid fit per placement
-// against a rigid fit written here, and each figure against its prediction.
+// turn with the stage at their first tile ([Pérez 2019] eq. 1 written out in published_model.h): the rigid fit per
+// placement against a rigid fit written here, and each figure against its prediction.
 
 #include <gtest/gtest.h>
 

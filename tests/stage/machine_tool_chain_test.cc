@@ -73,8 +73,9 @@ TEST(MachineToolChain, XfyzWithTrackerReproducesTheSeedEquation) {
 }
 
 TEST(MachineToolChain, SeedConventionsAgreeToFirstOrder) {
-  // Sources differ on how they invert R ([Pérez thesis] eq. 2.1 vs [IJSIMM 2016] eqs. 14-16); inverse and transpose of I + [e]x differ by
-  // O(e^2), so every convention agrees with ours to first order: |e|^2 * |p| with |e| < 3 * 6e-5 rad here.
+  // Sources differ on how they invert R ([Pérez thesis] eq. 2.1 vs [IJSIMM 2016] eqs. 14-16); inverse and transpose of
+  // I + [e]x differ by O(e^2), so every convention agrees with ours to first order: |e|^2 * |p| with |e| < 3 * 6e-5 rad
+  // here.
   for (RotationModel model : {RotationModel::kSmallAngle, RotationModel::kExact}) {
     const TrackedMachine s = MakeSetup(model);
     double worst = 0.0;

@@ -19,7 +19,8 @@
 namespace fvm::stage {
 namespace {
 
-// The published 75-point study ([Pérez 2019 Sensors] section 3): a 5 x 5 x 3 mesh at 100 mm, here on an XFYZ machine with a 100 mm tool.
+// The published 75-point study ([Pérez 2019 Sensors] section 3): a 5 x 5 x 3 mesh at 100 mm, here on an XFYZ machine
+// with a 100 mm tool.
 artefacts::Workspace Workspace() {
   artefacts::Workspace ws;
   ws.max = Eigen::Vector3d(400, 400, 200);

@@ -45,7 +45,7 @@ inline Eigen::Vector3d PublishedEquation1(const PublishedErrors& e, const Eigen:
 
 // A stage whose error functions are straight lines in their axis' coordinate plus, where `ripple_mm` > 0, a
 // sine on every translation (a lead-screw period the polynomial models cannot take): the truth identification
-// tests fit, drawn with a fixed seed. Magnitudes as in the published work: translations up to ~100 um over the
+// tests fit, drawn with a fixed seed. Magnitudes as in [Pérez 2019]: translations up to ~100 um over the
 // travel, rotations and squareness of ~1e-4 rad.
 struct PublishedStage {
   // Per term: value at 0 and slope per 100 mm of its axis, in the order xT(x,y,z) xR(x,y,z) yT(x,y,z) yR(x,y,z)
@@ -100,8 +100,8 @@ struct PublishedStage {
   }
 };
 
-// The first tile of a measurement ([Pérez thesis] 5.7.2), written out: lowest x, highest y of the positions, at the height
-// of the position nearest that corner.
+// The first tile of a measurement ([Pérez thesis] 5.7.2), written out: lowest x, highest y of the positions, at the
+// height of the position nearest that corner.
 inline Eigen::Vector3d PublishedFirstTile(const std::vector<Eigen::Vector3d>& positions) {
   Eigen::Vector2d corner(positions[0].x(), positions[0].y());
   for (const Eigen::Vector3d& p : positions) corner = {std::min(corner.x(), p.x()), std::max(corner.y(), p.y())};

@@ -167,8 +167,8 @@ TEST(TestPieceVerification, PublishedTestFunctionsFitToTheNoiseAndLogIterations)
   options.instrument = InstrumentPose::kEstimated;
   options.num_threads = 1;
   const TestPieceVerification v = VerifyTestPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 2), Observations(measured), options);
-  // [Lorente 2021] Table 4's functions are quadratics: an order-2 basis holds them, so what remains is the CMM noise, whose
-  // 3D norm averages 1.6 sigma (chi with 3 degrees of freedom), a little less after the fit takes its share.
+  // [Lorente 2021] Table 4's functions are quadratics: an order-2 basis holds them, so what remains is the CMM noise,
+  // whose 3D norm averages 1.6 sigma (chi with 3 degrees of freedom), a little less after the fit takes its share.
   EXPECT_GT(v.result.initial.mean_um, 30.0);
   EXPECT_NEAR(v.result.final.mean_um, 1.55, 0.15);
   ASSERT_GE(v.iterations.size(), 2u);
@@ -221,7 +221,8 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   options.tool_offsets = tools;
   const TestPieceVerification proposed = VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
   for (const char* iso : {"ECZ", "ECY", "EAZ", "EBZ", "EBY"}) EXPECT_TRUE(recovered(proposed, iso)) << iso;
-  // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in [Lorente 2021] Table 4.
+  // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in [Lorente
+  // 2021] Table 4.
   for (const TermRecovery& t : proposed.terms) {
     if (t.error == "ECZ") {
       EXPECT_NEAR(t.value, 1118.0, 5 * t.u + 5.0);
@@ -230,9 +231,9 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
 }
 
 
-// Our first-order extraction formulas on the published series, the piece cut by [Lorente 2021] Table 4's machine and read in
-// the machine frame without noise: each extracted function follows the truth (zero-referenced alike) to within the
-// second-order terms the formulas leave out (rotations of 1e-3 rad times deviations of 0.3 mm over 100-260 mm
+// Our first-order extraction formulas on the published series, the piece cut by [Lorente 2021] Table 4's machine and
+// read in the machine frame without noise: each extracted function follows the truth (zero-referenced alike) to within
+// the second-order terms the formulas leave out (rotations of 1e-3 rad times deviations of 0.3 mm over 100-260 mm
 // levers: a few urad, a fraction of a um).
 TEST(TestPieceVerification, ExtractionFormulasFollowTheTruthAlongTheSeries) {
   const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
