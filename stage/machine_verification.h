@@ -35,7 +35,7 @@ struct VerificationResult {
 // `basis` over `travel`, and the three squareness terms as constants.
 ParameterLayout MachineLayout(const AxisChain& chain, const std::array<Travel, 3>& travel, Basis basis, int order);
 
-// The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, Umeyama):
+// The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, [Umeyama 1991]):
 // a start for the joint estimate. Throws std::invalid_argument when the points do not span three dimensions.
 Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& readings,
                     const std::vector<Eigen::Vector3d>& tool_offsets = {});

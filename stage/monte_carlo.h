@@ -115,7 +115,7 @@ struct PairSpread {
 PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, const std::vector<Eigen::Vector3d>& points_mm,
                               int max_points = 200);
 
-// The ISO/TS 15530-3 budget as [Pérez 2017] applies it: U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
+// The [ISO/TS 15530-3] budget as [Pérez 2017] applies it: U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
 //   u_cal: the reference's calibration, given;
 //   u_p:   2 x the standard deviation of the simulated positions (as [Pérez 2017] defines it): 2 x the rms over
 //          the evaluation points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;

@@ -70,7 +70,7 @@ struct FrameFreeStats {
   int count = 0;  // residual vectors (rigid) or distances
   double rms_mm = 0, max_mm = 0, predicted_rms_mm = 0;
 };
-// Residuals after the best rigid transform (rotation and translation, Umeyama) of each measurement's compensated
+// Residuals after the best rigid transform (rotation and translation, [Umeyama 1991]) of each measurement's compensated
 // points onto its stitched ones. The prediction projects the model's covariance onto what no rigid motion takes.
 FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector<Observation>& observations);
 // Errors of the distances between every two points of a measurement (compensated - stitched).

@@ -82,7 +82,7 @@ void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& 
 // one line per point in measuring order.
 std::string CmmProgram(const std::vector<PiecePoint>& points);
 
-// The ISO 6983 tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
+// The [ISO 6983-1] tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
 // with a safe height above the envelope. A plain program for a simulator or a controller's dry run, not a CAM
 // output with stock allowances.
 std::string CuttingProgram(const TestPieceDescription& piece, double tool_diameter_mm = 10.0);

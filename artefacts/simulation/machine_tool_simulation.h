@@ -52,7 +52,7 @@ std::vector<PlannedPoint> PlanCloud(const Workspace& ws, const Eigen::Vector3d& 
 // (max,max,min)->(min,min,max). The centre appears on each diagonal when points_per_diagonal is odd.
 std::vector<PlannedPoint> PlanDiagonals(const Workspace& ws, int points_per_diagonal);
 
-// An ISO 6983 program (plain G-code, no controller-specific cycles) that visits the points:
+// An [ISO 6983-1] program (plain G-code, no controller-specific cycles) that visits the points:
 //   %
 //   (FVM VOLUMETRIC VERIFICATION: 96 POINTS, DWELL 6 S, FEED 2000 MM/MIN)
 //   G90 G21 G17 G94          absolute, mm, XY plane, feed per minute

@@ -248,7 +248,7 @@ TEST(StageMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   EXPECT_NEAR(mc_sd / real_sd, 1.0, 0.3);
 }
 
-// The ISO/TS 15530-3 budget: u_p from the spreads, u_b from repeated commands (or the noise model), u_w from the
+// The [ISO/TS 15530-3] budget: u_p from the spreads, u_b from repeated commands (or the noise model), u_w from the
 // temperature range and CTE, U = k sqrt(sum of squares).
 TEST(UncertaintyBudget, CombinesItsFourContributions) {
   PointSpread a, b;

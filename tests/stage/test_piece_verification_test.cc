@@ -1,8 +1,8 @@
 // Verification of a machine from the test piece it cut ([Lorente 2021]), judged against a least-squares fit written
 // here, apart from fvm's kinematics: the first-order XFYZ model spelled out term by term, Chebyshev polynomials of
-// our own, a rigid datum found by Eigen's Umeyama and a linear solve. The machine's errors are not polynomials
-// (cubics plus ball-screw and long-wave sines), the CMM adds 1 um per coordinate, and both fits are judged on a
-// noise-free grid over the whole piece.
+// our own, a rigid datum found by Eigen's Umeyama [Umeyama 1991] and a linear solve. The machine's errors are not
+// polynomials (cubics plus ball-screw and long-wave sines), the CMM adds 1 um per coordinate, and both fits are judged
+// on a noise-free grid over the whole piece.
 
 #include <gtest/gtest.h>
 
