@@ -53,8 +53,8 @@ struct RegistrationResult {
 // failed, or that disagree with the model by more than its tolerance, are searched again within that tolerance of
 // the model's offset and keep the result only if it passes and agrees. Then solves, with the model's positions and
 // repeatability as the stage prior (the nominal positions and options.stage_sigma_px along what it could not
-// estimate). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done,
-// total)`, when given, is called after each pair, from the pool's threads at once: it must be thread-safe.
+// estimate). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
+// given, is called after each pair, from the pool's threads at once: it must be thread-safe.
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
                                     const RegistrationOptions& options,
                                     const std::function<void(int done, int total)>& on_pair_registered = {});

@@ -477,8 +477,8 @@ Spike SpikeOf(const std::vector<Observation>& observations, const std::vector<Ei
 
 // Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni [Dunn 1961] over the centres),
 // and as improbable against their neighbours' (SpikeOf), found one at a time: the worst is taken out and the model
-// refitted before the next is judged, so that a large blunder, which drags the fit towards itself, cannot make its good
-// neighbours look bad. Indices into p.identify.
+// refitted before the next is judged, so that a large blunder, which drags the fit towards itself, cannot make its
+// good neighbours look bad. Indices into p.identify.
 std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit, const IdentificationOptions& base_options,
                               double alpha) {
   std::vector<int> flagged;

@@ -2,8 +2,7 @@
 // The discrepancy workflow: fit a stage model, study where it and the measurements disagree, name the physical
 // effect that explains the disagreement, add it, refit, and show the gap shrink.
 //
-// Each candidate effect is a block of extra parameters with a physical story (README, "Worked example: the discrepancy
-// workflow"):
+// Each candidate effect is a block of extra parameters with a physical story (README, "Worked example: the discrepancy workflow"):
 //   higher_order      a component needs the next polynomial order (one candidate per component: xTx, yRz, ...)
 //   z_coupling        pitch and roll (xRx, xRy, yRx, yRy) that only height changes reveal
 //   reference_anchor  each stitched measurement is anchored at the stage error of its own first tile
@@ -14,19 +13,19 @@
 //   frame_rotation    each stitched measurement keeps the orientation the stage had at its first tile
 //                     (stitched_frame.h); placements that share a start share the turn, so only held-out ones show it
 // Selection is statistical and forward: every candidate is scored on the linearised fit with an F-test (extra sum
-// of squares) and BIC [Schwarz 1978]; the significant ones are tried best first, and the first whose refit does not
-// make the held-out placements worse is accepted. Then the remaining candidates are scored against the new residuals,
-// and so on until none passes. Step k tests at alpha / 2^k, Bonferroni [Dunn 1961] over its candidates, so the
-// family-wise false-alarm probability over all steps stays below alpha (the sum of alpha / 2^k). After each step, an
-// earlier effect that the later ones made redundant (its own F-test no longer significant) is dropped; an accepted
-// drift or scale stays free while later candidates are scored. A candidate whose pattern the base model takes to within
-// 1 % is no effect of these data (a scale about a shared start is the model's linear terms). When the identification
+// of squares) and BIC; the significant ones are tried best first, and the first whose refit does not make the
+// held-out placements worse is accepted. Then the remaining candidates are scored against the new residuals, and
+// so on until none passes. Step k tests at alpha / 2^k, Bonferroni over its candidates, so the family-wise
+// false-alarm probability over all steps stays below alpha (the sum of alpha / 2^k). After each step, an earlier
+// effect that the later ones made redundant (its own F-test no longer significant) is dropped; an accepted drift or
+// scale stays free while later candidates are scored. A candidate whose pattern the base model takes to within 1 %
+// is no effect of these data (a scale about a shared start is the model's linear terms). When the identification
 // data fit to noise, the held-out placements are examined for turns about their first tiles (frame_rotation): a
-// chi-square of the fitted turns against what the noise, the calibration's covariance (joint with a drift's, when one
-// was corrected) and the coefficients the data could not determine predict for them. Outliers are found one at a time,
-// refitting after each, so that a large blunder does not drag good neighbours over the limit (swamping); a centre must
-// also stand out from its neighbours along the bar, which an effect the model lacks moves with it; and the other
-// candidates are scored without the flagged centres.
+// chi-square of the fitted turns against what the noise, the calibration's covariance (joint with a drift's, when
+// one was corrected) and the coefficients the data could not determine predict for them.
+// Outliers are found one at a time, refitting after each, so that a large blunder does not drag good neighbours
+// over the limit (swamping); a centre must also stand out from its neighbours along the bar, which an effect the
+// model lacks moves with it; and the other candidates are scored without the flagged centres.
 
 #include <Eigen/Core>
 #include <optional>

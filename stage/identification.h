@@ -7,10 +7,10 @@
 //   its own frame, each weighted by its 3x3 covariance, with the tracker pose estimated jointly (or held).
 //
 // Levenberg-Marquardt (Ceres) on the (whitened) point error of [Pérez 2019] eq. 6, with automatic derivatives through
-// the kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is examined
-// on the Jacobian: coefficients the data cannot tell apart from others (exact aliases such as xTy1 and xWy, offsets
-// that cancel under anchoring, pitch and roll when z barely varies) are fixed at zero, named, and reported with the
-// reason, so every model order converges to the best fit its identifiable part allows.
+// the kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is
+// examined on the Jacobian: coefficients the data cannot tell apart from others (exact aliases such as xTy1 and
+// xWy, offsets that cancel under anchoring, pitch and roll when z barely varies) are fixed at zero, named, and
+// reported with the reason, so every model order converges to the best fit its identifiable part allows.
 
 #include <Eigen/Core>
 #include <functional>

@@ -1,10 +1,10 @@
 #pragma once
 // Monte Carlo uncertainty of an identification ([GUM Supplement 1]; [Pérez 2017], [Aguado 2017], [Pérez 2019 Sensors]),
 // for a machine tool measured by a laser tracker and for the microscope stage. Machine: the identified machine and
-// tracker pose are taken as the truth, the tracker's readings of it are drawn again and again with the tracker's noise
-// (normal in range, azimuth and elevation, [IJSIMM 2016] eqs. 22-24), and each set is identified afresh, rank treatment
-// included, exactly as the original readings were. The spread of what the runs predict is the uncertainty of the
-// verification.
+// tracker pose are taken as the truth, the tracker's readings of it are drawn again and
+// again with the tracker's noise (normal in range, azimuth and elevation, [IJSIMM 2016] eqs. 22-24), and each set is
+// identified afresh, rank treatment included, exactly as the original readings were. The spread of what the runs
+// predict is the uncertainty of the verification.
 //
 // Reproducible: run i draws from Random(StreamSeed(seed, i)) (core/random.h) and writes only its own result, and
 // each identification runs on one thread, so the results are the same bits for any thread count.
@@ -117,8 +117,8 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
 
 // The [ISO/TS 15530-3] budget as [Pérez 2017] applies it: U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
 //   u_cal: the reference's calibration, given;
-//   u_p:   2 x the standard deviation of the simulated positions (as [Pérez 2017] defines it): 2 x the rms over
-//          the evaluation points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
+//   u_p:   2 x the standard deviation of the simulated positions (as [Pérez 2017] defines it): 2 x the rms over the
+//          evaluation points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
 //   u_b:   repeatability, s / sqrt(n): from readings repeated at one command (same tool), pooled 3D standard
 //          deviation s over the repeated commands and n their mean count; without repeats, s from the noise model
 //          (the tracker's: rms over the readings of sqrt(trace Cov); the microscope's: sqrt(3) sigma) and n = 1;

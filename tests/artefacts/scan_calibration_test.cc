@@ -126,10 +126,10 @@ TEST(ScanCalibration, RegisteredOffsetsAreTheDisplacementsTurnedWithTheCamera) {
   EXPECT_LT(turned_um, 0.7 * unturned_um) << "unturned " << unturned_um << " um";
 }
 
-// The target of issue 21 at a test's size (384 px tiles: 7.3 um pixels, where 1024 px have 2.75 um): the stage error in
-// xy within 1 um rms and 2 um max (the published 2-D method: 3 um max over 100 mm) where the chained positions, fitted
-// as independent points, leave more; and the prediction (coefficients from the white part of the residuals, plus the
-// misfit along the scans) not below 0.8 of what is seen.
+// The target of issue 21 at a test's size (384 px tiles: 7.3 um pixels, where 1024 px have 2.75 um): the stage error in xy within 1 um rms and 2 um max (the published 2-D
+// method: 3 um max over 100 mm) where the chained positions, fitted as independent points, leave more; and the
+// prediction (coefficients from the white part of the residuals, plus the misfit along the scans) not below 0.8 of
+// what is seen.
 TEST(ScanCalibration, DisplacementsBetweenNeighboursRecoverTheStageInXY) {
   const StageTruth truth = PublishedSizeStage(1);
   const Scanned s = ScanAndRegister(truth, {-50.0}, 384);

@@ -3,10 +3,10 @@
 # 2500 x 1500 x 1200 mm, tool 0,0,100 mm, a mesh of 500/500/400 mm (96 points), a cloud of 96 ([IJSIMM 2016] eq. 18) and
 # a mesh of 100 mm (5408 points), the four tracker positions of Table I, without and with the published tracker noise.
 # Per case: `fvm simulate tracker` (one seed: the same machine in every case) and `fvm verify --json --order 3`
-# (Legendre, pose estimated jointly), plus `--order auto` (BIC) where it picks another order; then one Markdown table
-# with the initial and final volumetric error (max / mean / min, um) next to the published figures, and the identified
-# model's mean error on 539 noise-free points it never saw (mesh 250/250/200: the machine as it is, not as the noisy
-# readings show it).
+# (Legendre, pose estimated jointly), plus `--order auto` (BIC) where it picks another order; then one Markdown
+# table with the initial and final volumetric error (max / mean / min, um) next to the published figures, and the
+# identified model's mean error on 539 noise-free points it never saw (mesh 250/250/200: the machine as it is, not
+# as the noisy readings show it).
 #
 # Usage: bash tests/bench/reproduce_001.sh [FVM] [SEED]    (FVM default build/fvm/fvm, SEED default 1)
 # Needs jq. Takes about a minute on 2 cores.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the published Monte Carlo studies in simulation with `fvm uncertainty` (keys: README, "References"):
+# Reproduces the published Monte Carlo studies in simulation with `fvm uncertainty` (keys: README, References):
 #   plane:  400 x 400 mm, 1000 runs: initial 77.39 +- 40.91 um -> residual 12.34 +- 7.06 um ([Aguado 2017]);
 #   mesh:   75 points, 5 x 5 x 3 at 100 mm, 1000 runs: residual N(13.77, 5.02) um, 95 % bound 23.81 um, worst ~50 um
 #           ([Pérez 2019 Sensors] section 3);

@@ -1,8 +1,8 @@
 // Verification of a machine from the test piece it cut ([Lorente 2021]), judged against a least-squares fit written
 // here, apart from fvm's kinematics: the first-order XFYZ model spelled out term by term, Chebyshev polynomials of
-// our own, a rigid datum found by Eigen's Umeyama [Umeyama 1991] and a linear solve. The machine's errors are not
-// polynomials (cubics plus ball-screw and long-wave sines), the CMM adds 1 um per coordinate, and both fits are judged
-// on a noise-free grid over the whole piece.
+// our own, a rigid datum found by Eigen's Umeyama and a linear solve. The machine's errors are not polynomials
+// (cubics plus ball-screw and long-wave sines), the CMM adds 1 um per coordinate, and both fits are judged on a
+// noise-free grid over the whole piece.
 
 #include <gtest/gtest.h>
 
@@ -221,8 +221,7 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   options.tool_offsets = tools;
   const TestPieceVerification proposed = VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
   for (const char* iso : {"ECZ", "ECY", "EAZ", "EBZ", "EBY"}) EXPECT_TRUE(recovered(proposed, iso)) << iso;
-  // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in [Lorente
-  // 2021] Table 4.
+  // ECZ is largest at the far end of Z (180 mm): 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad ([Lorente 2021] Table 4).
   for (const TermRecovery& t : proposed.terms) {
     if (t.error == "ECZ") {
       EXPECT_NEAR(t.value, 1118.0, 5 * t.u + 5.0);
