@@ -44,8 +44,7 @@ struct TrackerNoise {
   Eigen::Matrix3d Covariance(const Eigen::Vector3d& point) const;
   bool IsNoiseFree() const;
   // The reading of `point` (tracker frame, mm) with standard normal draws n_* scaled by the sigmas and added to its
-  // range, azimuth and elevation ([IJSIMM 2016] eqs. 22-24); `point` itself, bit for bit, when the tracker is
-  // noise-free.
+  // range, azimuth and elevation ([IJSIMM 2016] eqs. 22-24); `point` itself, bit for bit, for a noise-free tracker.
   Eigen::Vector3d Perturb(const Eigen::Vector3d& point, double n_range, double n_azimuth, double n_elevation) const;
 };
 
