@@ -426,7 +426,7 @@ void RegisterCalibrate(CLI::App& app) {
   sub->add_option("--validate", args->validate,
                   "--scan: an artefact batch of the same stage; its validation placements (all, without batch.json) "
                   "judge the scan calibration as they judge a batch's");
-  sub->add_option("--model", args->model, "published model: 9 (eq. 15), 15 (order 0), 27 (order 1), 42 (order 2)")
+  sub->add_option("--model", args->model, "[Pérez 2019] model: 9 (eq. 15), 15 (order 0), 27 (order 1), 42 (order 2)")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
   sub->add_option("--terms", args->terms,

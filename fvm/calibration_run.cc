@@ -8,7 +8,7 @@ namespace fvm::cli {
 
 void IdentifySettings::AddOptions(CLI::App& app) {
   app.add_option("--anchor", anchor,
-                 "how stitched measurements are referenced: 'none' (published procedure: every placement starts at "
+                 "how stitched measurements are referenced: 'none' ([Pérez 2019] procedure: every placement starts at "
                  "one spot) or 'first-tile' (each placement anchored at the stage error of its own first tile)")
       ->check(CLI::IsMember({"none", "first-tile"}))
       ->capture_default_str();

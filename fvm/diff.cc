@@ -1,5 +1,5 @@
 // fvm diff: how far a test export of an artefact is from a reference export of it, calotte by calotte and as
-// distances between calottes (the measure of the published stitching-strategy study, 000:4777).
+// distances between calottes (the measure of the published stitching-strategy study, [Pérez 2019] Tables 1-2).
 
 #include <fmt/core.h>
 
@@ -219,7 +219,7 @@ void RegisterDiff(CLI::App& app) {
   sub->add_option("--pairs", options->pairs,
                   "calotte pairs a:b whose distances to compare, e.g. 1:6,1:31 (default: the first common calotte "
                   "with every other one)");
-  sub->add_flag("--xy", options->xy, "distances in the XY plane, z ignored (as the published stitching tables)");
+  sub->add_flag("--xy", options->xy, "distances in the XY plane, z ignored (as the stitching tables of [Pérez 2019])");
   sub->add_flag("--json", options->json,
                 "print one JSON document {\"calottes\": [{\"id\", \"dx_um\", \"dy_um\", \"dz_um\", \"d_um\"}], "
                 "\"pairs\": [{\"a\", \"b\", \"ref_mm\", \"test_mm\", \"diff_um\"}]}");

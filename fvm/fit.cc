@@ -1,6 +1,6 @@
 // fvm fit FILE: finds the calottes in a height map (or an organised point cloud), fits a sphere to each, numbers
 // them as the artefact does when told which artefact it is, and writes the centre export stage calibration
-// reads (ARCHITECTURE.md section 3).
+// reads (README, "The main job").
 
 #include <fmt/core.h>
 

@@ -384,7 +384,7 @@ void RunTracker(const SimulateTrackerArgs& args) {
   if (validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *validation);
   WriteFileAtomically(dir / "truth.json", json.dump(2) + "\n");
   // The random machine is scaled on a fixed workspace grid, not on these points, so that a mesh and a cloud of
-  // the same seed measure the same machine (001 Tables II and III); corners weigh more in a coarse mesh.
+  // the same seed measure the same machine ([IJSIMM 2016] Tables II and III); corners weigh more in a coarse mesh.
   const std::string scaled =
       args.errors.empty() ? fmt::format(" (machine scaled to {} um mean over an 11 x 11 x 11 workspace grid)",
                                         FormatShortest(args.mean_error_um))
@@ -402,13 +402,13 @@ void RegisterSimulateTracker(CLI::App* simulate) {
   CLI::App* sub = simulate->add_subcommand(
       "tracker", "machine-tool verification: point plan, G-code and simulated laser-tracker readings with their truth");
   AddDetails(sub,
-             "Plans the points of a volumetric verification (mesh, cloud of eq. 18 or body diagonals; X fastest, "
+             "Plans the points of a volumetric verification (mesh, cloud of [IJSIMM 2016] eq. 18 or body diagonals; X fastest, "
              "serpentine) and writes points.csv and program.nc (ISO G-code with a dwell per point). With --seed N (a "
              "random machine, its errors cubics plus ball-screw and long-wave sines that no cubic represents, scaled "
              "to --mean-error-um) or --errors FILE.json (your own truth) it also writes readings.csv (the tracker "
              "readings with the tracker's noise: --tracker), truth.json (the machine, the tracker and the errors; it "
              "can be given back as --errors) and, with --validation, validation.csv: noise-free readings of other "
-             "points for checking an identification where it was not fitted. The tracker pose defaults to 001 "
+             "points for checking an identification where it was not fitted. The tracker pose defaults to [IJSIMM 2016] "
              "Table I position 4. Points the tracker cannot see (elevation -60..+77 deg, range 40 m) stop the run.");
   sub->add_option("-o,--output", args->output, "directory to write (created if needed)")->required();
   sub->add_option("--machine", args->machine, "axis travels LXxLYxLZ in mm, optionally @X0,Y0,Z0 (the origin, default 0)")
@@ -425,7 +425,7 @@ void RegisterSimulateTracker(CLI::App* simulate) {
       ->capture_default_str();
   sub->add_option("--pose", args->pose,
                   "tracker pose in the machine frame: X,Y,Z (mm) and intrinsic XYZ Euler angles A,B,C (deg); default "
-                  "001 Table I position 4")
+                  "[IJSIMM 2016] Table I position 4")
       ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
       ->capture_default_str();
   CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: README, Machine tools)")

@@ -1,5 +1,5 @@
-// fvm testpiece design|verify and fvm simulate testpiece: the machined test piece of seed 002. The verification is
-// fvm verify's (fvm/machine_problem.h): a CMM-measured piece is a tracker whose pose is the piece's datum.
+// fvm testpiece design|verify and fvm simulate testpiece: the machined test piece of [Lorente 2021]. The verification
+// is fvm verify's (fvm/machine_problem.h): a CMM-measured piece is a tracker whose pose is the piece's datum.
 
 #include <fmt/core.h>
 
@@ -37,7 +37,7 @@ artefacts::TestPieceDescription PieceOf(const std::string& path) {
 
 // PIECE, the optional description both design and simulate take.
 void AddPieceArgument(CLI::App* sub, std::string& piece) {
-  sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece")->check(CLI::ExistingFile);
+  sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece of [Lorente 2021]")->check(CLI::ExistingFile);
 }
 
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
@@ -108,7 +108,7 @@ nlohmann::json TermsJson(const std::vector<stage::TermRecovery>& terms) {
   return out;
 }
 
-// Counts of the volumetric errors before and after in bins of `width` um: the report's histograms (002 Figs.
+// Counts of the volumetric errors before and after in bins of `width` um: the report's histograms ([Lorente 2021] Figs.
 // 126-127, 132-133).
 MachineReportData::Table Histogram(const std::vector<MachineReportData::PointError>& points) {
   double top = 0;
@@ -345,7 +345,7 @@ void RunSimulate(const SimulateArgs& args) {
   t["datum"] = PoseJson(cmm.datum, nullptr);
   t["cmm_noise_um"] = args.noise_um;
   t["seed"] = args.seed;
-  t["errors"] = !args.errors.empty() ? args.errors : args.mean_error_um > 0 ? std::string("random") : std::string("002 Table 4");
+  t["errors"] = !args.errors.empty() ? args.errors : args.mean_error_um > 0 ? std::string("random") : std::string("[Lorente 2021] Table 4");
   WriteFileAtomically(dir / "truth.json", t.dump(2) + "\n");
   if (args.json) {
     nlohmann::json j{{"output", args.output}, {"points", measured.points.size()}, {"errors", t["errors"]},
@@ -365,13 +365,13 @@ void RunSimulate(const SimulateArgs& args) {
 }  // namespace
 
 void RegisterTestPiece(CLI::App& app) {
-  CLI::App* tp = app.add_subcommand("testpiece", "the machined test piece of 002: design it, verify a machine from its CMM measurement");
+  CLI::App* tp = app.add_subcommand("testpiece", "the machined test piece of [Lorente 2021]: design it, verify a machine from its CMM measurement");
   tp->require_subcommand(1);
   tp->footer("Examples:\n  fvm testpiece design -o nominal.csv --gcode piece.nc --cmm cmm\n"
              "  fvm simulate testpiece -o tp && fvm testpiece verify tp/measured.csv --basis chebyshev --order 2");
 
   auto design = std::make_shared<DesignArgs>();
-  CLI::App* d = tp->add_subcommand("design", "nominal probe points of a test piece (the published one without PIECE.json)");
+  CLI::App* d = tp->add_subcommand("design", "nominal probe points of a test piece (that of [Lorente 2021] without PIECE.json)");
   AddDetails(d,
              "Writes NOMINAL.csv id,x,y,z,series: machine coordinates (mm) of every probe point, `series` naming X1..X3, "
              "Y1..Y3, Z1..Z3 (the geometric verification's series) or else the feature. A PIECE.json describes the envelope "
@@ -419,7 +419,7 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
   AddDetails(sub,
              "Writes DIR/nominal.csv, DIR/measured.csv (id,x,y,z,xm,ym,zm: the CMM's readings of the piece at its datum, "
              "with normal noise), DIR/truth.json (the errors, datum, tool, noise) and with --validation a noise-free grid "
-             "over the piece (validation.csv). Errors: 002 Table 4's test functions by default, --errors FILE.json "
+             "over the piece (validation.csv). Errors: [Lorente 2021] Table 4's test functions by default, --errors FILE.json "
              "(fvm simulate tracker's format), or a random machine that no polynomial represents (--mean-error-um).");
   AddPieceArgument(sub, args->piece);
   sub->add_option("-o,--output", args->output, "directory to write")->required();
@@ -429,7 +429,7 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
       ->excludes(errors);
   sub->add_option("--seed", args->seed, "random machine and CMM noise (same seed, same bytes)")->capture_default_str();
   sub->add_option("--noise-um", args->noise_um, "CMM noise per coordinate (um)")->check(CLI::Range(0.0, 1e3))->capture_default_str();
-  sub->add_option("--points", args->only, "all, pyramid (002's 167-point test) or series (X1..Z3 only)")
+  sub->add_option("--points", args->only, "all, pyramid ([Lorente 2021]'s 167-point test) or series (X1..Z3 only)")
       ->check(CLI::IsMember({"all", "pyramid", "series"}))
       ->capture_default_str();
   sub->add_option("--chain", args->chain, "F-notation chain")->check(Parses([](const std::string& t) { stage::AxisChain::Parse(t); }, "CHAIN"))->capture_default_str();

@@ -1,4 +1,4 @@
-// fvm tiles: plan tile layouts with and without stitching (imaging/tile_plan.h) and simulate the published
+// fvm tiles: plan tile layouts with and without stitching (imaging/tile_plan.h) and simulate the [Pérez 2019]
 // stitching strategies on coordinates (artefacts/stitching_strategy.h) or on rendered tiles
 // (artefacts/rendered_stitching_strategy.h).
 
@@ -426,7 +426,7 @@ struct StrategyArgs {
   std::string calibration;
   std::string lens = "10x";
   double overlap = 0.2;
-  std::vector<double> from{-154.5487, -115.4767, -50.3624};  // Table 1, case a, calotte 1
+  std::vector<double> from{-154.5487, -115.4767, -50.3624};  // [Pérez 2019] Table 1, case a, calotte 1
   std::vector<double> to{-134.5409, -115.4371, -50.4457};    // ... calotte 6
   bool render = false;
   std::string tiles_output;
@@ -474,7 +474,7 @@ void RunStrategies(const StrategyArgs& args) {
     throw InputError(std::string("fvm tiles simulate: ") + e.what());
   }
   if (!args.tiles_output.empty()) WriteRenderedRow(*rendered, options, args.tiles_output);
-  // The published differences (Table 1, 6 x 6 grid, 10x lens, calottes 1 and 6), for comparison.
+  // The published differences ([Pérez 2019] Table 1, 6 x 6 grid, 10x lens, calottes 1 and 6), for comparison.
   const std::map<char, double> published = {{'b', -14.6}, {'c', -1.5}, {'d', -8.9}, {'e', -14.8}, {'f', -15.0}};
   nlohmann::ordered_json doc;
   doc["calibration"] = args.calibration;
@@ -630,16 +630,16 @@ void RegisterTiles(CLI::App& app) {
 
   auto strategy_args = std::make_shared<StrategyArgs>();
   CLI::App* strategies = tiles->add_subcommand(
-      "simulate", "the end-to-end distance error of the six published stitching strategies under a stage model");
+      "simulate", "the end-to-end distance error of the six stitching strategies of [Pérez 2019] under a stage model");
   strategies->add_option("--calibration", strategy_args->calibration, "stage model: a file written by 'fvm calibrate -o'")
       ->required();
   strategies->add_option("--lens", strategy_args->lens, "lens (field of view from the lens table)")->capture_default_str();
   strategies->add_option("--overlap", strategy_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")
       ->capture_default_str();
-  strategies->add_option("--from", strategy_args->from, "first calotte x,y,z in mm (default: Table 1, calotte 1)")
+  strategies->add_option("--from", strategy_args->from, "first calotte x,y,z in mm (default: [Pérez 2019] Table 1, calotte 1)")
       ->delimiter(',')
       ->expected(3);
-  strategies->add_option("--to", strategy_args->to, "last calotte x,y,z in mm (default: Table 1, calotte 6)")
+  strategies->add_option("--to", strategy_args->to, "last calotte x,y,z in mm (default: [Pérez 2019] Table 1, calotte 6)")
       ->delimiter(',')
       ->expected(3);
   strategies->add_flag("--render", strategy_args->render,
@@ -658,7 +658,7 @@ void RegisterTiles(CLI::App& app) {
                        "\"diff_um\", \"pairs\", \"accepted_pairs\"}]}][, \"rendered\": {\"tile_px\", "
                        "\"pixel_um\", \"row_tiles\", \"pair_rms_px\", \"rejected_pairs\", \"seed\"}]}");
   strategies->footer("Cases: a all stitched; b only the end tiles; c the tile after the first missing; d a middle "
-                     "tile missing; e the tile before the last missing; f every other tile missing (000:4777).\n"
+                     "tile missing; e the tile before the last missing; f every other tile missing ([Pérez 2019] Tables 1-2).\n"
                      "Example:\n  fvm calibrate samples/bar17 --model 27 -o stage.json && fvm tiles simulate "
                      "--calibration stage.json --lens 10x --overlap 20 --render");
   strategies->callback([strategy_args] { RunStrategies(*strategy_args); });

@@ -1,5 +1,5 @@
 // fvm uncertainty DATA.csv --chain XFYZ --order N --tool X,Y,Z --runs R --seed S [--validate VAL.csv] [--json]:
-// Monte Carlo uncertainty of a machine-tool verification (GUM Supplement 1): the readings are drawn again with the
+// Monte Carlo uncertainty of a machine-tool verification [GUM Supplement 1]: the readings are drawn again with the
 // tracker's noise around the identified machine and identified afresh, R times.
 
 #include <fmt/core.h>
@@ -489,13 +489,13 @@ void Run(const UncertaintyArgs& args) {
 
 void RegisterUncertainty(CLI::App& app) {
   auto args = std::make_shared<UncertaintyArgs>();
-  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification or stage calibration (GUM S1)");
+  CLI::App* sub = app.add_subcommand("uncertainty", "Monte Carlo uncertainty of a machine verification or stage calibration [GUM Supplement 1]");
   AddDetails(sub,
              "Identifies the machine from the readings as fvm verify does, takes that machine and tracker pose as the "
              "truth, and --runs times draws the readings again with the tracker's noise (normal in range, azimuth and "
              "elevation) and identifies them afresh. Reports the distribution of the final and validation mean errors "
              "over the runs, each point's 95 % radius and ellipsoid, distance errors over point pairs, and the "
-             "ISO/TS 15530-3 budget U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2). Run i draws from a stream seeded by "
+             "[ISO/TS 15530-3] budget U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2). Run i draws from a stream seeded by "
              "(--seed, i): the same seed gives the same bits for any --threads. With a batch directory instead of "
              "readings, the microscope stage: the model (--model) is identified as fvm calibrate does, the stitched "
              "centres are drawn again around it with their noise, and the validation rms over the runs is shown next "
@@ -512,7 +512,7 @@ void RegisterUncertainty(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
-  sub->add_option("--model", args->model, "microscope stage (DATA a batch): published model 9, 15, 27 or 42")
+  sub->add_option("--model", args->model, "microscope stage (DATA a batch): [Pérez 2019] model 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
   sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");

@@ -177,7 +177,7 @@ void Run(const VerifyArgs& args) {
     fit.order = order;
     fit.result = VerifyProblem(problem, problem.Layout(order));
     const stage::IdentificationResult& r = fit.result->identified;
-    // BIC on the (weighted) residuals: chi^2 + k ln(N), or N ln(RSS / N) + k ln(N) with equal weights.
+    // BIC [Schwarz 1978] on the (weighted) residuals: chi^2 + k ln(N), or N ln(RSS / N) + k ln(N) with equal weights.
     const double n_eq = 3.0 * static_cast<double>(observations.size());
     const double k = static_cast<double>(r.calibration.layout.NumFree() + (args.pose.empty() ? 6 : 0));
     const double dof = std::max(1.0, n_eq - k);

@@ -4,10 +4,10 @@
 // Hypotheses come from pairing a found calotte and one of its nearest neighbours with a nominal calotte and one
 // of its nearest neighbours: each pairing fixes a similarity transform (rotation, scale, translation). The
 // hypothesis that brings the most found calottes within the tolerance of a nominal one wins; the transform is
-// then refined by least squares (Umeyama) over the matched pairs. A symmetric layout fits in several ways
+// then refined by least squares [Umeyama 1991] over the matched pairs. A symmetric layout fits in several ways
 // (the 6 x 6 grid in four, the bar in two): the one whose rotation is nearest the expected one wins, as the
-// artefact is placed roughly as drawn (calotte 1 at lowest x, highest y: the first tile, 000:7264). When two
-// fits are equally near (a bar turned by 90 degrees), or a partial view fits in several places, numbering would
+// artefact is placed roughly as drawn (calotte 1 at lowest x, highest y: the first tile, [Pérez thesis] 5.7.2). When
+// two fits are equally near (a bar turned by 90 degrees), or a partial view fits in several places, numbering would
 // be a guess: it throws and says what to give.
 
 #include <Eigen/Core>

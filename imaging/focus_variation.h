@@ -20,7 +20,7 @@
 namespace fvm::imaging {
 
 enum class FocusMeasure {
-  kModifiedLaplacian,  // sum-modified-Laplacian (Nayar): |2I - I_left - I_right| + |2I - I_up - I_down|
+  kModifiedLaplacian,  // sum-modified-Laplacian [Nayar 1994]: |2I - I_left - I_right| + |2I - I_up - I_down|
   kTenengrad,          // Sobel gradient energy Gx^2 + Gy^2
   kVariance,           // grey-level variance
 };

@@ -1,7 +1,7 @@
 #pragma once
 // Least-squares sphere fits to measured surface points: the calotte centre that stage calibration consumes
-// (FACTS.md section 1: the instrument fits a sphere to the calotte's points and reports the centre, the radius
-// and the min / max / mean deviation from the sphere, 000:7280).
+// ([Pérez thesis] section 5.7.2: the instrument fits a sphere to the calotte's points and reports the centre, the
+// radius and the min / max / mean deviation from the sphere).
 //
 // Pipeline: an algebraic start (linear least squares on |p|^2 = 2 c.p + k), optionally a seeded RANSAC
 // consensus set, then the geometric fit (Levenberg-Marquardt on orthogonal distances), repeated with outliers

@@ -1,8 +1,8 @@
 #pragma once
-// The stage as the registered pairs of a grid show it (issue 13, after NIST MIST's stage model): a real stage steps
-// a little longer or shorter than nominal and drifts sideways by the same amount at every step, and repeats each
-// position only to within its repeatability. Estimated from the pairs that register, it predicts the pairs that
-// do not, rejects registrations that disagree with it, and is the prior of the global solve.
+// The stage as the registered pairs of a grid show it (issue 13, after the stage model of NIST MIST [Chalfoun 2017]): a
+// real stage steps a little longer or shorter than nominal and drifts sideways by the same amount at every step, and
+// repeats each position only to within its repeatability. Estimated from the pairs that register, it predicts the pairs
+// that do not, rejects registrations that disagree with it, and is the prior of the global solve.
 //
 // Pixel frame as in tile_registration.h: x right, y down; offsets are b's top-left corner in a's frame.
 

@@ -1,13 +1,13 @@
 #pragma once
-// Tile layouts of an FVM scan (FACTS.md section 1): the stitched grid that covers a region in the instrument's
+// Tile layouts of an FVM scan ([Pérez thesis] 5.7.2): the stitched grid that covers a region in the instrument's
 // scan order, and the stitching-free subset of that grid that covers only given features (calottes).
 //
 // Frame and order. Stage coordinates in mm, +X right, +Y up. Tiles are squares of the lens' field of view F on a
 // lattice of step s = F (1 - overlap). The grid is anchored where the instrument starts: the first tile's top-left
 // corner is the region's (x0, y1) corner (lowest X, highest Y). Row 0 is the highest Y, column 0 the lowest X.
 // Scan order is column by column from -X to +X, and inside a column from +Y to -Y, every column starting again at
-// its top (a raster, not a serpentine): index = col * rows + row. This is the reading of 000:7264 ("first tile
-// at lowest X and highest Y; tiles taken from +Y to -Y and -X to +X") with Y as the fast axis.
+// its top (a raster, not a serpentine): index = col * rows + row. This is the reading of [Pérez thesis] 5.7.2 ("first
+// tile at lowest X and highest Y; tiles taken from +Y to -Y and -X to +X") with Y as the fast axis.
 
 #include <Eigen/Core>
 #include <string>
@@ -22,8 +22,8 @@ struct Lens {
   double vertical_resolution_nm = 0.0;
 };
 
-// The Alicona G5 lenses of 000:5785 (Table 5.2). The 10x field is 1.62 mm as in that table; the paper says
-// 1.4 mm, but only 1.62 mm reproduces the published 225 stitched tiles (see tile_plan.cc).
+// The Alicona G5 lenses of [Pérez thesis] Table 5.2. The 10x field is 1.62 mm as in that table; [Pérez 2019] says
+// 1.4 mm, but only 1.62 mm reproduces the published 225 stitched tiles ([Pérez thesis] 5.7.2) (see tile_plan.cc).
 const std::vector<Lens>& Lenses();
 // Throws InputError naming the known lenses when `name` is none of them ("10x" and "10" both work).
 const Lens& FindLens(std::string_view name);

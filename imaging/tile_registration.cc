@@ -227,9 +227,9 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   RegisterFirstPass(images, nominal, result.pairs, first_window, options, on_pair_registered);
 
   // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
-  // again, widened, within a few repeatabilities of the model's offset (MIST's constrained second search). When
-  // too few pairs passed to estimate one, the failed ones are first searched within options.search_fraction of the
-  // tile around their nominal offsets, and the model is estimated from what then stands.
+  // again, widened, within a few repeatabilities of the model's offset (the constrained second search of MIST [Chalfoun
+  // 2017]). When too few pairs passed to estimate one, the failed ones are first searched within
+  // options.search_fraction of the tile around their nominal offsets, and the model is estimated from what then stands.
   result.stage = EstimateStageModel(tiles, result.pairs);
   // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
   // correlates the same frames again, and only the first pass stands.

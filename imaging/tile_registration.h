@@ -1,5 +1,5 @@
 #pragma once
-// Registration of overlapping tiles (FACTS.md section 1, "how stitching places tiles"): pairwise translations
+// Registration of overlapping tiles ([Pérez 2019] section 1.2: how stitching places tiles): pairwise translations
 // (tile_pair_registration.h), each with its uncertainty; a generalised least-squares solve for all tile positions;
 // tiles that no good pair connects to the first tile fall back to their stage positions, as the instrument does,
 // and the registrations after them continue from there.

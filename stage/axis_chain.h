@@ -2,19 +2,19 @@
 // Kinematic chains of three linear axes in F notation, and the forward model that maps axis commands and
 // error-term values to the coordinates of the tool point in the part frame.
 //
-// Convention (one for every chain, derived from the seeds; tests/stage/*chain* and published_model_test check it):
+// Convention (one for every chain, derived from the sources; tests/stage/*chain* and published_model_test check it):
 // - "YXFZ": F is the fixed frame; letters left of F move the part, letters right of F move the tool. On each
 //   side the letters read left to right go from the frame outward: in YXFZ the Y carriage sits on the frame and
-//   X rides on Y (000:840); in XFYZ, Y sits on the frame and Z rides on Y (001:77, 004:76).
+//   X rides on Y ([Pérez thesis] 2.7); in XFYZ, Y sits on the frame and Z rides on Y ([Aguado 2016] eq. 1).
 // - Each axis k commanded to q_k is a rigid motion A_k(v) = T_k + R_k v. Tool-side axes translate by +q_k,
 //   part-side axes by -q_k (moving the table +x moves the part -x under the tool):
 //       T_k = +-q_k e_k + (kTx, kTy, kTz)(q_k) - q_k * W(q_k) e_other   (for each squareness term k carries)
 //       R_k = I + [eps_k]x with eps_k = (kRx, kRy, kRz)(q_k)   (eq. 2; or the exact rotation of eps_k)
 // - Tool point in the frame: w = A_t1(A_t2(... A_tn(tool_offset))); part coordinates of it:
 //       p = A_pn^-1(... A_p1^-1(w)),  A^-1(v) = R^-1 (v - T)
-//   For YXFZ with no Z errors this is the published eq. 1: TP = RX^-1 [RY^-1 (TL - TY) - TX] (000:4890).
+//   For YXFZ with no Z errors this is the published eq. 1: TP = RX^-1 [RY^-1 (TL - TY) - TX] ([Pérez 2019]).
 // - An optional instrument frame carried by the part (a laser tracker on the table) maps p into its own
-//   coordinates: X_LT = R_LT^-1 (p - T_LT) (004:76).
+//   coordinates: X_LT = R_LT^-1 (p - T_LT) ([Aguado 2016]).
 // - A squareness term xWy tilts the motion of one of its two axes, its carrier: kPartEnd picks the axis nearer
 //   the part along part -> frame -> tool (the published FVM model: X carries xWy and xWz, Y carries yWz);
 //   kToolEnd picks the one nearer the tool (the machine-tool seeds: in XFYZ, Y carries xWy, Z the others).
@@ -33,7 +33,7 @@
 namespace fvm::stage {
 
 enum class RotationModel {
-  kSmallAngle,  // R = I + [eps]x exactly as the seeds write it; its inverse is the true matrix inverse
+  kSmallAngle,  // R = I + [eps]x exactly as the sources write it; its inverse is the true matrix inverse
   kExact,       // R = exp([eps]x), a proper rotation
 };
 

@@ -56,7 +56,7 @@ struct Compensation {
 };
 Compensation CompensateCommand(const Calibration& calibration, const Eigen::Vector3d& nominal);
 
-// Compensates one stitching-free point: the forward model, eq. 1.
+// Compensates one stitching-free point: the forward model, [Pérez 2019] eq. 1.
 CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& free_point);
 
 // Compensation into the frame of one stitched measurement (stitched_frame.h): where the instrument, stitching from

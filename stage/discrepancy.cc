@@ -134,7 +134,7 @@ struct Candidate {
 };
 
 // How far a drift of initial rate 1 has gone after t: t itself (linear), or tau (1 - exp(-t/tau)), the warm-up
-// rho(t) = A + B (1 - exp(-t/tau)) of FACTS (000:5810) with B = rate * tau (A is the model's constant).
+// rho(t) = A + B (1 - exp(-t/tau)) of [Pérez thesis] eqs. 5.1-5.2 with B = rate * tau (A is the model's constant).
 double DriftShape(double t, double tau) { return tau > 0 ? tau * (1.0 - std::exp(-t / tau)) : t; }
 
 void Test(Candidate& c, double alpha_each) {
@@ -475,8 +475,8 @@ Spike SpikeOf(const std::vector<Observation>& observations, const std::vector<Ei
   return {residuals[i], 1.0};
 }
 
-// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni over the centres), and as
-// improbable against their neighbours' (SpikeOf), found one at a time: the worst is taken out and the model
+// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni [Dunn 1961] over the centres),
+// and as improbable against their neighbours' (SpikeOf), found one at a time: the worst is taken out and the model
 // refitted before the next is judged, so that a large blunder, which drags the fit towards itself, cannot make its
 // good neighbours look bad. Indices into p.identify.
 std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit, const IdentificationOptions& base_options,
@@ -669,11 +669,11 @@ Applied MakeApplied(const Candidate& c, const Problem& p, const IdentificationRe
     a.step.explanation =
         a.tau_s > 0
             ? fmt::format("The stitching-free centres drift with measurement time as a warm-up settles, rho(t) = A + B (1 - "
-                          "exp(-t/tau)) (000:5810): initial rate {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, {:.2f}, "
+                          "exp(-t/tau)) ([Pérez thesis] eqs. 5.1-5.2): initial rate {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, {:.2f}, "
                           "{:.2f} um/min), time constant about {:.1f} min, better than a drift linear in t.",
                           a.step.size, a.step.size_u, std::string(1, "xyz"[axis]), v.x(), v.y(), v.z(), a.tau_s / 60.0)
             : fmt::format("The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: "
-                          "{:.2f}, {:.2f}, {:.2f} um/min), as a stage or column warming up would (000:7130). Removing a "
+                          "{:.2f}, {:.2f}, {:.2f} um/min), as a stage or column warming up would ([Pérez thesis] 5.7.1). Removing a "
                           "drift linear in t takes the time-correlated residuals away.",
                           a.step.size, a.step.size_u, a.step.component, v.x(), v.y(), v.z());
   } else if (effect == "scale") {

@@ -1,9 +1,9 @@
 #pragma once
-// The 21 geometric error terms of a three-axis machine, named after VDI 2617-3.
+// The 21 geometric error terms of a three-axis machine, named after [VDI 2617-3].
 //
 // Per axis k in {x, y, z}: kTx, kTy, kTz (translation: positioning along k, straightness across it) and
 // kRx, kRy, kRz (rotation: roll, pitch, yaw about x, y, z), each a function of the k coordinate; plus the three
-// squareness terms xWy, xWz, yWz. ISO 230-1 aliases (EXX, EYX, ..., EC0Y) are accepted as names too.
+// squareness terms xWy, xWz, yWz. [ISO 230-1] aliases (EXX, EYX, ..., EC0Y) are accepted as names too.
 
 #include <optional>
 #include <string_view>

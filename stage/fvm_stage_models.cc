@@ -17,7 +17,7 @@ ParameterLayout FvmModelLayout(std::string_view model, const std::array<Travel, 
     layout.SetTerm("xTy", basis, 0);
     layout.SetTerm("xTz", basis, 0);
     layout.SetTerm("yTy", basis, 1);
-    layout.Drop("yTy0");  // combined with xTy0 (eq. 15)
+    layout.Drop("yTy0");  // combined with xTy0 ([Pérez 2019] eq. 15)
     layout.SetTerm("yRz", basis, 0);
     for (const char* w : {"xWy", "xWz", "yWz"}) layout.SetTerm(w, basis, 0);
     return layout;

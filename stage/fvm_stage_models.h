@@ -1,10 +1,10 @@
 #pragma once
-// The published YXFZ stage models of the focus-variation microscope (FACTS.md section 1, 000:7491-7500,
-// 000:5340), and layouts composed by the user.
+// The published YXFZ stage models of the focus-variation microscope ([Pérez 2019] eqs. 1 and 15, [Pérez thesis]
+// 5.7.2), and layouts composed by the user.
 //
-// Convention: every model goes through eq. 1 (AxisChain::FvmStage(): stitching-free coordinates in, stitched
-// coordinates out), so signs follow eq. 1. Where eq. 15 prints (1 + yTy1) it is (1 - yTy1) here, the sign typo
-// FACTS.md documents; eq. 15's combined offsets xTx0 + yTx0 etc. are carried by xTx0, xTy0, xTz0 alone.
+// Convention: every model goes through [Pérez 2019] eq. 1 (AxisChain::FvmStage(): stitching-free coordinates in,
+// stitched coordinates out), so signs follow eq. 1. Where eq. 15 prints (1 + yTy1) it is (1 - yTy1) here, the sign typo
+// README documents ("The models"); eq. 15's combined offsets xTx0 + yTx0 etc. are carried by xTx0, xTy0, xTz0 alone.
 //
 //   "15": the 12 translation and rotation components of X and Y and the 3 squareness terms, order 0.
 //   "27": the same 15 components of order 1, minus xTy1, xTz1, yTz1, which are the squareness terms xWy, xWz,
@@ -22,7 +22,7 @@
 
 namespace fvm::stage {
 
-// Stage travel of the Alicona G5 (200 x 200 x 100 mm) in the coordinates of its exports (000:4777 shows
+// Stage travel of the Alicona G5 (200 x 200 x 100 mm) in the coordinates of its exports ([Pérez 2019] Table 1 shows
 // x = -154.5, y = -115.5, z = -50.4 mm): x, y in [-200, 0], z in [-100, 0].
 std::array<Travel, 3> FvmStageTravel();
 

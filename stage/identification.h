@@ -6,8 +6,8 @@
 // - a machine tool: commands are the nominal machine coordinates, measurements the laser tracker's readings in
 //   its own frame, each weighted by its 3x3 covariance, with the tracker pose estimated jointly (or held).
 //
-// Levenberg-Marquardt (Ceres) on the (whitened) point error of eq. 6, with automatic derivatives through the
-// kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is
+// Levenberg-Marquardt (Ceres) on the (whitened) point error of [Pérez 2019] eq. 6, with automatic derivatives through
+// the kinematic chain and coefficients scaled to their plausible size. Before the fit, the problem's rank is
 // examined on the Jacobian: coefficients the data cannot tell apart from others (exact aliases such as xTy1 and
 // xWy, offsets that cancel under anchoring, pitch and roll when z barely varies) are fixed at zero, named, and
 // reported with the reason, so every model order converges to the best fit its identifiable part allows.
@@ -56,9 +56,9 @@ struct MeasurementSet {
 };
 
 // How stitched coordinates are referenced. The instrument places the first tile of a stitched measurement by
-// its encoders and registers the rest to it (000:4826), so stitched = F(q) - e(first tile), e(q) = F(q) - q.
+// its encoders and registers the rest to it ([Pérez 2019] 1.2), so stitched = F(q) - e(first tile), e(q) = F(q) - q.
 enum class Anchor {
-  kNone,       // stitched = F(q): the published procedure, valid when every measurement starts at one spot
+  kNone,       // stitched = F(q): the procedure of [Pérez 2019], valid when every measurement starts at one spot
   kFirstTile,  // stitched = F(q) - F(a) + a with a the measurement's first tile
 };
 
@@ -92,7 +92,7 @@ struct IdentificationOptions {
   int num_threads = 0;                      // Jacobian evaluation threads; 0: all cores
   // Called after each solver iteration with the layout being solved (the given one less what the rank treatment
   // fixed), its current free coefficients and the instrument pose: what an iteration log needs (fvm testpiece
-  // verify prints max / mean / min per iteration, as 002 Tables 8-9 do). Empty: none.
+  // verify prints max / mean / min per iteration, as [Lorente 2021] Tables 8-9 do). Empty: none.
   std::function<void(const ParameterLayout& layout, const std::vector<double>& values, const Pose& pose)> on_iteration;
   void Check() const;  // throws std::invalid_argument
 };
@@ -131,8 +131,8 @@ Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free,
                               const Eigen::Vector3d* anchor = nullptr);
 
 // The first tile of a measurement that covers these stage positions: the instrument starts at lowest x and
-// highest y (000:7264); z is that of the position nearest to that corner. Positions are `offset` + each point
-// (a scan whose file origin is not the stage's); points that are not finite are left out, so a scan's invalid
+// highest y ([Pérez thesis] 5.7.2); z is that of the position nearest to that corner. Positions are `offset` + each
+// point (a scan whose file origin is not the stage's); points that are not finite are left out, so a scan's invalid
 // points need no copy. Throws std::invalid_argument when no point is left.
 Eigen::Vector3d FirstTile(std::span<const Eigen::Vector3d> positions, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
 

@@ -1,7 +1,7 @@
 #pragma once
-// Volumetric verification of a machine tool from laser-tracker readings (seeds 000, 001, 003/004): identify the
-// 21 error functions and the tracker pose from the readings at commanded points, and say how far the machine is
-// from where it should be before and after.
+// Volumetric verification of a machine tool from laser-tracker readings ([Aguado 2016], [IJSIMM 2016], [Pérez 2017]):
+// identify the 21 error functions and the tracker pose from the readings at commanded points, and say how far the
+// machine is from where it should be before and after.
 //
 // Volumetric error = distance between a tracker reading and the model's prediction of the ideal machine (before)
 // or of the identified machine (after), in the tracker frame. Before, the pose is that of the ideal machine's best
@@ -17,7 +17,7 @@
 
 namespace fvm::stage {
 
-// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the seeds quote them.
+// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the published studies quote them.
 struct VolumetricError {
   int points = 0;
   double mean_um = 0, max_um = 0, min_um = 0;
@@ -35,7 +35,7 @@ struct VerificationResult {
 // `basis` over `travel`, and the three squareness terms as constants.
 ParameterLayout MachineLayout(const AxisChain& chain, const std::array<Travel, 3>& travel, Basis basis, int order);
 
-// The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, Umeyama):
+// The rigid pose that maps readings onto the ideal machine's tool points (closed-form least squares, [Umeyama 1991]):
 // a start for the joint estimate. Throws std::invalid_argument when the points do not span three dimensions.
 Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& readings,
                     const std::vector<Eigen::Vector3d>& tool_offsets = {});

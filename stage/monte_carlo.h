@@ -1,10 +1,10 @@
 #pragma once
-// Monte Carlo uncertainty of an identification (GUM Supplement 1; 000:1741, 000:3470, 000:4560), for a machine tool
-// measured by a laser tracker and for the microscope stage. Machine: the identified machine and tracker pose are
-// taken as the truth, the tracker's readings of it are drawn again and
-// again with the tracker's noise (normal in range, azimuth and elevation, eq. 22-24), and each set is identified
-// afresh, rank treatment included, exactly as the original readings were. The spread of what the runs predict is
-// the uncertainty of the verification.
+// Monte Carlo uncertainty of an identification ([GUM Supplement 1]; [Pérez 2017], [Aguado 2017], [Pérez 2019 Sensors]),
+// for a machine tool measured by a laser tracker and for the microscope stage. Machine: the identified machine and
+// tracker pose are taken as the truth, the tracker's readings of it are drawn again and
+// again with the tracker's noise (normal in range, azimuth and elevation, [IJSIMM 2016] eqs. 22-24), and each set is
+// identified afresh, rank treatment included, exactly as the original readings were. The spread of what the runs
+// predict is the uncertainty of the verification.
 //
 // Reproducible: run i draws from Random(StreamSeed(seed, i)) (core/random.h) and writes only its own result, and
 // each identification runs on one thread, so the results are the same bits for any thread count.
@@ -115,10 +115,10 @@ struct PairSpread {
 PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, const std::vector<Eigen::Vector3d>& points_mm,
                               int max_points = 200);
 
-// The ISO/TS 15530-3 budget as 000:1741 applies it (FACTS section 2): U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
+// The [ISO/TS 15530-3] budget as [Pérez 2017] applies it: U = k sqrt(u_cal^2 + u_p^2 + u_b^2 + u_w^2).
 //   u_cal: the reference's calibration, given;
-//   u_p:   2 x the standard deviation of the simulated positions (000's definition): 2 x the rms over the evaluation
-//          points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
+//   u_p:   2 x the standard deviation of the simulated positions (as [Pérez 2017] defines it): 2 x the rms over the
+//          evaluation points of their 3D standard deviation sqrt(trace Cov) from the Monte Carlo;
 //   u_b:   repeatability, s / sqrt(n): from readings repeated at one command (same tool), pooled 3D standard
 //          deviation s over the repeated commands and n their mean count; without repeats, s from the noise model
 //          (the tracker's: rms over the readings of sqrt(trace Cov); the microscope's: sqrt(3) sigma) and n = 1;
@@ -126,8 +126,8 @@ PairSpread PairDistanceSpread(const std::vector<MachineMonteCarloRun>& runs, con
 //          diagonal of the commanded points' span.
 struct BudgetInputs {
   double u_cal_mm = 0.0;
-  double temperature_half_range_k = 0.2;  // 000: +-0.2 C
-  double cte_per_k = 11.5e-6;             // steel; 000 used 24e-6 for an aluminium plate
+  double temperature_half_range_k = 0.2;  // [Pérez 2017]: +-0.2 C
+  double cte_per_k = 11.5e-6;             // steel; [Pérez 2017] used 24e-6 for an aluminium plate
   double k = 2.0;
 };
 struct UncertaintyBudget {

@@ -1,20 +1,20 @@
 #pragma once
 // Multilateration: points measured by several laser-tracker stations, located from the ranges (and, for a
-// bundle adjustment, the angles too), with the stations known or calibrated together with the points (004
-// section 4, 003 section 4).
+// bundle adjustment, the angles too), with the stations known or calibrated together with the points ([Aguado 2016]
+// section 4).
 //
 // Model. Station i sits at s_i in the common frame, its own frame rotated by R_i (only with angles). A reading of
 // point p from station i is q = R_i^T (p - s_i) in spherical coordinates (stage/tracker.h): range |q|, azimuth
 // and elevation. Each residual is divided by its sigma from the tracker's noise model (range a + b * range,
-// angles constant), so the solve minimises the weighted sum of squares of 004 eq. 10-16.
+// angles constant), so the solve minimises the weighted sum of squares of [Aguado 2016] eqs. 10-16.
 //
 // Solver. Gauss-Newton with Levenberg-Marquardt damping on the normal equations, analytic derivatives, points
 // eliminated block by block (each point is a 3x3 block; the station parameters form a small dense system, their
 // Schur complement). With known stations and ranges only there are no station parameters and every point is its
 // own 3-unknown Gauss-Newton solve, as the issue asks.
 //
-// Frame of a self-calibration (004 Figure 4): station 1 at the origin, station 2 on +x, station 3 in the xy plane
-// (+y side); z follows by the right-hand rule. Ranges fix the scale. The starting stations (any frame) are moved
+// Frame of a self-calibration ([Aguado 2016] Figure 4): station 1 at the origin, station 2 on +x, station 3 in the xy
+// plane (+y side); z follows by the right-hand rule. Ranges fix the scale. The starting stations (any frame) are moved
 // into that frame first; results are in it.
 //
 // Rank. Before solving, the station parameters are examined on the Schur complement (the part of each

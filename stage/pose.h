@@ -11,7 +11,7 @@ struct Pose {
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();     // axis-angle vector, rad
 
   // R = Rx(a) * Ry(b) * Rz(c): rotate about x, then the new y, then the new z (intrinsic XYZ Euler angles,
-  // the tracker-pose convention of the thesis, 000:4225).
+  // the tracker-pose convention of [Pérez 2019 Sensors] eq. 22).
   static Pose FromEulerXyzDegrees(const Eigen::Vector3d& translation, const Eigen::Vector3d& euler_deg);
   Eigen::Matrix3d Rotation() const;
 };

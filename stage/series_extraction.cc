@@ -38,8 +38,8 @@ Series Mean(const Series& a, const Series& b, int axis) {
 }
 
 // The zero-reference step: subtract the value at the axis' origin, where the error itself is zero and what
-// remains is the other errors' constant share. 002 takes the series point at or near the origin (0, 5 or 15 mm);
-// we extrapolate the two points nearest it to the origin itself, because an angle referenced 5 mm off leaves a
+// remains is the other errors' constant share. [Lorente 2021] takes the series point at or near the origin (0, 5 or 15
+// mm); we extrapolate the two points nearest it to the origin itself, because an angle referenced 5 mm off leaves a
 // constant that a formula multiplies by the coordinate (x ECX(x): 8.5 urad x 300 mm = 2.5 um).
 ExtractedError ZeroReferenced(std::string name, std::vector<double> s, std::vector<double> v, double origin) {
   ExtractedError e{std::move(name), std::move(s), std::move(v)};

@@ -1,7 +1,7 @@
 #pragma once
-// Geometric verification of an XFYZ machine from a test piece's series (002, second method), with extraction
-// formulas derived from our own first-order model instead of the published ones (which carry sign typos: FACTS
-// section 3).
+// Geometric verification of an XFYZ machine from a test piece's series ([Lorente 2021], second method), with extraction
+// formulas derived from our own first-order model instead of the published ones (which carry sign typos: README,
+// "Geometric verification").
 //
 // The model (stage/axis_chain.h to first order; X moves the part, Y sits on the frame, Z rides on Y, the tool point
 // at t = (0, 0, L) from Z, squareness carried by Y (xWy) and Z (xWz, yWz)): the deviation d = p - (q + t) of the
@@ -11,9 +11,9 @@
 //   d_z = EZY(y) + EZZ(z) - EZX(x) - y EAX(x) + x EBX(x)
 // Along a series only its own axis' coordinate varies, so every term of the other axes is a constant there. The
 // formulas take differences between parallel series to cancel the terms they share, and the zero-reference step
-// (002:1068) subtracts each result's value at the axis' origin (extrapolated from the two series points nearest
-// it), which removes every constant at once. With series X1, X2 (one XY plane, apart in y), X3 (X1's XZ plane, apart in z); Y1, Y2 (one XY
-// plane, apart in x), Y3 (another height); Z1 (and Z2, Z3 in parallel planes):
+// ([Lorente 2021] 6.2.3) subtracts each result's value at the axis' origin (extrapolated from the two series points
+// nearest it), which removes every constant at once. With series X1, X2 (one XY plane, apart in y), X3 (X1's XZ plane,
+// apart in z); Y1, Y2 (one XY plane, apart in x), Y3 (another height); Z1 (and Z2, Z3 in parallel planes):
 //   ECX = (d_x[X1] - d_x[X2]) / (y1 - y2)          EBX = -(d_x[X1] - d_x[X3]) / (z1 - z3)
 //   EAX = (d_y[X1] - d_y[X3]) / (z1 - z3)          EXX = -d_x[X1] - (z1 + L) EBX + y1 ECX
 //   EYX = -d_y[X1] - x ECX + (z1 + L) EAX          EZX = -d_z[X1] - y1 EAX + x EBX

@@ -2,13 +2,13 @@
 // The frame of a stitched measurement: one convention for the simulators, identification, validation, correction
 // and diagnosis.
 //
-// The instrument places the first tile of a stitched measurement at its encoder reading a (000:4826) and every
+// The instrument places the first tile of a stitched measurement at its encoder reading a ([Pérez 2019] 1.2) and every
 // later tile by registration against it. Registration finds translations only, so the mosaic keeps the orientation
 // in which the camera saw the part in that first tile. A part point P therefore shows up at
 //     s = a + T (P - F(a)),   T = C(a)^-1    (rotated: what the instrument does)
 //     s = a +   (P - F(a))                   (translated: the turn left out, the convention before)
-// with F the stage's forward model (eq. 1) and C(a) the camera's orientation in the part frame at a, d F / d(tool
-// offset): for YXFZ C = R_X^-1 R_Y^-1, so T = R_Y R_X evaluated at a. Its yaw is tens of microradians on a stage
+// with F the stage's forward model ([Pérez 2019] eq. 1) and C(a) the camera's orientation in the part frame at a, d F /
+// d(tool offset): for YXFZ C = R_X^-1 R_Y^-1, so T = R_Y R_X evaluated at a. Its yaw is tens of microradians on a stage
 // of the published error size: a micrometre over 20 mm.
 //
 // An identified model knows the part frame only as its reference measurements saw it: the calibration of an

@@ -1,8 +1,8 @@
 #pragma once
-// Verification of a machine tool from a test piece it cut, measured on a CMM (seed 002): the same identification
+// Verification of a machine tool from a test piece it cut, measured on a CMM ([Lorente 2021]): the same identification
 // as the laser-tracker verification (machine_verification.h), because to the kinematics a CMM-measured piece is a
 // tracker whose pose is the piece's datum. What the test piece adds:
-// - the iteration log, max / mean / min volumetric error after each solver iteration (002 Tables 8 and 9);
+// - the iteration log, max / mean / min volumetric error after each solver iteration ([Lorente 2021] Tables 8 and 9);
 // - per error term, whether the points recover it, its largest deviation over its axis and its uncertainty
 //   (the geometric verification's question, answered by the rank of the Jacobian on the chosen points);
 // - the datum: the piece's rigid transform into the CMM frame, estimated with the errors; the rank treatment names
@@ -18,7 +18,7 @@
 namespace fvm::stage {
 
 struct TermRecovery {
-  std::string error;           // ISO 230-1 name (EXX, ..., EC0Y) as 002 writes them
+  std::string error;           // ISO 230-1 name (EXX, ..., EC0Y) as [Lorente 2021] writes them
   std::string vdi;             // VDI 2617-3 name (xTx)
   bool recoverable = false;    // every coefficient but the constant is free (none fixed by the rank treatment)
   bool partly = false;         // some but not all are fixed (typically the linear part: the datum's turn)

@@ -33,7 +33,7 @@ TrackerNoise TrackerNoise::Preset(std::string_view name) {
   t.name = std::string(name);
   if (name == "published") return t;
   if (name == "ifm") {
-    // 004 Table 3, tracker A (interferometer): angular accuracy +-10 um/m across the beam, i.e. 10 urad. The
+    // [Aguado 2016] Table 3, tracker A (interferometer): angular accuracy +-10 um/m across the beam, i.e. 10 urad. The
     // table gives no range figure for it; an interferometer's 0.5 um + 0.4 um/m is assumed (README).
     t.azimuth_sigma_rad = t.elevation_sigma_rad = 10e-6;
     t.range_sigma_mm = 0.0005;
@@ -41,7 +41,8 @@ TrackerNoise TrackerNoise::Preset(std::string_view name) {
     return t;
   }
   if (name == "adm") {
-    // 004 Table 3, tracker C (absolute distance meter): 20 um + 5 um/m across the beam, 16 um + 0.8 um/m along it.
+    // [Aguado 2016] Table 3, tracker C (absolute distance meter): 20 um + 5 um/m across the beam, 16 um + 0.8 um/m
+    // along it.
     t.azimuth_sigma_rad = t.elevation_sigma_rad = 5e-6;
     t.range_sigma_mm = 0.016;
     t.range_sigma_per_mm = 0.8e-6;

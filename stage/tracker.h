@@ -1,9 +1,9 @@
 #pragma once
 // A laser tracker as a measuring instrument: its spherical coordinates and the noise of its readings.
 //
-// A tracker reads a range and two angles (001:400); its Cartesian coordinates are x = r cos(el) cos(az),
-// y = r cos(el) sin(az), z = r sin(el) in its own frame. The published noise model (001:499, eq. 22-24; FACTS
-// section 2) is normal and independent per spherical coordinate: range sigma a + b*L, azimuth and elevation
+// A tracker reads a range and two angles ([IJSIMM 2016] 4.4); its Cartesian coordinates are x = r cos(el) cos(az),
+// y = r cos(el) sin(az), z = r sin(el) in its own frame. The published noise model ([IJSIMM 2016] eqs. 22-24,
+// section 5) is normal and independent per spherical coordinate: range sigma a + b*L, azimuth and elevation
 // sigma constant. Seen in Cartesian coordinates that is a 3x3 covariance per point, elongated across the beam
 // (24 urad at 3 m is 72 um across, against 6 um along it), which is why identification weights each reading
 // with it instead of treating the three coordinates alike.
@@ -33,8 +33,8 @@ struct TrackerNoise {
   double azimuth_sigma_rad = 24e-6;
   double elevation_sigma_rad = 24e-6;
 
-  // "published" (001:499, 000:3456): 24 urad, 4 um + 0.8 um/m; "ifm" and "adm": the interferometer and absolute
-  // distance meter of 004 Table 3 as README documents them; "none": a perfect tracker. Throws
+  // "published" ([IJSIMM 2016] section 5, [Aguado 2017]): 24 urad, 4 um + 0.8 um/m; "ifm" and "adm": the interferometer
+  // and absolute distance meter of [Aguado 2016] Table 3 as README documents them; "none": a perfect tracker. Throws
   // std::invalid_argument listing the presets.
   static TrackerNoise Preset(std::string_view name);
   static std::vector<std::string> PresetNames();
@@ -44,7 +44,7 @@ struct TrackerNoise {
   Eigen::Matrix3d Covariance(const Eigen::Vector3d& point) const;
   bool IsNoiseFree() const;
   // The reading of `point` (tracker frame, mm) with standard normal draws n_* scaled by the sigmas and added to its
-  // range, azimuth and elevation (eq. 22-24); `point` itself, bit for bit, when the tracker is noise-free.
+  // range, azimuth and elevation ([IJSIMM 2016] eqs. 22-24); `point` itself, bit for bit, for a noise-free tracker.
   Eigen::Vector3d Perturb(const Eigen::Vector3d& point, double n_range, double n_azimuth, double n_elevation) const;
 };
 

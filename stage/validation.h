@@ -2,9 +2,9 @@
 // How well a calibration predicts measurements it was not fitted to.
 //
 // Every validation measurement is referenced to its own first tile (the instrument anchors each stitched
-// measurement there, 000:4826) whatever anchoring identification used: a constant offset common to a measurement
-// is not a stage error the calibration can be blamed for. Its turn is (stitched_frame.h) where the model can tell
-// it; and the figures no frame changes (rigid fit per measurement, distances) judge the calibration beside it.
+// measurement there, [Pérez 2019] 1.2) whatever anchoring identification used: a constant offset common to a
+// measurement is not a stage error the calibration can be blamed for. Its turn is (stitched_frame.h) where the model
+// can tell it; and the figures no frame changes (rigid fit per measurement, distances) judge the calibration beside it.
 
 #include <Eigen/Core>
 #include <vector>
@@ -64,14 +64,14 @@ struct FrameFreeStats {
   int count = 0;  // residual vectors (rigid) or distances
   double rms_mm = 0, max_mm = 0, predicted_rms_mm = 0;
 };
-// Residuals after the best rigid transform (rotation and translation, Umeyama) of each measurement's compensated
+// Residuals after the best rigid transform (rotation and translation, [Umeyama 1991]) of each measurement's compensated
 // points onto its stitched ones. The prediction projects the model's covariance onto what no rigid motion takes.
 FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector<Observation>& observations);
 // Errors of the distances between every two points of a measurement (compensated - stitched).
 FrameFreeStats PairDistanceValidation(const Calibration* calibration, const std::vector<Observation>& observations);
 
 // Errors of the distances from the first observation of each group to every other one (compensated free
-// distance - stitched distance), mm: anchor-free, the paper's figure of merit (Figs. 6 and 8).
+// distance - stitched distance), mm: anchor-free, [Pérez 2019]'s figure of merit (Figs. 6 and 8).
 std::vector<double> DistanceErrors(const Calibration* calibration, const std::vector<Observation>& observations);
 
 }  // namespace fvm::stage

@@ -1,5 +1,5 @@
 #pragma once
-// Nominal geometry of the calotte artefacts of the published work (000:4727, 000:5035), in the artefact's own
+// Nominal geometry of the calotte artefacts of [Pérez 2019] (section 1.2; the bar: section 2.2), in the artefact's own
 // frame (mm): x along the rows, y across, z = 0 on the top face; calottes numbered as the artefact is.
 
 #include <Eigen/Core>

@@ -157,8 +157,8 @@ TestPieceDescription PublishedTestPiece() {
     e.points = {{{295, y + 5, kTop}, ""}};
     f.push_back(e);
   }
-  // Four main slots 20 mm wide, 20 deep in the block's top; the two along Y carry Y1 and Y2 (002: Y1, Y2 in one
-  // XY plane below Y3, apart in X).
+  // Four main slots 20 mm wide, 20 deep in the block's top; the two along Y carry Y1 and Y2 ([Lorente 2021]: Y1, Y2 in
+  // one XY plane below Y3, apart in X).
   PieceFeature sx1 = Box("SX1", FeatureKind::kSlot, {15, 15, 80}, {285, 35, kBlock});
   sx1.points = Line({20, 25, 80}, {10, 0, 0}, 26, "");
   PieceFeature sx2 = Box("SX2", FeatureKind::kSlot, {15, 235, 80}, {285, 255, kBlock});
@@ -169,7 +169,7 @@ TestPieceDescription PublishedTestPiece() {
   sy2.points = Line({275, 25, 80}, {0, 20, 0}, 12, "Y2");
   f.insert(f.end(), {sx1, sx2, sy1, sy2});
   // Three side slots on each of the faces y = 0 and x = 0, 6 mm high and 5 deep; the lowest on y = 0 carries X3
-  // (002: X3 in X1's XZ plane, apart in Z).
+  // ([Lorente 2021]: X3 in X1's XZ plane, apart in Z).
   for (int i = 0; i < 3; ++i) {
     const double zy = 25.0 + 30.0 * i, zx = 35.0 + 30.0 * i;
     PieceFeature a = Box(fmt::format("LY{}", i + 1), FeatureKind::kSideSlot, {0, 0, zy - 3}, {300, 5, zy + 3});

@@ -1,6 +1,6 @@
 #pragma once
-// The machined test piece of seed 002 (a block with slots, a stepped pyramid, crenellations and conical holes, cut
-// by the machine under test and measured on a CMM), as a parametric description: features that are axis-aligned
+// The machined test piece of [Lorente 2021] (a block with slots, a stepped pyramid, crenellations and conical holes,
+// cut by the machine under test and measured on a CMM), as a parametric description: features that are axis-aligned
 // boxes, each with the probe points a CMM measures on it.
 //
 // Coordinates are machine coordinates (mm): the tool command at which the feature's point was cut, so a piece cut
@@ -50,10 +50,10 @@ struct TestPieceDescription {
   std::vector<std::string> Problems() const;
 };
 
-// Our reconstruction of the final design of 002 (5.2): a 300 x 270 x 180 mm block, crenellations on its four
-// edges up to z 180, four main slots 20 mm wide, a four-level pyramid, three side slots on each of two lateral
+// Our reconstruction of the final design of [Lorente 2021] (section 5.2): a 300 x 270 x 180 mm block, crenellations on
+// its four edges up to z 180, four main slots 20 mm wide, a four-level pyramid, three side slots on each of two lateral
 // faces, and conical holes in two side faces for the Z series. 480 probe points, 167 of them on the pyramid; the
-// series X1..Z3 as 002:960 arranges them (see README, "The machined test piece").
+// series X1..Z3 as [Lorente 2021] section 6.2.1 arranges them (see README, "The machined test piece").
 TestPieceDescription PublishedTestPiece();
 
 // Parses the JSON above. Throws InputError naming `name` and the feature on a malformed description, and listing
@@ -82,7 +82,7 @@ void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& 
 // one line per point in measuring order.
 std::string CmmProgram(const std::vector<PiecePoint>& points);
 
-// The ISO 6983 tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
+// The [ISO 6983-1] tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
 // with a safe height above the envelope. A plain program for a simulator or a controller's dry run, not a CAM
 // output with stock allowances.
 std::string CuttingProgram(const TestPieceDescription& piece, double tool_diameter_mm = 10.0);

@@ -1,6 +1,6 @@
 #pragma once
 // A batch directory: pairs <placement>.stitched.csv / <placement>.free.csv of the same calottes, and an optional
-// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (ARCHITECTURE.md section 3).
+// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (README, "The main job").
 
 #include <Eigen/Core>
 #include <filesystem>

@@ -12,7 +12,7 @@
 //     }
 //   }
 //
-// Each term, by VDI 2617-3 name (xTx, yRz, xWy) or ISO 230-1 alias (EXX, EC0Y), is
+// Each term, by [VDI 2617-3] name (xTx, yRz, xWy) or [ISO 230-1] alias (EXX, EC0Y), is
 //   value(u) = poly[0] + poly[1] u + poly[2] u^2 + poly[3] u^3 + amplitude sin(2 pi u / pitch_mm + phase_rad)
 // with u = q - min (mm) of the term's own axis: poly[i] in mm/mm^i for translation terms, rad/mm^i for rotations;
 // amplitude in mm or rad. Up to 4 coefficients (a cubic); "sine" is optional. A squareness term is one angle:

@@ -28,7 +28,7 @@ struct CalotteSurfaceOptions {
   double slope_x = 0.0;
   double slope_y = 0.0;
   // Depth of each dimple below the face along the face's normal; 0 means a hemisphere (depth = radius, the
-  // sphere's centre in the face), as the calotte grid of the published work (000:4727).
+  // sphere's centre in the face), as the calotte grid of [Pérez 2019] (section 1.2).
   double depth_mm = 0.0;
   // The optics see no steeper flank: those points come out invalid (NaN), as real exports have a ring of
   // missing points inside the rim of a deep calotte.

@@ -32,9 +32,9 @@ FvmBatchTruth DrawTruth(const FvmBatchOptions& options, std::mt19937_64& rng) {
       options.truth_terms.empty() ? stage::FvmModelLayout(options.truth_model) : stage::ComposeLayout(options.truth_terms);
   const Eigen::VectorXd tau = stage::PlausibleSizes(layout);
   // Stage errors grow with travel from the home position: offsets stay small (10 um), the terms that vary
-  // along the axes carry the error (000:7640: up to 180-200 um over 200 mm). The guideways turn the carriages by
-  // tens of microradians, a tenth of the plausible size the translations and squareness are drawn at: that turn is
-  // what each stitched frame keeps from its first tile (stitched_frame.h).
+  // along the axes carry the error ([Pérez thesis] section 5.7.2: up to 180-200 um over 200 mm). The guideways turn the
+  // carriages by tens of microradians, a tenth of the plausible size the translations and squareness are drawn at: that
+  // turn is what each stitched frame keeps from its first tile (stitched_frame.h).
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<double> values(static_cast<size_t>(layout.NumFree()));
   for (int i = 0; i < layout.NumFree(); ++i) {

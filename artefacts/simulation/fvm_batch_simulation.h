@@ -1,6 +1,6 @@
 #pragma once
 // Synthetic calibration batches for the focus-variation microscope stage, with a recorded truth: the published
-// procedure (000:5031-5110) played on a known stage error model.
+// procedure ([Pérez 2019] sections 2.2-3) played on a known stage error model.
 //
 // The 17-calotte bar is placed on a 200 x 200 mm stage along X, along Y and obliquely with its first calotte at
 // one physical spot (identification), and at random positions and angles over the whole stage (validation).
@@ -51,7 +51,7 @@ struct FvmBatchOptions {
   std::string hidden_effect;
   double effect_size = 0.0;
   // thermal_drift: 0 drifts linearly in t; > 0 is a warm-up B (1 - exp(-t/tau)) with this time constant (min) and
-  // the same initial rate (FACTS 000:5810).
+  // the same initial rate ([Pérez thesis] eqs. 5.1-5.2).
   double drift_tau_min = 0.0;
   bool Hides(std::string_view effect) const;  // `effect` is one of hidden_effect's names
   void Check() const;                  // throws std::invalid_argument

@@ -1,8 +1,8 @@
 #pragma once
-// Volumetric verification of a three-axis machine tool with a laser tracker, simulated (001:330-600): the
-// point plan (mesh, cloud of eq. 18, body diagonals), the CNC program that visits it, a machine whose geometric
-// errors are known but are NOT the polynomials an identification fits, and the tracker readings of that machine
-// with the published noise (eq. 22-24).
+// Volumetric verification of a three-axis machine tool with a laser tracker, simulated ([IJSIMM 2016] sections 4-5):
+// the point plan (mesh, cloud of [IJSIMM 2016] eq. 18, body diagonals), the CNC program that visits it, a machine whose
+// geometric errors are known but are NOT the polynomials an identification fits, and the tracker readings of that
+// machine with the published noise ([IJSIMM 2016] eqs. 22-24).
 //
 // Randomness: every draw comes from std::mt19937_64 seeded with the caller's seed, turned into uniform doubles
 // (53 bits) and normal ones (Box-Muller) by this file's own code, not by std::*_distribution, whose algorithms the
@@ -41,7 +41,7 @@ struct PlannedPoint {
 // the travel is no multiple of it). Order: X fastest, then Y, then Z, serpentine (boustrophedon): each row of X
 // runs opposite to the previous one, each layer of Y rows too, so the machine never jumps back. Approach: the
 // sign of the last X motion before the point (the first point counts as +x, approached from below). 2500 x
-// 1500 x 1200 with steps 500, 500, 400 gives 6 * 4 * 4 = 96 points (001 Table I); steps of 100 give 5408.
+// 1500 x 1200 with steps 500, 500, 400 gives 6 * 4 * 4 = 96 points ([IJSIMM 2016] section 5); steps of 100 give 5408.
 std::vector<PlannedPoint> PlanMesh(const Workspace& ws, const Eigen::Vector3d& step);
 // The mesh, each coordinate strictly inside the travel moved by a uniform random amount in [-step/2, +step/2]
 // of its axis (eq. 18: x_cloud = x_mesh +- rand(interval(x)) if x_min < x < x_max), rounded to 1 um; coordinates
@@ -52,7 +52,7 @@ std::vector<PlannedPoint> PlanCloud(const Workspace& ws, const Eigen::Vector3d& 
 // (max,max,min)->(min,min,max). The centre appears on each diagonal when points_per_diagonal is odd.
 std::vector<PlannedPoint> PlanDiagonals(const Workspace& ws, int points_per_diagonal);
 
-// An ISO 6983 program (plain G-code, no controller-specific cycles) that visits the points:
+// An [ISO 6983-1] program (plain G-code, no controller-specific cycles) that visits the points:
 //   %
 //   (FVM VOLUMETRIC VERIFICATION: 96 POINTS, DWELL 6 S, FEED 2000 MM/MIN)
 //   G90 G21 G17 G94          absolute, mm, XY plane, feed per minute
@@ -99,10 +99,10 @@ void TermValuesAt(const MachineTruth& truth, const Eigen::Vector3d& q, double e[
 // Neither a cubic can represent: the screw period is far below the travel, the long wave has at least 1.25
 // periods. Sizes per kind (positioning 20 um/m, straightness 10 um/m, rotation 20 urad, squareness 20 urad) are
 // scaled together so that the mean volumetric error (|tool point displaced by the errors|) over an 11 x 11 x 11
-// mesh of the workspace is `mean_error_um` (001 Table I: 35.3 um).
+// mesh of the workspace is `mean_error_um` ([IJSIMM 2016] Table I: 35.3 um).
 MachineTruth RandomMachineTruth(const stage::AxisChain& chain, const Workspace& ws, std::uint64_t seed,
                                 double mean_error_um = 35.0);
-// The same for the published machine of 001: chain XFYZ, tool offset (0, 0, 100) mm.
+// The same for the published machine of [IJSIMM 2016]: chain XFYZ, tool offset (0, 0, 100) mm.
 MachineTruth RandomMachineTruth(const Workspace& ws, std::uint64_t seed, double mean_error_um = 35.0);
 
 // Volumetric error (mm) of the tool point commanded to q: |ChainForward(e(q), q) - ChainForward(0, q)| in the
@@ -118,7 +118,7 @@ ErrorSummary VolumetricErrorSummary(const stage::AxisChain& chain, const Machine
 // What a tracker can see. Defaults: elevation -60..+77 deg (a typical tracker head's vertical travel) and range
 // up to 40 m. The elevation is taken against the horizontal (the machine's xy plane, z up) at the tracker's
 // position, not in the frame its readings are expressed in: a tracker head stands levelled, while the frame of a
-// pose such as 001 Table I (rotations of up to 65 deg) is a coordinate frame, not a tilt of the head. In the
+// pose such as [IJSIMM 2016] Table I (rotations of up to 65 deg) is a coordinate frame, not a tilt of the head. In the
 // tracker's own frame position 4 would put 24 of the 96 mesh points below -60 deg.
 struct TrackerLimits {
   double min_elevation_deg = -60.0;

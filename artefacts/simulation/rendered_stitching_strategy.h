@@ -27,8 +27,8 @@ struct RenderedStrategyOptions {
   int tile_px = 512;  // pixels across the field of view (square tiles)
   TileCameraOptions camera;
   imaging::RegistrationOptions registration;
-  double calotte_radius_mm = 0.25;  // the 6 x 6 grid's (000:4727)
-  double height_noise_mm = 1e-4;    // the 10x lens' vertical resolution (FACTS.md lens table)
+  double calotte_radius_mm = 0.25;  // the 6 x 6 grid's ([Pérez 2019] 1.2)
+  double height_noise_mm = 1e-4;    // the 10x lens' vertical resolution ([Pérez thesis] Table 5.2)
   std::uint64_t seed = 1;
   void Check() const;  // throws std::invalid_argument
 };

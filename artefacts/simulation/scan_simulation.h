@@ -2,8 +2,8 @@
 // Stitched calibration scans of a textured part on a stage with known errors (issue 21): every pixel of every tile
 // shows the part where the stage really puts it, not a shifted copy of a nominal tile. A tile at encoder reading e
 // sees, at its pixel offset d from the optical axis (camera frame, mm), the part point F(e) + C(e) d: the stage's
-// forward model (eq. 1) and the camera's orientation in the part frame (stage/stitched_frame.h), so the tiles turn
-// with the stage's guideways as a real scan's do. The texture is a TileScene drawn once for the whole part.
+// forward model ([Pérez 2019] eq. 1) and the camera's orientation in the part frame (stage/stitched_frame.h), so the
+// tiles turn with the stage's guideways as a real scan's do. The texture is a TileScene drawn once for the whole part.
 
 #include <Eigen/Core>
 #include <cstdint>

@@ -1,5 +1,5 @@
 #pragma once
-// What stitching strategies do to a measured distance (FACTS.md section 1, 000:4777-4838, Tables 1 and 2).
+// What stitching strategies do to a measured distance ([Pérez 2019] section 1.2, Tables 1 and 2).
 //
 // A row of tiles runs from the tile that holds the first calotte to the one that holds the last. The first tile
 // is placed by the encoders; each following tile is registered to its neighbour, so it inherits its neighbour's
@@ -20,8 +20,8 @@
 namespace fvm::artefacts {
 
 struct StrategyOptions {
-  double fov_mm = 1.62;   // 10x lens (000:5785)
-  double overlap = 0.2;   // of neighbouring tiles (000:7190)
+  double fov_mm = 1.62;   // 10x lens ([Pérez thesis] Table 5.2)
+  double overlap = 0.2;   // of neighbouring tiles ([Pérez thesis] 5.7.2)
   void Check() const;     // throws std::invalid_argument
 };
 

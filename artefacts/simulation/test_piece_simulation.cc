@@ -9,7 +9,7 @@ namespace fvm::artefacts {
 MachineTruth PublishedTestFunctions(const Workspace& ws) {
   MachineTruth truth;
   truth.workspace = ws;
-  // {ISO name, linear, quadratic} as 002 Table 4 prints them (mm or rad per mm^i).
+  // {ISO name, linear, quadratic} as [Lorente 2021] Table 4 prints them (mm or rad per mm^i).
   struct Published {
     const char* iso;
     double c1, c2;

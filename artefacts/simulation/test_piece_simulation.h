@@ -1,5 +1,5 @@
 #pragma once
-// A test piece cut by a machine with known geometric errors and measured on a CMM (002:6-7), with the truth
+// A test piece cut by a machine with known geometric errors and measured on a CMM ([Lorente 2021]), with the truth
 // recorded: what `fvm simulate testpiece` writes and the test piece's tests judge `fvm testpiece verify` against.
 //
 // The tool commanded to q cuts the feature point at the part coordinates F(e(q), q) of the machine's kinematic
@@ -19,7 +19,7 @@
 
 namespace fvm::artefacts {
 
-// The test functions of 002 Table 4 (002:780) on the machine's travel from ws.min: per term
+// The test functions of [Lorente 2021] Table 4 on the machine's travel from ws.min: per term
 //   EXX 4.5e-8 x^2 - 1.5e-4 x, EYX -3.35e-8 x^2, ... (mm, rad; x in mm from the axis' origin),
 // the squareness terms as the constant angles of their published effects (ECO 4e-4 x: xWy = 4e-4 rad;
 // EBO -5e-4 x: xWz; EAO -9.5e-4 y: yWz).

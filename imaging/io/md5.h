@@ -1,5 +1,5 @@
 #pragma once
-// MD5 digests as X3P containers carry them (ISO 25178-72): for detecting corruption, not for security.
+// MD5 digests as X3P containers carry them [ISO 25178-72]: for detecting corruption, not for security.
 
 #include <string>
 #include <string_view>

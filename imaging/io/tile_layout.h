@@ -1,7 +1,7 @@
 #pragma once
-// Tile layout files (ARCHITECTURE.md section 3): CSV `file,row,col[,x,y[,z]]`, '#' comment lines allowed; file names
-// relative to the layout's directory; row 0 is the highest Y and column 0 the lowest X (tile_plan.h); x, y the
-// nominal stage position of the tile's centre in mm, optional. `fvm tiles plan` writes it, `fvm stitch` reads it.
+// Tile layout files (README, "Worked example: stitching"): CSV `file,row,col[,x,y[,z]]`, '#' comment lines allowed;
+// file names relative to the layout's directory; row 0 is the highest Y and column 0 the lowest X (tile_plan.h); x, y
+// the nominal stage position of the tile's centre in mm, optional. `fvm tiles plan` writes it, `fvm stitch` reads it.
 
 #include <Eigen/Core>
 #include <cstdint>

@@ -347,7 +347,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   map.source = Describe(root);
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    // ISO 5436-2 scales every type the same way; floats usually carry increment 1 and offset 0.
+    // [ISO 5436-2] scales every type the same way; floats usually carry increment 1 and offset 0.
     const double z_m = cz.offset + cz.increment * raw[i];
     const bool ok = (valid.empty() || valid[i]) && std::isfinite(z_m);
     map.z_mm[i] = ok ? z_m * kMmPerMetre : std::numeric_limits<double>::quiet_NaN();

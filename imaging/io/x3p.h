@@ -1,5 +1,5 @@
 #pragma once
-// X3P (ISO 25178-72, the OpenGPS container): a zip archive with main.xml (axes, matrix dimensions, the point
+// X3P ([ISO 25178-72], the OpenGPS container): a zip archive with main.xml (axes, matrix dimensions, the point
 // data inline or as a link to bindata/data.bin with its MD5), optional bindata/valid.bin (one validity bit per
 // point) and md5checksum.hex (the MD5 of main.xml). X3P is in metres; the height map is in mm.
 //

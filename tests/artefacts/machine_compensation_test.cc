@@ -20,7 +20,7 @@
 namespace fvm::artefacts {
 namespace {
 
-const Workspace kWorkspace;  // 2500 x 1500 x 1200 mm, 001 Table I
+const Workspace kWorkspace;  // 2500 x 1500 x 1200 mm, [IJSIMM 2016] section 5
 const Eigen::Vector3d kTool(0, 0, 100);
 
 stage::AxisChain Chain() {

@@ -20,9 +20,9 @@ namespace {
 using fvm::testing::InputErrorOf;
 using ::testing::HasSubstr;
 
-const Workspace kPublished{Eigen::Vector3d::Zero(), Eigen::Vector3d(2500, 1500, 1200)};  // 001 section 5
+const Workspace kPublished{Eigen::Vector3d::Zero(), Eigen::Vector3d(2500, 1500, 1200)};  // [IJSIMM 2016] section 5
 
-// 001 Table I, position 4 (the optimised one): 1100, -1000, 600 mm; 63, 14, 35 deg.
+// [IJSIMM 2016] Table I, position 4 (the optimised one): 1100, -1000, 600 mm; 63, 14, 35 deg.
 stage::AxisChain PublishedChain() {
   stage::AxisChain chain = stage::AxisChain::Parse("XFYZ");
   chain.tool_offset = Eigen::Vector3d(0, 0, 100);
@@ -246,7 +246,7 @@ TEST(TrackerSimulation, NoiseFreeReadingsAreTheChainInTheTrackerFrame) {
     const double displaced = (noisy.points[i].measured - nominal_in_tracker).norm();
     EXPECT_NEAR(displaced, VolumetricErrorMm(chain, truth, mesh[i].nominal), 1e-9);
   }
-  // All 96 points are visible from Table I position 4.
+  // All 96 points are visible from [IJSIMM 2016] Table I position 4.
   EXPECT_TRUE(PointsBeyondTrackerLimits(noisy, *chain.instrument).empty());
 }
 

@@ -13,7 +13,7 @@
 namespace fvm::artefacts {
 namespace {
 
-// The published row: calottes 1 and 6 of the grid, 20 mm apart along x (Table 1, case a).
+// The published row: calottes 1 and 6 of the grid, 20 mm apart along x ([Pérez 2019] Table 1, case a).
 const Eigen::Vector3d kFirst(-154.5487, -115.4767, -50.3624);
 const Eigen::Vector3d kLast(-134.5409, -115.4371, -50.4457);
 

@@ -21,7 +21,7 @@
 namespace fvm::artefacts {
 namespace {
 
-constexpr double kFov5xMm = 2.82;  // FACTS: the 5x lens' field of view
+constexpr double kFov5xMm = 2.82;  // [Pérez thesis] Table 5.2: the 5x lens' field of view
 
 StageTruth PublishedSizeStage(unsigned seed) {
   FvmBatchOptions batch;

@@ -1,5 +1,5 @@
-// The test piece's geometry: the published piece as 002 counts it, and descriptions that cannot be made refused
-// with the features named.
+// The test piece's geometry: the published piece as [Lorente 2021] counts it, and descriptions that cannot be made
+// refused with the features named.
 
 #include <gtest/gtest.h>
 
@@ -16,14 +16,14 @@ TEST(TestPiece, PublishedPieceHasThePublishedPointCountsAndSeries) {
   const TestPieceDescription piece = PublishedTestPiece();
   EXPECT_TRUE(piece.Problems().empty()) << piece.Problems().front();
   const std::vector<PiecePoint> points = NominalPoints(piece);
-  EXPECT_EQ(points.size(), 480u);  // 002 7.2.1
+  EXPECT_EQ(points.size(), 480u);  // [Lorente 2021] 7.2.1
   std::map<std::string, int> series;
   int pyramid = 0;
   for (const PiecePoint& p : points) {
     ++series[p.series];
     pyramid += p.kind == FeatureKind::kPyramid ? 1 : 0;
   }
-  EXPECT_EQ(pyramid, 167);  // 002 7.2.2
+  EXPECT_EQ(pyramid, 167);  // [Lorente 2021] 7.2.2
   for (const char* s : {"X1", "X2", "X3", "Y1", "Y2", "Y3", "Z1", "Z2", "Z3"}) EXPECT_GE(series[s], 6) << s;
   // The description round-trips through its JSON.
   const TestPieceDescription again = ParseTestPiece(TestPieceJson(piece), "piece.json");

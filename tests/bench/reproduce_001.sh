@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Reproduces the published verification study of seed 001 (section 5, Tables I-IV) in simulation: XFYZ machine
-# 2500 x 1500 x 1200 mm, tool 0,0,100 mm, a mesh of 500/500/400 mm (96 points), a cloud of 96 (eq. 18) and a mesh of
-# 100 mm (5408 points), the four tracker positions of Table I, without and with the published tracker noise.
+# Reproduces the published verification study of [IJSIMM 2016] (section 5, Tables I-IV) in simulation: XFYZ machine
+# 2500 x 1500 x 1200 mm, tool 0,0,100 mm, a mesh of 500/500/400 mm (96 points), a cloud of 96 ([IJSIMM 2016] eq. 18) and
+# a mesh of 100 mm (5408 points), the four tracker positions of Table I, without and with the published tracker noise.
 # Per case: `fvm simulate tracker` (one seed: the same machine in every case) and `fvm verify --json --order 3`
 # (Legendre, pose estimated jointly), plus `--order auto` (BIC) where it picks another order; then one Markdown
 # table with the initial and final volumetric error (max / mean / min, um) next to the published figures, and the
@@ -19,7 +19,7 @@ trap 'rm -rf "$WORK"' EXIT
 MACHINE=2500x1500x1200
 POSES=("3500,-1500,500,15,37,26" "4500,-800,500,32,17,12" "1250,2000,600,5,65,32" "1100,-1000,600,63,14,35")
 
-# Published figures (001 Tables I-IV): initial max/mean/min -> final max/mean/min (um).
+# Published figures ([IJSIMM 2016] Tables I-IV): initial max/mean/min -> final max/mean/min (um).
 published() {  # points tracker pose
   case "$1/$2/$3" in
     mesh:500,500,400/none/*) echo "63.7/35.3/0.0 -> 16.3/7.7/0.0 (I)" ;;
@@ -42,7 +42,7 @@ published() {  # points tracker pose
 
 triple() { jq -r "\"\(.${1}.max_um*10|round/10) / \(.${1}.mean_um*10|round/10) / \(.${1}.min_um*10|round/10)\"" "$2"; }
 
-echo "| points | tracker | pose | initial max / mean / min (um) | final max / mean / min (um) | held-out mean (um) | --order auto | 001 published |"
+echo "| points | tracker | pose | initial max / mean / min (um) | final max / mean / min (um) | held-out mean (um) | --order auto | [IJSIMM 2016] |"
 echo "|---|---|---|---|---|---|---|---|"
 for points in mesh:500,500,400 cloud:500,500,400 mesh:100,100,100; do
   for tracker in none published; do

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Reproduces the published Monte Carlo studies of seed 000 (FACTS section 2) in simulation with `fvm uncertainty`:
-#   plane:  400 x 400 mm, 1000 runs: initial 77.39 +- 40.91 um -> residual 12.34 +- 7.06 um (000:3470);
+# Reproduces the published Monte Carlo studies in simulation with `fvm uncertainty` (keys: README, References):
+#   plane:  400 x 400 mm, 1000 runs: initial 77.39 +- 40.91 um -> residual 12.34 +- 7.06 um ([Aguado 2017]);
 #   mesh:   75 points, 5 x 5 x 3 at 100 mm, 1000 runs: residual N(13.77, 5.02) um, 95 % bound 23.81 um, worst ~50 um
-#           (000:4560);
-#   placement: tracker positions ranked by the Monte Carlo maximum error; a good placement cuts it by ~30 % (000:4560).
+#           ([Pérez 2019 Sensors] section 3);
+#   placement: tracker positions ranked by the Monte Carlo maximum error; a good placement cuts it by ~30 %
+#           ([Pérez 2019 Sensors] section 4).
 # One simulated XFYZ machine (seed 1, 400 x 400 x 200 mm, tool 0,0,100 mm, scaled with --mean-error-um so that the
 # plane's initial mean error is near the published 77 um), the tracker 1.3 m from the mesh centre with the published
 # noise. The plane is the mesh's z = 0 layer (25 points); on a plane the tracker pose cannot be estimated (a rotation

@@ -4,12 +4,12 @@ and the tracker pose) fitted with scipy.optimize.least_squares(method="lm") and 
 Jacobian, so that the whole `fvm verify` process can be timed against a plain Python fit of the same model on the
 same readings. Not a second implementation to trust: no rank analysis, no uncertainties, no validation.
 
-Model (FACTS section 2, 004:76; the convention of stage/axis_chain.h, small angles R = I + [e]x):
+Model ([Aguado 2016] eq. 1, last term X; the convention of stage/axis_chain.h, small angles R = I + [e]x):
     X_LT = R_LT^T ( R_X^-1 ( R_Y ( R_Z T + Z ) + Y - X ) - T_LT )
     X = (-x + xTx, xTy, xTz);  Y = (yTx - y xWy, y + yTy, yTz);  Z = (zTx - z xWz, zTy - z yWz, z + zTz)
 each term a Legendre series of order 3 in u = (q - mid-travel) / half-travel of its own axis, the squareness terms
 constants; R_k = I + [(kRx, kRy, kRz)]x; the tracker pose (T_LT, rotation vector of R_LT) is estimated jointly,
-starting from the rigid best fit (Umeyama) of the readings to the ideal machine. Residuals are whitened by each
+starting from the rigid best fit [Umeyama 1991] of the readings to the ideal machine. Residuals are whitened by each
 reading's covariance under the published tracker noise (range 4 um + 0.8 um/m, angles 24 urad), as fvm verify
 weights them.
 

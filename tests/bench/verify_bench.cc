@@ -1,10 +1,10 @@
 // Machine-tool verification of issue 10: the 21 error functions (Legendre, order 3) and the tracker pose
-// identified from 5408 simulated tracker readings (001 Table IV: XFYZ, 2500 x 1500 x 1200 mm, mesh of 100 mm, tool
-// 0,0,100 mm, tracker at 001 Table I position 4 with the published noise), by ours (stage::VerifyMachine: rank
-// treatment, then Ceres' Levenberg-Marquardt with analytic-through-autodiff Jacobians) against a plain
-// Levenberg-Marquardt with central-difference Jacobians of the same forward model (stage::ChainForward + pose), the
-// same weights (each reading whitened by its tracker covariance) and the same free coefficients, in the same run.
-// Both run on one thread: the comparison is of the algorithms, not of the cores a shared machine lends.
+// identified from 5408 simulated tracker readings ([IJSIMM 2016] Table IV: XFYZ, 2500 x 1500 x 1200 mm, mesh of 100 mm,
+// tool 0,0,100 mm, tracker at [IJSIMM 2016] Table I position 4 with the published noise), by ours
+// (stage::VerifyMachine: rank treatment, then Ceres' Levenberg-Marquardt with analytic-through-autodiff Jacobians)
+// against a plain Levenberg-Marquardt with central-difference Jacobians of the same forward model (stage::ChainForward
+// + pose), the same weights (each reading whitened by its tracker covariance) and the same free coefficients, in the
+// same run. Both run on one thread: the comparison is of the algorithms, not of the cores a shared machine lends.
 //
 // The baseline is given the well-posed problem for free (the layout our rank treatment produced) and starts where
 // a user would: zero errors and the rigid best-fit pose. The check: both reach the same cost (1/2 chi^2) within

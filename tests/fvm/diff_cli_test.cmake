@@ -1,4 +1,4 @@
-# fvm diff as a user runs it, on the published stitching-strategy exports (samples/stitching-strategies).
+# fvm diff as a user runs it, on the stitching-strategy exports of [Pérez 2019] (samples/stitching-strategies).
 # Variables: FVM (the executable), SAMPLES (the samples directory), WORK (a scratch directory).
 
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
@@ -36,7 +36,7 @@ expect_near("x a->b ref_mm vs Table 1" ${REF_MM} 20.0079 0.00015 7)
 expect_near("x a->b diff_um vs Table 1" ${DIFF_UM} -14.6 0.25 4)
 
 # The 3-D distance misses Table 2's reference distance by 0.43 um, beyond rounding; the XY-plane distance
-# matches every published distance, so the paper measured in the plane: --xy.
+# matches every published distance, so [Pérez 2019] measured in the plane: --xy.
 diff_pair(${Y}/a.csv ${Y}/b.csv)
 expect_near("y a->b 3-D ref_mm" ${REF_MM} 20.0051323 0.000001 7)
 diff_pair(${Y}/a.csv ${Y}/b.csv --xy)

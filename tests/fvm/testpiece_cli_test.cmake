@@ -1,5 +1,5 @@
 # fvm testpiece as a user runs it: the published piece's design (NOMINAL.csv, CMM program, G-code), a piece cut by
-# 002 Table 4's machine and measured with 1 um CMM noise, its verification's JSON contract and report, the
+# [Lorente 2021] Table 4's machine and measured with 1 um CMM noise, its verification's JSON contract and report, the
 # 167-point pyramid with Legendre, and bad input (a piece whose features collide) that exits 1 and writes nothing.
 # Variables: FVM (the executable), WORK (a scratch directory).
 
@@ -11,7 +11,7 @@ file(MAKE_DIRECTORY ${WORK})
 run(0 testpiece design -o ${WORK}/nominal.csv --cmm ${WORK}/cmm --gcode ${WORK}/piece.nc --describe ${WORK}/piece.json --json)
 string(JSON points GET "${OUT}" points)
 if(NOT points EQUAL 480)
-  message(FATAL_ERROR "the published piece has ${points} points, 002 measures 480")
+  message(FATAL_ERROR "the published piece has ${points} points, [Lorente 2021] measures 480")
 endif()
 expect_files("fvm testpiece design" ${WORK} nominal.csv piece.nc piece.json cmm/program.txt)
 file(STRINGS ${WORK}/nominal.csv header LIMIT_COUNT 1)
@@ -27,6 +27,12 @@ if(NOT a STREQUAL b)
 endif()
 
 run(0 simulate testpiece -o ${WORK}/tp --validation 30,30,30)
+# truth.json names the default errors by their source's key (README, "References").
+file(READ ${WORK}/tp/truth.json truth)
+string(JSON errors GET "${truth}" errors)
+if(NOT errors STREQUAL "[Lorente 2021] Table 4")
+  message(FATAL_ERROR "truth.json errors: '${errors}', expected '[Lorente 2021] Table 4'")
+endif()
 run(0 testpiece verify ${WORK}/tp/measured.csv --basis chebyshev --order 2 --nominal ${WORK}/tp/nominal.csv
     --validate ${WORK}/tp/validation.csv --json --report ${WORK}/report)
 expect_json_keys("fvm testpiece verify" "${OUT}" points initial/mean_um initial/max_um initial/min_um final/mean_um
@@ -70,7 +76,7 @@ run(0 simulate testpiece -o ${WORK}/pyramid --points pyramid)
 run(0 testpiece verify ${WORK}/pyramid/measured.csv --basis legendre --order 2 --json)
 string(JSON points GET "${OUT}" points)
 if(NOT points EQUAL 167)
-  message(FATAL_ERROR "the pyramid has ${points} points, 002 measures 167")
+  message(FATAL_ERROR "the pyramid has ${points} points, [Lorente 2021] measures 167")
 endif()
 
 file(WRITE ${WORK}/bad.json [=[{"envelope_mm": [100, 100, 50], "features": [

@@ -16,8 +16,8 @@ function(expect_rows file prefix expected)
   endif()
 endfunction()
 
-# The published plan (001 section 5: 2500 x 1500 x 1200 mm, steps 500/500/400 mm = 96 points) with a truth, and a
-# noise-free validation mesh of 100 mm (5408 points).
+# The published plan ([IJSIMM 2016] section 5: 2500 x 1500 x 1200 mm, steps 500/500/400 mm = 96 points) with a truth,
+# and a noise-free validation mesh of 100 mm (5408 points).
 run(0 simulate tracker --machine 2500x1500x1200 --chain XFYZ --points mesh:500,500,400 --tool 0,0,100 -o ${WORK}/a
     --seed 1 --validation mesh:100,100,100)
 if(NOT OUT MATCHES "simulated 96 points .* initial volumetric error mean [0-9.]+ um, max [0-9.]+ um.*5408 validation points")

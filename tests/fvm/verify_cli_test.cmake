@@ -22,7 +22,8 @@ math(EXPR limit "${b} * 2 / 3")
 if(NOT a LESS limit)
   message(FATAL_ERROR "validation mean ${before} um -> ${after} um: the model learnt too little")
 endif()
-# The tracker pose: simulated at 1100,-1000,600 mm (001 Table I, position 4); 96 noisy readings find it to tens of um.
+# The tracker pose: simulated at 1100,-1000,600 mm ([IJSIMM 2016] Table I, position 4); 96 noisy readings find it to
+# tens of um.
 string(JSON tx GET "${OUT}" pose translation_mm 0)
 string(JSON tz GET "${OUT}" pose translation_mm 2)
 expect_near("pose x (mm)" "${tx}" 1100 0.1)

@@ -34,13 +34,13 @@ std::map<int, Eigen::Vector3d> TruthById(const CalotteSurface& surface) {
 }
 
 // The 6 x 6 grid as the target asks: noise, missing points, a tilted face, plus spikes and burrs, placed
-// on the stage where the published study measured it (000:4777) and turned by a degree.
+// on the stage where the published study measured it ([Pérez 2019] Table 1) and turned by a degree.
 //
 // Why 0.1 um is achievable here: the calottes are 0.5 mm hemispheres whose flanks beyond 75 degrees the optics
 // cannot see, leaving a disc of 0.48 mm; at 10 um pixels that is ~1800 heights per calotte. With sigma_z = 0.1
-// um (the 10x lens' vertical resolution, 000:5785) the Cramer-Rao bound of a centre is 2.4 nm in x, y and 6.5 nm
-// in z (checked below), so 0.1 um is 15 bounds in z: room for 36 x 3 coordinates, dropouts and trimmed spikes.
-// With the 5x lens (0.41 um) the bound in z would be 27 nm and 0.1 um only 3.7 bounds: not achievable for all
+// um (the 10x lens' vertical resolution, [Pérez thesis] Table 5.2) the Cramer-Rao bound of a centre is 2.4 nm in x, y
+// and 6.5 nm in z (checked below), so 0.1 um is 15 bounds in z: room for 36 x 3 coordinates, dropouts and trimmed
+// spikes. With the 5x lens (0.41 um) the bound in z would be 27 nm and 0.1 um only 3.7 bounds: not achievable for all
 // 108 coordinates, which is why the target names the noise.
 CalotteSurfaceOptions GridOptions() {
   CalotteSurfaceOptions o;

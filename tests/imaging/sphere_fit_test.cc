@@ -12,10 +12,10 @@
 namespace fvm::imaging {
 namespace {
 
-// Where the published 6 x 6 grid's calotte 1 lies on the stage (000:4777, case a): coordinates of -150 mm test
-// that the fit keeps its digits far from the origin.
+// Where the published 6 x 6 grid's calotte 1 lies on the stage ([Pérez 2019] Table 1, case a): coordinates of -150 mm
+// test that the fit keeps its digits far from the origin.
 const Eigen::Vector3d kCentre(-154.5487, -115.4767, -50.3624);
-constexpr double kRadius = 0.25;  // the grid's calottes: 0.5 mm hemispherical holes (000:4727)
+constexpr double kRadius = 0.25;  // the grid's calottes: 0.5 mm hemispherical holes ([Pérez 2019] 1.2)
 
 // The lower half of the sphere sampled on a pixel grid, as a height map sees a calotte: points up to the largest
 // slope the optics measure (75 degrees), heights exact.
@@ -111,7 +111,7 @@ TEST(SphereFit, ReportsNonConvergenceAsSuch) {
 // noise in z, so it should reach the bound; with 100 seeds a sample standard deviation is known to 7 %, so
 // 1.2 is a 2.8-sigma margin and 0.8 below catches a bound that is too loose.
 TEST(SphereFit, HeightNoiseScatterWithinCramerRaoBound) {
-  const double sigma = 1e-4;  // 0.1 um: the 10x lens' vertical resolution (000:5785)
+  const double sigma = 1e-4;  // 0.1 um: the 10x lens' vertical resolution ([Pérez thesis] Table 5.2)
   const std::vector<Eigen::Vector3d> truth = CapPoints(kCentre, kRadius, 0.008);
   ASSERT_GT(truth.size(), 2500u);
   const Eigen::MatrixXd crb = SphereCramerRaoBound(truth, {kCentre, kRadius}, sigma, SphereResidual::kHeight);

@@ -23,7 +23,7 @@ constexpr Region kGridRegion{-0.25, -20.25, 20.25, 0.25};
 
 TEST(TilePlan, LensTable) {
   EXPECT_DOUBLE_EQ(FindLens("2.5x").fov_mm, 5.63);
-  EXPECT_DOUBLE_EQ(FindLens("10x").fov_mm, 1.62);  // Table 5.2; the paper's 1.4 mm cannot give 225 tiles
+  EXPECT_DOUBLE_EQ(FindLens("10x").fov_mm, 1.62);  // [Pérez thesis] Table 5.2; 1.4 mm ([Pérez 2019]) gives no 225 tiles
   EXPECT_DOUBLE_EQ(FindLens("100X").fov_mm, 0.16);
   EXPECT_DOUBLE_EQ(FindLens("20").fov_mm, 0.81);
   EXPECT_THROW(FindLens("15x"), InputError);
@@ -63,13 +63,14 @@ TEST(TilePlan, ExactFitNeedsNoExtraTile) {
   EXPECT_EQ(PlanStitchedGrid({0.0, 0.0, 3.0, 0.5}, options).rows, 1);
 }
 
-// The published example (FACTS.md section 1): 6 x 6 grid, 10x lens, 225 tiles stitched vs 49 stitching-free.
-// Assumptions that give both: the 1.62 mm field of Table 5.2, the region the calottes' bounding box (centres
-// 0..20 mm plus the 0.25 mm radius: 20.5 mm square), features the calottes with their radius, and an overlap in
-// (10.35 %, 11.11 %] or [11.82 %, 15.06 %]. With step s = 1.62 (1 - overlap): 15 tiles per axis need
+// The published example ([Pérez thesis] 5.7.2): 6 x 6 grid, 10x lens, 225 tiles stitched vs 49 stitching-free.
+// Assumptions that give both: the 1.62 mm field of [Pérez thesis] Table 5.2, the region the calottes' bounding box
+// (centres 0..20 mm plus the 0.25 mm radius: 20.5 mm square), features the calottes with their radius, and an overlap
+// in (10.35 %, 11.11 %] or [11.82 %, 15.06 %]. With step s = 1.62 (1 - overlap): 15 tiles per axis need
 // s < 18.88 / 13 = 1.4523 mm; 49 = 7 x 7 means exactly one calotte of each six straddles two tiles: calotte 2
 // (edge at 4.0..4.5 mm) when s < 1.44, calotte 6 (20.0..20.5) when s > 20 / 14 = 1.4286, calotte 3 (8.0..8.5) when
-// s < 1.376. 13 % (s = 1.4094) is inside with margin; the "about 20 %" of 000:7190 gives 256 and 36 instead.
+// s < 1.376. 13 % (s = 1.4094) is inside with margin; the "about 20 %" of [Pérez thesis] 5.7.2 gives 256 and 36
+// instead.
 TEST(TilePlan, ReproducesPublished225StitchedVs49StitchingFree) {
   TilePlanOptions options;
   options.fov_mm = FindLens("10x").fov_mm;
@@ -102,7 +103,7 @@ TEST(TilePlan, PublishedCountsHoldExactlyInTheDerivedOverlapRanges) {
     const bool inside = s < 18.88 / 13.0 && s >= 1.376 && (s < 1.44) != (s > 20.0 / 14.0);
     EXPECT_EQ(published, inside) << "overlap " << options.overlap << ": " << grid.tiles.size() << " / " << free;
   }
-  // The "about 20 %" of 000:7190 gives 16 x 16 = 256 stitched tiles and every calotte in one tile: 36.
+  // The "about 20 %" of [Pérez thesis] 5.7.2 gives 16 x 16 = 256 stitched tiles and every calotte in one tile: 36.
   options.overlap = 0.2;
   const TileGrid grid = PlanStitchedGrid(kGridRegion, options);
   EXPECT_EQ(grid.tiles.size(), 256u);

@@ -231,7 +231,7 @@ TEST(TileRegistration, TileWithoutGoodNeighbourFallsBackToStage) {
   EXPECT_TRUE(p.registered[1]);
   EXPECT_FALSE(p.registered[2]);
   EXPECT_FALSE(p.registered[3]);
-  // Tiles 2 and 3 sit where the stage put them, and 3 starts its own chain (FACTS.md: the encoders take over).
+  // Tiles 2 and 3 sit where the stage put them, and 3 starts its own chain ([Pérez 2019] 1.2: the encoders take over).
   EXPECT_EQ(p.positions_px[2], tiles.tiles[2].nominal_px);
   EXPECT_EQ(p.positions_px[3], tiles.tiles[3].nominal_px);
   EXPECT_EQ(p.anchor[3], 3);

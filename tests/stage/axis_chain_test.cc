@@ -16,7 +16,7 @@ constexpr Axis Z = Axis::kZ;
 
 TEST(AxisChain, ParsesBothSidesFromTheFrameOutward) {
   const AxisChain yxfz = AxisChain::Parse("YXFZ");
-  EXPECT_THAT(yxfz.part_axes, ElementsAre(Y, X));  // Y on the frame, X rides on Y (000:840)
+  EXPECT_THAT(yxfz.part_axes, ElementsAre(Y, X));  // Y on the frame, X rides on Y ([Pérez thesis] 2.7)
   EXPECT_THAT(yxfz.tool_axes, ElementsAre(Z));
   const AxisChain xfyz = AxisChain::Parse("XFYZ");
   EXPECT_THAT(xfyz.part_axes, ElementsAre(X));
@@ -38,9 +38,9 @@ TEST(AxisChain, RejectsMalformedCodesWithAReason) {
 }
 
 TEST(AxisChain, SquarenessCarriersFollowTheSeeds) {
-  // Published FVM model (eqs. 3-4): X carries xWy and xWz, Y carries yWz.
+  // Published FVM model ([Pérez 2019] eqs. 3-4): X carries xWy and xWz, Y carries yWz.
   EXPECT_THAT(AxisChain::FvmStage().squareness_carrier, ElementsAre(X, X, Y));
-  // Machine-tool seed (004 eqs. 5-6): in XFYZ, Y carries xWy, Z carries xWz and yWz.
+  // Machine tool ([Aguado 2016] eqs. 5-6): in XFYZ, Y carries xWy, Z carries xWz and yWz.
   EXPECT_THAT(AxisChain::Parse("XFYZ").squareness_carrier, ElementsAre(Y, Z, Z));
 }
 

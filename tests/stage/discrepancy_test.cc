@@ -216,9 +216,9 @@ TEST(Discrepancy, FlagsOutliersWithoutSwamping) {
   EXPECT_LE(false_flags, 1) << "good centres flagged among " << outliers << " outliers in 20 batches";
 }
 
-// A warm-up (FACTS 000:5810) that settles within a placement, time constant 2 min, against a drift linear in t of
-// the same initial rate (6 um/min): each is named as what it is. The warm-up needs one parameter more and an F-test
-// of its own against the linear drift before it competes.
+// A warm-up ([Pérez thesis] eqs. 5.1-5.2) that settles within a placement, time constant 2 min, against a drift linear
+// in t of the same initial rate (6 um/min): each is named as what it is. The warm-up needs one parameter more and an
+// F-test of its own against the linear drift before it competes.
 TEST(Discrepancy, TellsAWarmUpFromALinearDrift) {
   for (unsigned seed : {1u, 2u, 3u}) {
     for (double tau_min : {0.0, 2.0}) {
@@ -246,8 +246,8 @@ TEST(Discrepancy, ResidualAnalysisPointsAtWhatIsWrong) {
 }
 
 // The same workflow through the same kinematics layer for a machine tool measured by a laser tracker: an XFYZ
-// machine (001 workspace 2500 x 1500 x 1200 mm), the tracker pose of the thesis, first-order Legendre errors on all
-// three axes, and a positioning error of X that bends (a second order the model lacks).
+// machine ([IJSIMM 2016] workspace 2500 x 1500 x 1200 mm), the tracker pose of [Aguado 2017], first-order Legendre
+// errors on all three axes, and a positioning error of X that bends (a second order the model lacks).
 TEST(Discrepancy, WorksForAMachineToolSeenByATracker) {
   AxisChain chain = AxisChain::Parse("XFYZ");
   chain.tool_offset = Eigen::Vector3d(0, 0, -100);
@@ -259,7 +259,7 @@ TEST(Discrepancy, WorksForAMachineToolSeenByATracker) {
   std::vector<double> values = testing::RandomCoefficients(truth, 8, 0.03, 2e-5);
   values[static_cast<size_t>(truth.FreeIndexOf("xTx2"))] = 0.04;  // 40 um of bending at the ends of X
 
-  // Tracker readings with 4 um of noise per coordinate (000:3456: range 4 um + angles) on two meshes.
+  // Tracker readings with 4 um of noise per coordinate ([Aguado 2017]: range 4 um + angles) on two meshes.
   std::mt19937_64 rng(8);
   std::normal_distribution<double> noise(0.0, 0.004);
   const auto mesh = [&](double shift) {

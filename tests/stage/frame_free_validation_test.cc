@@ -1,6 +1,6 @@
 // Judging a calibration by what no frame changes (stage/validation.h), on independent data whose stitched exports
-// turn with the stage at their first tile (eq. 1 written out in published_model.h): the rigid fit per placement
-// against a rigid fit written here, and each figure against its prediction.
+// turn with the stage at their first tile ([Pérez 2019] eq. 1 written out in published_model.h): the rigid fit per
+// placement against a rigid fit written here, and each figure against its prediction.
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 namespace fvm::stage {
 namespace {
 
-// Kabsch: the rotation and translation that take p onto s in least squares, and the rms of what is left.
+// [Kabsch 1976]: the rotation and translation that take p onto s in least squares, and the rms of what is left.
 double IndependentRigidRms(const std::vector<Eigen::Vector3d>& p, const std::vector<Eigen::Vector3d>& s, double* sum_sq) {
   Eigen::Vector3d cp = Eigen::Vector3d::Zero(), cs = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < p.size(); ++i) cp += p[i], cs += s[i];

@@ -1,6 +1,6 @@
-// Identification of the published models on measurements made with an independent forward model: the published
-// equation written out in tests/stage/published_model.h, not the library's chain, inverse or first tile, so that
-// a mistake shared by simulator and identification cannot cancel. The truth carries a 37 mm ripple of 0.3 um on
+// Identification of the published models ([Pérez 2019]) on measurements made with an independent forward model: the
+// published equation written out in tests/stage/published_model.h, not the library's chain, inverse or first tile, so
+// that a mistake shared by simulator and identification cannot cancel. The truth carries a 37 mm ripple of 0.3 um on
 // every translation on top of straight lines: no polynomial model takes it exactly.
 
 #include "stage/identification.h"

@@ -1,4 +1,4 @@
-// XFYZ machine tool with a laser tracker on the table, against the seed's equation (004:76, FACTS.md section 2).
+// XFYZ machine tool with a laser tracker on the table, against [Aguado 2016] eq. 1 (last term X).
 
 #include <gtest/gtest.h>
 
@@ -27,9 +27,9 @@ TrackedMachine MakeSetup(RotationModel model) {
   AxisChain chain = AxisChain::Parse("XFYZ");
   chain.rotation_model = model;
   chain.tool_offset = Eigen::Vector3d(10.0, -5.0, -150.0);
-  // Tracker pose of the thesis (000:3457): T = (-863.527, 194.373, 677.782) mm, XYZ Euler angles in degrees.
+  // Tracker pose of [Aguado 2017] (section 3): T = (-863.527, 194.373, 677.782) mm, XYZ Euler angles in degrees.
   chain.instrument = Pose::FromEulerXyzDegrees({-863.527, 194.373, 677.782}, {0.0339, 0.0343, 59.4652});
-  const std::array<Travel, 3> travel{Travel{0, 2500}, Travel{0, 1500}, Travel{0, 1200}};  // 001 workspace
+  const std::array<Travel, 3> travel{Travel{0, 2500}, Travel{0, 1500}, Travel{0, 1200}};  // [IJSIMM 2016] workspace
   ParameterLayout layout = testing::FullLayout(chain, travel, 2, "xyz", Basis::kLegendre);
   std::vector<double> free = testing::RandomCoefficients(layout, 21, 0.03, 2e-5);
   const Pose tracker = *chain.instrument;
@@ -37,7 +37,7 @@ TrackedMachine MakeSetup(RotationModel model) {
   return {std::move(layout), std::move(free), tracker, tool};
 }
 
-// The seed's equation written out: X_LT = R_LT^-1 (R_X^-1 (R_Y (R_Z T + Z) + Y - X) - T_LT).
+// [Aguado 2016] eq. 1 written out: X_LT = R_LT^-1 (R_X^-1 (R_Y (R_Z T + Z) + Y - X) - T_LT).
 Eigen::Vector3d SeedEquation(const TrackedMachine& s, const Eigen::Vector3d& q, bool transpose_for_inverse) {
   std::vector<double> all(s.layout.coefficients().size());
   s.layout.Expand(s.free.data(), all.data());
@@ -56,7 +56,7 @@ Eigen::Vector3d SeedEquation(const TrackedMachine& s, const Eigen::Vector3d& q, 
   return s.tracker.Rotation().transpose() * (part - s.tracker.translation);
 }
 
-std::vector<Eigen::Vector3d> Mesh() {  // the 500/500/400 mm mesh of 001 Table I: 6 x 4 x 4 = 96 points
+std::vector<Eigen::Vector3d> Mesh() {  // the 500/500/400 mm mesh of [IJSIMM 2016] section 5: 6 x 4 x 4 = 96 points
   std::vector<Eigen::Vector3d> q;
   for (int i = 0; i <= 5; ++i)
     for (int j = 0; j <= 3; ++j)
@@ -73,8 +73,9 @@ TEST(MachineToolChain, XfyzWithTrackerReproducesTheSeedEquation) {
 }
 
 TEST(MachineToolChain, SeedConventionsAgreeToFirstOrder) {
-  // Seeds differ on how they invert R (000:853 vs 001:202); inverse and transpose of I + [e]x differ by
-  // O(e^2), so every convention agrees with ours to first order: |e|^2 * |p| with |e| < 3 * 6e-5 rad here.
+  // Sources differ on how they invert R ([Pérez thesis] eq. 2.1 vs [IJSIMM 2016] eqs. 14-16); inverse and transpose of
+  // I + [e]x differ by O(e^2), so every convention agrees with ours to first order: |e|^2 * |p| with |e| < 3 * 6e-5 rad
+  // here.
   for (RotationModel model : {RotationModel::kSmallAngle, RotationModel::kExact}) {
     const TrackedMachine s = MakeSetup(model);
     double worst = 0.0;

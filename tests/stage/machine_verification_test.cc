@@ -1,5 +1,5 @@
 // Volumetric verification of an XFYZ machine with a laser tracker, checked against data and a fit that share none
-// of fvm's kinematics: the readings come from the seed's equation written out (004:76, FACTS section 2) with error
+// of fvm's kinematics: the readings come from [Aguado 2016] eq. 1 written out (last term X) with error
 // functions that no polynomial can take (ball-screw-like sines on top of cubics), and the reference fit is a
 // separately written Gauss-Newton on the same equation with numeric derivatives.
 
@@ -17,7 +17,7 @@ namespace fvm::stage {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-const Eigen::Vector3d kWorkspace(2500.0, 1500.0, 1200.0);  // 001 Table I
+const Eigen::Vector3d kWorkspace(2500.0, 1500.0, 1200.0);  // [IJSIMM 2016] section 5
 const Eigen::Vector3d kTool(0.0, 0.0, 100.0);
 
 Eigen::Matrix3d SmallRotation(const Eigen::Vector3d& e) {
@@ -33,13 +33,13 @@ Eigen::Matrix3d EulerXyz(const Eigen::Vector3d& deg) {
       .toRotationMatrix();
 }
 
-// The 21 error values at q, named as the seed names them.
+// The 21 error values at q, named as [Aguado 2016] names them.
 struct Errors {
   Eigen::Vector3d x_t, y_t, z_t, x_r, y_r, z_r;
   double xwy = 0, xwz = 0, ywz = 0;
 };
 
-// X_LT = R_LT^T (R_X^-1 (R_Y (R_Z T + Z) + Y - X) - T_LT), small-angle matrices as the seed writes them.
+// X_LT = R_LT^T (R_X^-1 (R_Y (R_Z T + Z) + Y - X) - T_LT), small-angle matrices as [Aguado 2016] writes them.
 Eigen::Vector3d SeedReading(const Errors& e, const Eigen::Vector3d& q, const Eigen::Matrix3d& r_lt, const Eigen::Vector3d& t_lt) {
   const Eigen::Vector3d xv(-q.x() + e.x_t.x(), e.x_t.y(), e.x_t.z());
   const Eigen::Vector3d yv(e.y_t.x() - q.y() * e.xwy, q.y() + e.y_t.y(), e.y_t.z());
@@ -102,7 +102,7 @@ std::vector<Eigen::Vector3d> Mesh(const Eigen::Vector3d& step) {
 }
 
 struct Tracker {
-  Eigen::Matrix3d rotation = EulerXyz({63.0, 14.0, 35.0});  // 001 Table I, position 4
+  Eigen::Matrix3d rotation = EulerXyz({63.0, 14.0, 35.0});  // [IJSIMM 2016] Table I, position 4
   Eigen::Vector3d translation{1100.0, -1000.0, 600.0};
 };
 
@@ -116,7 +116,7 @@ std::vector<Observation> Readings(const Truth& truth, const std::vector<Eigen::V
     o.command = q;
     o.measured = SeedReading(truth.At(q), q, tracker.rotation, tracker.translation);
     if (noise != nullptr) {
-      // Noise on the tracker's own coordinates, written out here from eq. 22-24 of 001.
+      // Noise on the tracker's own coordinates, written out here from [IJSIMM 2016] eqs. 22-24.
       const double r = o.measured.norm();
       double az = std::atan2(o.measured.y(), o.measured.x());
       double el = std::asin(o.measured.z() / r);
@@ -153,7 +153,7 @@ TEST(MachineVerification, RecoversAPolynomialMachineAndTheTrackerPoseWithoutNois
   const Truth truth = MakeTruth(3, true);
   const Tracker tracker;
   const std::vector<Observation> readings = Readings(truth, Mesh({500, 500, 400}), tracker, nullptr, 0);
-  ASSERT_EQ(readings.size(), 96u);  // the 001 mesh
+  ASSERT_EQ(readings.size(), 96u);  // the [IJSIMM 2016] mesh
   const VerificationResult r = VerifyMachine(MachineLayout(Basis::kPower, 3), readings, Estimated());
   EXPECT_GT(r.initial.mean_um, 10.0);
   // Small-angle inverse and products of errors are in both models alike: what is left is rounding.
@@ -178,7 +178,7 @@ TEST(MachineVerification, ASecondToolOffsetMakesMoreTermsIdentifiable) {
   std::vector<Observation> both = one;
   for (Observation o : one) {
     o.tool = 1;
-    // The second tool's readings from the seed equation with its own offset.
+    // The second tool's readings from [Aguado 2016] eq. 1 with its own offset.
     const Errors e = truth.At(o.command);
     const Eigen::Vector3d t2 = two_tools.tool_offsets[1];
     const Eigen::Vector3d xv(-o.command.x() + e.x_t.x(), e.x_t.y(), e.x_t.z());
@@ -198,7 +198,7 @@ TEST(MachineVerification, ASecondToolOffsetMakesMoreTermsIdentifiable) {
 }
 
 // Any three-axis F-notation chain: FXYZ (all axes move the tool) and XYFZ (two move the part), simulated with the
-// library's chain (the XFYZ tests above check that chain against the seed's equation) and a polynomial truth.
+// library's chain (the XFYZ tests above check that chain against [Aguado 2016] eq. 1) and a polynomial truth.
 TEST(MachineVerification, OtherChainsRecoverTheirMachineWithoutNoise) {
   for (const char* code : {"FXYZ", "XYFZ"}) {
     AxisChain chain = AxisChain::Parse(code);
@@ -236,7 +236,7 @@ TEST(MachineVerification, OtherChainsRecoverTheirMachineWithoutNoise) {
   }
 }
 
-// Independent reference: Gauss-Newton with central differences on the seed equation, same weights, same free
+// Independent reference: Gauss-Newton with central differences on [Aguado 2016] eq. 1, same weights, same free
 // coefficients (power basis, evaluated here by hand), the pose as translation + rotation vector.
 struct ReferenceFit {
   std::vector<double> values;

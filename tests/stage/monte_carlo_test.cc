@@ -19,7 +19,8 @@
 namespace fvm::stage {
 namespace {
 
-// The published 75-point study (000:4560): a 5 x 5 x 3 mesh at 100 mm, here on an XFYZ machine with a 100 mm tool.
+// The published 75-point study ([Pérez 2019 Sensors] section 3): a 5 x 5 x 3 mesh at 100 mm, here on an XFYZ machine
+// with a 100 mm tool.
 artefacts::Workspace Workspace() {
   artefacts::Workspace ws;
   ws.max = Eigen::Vector3d(400, 400, 200);
@@ -247,7 +248,7 @@ TEST(StageMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   EXPECT_NEAR(mc_sd / real_sd, 1.0, 0.3);
 }
 
-// The ISO/TS 15530-3 budget: u_p from the spreads, u_b from repeated commands (or the noise model), u_w from the
+// The [ISO/TS 15530-3] budget: u_p from the spreads, u_b from repeated commands (or the noise model), u_w from the
 // temperature range and CTE, U = k sqrt(sum of squares).
 TEST(UncertaintyBudget, CombinesItsFourContributions) {
   PointSpread a, b;

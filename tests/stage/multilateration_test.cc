@@ -18,7 +18,7 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
-// Points of a 2500 x 1500 x 1200 mm machine on a coarse mesh (the published workspace).
+// Points of a 2500 x 1500 x 1200 mm machine on a coarse mesh (the workspace of [IJSIMM 2016]).
 std::vector<Vec> MeshPoints(int nx, int ny, int nz) {
   std::vector<Vec> out;
   for (int k = 0; k < nz; ++k)

@@ -1,6 +1,6 @@
 #pragma once
-// The published YXFZ stage model written out from the paper, independently of the library (FACTS.md section 1;
-// 000:4890-4935): the truth that stage tests make their data with, so that a mistake in the library's chain,
+// The published YXFZ stage model written out from [Pérez 2019], independently of the library (eqs. 1-5;
+// section 2.1): the truth that stage tests make their data with, so that a mistake in the library's chain,
 // inverse or first tile cannot cancel between the simulator and the identification ("inverse crime").
 //
 //   TP = RX^-1 [ RY^-1 (TL - TY) - TX ],  TX = (-x + xTx, xTy - x xWy, xTz - x xWz),
@@ -45,7 +45,7 @@ inline Eigen::Vector3d PublishedEquation1(const PublishedErrors& e, const Eigen:
 
 // A stage whose error functions are straight lines in their axis' coordinate plus, where `ripple_mm` > 0, a
 // sine on every translation (a lead-screw period the polynomial models cannot take): the truth identification
-// tests fit, drawn with a fixed seed. Magnitudes as in the published work: translations up to ~100 um over the
+// tests fit, drawn with a fixed seed. Magnitudes as in [Pérez 2019]: translations up to ~100 um over the
 // travel, rotations and squareness of ~1e-4 rad.
 struct PublishedStage {
   // Per term: value at 0 and slope per 100 mm of its axis, in the order xT(x,y,z) xR(x,y,z) yT(x,y,z) yR(x,y,z)
@@ -100,8 +100,8 @@ struct PublishedStage {
   }
 };
 
-// The first tile of a measurement (000:7264), written out: lowest x, highest y of the positions, at the height
-// of the position nearest that corner.
+// The first tile of a measurement ([Pérez thesis] 5.7.2), written out: lowest x, highest y of the positions, at the
+// height of the position nearest that corner.
 inline Eigen::Vector3d PublishedFirstTile(const std::vector<Eigen::Vector3d>& positions) {
   Eigen::Vector2d corner(positions[0].x(), positions[0].y());
   for (const Eigen::Vector3d& p : positions) corner = {std::min(corner.x(), p.x()), std::max(corner.y(), p.y())};
@@ -114,7 +114,7 @@ inline Eigen::Vector3d PublishedFirstTile(const std::vector<Eigen::Vector3d>& po
 }
 
 // A bar of 17 calottes at 10 mm pitch laid on the stage from `start` in direction `angle_rad`, slightly tilted
-// (it never lies flat: +-1.5 mrad along it, as in the paper's set-up) at z = -50 mm: the commanded centres.
+// (it never lies flat: +-1.5 mrad along it, as in [Pérez 2019]'s set-up) at z = -50 mm: the commanded centres.
 inline std::vector<Eigen::Vector3d> BarPlacement(const Eigen::Vector2d& start, double angle_rad, double tilt) {
   std::vector<Eigen::Vector3d> q;
   for (int i = 0; i < 17; ++i) {
@@ -139,7 +139,7 @@ struct PublishedEffects {
   double blunder_mm = 0.08;
 };
 
-// The three identification placements of the paper (along x, along y, oblique, from the corner at lowest x and
+// The three identification placements of [Pérez 2019] (along x, along y, oblique, from the corner at lowest x and
 // highest y) and `validation` random placements, measured on `stage`: the stitching-free centre is the command
 // plus noise, the stitched one the part coordinates (eq. 1) relative to the measurement's first tile, plus noise
 // (`noise_mm` per coordinate in both). `apart`: the identification placements start up to 30 mm apart.

@@ -1,5 +1,5 @@
-// The generic chain against the published YXFZ stage model (FACTS.md section 1; 000:4890-4935, eq. 13 at
-// 000:5230 with the +yTy sign typo corrected).
+// The generic chain against the published YXFZ stage model ([Pérez 2019] eqs. 1-5, and its eq. 13
+// with the +yTy sign typo corrected).
 
 #include <gtest/gtest.h>
 

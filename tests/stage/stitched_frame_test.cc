@@ -1,5 +1,5 @@
-// The frame of a stitched measurement (stage/stitched_frame.h) against the convention written out from eq. 1 in
-// the test (published_model.h): the export keeps the orientation the camera had at its first tile a,
+// The frame of a stitched measurement (stage/stitched_frame.h) against the convention written out from [Pérez 2019] eq.
+// 1 in the test (published_model.h): the export keeps the orientation the camera had at its first tile a,
 // s = a + R_Y R_X (at a) (P(q) - P(a)).
 
 #include "stage/stitched_frame.h"

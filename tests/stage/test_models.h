@@ -1,5 +1,5 @@
 #pragma once
-// Error sets shared by the stage tests: realistic magnitudes from the published FVM work (translations of
+// Error sets shared by the stage tests: realistic magnitudes from the published FVM work ([Pérez 2019]; translations of
 // 100-200 um over the travel, rotations of 1e-4 rad), drawn with a fixed seed.
 
 #include <random>

@@ -1,4 +1,4 @@
-// Verification of a machine from the test piece it cut (seed 002), judged against a least-squares fit written
+// Verification of a machine from the test piece it cut ([Lorente 2021]), judged against a least-squares fit written
 // here, apart from fvm's kinematics: the first-order XFYZ model spelled out term by term, Chebyshev polynomials of
 // our own, a rigid datum found by Eigen's Umeyama and a linear solve. The machine's errors are not polynomials
 // (cubics plus ball-screw and long-wave sines), the CMM adds 1 um per coordinate, and both fits are judged on a
@@ -169,8 +169,8 @@ TEST(TestPieceVerification, PublishedTestFunctionsFitToTheNoiseAndLogIterations)
   options.instrument = InstrumentPose::kEstimated;
   options.num_threads = 1;
   const TestPieceVerification v = VerifyTestPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 2), Observations(measured), options);
-  // 002 Table 4's functions are quadratics: an order-2 basis holds them, so what remains is the CMM noise, whose
-  // 3D norm averages 1.6 sigma (chi with 3 degrees of freedom), a little less after the fit takes its share.
+  // [Lorente 2021] Table 4's functions are quadratics: an order-2 basis holds them, so what remains is the CMM noise,
+  // whose 3D norm averages 1.6 sigma (chi with 3 degrees of freedom), a little less after the fit takes its share.
   EXPECT_GT(v.result.initial.mean_um, 30.0);
   EXPECT_NEAR(v.result.final.mean_um, 1.55, 0.15);
   ASSERT_GE(v.iterations.size(), 2u);
@@ -231,9 +231,9 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
 }
 
 
-// Our first-order extraction formulas on the published series, the piece cut by 002 Table 4's machine and read in
-// the machine frame without noise: each extracted function follows the truth (zero-referenced alike) to within the
-// second-order terms the formulas leave out (rotations of 1e-3 rad times deviations of 0.3 mm over 100-260 mm
+// Our first-order extraction formulas on the published series, the piece cut by [Lorente 2021] Table 4's machine and
+// read in the machine frame without noise: each extracted function follows the truth (zero-referenced alike) to within
+// the second-order terms the formulas leave out (rotations of 1e-3 rad times deviations of 0.3 mm over 100-260 mm
 // levers: a few urad, a fraction of a um).
 TEST(TestPieceVerification, ExtractionFormulasFollowTheTruthAlongTheSeries) {
   const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
