@@ -39,7 +39,8 @@ std::optional<SurfaceFormat> FromExtension(const std::filesystem::path& path) {
   }
   if (extension == ".pcd") return SurfaceFormat::kPcd;
   if (extension == ".ply") return SurfaceFormat::kPly;
-  if (extension == ".xyz" || extension == ".csv" || extension == ".txt" || extension == ".asc" || extension == ".pts") {
+  if (extension == ".xyz" || extension == ".csv" || extension == ".txt" || extension == ".asc" || extension == ".pts" ||
+      extension == ".ds") {
     return SurfaceFormat::kXyz;
   }
   return std::nullopt;

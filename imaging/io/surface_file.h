@@ -21,7 +21,7 @@ std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 
 // The format a file of this name is written in, by its extension alone (for outputs): .x3p, .al3d,
-// .tif/.tiff/.exr/.png, .pcd, .ply, .xyz/.csv/.txt/.asc/.pts; nullopt for anything else.
+// .tif/.tiff/.exr/.png, .pcd, .ply, .xyz/.csv/.txt/.asc/.pts/.ds; nullopt for anything else.
 std::optional<SurfaceFormat> SurfaceFormatOfName(const std::filesystem::path& path);
 
 // Throws InputError when the file is missing, empty, or neither its content nor its extension is one fvm reads.
