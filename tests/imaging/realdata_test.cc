@@ -15,7 +15,9 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/height_map.h"
 #include "imaging/io/point_cloud_io.h"
+#include "imaging/io/surface_file.h"
 #include "imaging/shape_fit.h"
 
 namespace fvm::imaging {
@@ -133,6 +135,60 @@ TEST_P(NistLaserScans, RobustFitFindsTheSphere) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sph101To105, NistLaserScans, ::testing::Values(101, 102, 103, 104, 105));
+
+// Real surface exports against the values an independent reader (SurfaceTopography, MIT) gives for them, as
+// ../shared/realdata/README.md quotes them: grid, pixel size, extent (pixel x points, which is how the README's
+// numbers come out: 200 x 4.38027e-7 m = 8.76054e-5 m) and Sq (RMS height about the mean), to 1e-6 relative.
+struct SurfaceCase {
+  std::string file;
+  int size_x, size_y;
+  double extent_x_m, extent_y_m, sq_m;
+  double pixel_m;  // 0: not quoted (non-square pixels: the extent says it)
+};
+
+class RealSurfaces : public ::testing::TestWithParam<SurfaceCase> {};
+
+TEST_P(RealSurfaces, MatchTheIndependentReader) {
+  const SurfaceCase& c = GetParam();
+  const std::filesystem::path path = kRealData / "surfaces" / c.file;
+  SKIP_WITHOUT_REALDATA(path);
+  const Surface surface = ReadSurface(path);
+  ASSERT_TRUE(surface.height_map);
+  const HeightMap& map = *surface.height_map;
+  EXPECT_EQ(map.size_x, c.size_x);
+  EXPECT_EQ(map.size_y, c.size_y);
+  EXPECT_NEAR(map.size_x * map.dx_mm, c.extent_x_m * 1e3, 1e-6 * c.extent_x_m * 1e3);
+  EXPECT_NEAR(map.size_y * map.dy_mm, c.extent_y_m * 1e3, 1e-6 * c.extent_y_m * 1e3);
+  if (c.pixel_m > 0) {
+    EXPECT_NEAR(map.dx_mm, c.pixel_m * 1e3, 1e-6 * c.pixel_m * 1e3);
+    EXPECT_NEAR(map.dy_mm, c.pixel_m * 1e3, 1e-6 * c.pixel_m * 1e3);
+  }
+  const HeightMapStats stats = ComputeStats(map);
+  EXPECT_EQ(stats.valid_points, map.z_mm.size());
+  EXPECT_NEAR(stats.sq_mm, c.sq_m * 1e3, 1e-6 * c.sq_m * 1e3);
+}
+
+// The SDF "S2 Softgauges Example": README gives a 7 x 4 grid of 1 um; its Sq is computed here from the 28
+// heights as the file prints them (Zscale 1e-6 m), by the textbook two-pass formula.
+double SoftgaugeSq() {
+  const double z[28] = {1.00000, 0.99874, 0.99495, 0.98865, 0.97986, 0.96858, 1.00000,
+                        0.99874, 0.99748, 0.99369, 0.98740, 0.97862, 0.96736, 0.99874,
+                        0.99495, 0.99369, 0.98993, 0.98366, 0.97491, 0.96369, 0.99495,
+                        0.97986, 0.97862, 0.97491, 0.96874, 0.96012, 0.94907, 0.97986};
+  double mean = 0, sum2 = 0;
+  for (const double v : z) mean += v / 28;
+  for (const double v : z) sum2 += (v - mean) * (v - mean);
+  return std::sqrt(sum2 / 28) * 1e-6;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Al3dX3pSdf, RealSurfaces,
+    ::testing::Values(SurfaceCase{"al3d-1.al3d", 200, 296, 8.76054e-5, 1.29655992e-4, 7.688266102603082e-6, 4.38027e-7},
+                      SurfaceCase{"x3p-2.x3p", 650, 650, 8.29767313942749e-5, 2.044783737930349e-4,
+                                  7.728033273597876e-8, 0},
+                      SurfaceCase{"sdf-1.sdf", 7, 4, 7e-6, 4e-6, SoftgaugeSq(), 1e-6}),
+    [](const auto& info) { return info.param.file.substr(0, info.param.file.find('.')) == "al3d-1" ? std::string("Al3d")
+                                  : info.param.file[0] == 'x' ? std::string("X3p") : std::string("Sdf"); });
 
 }  // namespace
 }  // namespace fvm::imaging
