@@ -146,6 +146,8 @@ struct SurfaceCase {
   double pixel_m;  // 0: not quoted (non-square pixels: the extent says it)
 };
 
+void PrintTo(const SurfaceCase& c, std::ostream* os) { *os << c.file; }
+
 class RealSurfaces : public ::testing::TestWithParam<SurfaceCase> {};
 
 TEST_P(RealSurfaces, MatchTheIndependentReader) {

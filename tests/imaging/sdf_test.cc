@@ -38,7 +38,7 @@ TEST(Sdf, BinaryFloat64HeightsAndGrid) {
       EXPECT_DOUBLE_EQ(map.z_mm[i], values[i] * 1e-6) << i;  // nm to mm
     }
   }
-  EXPECT_EQ(map.at(4, 1), values[9] * 1e-6);  // profile after profile: x runs fastest
+  EXPECT_DOUBLE_EQ(map.at(4, 1), values[9] * 1e-6);  // profile after profile: x runs fastest
 }
 
 TEST(Sdf, BinaryInt16Heights) {
