@@ -1,5 +1,6 @@
 #include "imaging/io/sdf.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -48,7 +49,6 @@ HeightMap MakeMap(const std::string& name, const SdfHeader& h, const std::string
   map.size_y = static_cast<int>(h.profiles);
   map.dx_mm = h.x_scale * kMmPerMetre;
   map.dy_mm = h.y_scale * kMmPerMetre;
-  map.z_mm.reserve(h.points * h.profiles);
   map.source = "ISO 25178-71 SDF (" + form + ")" + (h.manufacturer.empty() ? "" : ", " + h.manufacturer);
   return map;
 }
@@ -113,6 +113,7 @@ HeightMap ParseAscii(std::string_view text, const std::string& name) {
   }
   HeightMap map = MakeMap(name, h, "aISO-1.0");
   const std::size_t wanted = h.points * h.profiles;
+  map.z_mm.reserve(std::min(wanted, text.size() / 2));  // a value takes 2 characters at least: no trust in the header
   // The data: numbers separated by white space, up to a '*' (or the end of the file).
   while (start < text.size() && map.z_mm.size() < wanted) {
     const std::size_t end = std::min(text.find('\n', start), text.size());
@@ -168,6 +169,7 @@ HeightMap ParseBinary(const std::string& bytes, const std::string& name) {
     Fail(name, "the data hold " + std::to_string((bytes.size() - kBinaryHeaderSize) / size) + " values where " +
                    std::to_string(h.points) + " x " + std::to_string(h.profiles) + " are declared; the file is cut short");
   }
+  map.z_mm.reserve(count);  // the bytes are there (checked above)
   for (std::size_t i = 0; i < count; ++i) {
     const char* v = p + kBinaryHeaderSize + i * size;
     double value = 0;

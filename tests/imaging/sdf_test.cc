@@ -79,6 +79,12 @@ TEST(Sdf, BadInputIsNamed) {
   const std::string cut = testing::BinarySdf(4, 4, 1e-6, 1e-6, 1e-6, std::vector<double>(16, 1.0));
   EXPECT_THAT(InputErrorOf([&] { ParseSdf(cut.substr(0, cut.size() - 8), "c.sdf"); }), HasSubstr("cut short"));
   EXPECT_THAT(InputErrorOf([&] { ParseSdf(cut.substr(0, 50), "c.sdf"); }), HasSubstr("81-byte"));
+  // A header that declares 2 billion points over no data fails before it allocates anything.
+  EXPECT_THAT(InputErrorOf([&] { ParseSdf(testing::BinarySdf(65535, 32767, 1e-6, 1e-6, 1e-6, {}), "h.sdf"); }),
+              HasSubstr("cut short"));
+  EXPECT_THAT(InputErrorOf([&] { ParseSdf("aISO-1.0\nNumPoints = 65535\nNumProfiles = 32767\nXscale = 1e-6\n"
+                                          "Yscale = 1e-6\nZscale = 1e-6\n*\n1 2\n", "h.sdf"); }),
+              HasSubstr("cut short"));
   std::string bad_type = cut;
   bad_type[79] = 9;
   EXPECT_THAT(InputErrorOf([&] { ParseSdf(bad_type, "c.sdf"); }), HasSubstr("DataType 9"));
