@@ -17,6 +17,7 @@
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
 #include "fvm/commands.h"
+#include "fvm/fit_shape.h"
 #include "fvm/surface_read_args.h"
 #include "imaging/calotte_detection.h"
 #include "imaging/calotte_numbering.h"
@@ -40,6 +41,8 @@ struct FitArgs {
   double min_depth_mm = 0.0;
   std::string residual = "height";
   SurfaceReadArgs read;  // as fvm info
+  std::string shape;     // set: one sphere or plane to every point (fvm/fit_shape.cc) instead of the calotte search
+  bool robust = false;
 };
 
 // What fit searched: a height map (a file's, or an organised cloud's grid), or an unorganised cloud.
@@ -64,6 +67,15 @@ std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
 double Round(double v, double per_unit) { return std::round(v * per_unit) / per_unit; }
 
 void RunFit(const FitArgs& args) {
+  if (!args.shape.empty()) {
+    if (!args.artefact.empty() || !args.output.empty() || args.radius_mm > 0) {
+      throw InputError("--shape fits one shape to every point and prints it; --artefact, -o and --radius-mm "
+                       "belong to the calotte search (leave --shape out for that)");
+    }
+    RunShapeFit({args.file, args.shape, args.robust, args.json, args.read});
+    return;
+  }
+  if (args.robust) throw InputError("--robust goes with --shape; the calotte search always trims outliers");
   const std::optional<artefacts::Artefact> artefact = NamedArtefact(args.artefact);
   const Searched searched = ReadSearched(args);
 
@@ -239,7 +251,14 @@ void RegisterFit(CLI::App& app) {
       "With --artefact the calottes get the artefact's numbers (1..36 row by row for grid6x6, 1..17 along bar17), "
       "matched to its nominal layout. Prints centre, radius, form deviation (RMS) and the centre's standard "
       "uncertainty per calotte; -o writes the centre export (CSV id,x,y,z,radius,form_rms in mm) that fvm "
-      "calibrate reads. Reads what fvm info reads.");
+      "calibrate reads. Reads what fvm info reads.\n\n"
+      "With --shape sphere|plane it fits one shape to all points of any cloud or surface (a CMM probing of a "
+      "reference sphere, a tracker nest, a cap or a flat of a few dozen points; XYZ text including NIST's .ds "
+      "sets whose first line is the count, PLY, PCD, height maps): orthogonal-distance least squares from a "
+      "closed-form start, converged to the last digits of double, with standard uncertainties from the "
+      "residuals. JSON: sphere {\"shape\", \"points\", \"centre_mm\", \"radius_mm\", \"u_centre_um\", "
+      "\"u_radius_um\", \"rms_um\", \"outliers\"}; plane {\"shape\", \"points\", \"point_mm\" (centroid), "
+      "\"normal\" (unit), \"u_normal_urad\", \"rms_um\", \"outliers\"}.");
   sub->add_option("FILE", args->file, "height map (X3P, AL3D, TIFF/EXR/PNG) or point cloud (PLY, PCD, XYZ)")->required();
   sub->add_option("--artefact", args->artefact, "number the calottes as this artefact does: grid6x6 or bar17");
   sub->add_option("-o,--output", args->output, "write the centre export (CSV) here");
@@ -265,8 +284,18 @@ void RegisterFit(CLI::App& app) {
                   "orthogonal: plain distance to the sphere, as instrument software fits")
       ->check(CLI::IsMember({"height", "orthogonal"}))
       ->default_str("height");
+  sub->add_option("--shape", args->shape,
+                  "fit one sphere or plane to every point instead of searching calottes (orthogonal-distance least "
+                  "squares, ISO 10360-6; from 4 points for a sphere, 3 for a plane), e.g. --shape sphere")
+      ->check(CLI::IsMember({"sphere", "plane"}));
+  sub->add_flag("--robust", args->robust,
+                "with --shape: find the shape among stray points (least median of squares over 4-point spheres or "
+                "3-point planes, seed 1, then refits without points beyond 3 robust standard deviations until "
+                "stable); the points left out are counted in \"outliers\", e.g. --shape sphere --robust");
   args->read.AddOptions(*sub);
-  sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv\n         fvm fit calotte.ply --json");
+  sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv\n         fvm fit calotte.ply --json\n"
+              "         fvm fit sph1.ds --shape sphere --json\n"
+              "         fvm fit scan.xyz --shape sphere --unit m --robust");
   sub->callback([args] { RunFit(*args); });
 }
 

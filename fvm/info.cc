@@ -35,6 +35,7 @@ struct Summary {
   std::optional<double> dx_mm, dy_mm, x0_mm, y0_mm;  // the grid, when there is one
   std::size_t points = 0, valid_points = 0;
   std::optional<double> x_min, x_max, y_min, y_max, z_min, z_max;  // over valid points
+  std::optional<double> sq_mm;  // height maps: RMS height about the mean
   bool organised = false;
 };
 
@@ -55,6 +56,7 @@ Summary SummariseMap(const imaging::HeightMap& map) {
   if (stats.valid_points > 0) {
     s.z_min = stats.z_min_mm;
     s.z_max = stats.z_max_mm;
+    s.sq_mm = stats.sq_mm;
     s.x_min = map.x0_mm;
     s.x_max = map.x0_mm + (map.size_x - 1) * map.dx_mm;
     s.y_min = map.y0_mm;
@@ -118,6 +120,7 @@ void PrintText(const std::string& file, const std::string& format, const Summary
   fmt::print("  x range       {:.6f} .. {:.6f} mm\n", *s.x_min, *s.x_max);
   fmt::print("  y range       {:.6f} .. {:.6f} mm\n", *s.y_min, *s.y_max);
   fmt::print("  z range       {:.6f} .. {:.6f} mm ({})\n", *s.z_min, *s.z_max, Um(*s.z_max - *s.z_min));
+  if (s.sq_mm) fmt::print("  Sq            {} (RMS height about the mean, no form removed)\n", Um(*s.sq_mm));
 }
 
 void RunInfo(const InfoArgs& args) {
@@ -149,6 +152,7 @@ void RunInfo(const InfoArgs& args) {
   out["x_max_mm"] = Optional(s.x_max);
   out["y_min_mm"] = Optional(s.y_min);
   out["y_max_mm"] = Optional(s.y_max);
+  out["sq_um"] = s.sq_mm ? nlohmann::ordered_json(*s.sq_mm * 1e3) : nlohmann::ordered_json(nullptr);
   fmt::print("{}\n", out.dump(2));
 }
 

@@ -29,6 +29,7 @@ struct HeightMapStats {
   std::size_t valid_points = 0;
   double z_min_mm = 0.0;  // over valid points; 0 when there are none
   double z_max_mm = 0.0;
+  double sq_mm = 0.0;  // Sq (ISO 25178-2): the RMS height about the mean of the valid points, no form removed
 };
 
 HeightMapStats ComputeStats(const HeightMap& map);

@@ -307,15 +307,17 @@ Algebraic AlgebraicFit(std::span<const Eigen::Vector3d> points, const std::vecto
   return Algebraic{Sphere{origin + c, std::sqrt(std::max(0.0, x.w() + c.squaredNorm()))}, origin, spread};
 }
 
-// Seeded MSAC on spheres through 4 points, scored on at most 2000 points (the score only ranks hypotheses; the
-// consensus set is then taken over all points).
+// Seeded MSAC on spheres through 4 points (or, kLeastMedian, the least median of squares), scored on at most
+// 2000 points (the score only ranks hypotheses; the consensus set is then taken over all points).
 std::vector<bool> RansacInliers(std::span<const Eigen::Vector3d> points, const SphereFitOptions& options) {
+  const bool least_median = options.outliers == SphereOutliers::kLeastMedian;
+  std::vector<double> squared;  // kLeastMedian: the subset's squared residuals
   std::mt19937_64 rng(options.seed);
   std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
   std::vector<std::size_t> subset;
   const std::size_t score_points = std::min<std::size_t>(points.size(), 2000);
   for (std::size_t i = 0; i < score_points; ++i) subset.push_back(points.size() <= 2000 ? i : pick(rng));
-  const double t = options.inlier_threshold_mm;
+  double t = options.inlier_threshold_mm;
   const double t2 = t * t;
   Sphere best;
   double best_score = std::numeric_limits<double>::infinity();
@@ -333,14 +335,27 @@ std::vector<bool> RansacInliers(std::span<const Eigen::Vector3d> points, const S
       continue;
     }
     double score = 0;
-    for (const std::size_t i : subset) {
-      const double r = (points[i] - s.centre_mm).norm() - s.radius_mm;
-      score += std::min(r * r, t2);
+    if (least_median) {
+      squared.clear();
+      for (const std::size_t i : subset) squared.push_back(std::pow((points[i] - s.centre_mm).norm() - s.radius_mm, 2));
+      score = Median(squared);
+    } else {
+      for (const std::size_t i : subset) {
+        const double r = (points[i] - s.centre_mm).norm() - s.radius_mm;
+        score += std::min(r * r, t2);
+      }
     }
     if (score < best_score) best_score = score, best = s;
   }
   if (!std::isfinite(best_score)) {
     throw InputError("sphere fit: no 4 of the points span a sphere; the points lie on a plane or a line");
+  }
+  if (least_median) {
+    // The robust standard deviation of the best sphere's residuals, with Rousseeuw and Leroy's small-sample
+    // factor (1 + 5 / (n - p)); points within 2.5 of it are the consensus set.
+    const double n = static_cast<double>(subset.size());
+    const double sigma = 1.4826 * (1.0 + 5.0 / std::max(1.0, n - 4.0)) * std::sqrt(best_score);
+    t = std::max(2.5 * sigma, options.min_threshold_mm);
   }
   std::vector<bool> inlier(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -402,7 +417,7 @@ SphereFit FitSphere(std::span<const Eigen::Vector3d> points, const SphereFitOpti
     theta << start.centre_mm - origin, start.radius_mm;
     scale = start.radius_mm;
   } else {
-    if (options.outliers == SphereOutliers::kRansac) {
+    if (options.outliers == SphereOutliers::kRansac || options.outliers == SphereOutliers::kLeastMedian) {
       fit.inlier = RansacInliers(points, options);
       const auto agree = static_cast<std::size_t>(std::count(fit.inlier.begin(), fit.inlier.end(), true));
       if (agree < static_cast<std::size_t>(n + 1)) {

@@ -38,6 +38,10 @@ enum class SphereOutliers {
   kNone,    // every point counts
   kTrim,    // refit without the points beyond the threshold until the inlier set no longer changes
   kRansac,  // a consensus set first (needs inlier_threshold_mm), then kTrim
+  // A consensus set with no threshold to give: the 4-point sphere with the least median squared residual
+  // (Rousseeuw 1984: up to half the points may be anything), its inliers those within 2.5 robust standard
+  // deviations of it (Rousseeuw and Leroy 1987), then kTrim. For point sets whose noise is not known.
+  kLeastMedian,
 };
 
 enum class SphereSolver {

@@ -67,6 +67,7 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
   std::optional<std::pair<int, int>> grid;
   int columns[3] = {0, 1, 2};
   bool seen_data_or_header = false;
+  std::optional<std::uint64_t> declared_count;
   std::size_t line_number = 0;
   size_t start = 0;
   while (start < text.size()) {
@@ -83,6 +84,14 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
     const std::vector<std::string_view> fields = Fields(line);
     if (!seen_data_or_header) {
       seen_data_or_header = true;
+      // A first line holding only the point count (NIST ATS .ds files): kept to check the count against.
+      if (fields.size() == 1) {
+        const std::optional<std::int64_t> count = ParseInt(fields[0]);
+        if (count && *count >= 0) {
+          declared_count = static_cast<std::uint64_t>(*count);
+          continue;
+        }
+      }
       if (!fields.empty() && !ParseDouble(fields[0])) {  // a header naming the columns
         for (int axis = 0; axis < 3; ++axis) {
           const std::string wanted(1, static_cast<char>('x' + axis));
@@ -124,6 +133,10 @@ PointCloud ParseXyz(std::string_view text, const std::string& name, const PointC
     if (points.size() > kMaxPoints) throw InputError(name + ": more points than fvm can hold");
   }
   if (points.empty()) throw InputError(name + ": holds no points; XYZ files hold x y z (mm) per line");
+  if (declared_count && *declared_count != points.size()) {
+    throw InputError(name + ":1: the first line says " + std::to_string(*declared_count) + " points, the file holds " +
+                     std::to_string(points.size()) + "; the file is cut short or the count is wrong");
+  }
   PointCloud cloud = MakeUnorganisedCloud(std::move(points));
   if (grid &&
       static_cast<std::uint64_t>(grid->first) * static_cast<std::uint64_t>(grid->second) == cloud.points.size()) {

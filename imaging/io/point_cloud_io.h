@@ -1,7 +1,8 @@
 #pragma once
 // Point clouds in files: PCD and PLY (read by fvm's own strict readers, written through PCL; any numeric x, y, z
 // fields, other fields ignored), and plain XYZ/CSV text (x y z per line, separated by blanks, commas or
-// semicolons; '#' comments; an optional header line naming the columns; more columns ignored). Coordinates are mm unless the options say otherwise.
+// semicolons; '#' comments; an optional header line naming the columns, or a first line holding only the point
+// count, as NIST's ATS .ds files have it; more columns ignored). Coordinates are mm unless the options say otherwise.
 
 #include <filesystem>
 #include <string>

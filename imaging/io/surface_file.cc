@@ -7,6 +7,7 @@
 #include "core/number_text.h"
 #include "imaging/io/al3d.h"
 #include "core/file_io.h"
+#include "imaging/io/sdf.h"
 #include "imaging/io/x3p.h"
 
 namespace fvm::imaging {
@@ -19,6 +20,7 @@ std::optional<SurfaceFormat> FromContent(std::string_view head) {
   using namespace std::string_view_literals;
   if (StartsWith(head, "PK\x03\x04"sv) || StartsWith(head, "PK\x05\x06"sv)) return SurfaceFormat::kX3p;
   if (StartsWith(head, "AliconaImaging")) return SurfaceFormat::kAl3d;
+  if (StartsWith(head, "aISO-1.0") || StartsWith(head, "bISO-1.0")) return SurfaceFormat::kSdf;
   if (StartsWith(head, "II*\0"sv) || StartsWith(head, "MM\0*"sv) || StartsWith(head, "\x76\x2f\x31\x01"sv) ||
       StartsWith(head, "\x89PNG"sv)) {
     return SurfaceFormat::kImage;
@@ -34,12 +36,14 @@ std::optional<SurfaceFormat> FromExtension(const std::filesystem::path& path) {
   const std::string extension = AsciiLower(path.extension().string());
   if (extension == ".x3p") return SurfaceFormat::kX3p;
   if (extension == ".al3d") return SurfaceFormat::kAl3d;
+  if (extension == ".sdf") return SurfaceFormat::kSdf;
   if (extension == ".tif" || extension == ".tiff" || extension == ".exr" || extension == ".png") {
     return SurfaceFormat::kImage;
   }
   if (extension == ".pcd") return SurfaceFormat::kPcd;
   if (extension == ".ply") return SurfaceFormat::kPly;
-  if (extension == ".xyz" || extension == ".csv" || extension == ".txt" || extension == ".asc" || extension == ".pts") {
+  if (extension == ".xyz" || extension == ".csv" || extension == ".txt" || extension == ".asc" || extension == ".pts" ||
+      extension == ".ds") {
     return SurfaceFormat::kXyz;
   }
   return std::nullopt;
@@ -67,6 +71,8 @@ std::string FormatName(SurfaceFormat format) {
       return "pcd";
     case SurfaceFormat::kPly:
       return "ply";
+    case SurfaceFormat::kSdf:
+      return "sdf";
     default:
       return "xyz";
   }
@@ -98,7 +104,7 @@ SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   if (const std::optional<SurfaceFormat> format = FromExtension(path)) return *format;
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
-                   ": not a format fvm reads; it reads X3P, Alicona AL3D, height-map images (TIFF, EXR, PNG), "
+                   ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, height-map images (TIFF, EXR, PNG), "
                    "PCD, PLY and XYZ/CSV text");
 }
 
@@ -117,6 +123,9 @@ Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions&
       break;
     case SurfaceFormat::kAl3d:
       surface.height_map = ReadAl3d(path);
+      break;
+    case SurfaceFormat::kSdf:
+      surface.height_map = ReadSdf(path);
       break;
     case SurfaceFormat::kImage:
       surface.height_map = ReadHeightMapImage(path, options.image);

@@ -1,6 +1,6 @@
 #pragma once
 // Any surface or point-cloud file fvm reads, recognised by its content first (zip for X3P, the AL3D
-// signature, TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read into a height map or a
+// signature, ISO 25178-71 SDF's aISO-1.0 / bISO-1.0, TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read into a height map or a
 // point cloud. The one entry point for commands that take "a measurement file" (fvm info, fvm fit).
 
 #include <filesystem>
@@ -14,14 +14,14 @@
 
 namespace fvm::imaging {
 
-enum class SurfaceFormat { kX3p, kAl3d, kImage, kPcd, kPly, kXyz };
+enum class SurfaceFormat { kX3p, kAl3d, kImage, kPcd, kPly, kXyz, kSdf };
 
-// "x3p", "al3d", "image", "pcd", "ply", "xyz".
+// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf".
 std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 
-// The format a file of this name is written in, by its extension alone (for outputs): .x3p, .al3d,
-// .tif/.tiff/.exr/.png, .pcd, .ply, .xyz/.csv/.txt/.asc/.pts; nullopt for anything else.
+// The format a file of this name is written in, by its extension alone (for outputs): .x3p, .al3d, .sdf,
+// .tif/.tiff/.exr/.png, .pcd, .ply, .xyz/.csv/.txt/.asc/.pts/.ds; nullopt for anything else.
 std::optional<SurfaceFormat> SurfaceFormatOfName(const std::filesystem::path& path);
 
 // Throws InputError when the file is missing, empty, or neither its content nor its extension is one fvm reads.
@@ -34,7 +34,7 @@ struct SurfaceReadOptions {
   void Check() const;
 };
 
-// Exactly one of height_map and cloud is set: a height map for X3P, AL3D and images, a cloud for PCD, PLY
+// Exactly one of height_map and cloud is set: a height map for X3P, AL3D, SDF and images, a cloud for PCD, PLY
 // and XYZ.
 struct Surface {
   SurfaceFormat format = SurfaceFormat::kX3p;

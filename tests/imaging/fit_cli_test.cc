@@ -142,5 +142,61 @@ TEST(FitCli, BadInputFailsWithoutOutput) {
   EXPECT_THAT(run.err, ::testing::HasSubstr("grid6x6 or bar17"));
 }
 
+void WriteText(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+// fvm fit --shape: the JSON contract's keys in order, the numbers of the points it was given (a sphere of radius 2
+// through 6 exact points in micrometres, a plane z = 1 of 4 points), and every bad input with exit 1 naming the file.
+TEST(FitCli, ShapeJsonContract) {
+  testing::TempDir dir;
+  const auto sphere = dir / "ball.ds";  // NIST ATS layout: the count first; micrometres
+  WriteText(sphere, "6\n2000 0 0\n-2000 0 0\n0 2000 0\n0 -2000 0\n0 0 2000\n0 0 -2000.5\n");
+  FvmRun run = RunFvm(dir, "fit " + sphere.string() + " --shape sphere --unit um --json");
+  ASSERT_EQ(run.status, 0) << run.err;
+  nlohmann::json doc = nlohmann::json::parse(run.out);
+  std::vector<std::string> keys;
+  for (auto it = doc.begin(); it != doc.end(); ++it) keys.push_back(it.key());
+  EXPECT_THAT(keys, ::testing::IsSupersetOf({"shape", "points", "centre_mm", "radius_mm", "u_centre_um",
+                                             "u_radius_um", "rms_um", "outliers"}));
+  EXPECT_EQ(doc["shape"], "sphere");
+  EXPECT_EQ(doc["points"], 6);
+  EXPECT_EQ(doc["outliers"], 0);
+  EXPECT_NEAR(doc["radius_mm"].get<double>(), 2.0, 1e-3);
+  EXPECT_NEAR(doc["centre_mm"][2].get<double>(), 0.0, 1e-3);
+  EXPECT_GT(doc["u_radius_um"].get<double>(), 0.0);
+
+  const auto plane = dir / "flat.xyz";
+  WriteText(plane, "0 0 1\n1 0 1\n0 1 1\n1 1 1.001\n");
+  run = RunFvm(dir, "fit " + plane.string() + " --shape plane --json");
+  ASSERT_EQ(run.status, 0) << run.err;
+  doc = nlohmann::json::parse(run.out);
+  EXPECT_EQ(doc["shape"], "plane");
+  EXPECT_NEAR(doc["point_mm"][2].get<double>(), 1.00025, 1e-12);  // the centroid
+  EXPECT_NEAR(doc["normal"][2].get<double>(), 1.0, 1e-6);
+  EXPECT_TRUE(doc.contains("u_normal_urad") && doc.contains("rms_um"));
+
+  const auto few = dir / "few.xyz";
+  WriteText(few, "0 0 0\n1 0 0\n0 1 0\n");
+  run = RunFvm(dir, "fit " + few.string() + " --shape sphere");
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr(few.string() + ": 3 points cannot determine a sphere"));
+  EXPECT_TRUE(run.out.empty());
+  run = RunFvm(dir, "fit " + few.string() + " --shape sphere --unit m");
+  EXPECT_EQ(run.status, 1);
+  const auto line = dir / "line.xyz";
+  WriteText(line, "0 0 0\n1 1 1\n2 2 2\n");
+  run = RunFvm(dir, "fit " + line.string() + " --shape plane");
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("lie on a line"));
+  const auto nan = dir / "nan.xyz";
+  WriteText(nan, "0 0 0\n1 0 0\n0 1 0\nnan 0 1\n0 0 1\n");
+  run = RunFvm(dir, "fit " + nan.string() + " --shape sphere");
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("point 4 of 5 has a NaN or infinite coordinate"));
+  // A ball of 2 mm given in micrometres but read as metres: radius 2 km.
+  run = RunFvm(dir, "fit " + sphere.string() + " --shape sphere --unit m");
+  EXPECT_EQ(run.status, 1);
+  EXPECT_THAT(run.err, ::testing::HasSubstr("is above 10 m"));
+}
+
 }  // namespace
 }  // namespace fvm

@@ -14,6 +14,7 @@
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/md5.h"
 #include "imaging/io/point_cloud_io.h"
+#include "imaging/io/sdf.h"
 #include "imaging/io/x3p.h"
 #include "imaging/io/zip_archive.h"
 #include "tests/artefacts/test_support.h"
@@ -105,6 +106,17 @@ TEST(ReaderFuzz, Al3d) {
       for (int i = 0; i < 3; ++i) bytes[random() % 900] = static_cast<char>(random() % 256);
     }
     EXPECT_EQ(Outcome([&] { ExpectWellFormed(ParseAl3d(bytes, "fuzz.al3d")); }), "") << "round " << round;
+  }
+}
+
+TEST(ReaderFuzz, Sdf) {
+  const std::string binary = testing::BinarySdf(3, 2, 1e-6, 2e-6, 1e-9, {1, 2, 3, -4, 5.5, 1e300});
+  const std::string ascii = "aISO-1.0\nManufacID = X\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\n"
+                            "Yscale = 1e-6\nZscale = 1e-6\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n";
+  std::mt19937 random(9);
+  for (int round = 0; round < kRounds; ++round) {
+    const std::string bytes = Mutate(round % 2 == 0 ? binary : ascii, random);
+    EXPECT_EQ(Outcome([&] { ExpectWellFormed(ParseSdf(bytes, "fuzz.sdf")); }), "") << "round " << round;
   }
 }
 

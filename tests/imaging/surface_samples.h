@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "imaging/height_map.h"
 
@@ -46,6 +48,29 @@ inline void ExpectSameHeights(const HeightMap& expected, const HeightMap& actual
       EXPECT_DOUBLE_EQ(actual.z_mm[i], expected.z_mm[i]) << "point " << i;
     }
   }
+}
+
+// A binary ISO 25178-71 SDF ("bISO-1.0") laid out byte by byte from the standard's header table, independently
+// of imaging/io/sdf.cc: heights as float64 (DataType 7) in units of z_scale_m, little-endian.
+inline std::string BinarySdf(int points, int profiles, double x_scale_m, double y_scale_m, double z_scale_m,
+                             const std::vector<double>& values, unsigned char data_type = 7) {
+  std::string bytes = "bISO-1.0";
+  bytes += std::string("TEST      ", 10) + "010120240000" + "010120240000";
+  const auto put = [&](const void* p, std::size_t n) { bytes.append(static_cast<const char*>(p), n); };
+  const std::uint16_t np = static_cast<std::uint16_t>(points), nq = static_cast<std::uint16_t>(profiles);
+  put(&np, 2), put(&nq, 2);
+  const double resolution = 0;
+  put(&x_scale_m, 8), put(&y_scale_m, 8), put(&z_scale_m, 8), put(&resolution, 8);
+  bytes += std::string(1, '\0') + std::string(1, static_cast<char>(data_type)) + std::string(1, '\0');
+  for (const double v : values) {
+    if (data_type == 5) {
+      const auto i = static_cast<std::int16_t>(v);
+      put(&i, 2);
+    } else {
+      put(&v, 8);
+    }
+  }
+  return bytes;
 }
 
 inline void ExpectSameGrid(const HeightMap& expected, const HeightMap& actual) {
