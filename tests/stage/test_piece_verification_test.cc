@@ -225,7 +225,7 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   options.tool_offsets = tools;
   const TestPieceVerification proposed = VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
   for (const char* iso : {"ECZ", "ECY", "EAZ", "EBZ", "EBY"}) EXPECT_TRUE(recovered(proposed, iso)) << iso;
-  // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in 002 Table 4.
+  // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in [Lorente 2021] Table 4.
   const TermRecovery& ecz = term(proposed, "ECZ");
   EXPECT_NEAR(ecz.value, 1118.0, 5 * ecz.u + 5.0);
 }
