@@ -623,6 +623,7 @@ std::vector<std::string> UnobservableStationParameters(const MultilaterationProb
 }
 
 MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const MultilaterationOptions& options) {
+  CheckRangesSpanANetwork(problem, options);
   Prepared prep = Prepare(problem, options, true);
   const Problem& pr = prep.pr;
   State& st = prep.state;

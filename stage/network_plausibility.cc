@@ -10,6 +10,20 @@
 
 namespace fvm::stage {
 
+void CheckRangesSpanANetwork(const MultilaterationProblem& problem, const MultilaterationOptions& options) {
+  if (!options.self_calibrate || problem.readings.empty()) return;
+  double longest = 0;
+  for (const StationReading& r : problem.readings) longest = std::max(longest, r.range_mm);
+  const double least = kMinStationSeparationSigmas * RangeSigmaMm(options.noise, 0.0);
+  if (longest < least) {
+    throw ImplausibleFit(fmt::format(
+        "every range is at most {:.4g} mm, shorter than {:.0f} range sigmas ({:.3g} mm): a self-calibration would put "
+        "the stations collapsed onto one spot, which is no network. It needs the tracker at distinct places with "
+        "ranges of its working distance; check the range column's units (mm)",
+        longest, kMinStationSeparationSigmas, least));
+  }
+}
+
 void CheckNetworkPlausible(const MultilaterationProblem& problem, const MultilaterationOptions& options,
                            const MultilaterationResult& result) {
   // Residuals against the noise model.

@@ -21,6 +21,11 @@ inline constexpr double kMinStationSeparationSigmas = 1000.0;
 // Throws ImplausibleFit (stage/plausibility.h) naming the worst reading (point, station, residual in mm and in
 // sigmas) when the range residuals' rms exceeds kMaxRangeRmsSigmas, or naming two stations a self-calibration put
 // closer than kMinStationSeparationSigmas. `result` is Multilaterate's, with its range residuals.
+// Before a self-calibration: throws ImplausibleFit when even the longest range is shorter than
+// kMinStationSeparationSigmas range sigmas, so that the stations could only sit on one spot (ranges in the wrong
+// units, a zero column).
+void CheckRangesSpanANetwork(const MultilaterationProblem& problem, const MultilaterationOptions& options);
+
 void CheckNetworkPlausible(const MultilaterationProblem& problem, const MultilaterationOptions& options,
                            const MultilaterationResult& result);
 

@@ -62,6 +62,7 @@ endfunction()
 
 # --- A laser tracker's readings with z mirrored: the fit would explain it by zTz = -2 x travel (-2400 mm).
 run(0 simulate tracker --seed 1 -o ${WORK}/plan)
+run(0 simulate tracker --seed 1 --stations ${SAMPLES}/stations/spread-4.json -o ${WORK}/net)
 # A clean run says nothing on stderr: no glog or Ceres lines.
 run(0 verify ${WORK}/plan/readings.csv --chain XFYZ --order 3 --tool 0,0,100 --json)
 if(NOT ERR STREQUAL "")
@@ -93,11 +94,14 @@ rewrite_column(${WORK}/tp_x.csv ${WORK}/tp_xy.csv ym constant)
 rewrite_column(${WORK}/tp_xy.csv ${WORK}/tp_same.csv zm constant)
 refused("" ARGS testpiece verify ${WORK}/tp_same.csv MATCHES "the same point" "rank-deficient" "pose_rx")
 
-# --- Multilateration: four ranges of 1000 mm to stations kilometres apart do not meet.
+# --- Multilateration: a simulated network's residuals are about half a sigma (the noise model's own scale); four ranges of 1000 mm to stations kilometres apart do not meet.
 file(WRITE ${WORK}/far.json "{\"stations\": [{\"name\": \"A\", \"x\": 0, \"y\": 0, \"z\": 0},
   {\"name\": \"B\", \"x\": 5000, \"y\": 0, \"z\": 0}, {\"name\": \"C\", \"x\": 0, \"y\": 5000, \"z\": 0},
   {\"name\": \"D\", \"x\": 0, \"y\": 0, \"z\": 5000}]}\n")
 file(WRITE ${WORK}/far.csv "id,station,range\nP1,A,1000\nP1,B,1000\nP1,C,1000\nP1,D,1000\n")
+run(0 multilaterate ${WORK}/net/readings.csv --stations ${WORK}/net/stations.json --self-calibrate --json)
+string(JSON sigmas GET "${OUT}" range_rms_sigmas)
+expect_near("range rms of a consistent network (sigmas)" "${sigmas}" 0.5 0.3)
 refused(${WORK}/far_points.csv ARGS multilaterate ${WORK}/far.csv --stations ${WORK}/far.json -o ${WORK}/far_points.csv
         MATCHES "far.csv: the ranges do not meet" "sigmas of the tracker's range noise" "point P1, station")
 # A self-calibration of ranges of 1e-6 mm: the stations collapse onto one spot.
