@@ -120,7 +120,8 @@ stage::VerificationResult VerifyProblem(const MachineProblem& problem, const sta
 }
 
 InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal) {
-  const bool implausible = dynamic_cast<const stage::ImplausibleFit*>(&refusal) != nullptr;
+  const bool implausible = dynamic_cast<const stage::ImplausibleFit*>(&refusal) != nullptr &&
+                           dynamic_cast<const stage::DegenerateReadings*>(&refusal) == nullptr;
   return InputError(fmt::format("{}: {}{}", source, refusal.what(),
                                 implausible ? " (a machine really this far out: raise the bound with --max-error-mm)" : ""));
 }

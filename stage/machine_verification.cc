@@ -75,7 +75,8 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
   if (options.instrument == InstrumentPose::kNone) {
     throw std::invalid_argument("a verification needs the tracker pose: held or estimated");
   }
-  CheckReadingsSpan(layout, readings, options.tool_offsets);
+  // With too few readings for the model, Identify's count says what to do; otherwise their span first.
+  if (3 * readings.size() >= static_cast<size_t>(layout.NumFree()) + 6) CheckReadingsSpan(layout, readings, options.tool_offsets);
   if (options.instrument == InstrumentPose::kEstimated && options.pose.translation.isZero() && options.pose.rotation.isZero()) {
     options.pose = RigidStartPose(layout.chain(), readings, options.tool_offsets);
   }

@@ -182,7 +182,7 @@ void CheckReadingsSpan(const ParameterLayout& layout, const std::vector<Observat
   const char* shape = collapsed == 3 ? "every reading is (nearly) the same point"
                       : collapsed == 2 ? "the readings lie on a line"
                                        : "the readings lie in a plane";
-  throw ImplausibleFit(fmt::format(
+  throw DegenerateReadings(fmt::format(
       "{}: they spread {:.4g}, {:.4g}, {:.4g} mm (rms along their principal axes) where the commanded points spread "
       "{:.4g}, {:.4g}, {:.4g} mm. A fit is rank-deficient here: only positioning errors as large as the travel (xTx1, "
       "yTy1, zTz1 near -100 %) could explain the readings, and at that solution the instrument's rotation (pose_rx, "

@@ -28,6 +28,11 @@ struct ImplausibleFit : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+// Readings that do not span the commanded points (CheckReadingsSpan): no bound makes them a machine.
+struct DegenerateReadings : ImplausibleFit {
+  using ImplausibleFit::ImplausibleFit;
+};
+
 // 1 mm per metre of the longest travel of the layout (mm).
 double DefaultMaxErrorMm(const ParameterLayout& layout);
 
@@ -49,7 +54,7 @@ TermExcess LargestExcess(const Calibration& calibration, double max_error_mm);
 // (a scale of -2.000) ... are the instrument's axes mirrored?". Infinity disables the check.
 void CheckPlausibleMachine(const IdentificationResult& identified, double max_error_mm);
 
-// Throws ImplausibleFit (before any fit) when the readings do not span what the commanded points span: every
+// Throws DegenerateReadings (before any fit) when the readings do not span what the commanded points span: every
 // reading the same point, or readings on a line or a plane where the commands fill a volume. A fit would explain
 // them by errors as large as the travel, at a solution where the instrument's rotation has no effect (a
 // rank-deficient problem); the message names the parameters.
