@@ -20,9 +20,33 @@ void AddScan(stage::MeasurementSet& set, const RegisteredScan& scan) {
   set.anchors.push_back(scan.encoder_mm.front());
 }
 
+// The same scan given twice (one layout under two names, or a copy) would count each registration twice and shrink
+// every uncertainty by sqrt(2): same encoder readings and same registered offsets, bit for bit, are the same scan.
+// Two real scans of one path differ in their registrations' noise.
+void RefuseRepeatedScans(const std::vector<RegisteredScan>& scans) {
+  const auto same = [](const RegisteredScan& a, const RegisteredScan& b) {
+    if (a.encoder_mm != b.encoder_mm || a.registration.pairs.size() != b.registration.pairs.size()) return false;
+    for (size_t k = 0; k < a.registration.pairs.size(); ++k) {
+      const imaging::PairRegistration &p = a.registration.pairs[k], &q = b.registration.pairs[k];
+      if (p.accepted != q.accepted || p.offset_px != q.offset_px) return false;
+    }
+    return true;
+  };
+  for (size_t i = 0; i < scans.size(); ++i) {
+    for (size_t j = i + 1; j < scans.size(); ++j) {
+      if (same(scans[i], scans[j])) {
+        throw std::invalid_argument("scans " + scans[i].name + " and " + scans[j].name +
+                                    " are the same scan (the same encoder readings and registrations): counted twice, it "
+                                    "would shrink every uncertainty; give each scan once");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm) {
+  RefuseRepeatedScans(scans);
   stage::MeasurementSet set;
   for (size_t s = 0; s < scans.size(); ++s) {
     const RegisteredScan& scan = scans[s];

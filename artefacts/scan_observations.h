@@ -27,7 +27,8 @@ struct RegisteredScan {
 // pixel size p, weighted by the pair's own information (px^-2, so p^2 times its inverse, y flipped). The
 // registrations of a chain are independent pair by pair, where the positions chained from them are not. z is the
 // pair's height step where the scan has them, else not observed (grey tiles). One group per scan, anchored at its
-// first tile: the first scan's is the frame reference.
+// first tile: the first scan's is the frame reference. Throws std::invalid_argument naming two scans that are one
+// (the same encoder readings and registrations): given twice, a scan would shrink every uncertainty by sqrt(2).
 stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm);
 
 // The same registrations as the chained positions a stitched export holds, e_0 + p (position_k - position_0), each

@@ -148,6 +148,12 @@ CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& opt
         const std::string& key = table.lower_header_.back();
         if (key.empty()) continue;  // a trailing separator: an unnamed column, ignored like any other extra one
         for (std::size_t j = 0; j < i; ++j) {
+          if (table.lower_header_[j] == key && ParseDouble(key).has_value()) {
+            // A repeated number is a data row read as the header ("1,0,0,0"): say that, not "column '0' twice".
+            throw InputError(fmt::format("{}:{}: this line holds numbers, not column names: the header line is "
+                                         "missing; add one naming the columns ({}) above the rows",
+                                         file, first_line, expected));
+          }
           if (table.lower_header_[j] == key) {
             throw InputError(
                 fmt::format("{}:{}: column '{}' appears twice in the header (fields {} and {}); keep "
@@ -192,6 +198,13 @@ CsvTable ParseCsv(std::string_view text, std::string name, const CsvOptions& opt
 }
 
 CsvTable ReadCsv(const std::filesystem::path& path, const CsvOptions& options) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw InputError(fmt::format("{}: is a directory, not a file; name the CSV table itself (a header line {} and "
+                                 "one row per line)",
+                                 path.string(), options.expected_header.empty() ? std::string("naming the columns")
+                                                                                : options.expected_header));
+  }
   return ParseCsv(ReadFileBytes(path, options.max_bytes), path.string(), options);
 }
 

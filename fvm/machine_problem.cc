@@ -10,6 +10,8 @@
 #include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
+#include "stage/error_terms.h"
+#include "stage/plausibility.h"
 
 namespace fvm::cli {
 namespace {
@@ -57,6 +59,15 @@ void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
       ->capture_default_str();
   sub->add_flag("--unweighted", args.unweighted, "equal weights instead of the tracker's covariances");
   sub->add_option("--validate", args.validate, "other readings to judge the model on (never fitted)");
+  AddMaxErrorOption(sub, args);
+}
+
+void AddMaxErrorOption(CLI::App* sub, MachineArgs& args) {
+  sub->add_option("--max-error-mm", args.max_error_mm,
+                  "plausibility bound: refuse a result with an error term or residual beyond it, which means wrong data "
+                  "(mirrored axes, units, columns), not a machine (default: 1 mm per metre of the longest travel; "
+                  "e.g. --max-error-mm 5)")
+      ->check(CLI::PositiveNumber);
 }
 
 std::string MachineProblem::WeightsName() const { return weighted ? "tracker " + noise.name : std::string("equal"); }
@@ -96,6 +107,7 @@ MachineProblem LoadMachineProblem(const MachineArgs& args) {
   p.options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
   if (!args.pose.empty()) p.options.pose = ParsePose(args.pose, "--pose");
   p.options.num_threads = ThreadCount();
+  p.options.max_error_mm = args.max_error_mm;
   return p;
 }
 
@@ -103,8 +115,37 @@ stage::VerificationResult VerifyProblem(const MachineProblem& problem, const sta
   try {
     return stage::VerifyMachine(layout, problem.observations, problem.options);
   } catch (const std::invalid_argument& e) {
-    throw InputError(fmt::format("{}: {}", problem.readings.source, e.what()));
+    throw VerificationRefusal(problem.readings.source, e);
   }
+}
+
+InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal) {
+  const bool implausible = dynamic_cast<const stage::ImplausibleFit*>(&refusal) != nullptr &&
+                           dynamic_cast<const stage::DegenerateReadings*>(&refusal) == nullptr;
+  return InputError(fmt::format("{}: {}{}", source, refusal.what(),
+                                implausible ? " (a machine really this far out: raise the bound with --max-error-mm)" : ""));
+}
+
+std::string NotConvergedReason(const stage::IdentificationResult& identified) {
+  const std::string& report = identified.solver_report;
+  const size_t at = report.find("Termination: ");
+  const std::string termination = at == std::string::npos ? std::string() : report.substr(at + 13, report.find_first_of(" ,\n", at + 13) - at - 13);
+  const std::string advice = "the results are written but must not be trusted as they are: check the readings (units, "
+                             "ids, outliers) or try a smaller model";
+  if (termination == "NO_CONVERGENCE") {
+    return fmt::format("the identification stopped at its limit of {} iterations before the fit settled; {}",
+                       identified.iterations, advice);
+  }
+  return fmt::format("the identification failed after {} iterations ({}); {}", identified.iterations,
+                     termination.empty() ? "the solver gave no reason" : "the solver ended with " + termination, advice);
+}
+
+nlohmann::json PlausibilityJson(const stage::IdentificationResult& identified, double max_error_mm) {
+  const double bound = max_error_mm > 0 ? max_error_mm : stage::DefaultMaxErrorMm(identified.calibration.layout);
+  const stage::TermExcess largest = stage::LargestExcess(identified.calibration, bound);
+  return {{"max_error_mm", bound},
+          {"largest_term", largest.term >= 0 ? std::string(stage::GetErrorTerm(largest.term).vdi) : std::string()},
+          {"largest_share", largest.share}};
 }
 
 nlohmann::json ErrorJson(const stage::VolumetricError& e) {

@@ -5,10 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "artefacts/io/tracker_readings.h"
+#include "core/input_error.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "fvm/machine_report.h"
 #include "stage/identification.h"
@@ -28,10 +30,13 @@ struct MachineArgs {
   std::string tracker = "published";
   bool unweighted = false;
   std::string validate;
+  double max_error_mm = 0;  // 0: 1 mm per metre of the longest travel
 };
 
-// DATA, --chain, --basis, --tool, --fit-pose, --pose, --machine, --tracker, --unweighted, --validate.
+// DATA, --chain, --basis, --tool, --fit-pose, --pose, --machine, --tracker, --unweighted, --validate, --max-error-mm.
 void AddMachineOptions(CLI::App* sub, MachineArgs& args);
+// --max-error-mm alone (fvm testpiece verify adds its options itself).
+void AddMaxErrorOption(CLI::App* sub, MachineArgs& args);
 
 struct MachineProblem {
   artefacts::TrackerReadings readings;
@@ -51,10 +56,22 @@ struct MachineProblem {
 // Reads and checks everything; bad input is an InputError naming the file, line and point.
 MachineProblem LoadMachineProblem(const MachineArgs& args);
 
-// Identifies `layout` (VerifyMachine); a refusal is an InputError naming the data file. Then refuses readings the
-// tracker could not have made from the pose found.
+// Identifies `layout` (VerifyMachine); a refusal is an InputError naming the data file (an implausible result says
+// how to raise the bound). Then refuses readings the tracker could not have made from the pose found.
 stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout);
+// The InputError for a verification's refusal: the data file and the reason; for an implausible result
+// (stage::ImplausibleFit) also how to raise the bound.
+InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal);
 void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
+
+// The one-line reason an identification did not converge, for exit 3 ("the identification stopped at its limit of
+// 100 iterations before the fit settled: ..."): what happened and what to try, without the solver's raw report
+// (which --json carries as "solver_report").
+std::string NotConvergedReason(const stage::IdentificationResult& identified);
+
+// {"max_error_mm", "largest_term", "largest_share"}: the plausibility bound applied and the identified term that
+// comes nearest it (share 1 is the bound).
+nlohmann::json PlausibilityJson(const stage::IdentificationResult& identified, double max_error_mm);
 
 // {"mean_um", "max_um", "min_um"} of a volumetric error.
 nlohmann::json ErrorJson(const stage::VolumetricError& e);

@@ -2,6 +2,8 @@
 
 #include <fmt/core.h>
 
+#include <glog/logging.h>
+
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <memory>
@@ -69,6 +71,12 @@ constexpr const char* kExitCodeFooter =
 }  // namespace fvm::cli
 
 int main(int argc, char** argv) {
+  // Ceres reports through glog: its warnings (and, before InitGoogleLogging, a notice that logging is not set up)
+  // would reach stderr in a clean run. fvm says what matters itself; only a fatal check, which aborts, is logged.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  FLAGS_stderrthreshold = google::GLOG_FATAL;
+  FLAGS_logtostderr = false;
+  google::InitGoogleLogging("fvm");
   // Named here, not from argv[0]: messages and usage lines say "fvm", never the binary's full path.
   CLI::App app{"fvm: calibrate the motion stage of focus-variation microscopes (and machine tools measured with "
                "laser\ntrackers) from measurements of an uncalibrated artefact. Units: mm and rad in files, um and "

@@ -195,6 +195,7 @@ void Run(const MultilaterateArgs& args) {
   doc["stations"] = jstations;
   doc["range_rms_um"] = result.range_rms_mm * 1e3;
   doc["weighted_rms"] = result.weighted_rms;
+  doc["range_rms_sigmas"] = result.range_rms_sigmas;
   doc["u_mean_um"] = u_mean * 1e3;
   doc["u_max_um"] = u_max * 1e3;
   doc["geometry"] = {{"angle_min_deg", g.min_angle_deg}, {"angle_mean_deg", g.mean_angle_deg},
@@ -236,10 +237,10 @@ void Run(const MultilaterateArgs& args) {
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
   } else {
-    fmt::print("multilaterated {} points from {} stations ({}, {} stations, tracker {} weights): range rms {:.2f} um, "
-               "weighted rms {:.2f}\n",
+    fmt::print("multilaterated {} points from {} stations ({}, {} stations, tracker {} weights): range rms {:.2f} um "
+               "({:.2f} sigmas of the noise model), weighted rms {:.2f}\n",
                result.points.size(), result.stations.size(), mode, args.self_calibrate ? "self-calibrated" : "known",
-               options.noise.name, result.range_rms_mm * 1e3, result.weighted_rms);
+               options.noise.name, result.range_rms_mm * 1e3, result.range_rms_sigmas, result.weighted_rms);
     fmt::print("  geometry: angles between lines of sight {:.1f} / {:.1f} / {:.1f} deg (min / mean / max, folded to "
                "0-90: 90 is ideal), PDOP mean {:.2f} (max {:.2f})\n",
                g.min_angle_deg, g.mean_angle_deg, g.max_angle_deg, g.mean_pdop, g.max_pdop);

@@ -12,7 +12,26 @@
 
 namespace fvm::cli {
 
+void RefuseRepeatedFiles(const std::vector<std::string>& paths, const std::string& option) {
+  // The same file under two spellings (./a.csv, a.csv, a link). Copies of one scan are caught after registration
+  // (artefacts::ScanDisplacements): two layouts of the same content in two directories may be two real scans.
+  std::vector<std::filesystem::path> seen;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    std::error_code error;
+    seen.push_back(std::filesystem::weakly_canonical(paths[i], error));
+    if (error) seen.back() = std::filesystem::absolute(paths[i]).lexically_normal();
+    for (size_t j = 0; j < i; ++j) {
+      if (seen[j] == seen[i]) {
+        throw InputError(fmt::format("{} {} and {} {} are the same file: a measurement counts once (given twice it "
+                                     "would shrink every uncertainty by sqrt(2)); give it once",
+                                     option, paths[j], option, paths[i]));
+      }
+    }
+  }
+}
+
 std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<std::string>& layouts, double pixel_mm) {
+  RefuseRepeatedFiles(layouts, "--scan");
   std::vector<artefacts::RegisteredScan> scans;
   imaging::SetImagingThreads(ThreadCount());
   for (const std::string& path : layouts) {

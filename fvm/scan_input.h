@@ -11,7 +11,10 @@
 
 namespace fvm::cli {
 
-// Throws InputError naming the layout and line: a scan shorter than two tiles, encoder readings missing, or a step
+// Throws InputError naming two --option paths that are the same file (however spelt).
+void RefuseRepeatedFiles(const std::vector<std::string>& paths, const std::string& option);
+
+// Throws InputError naming the layout and line: the same layout twice, a scan shorter than two tiles, encoder readings missing, or a step
 // between consecutive tiles longer than the field of view (readings in pixels, or tiles that cannot overlap).
 std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<std::string>& layouts, double pixel_mm);
 

@@ -139,7 +139,7 @@ void RunVerify(const TestPieceVerifyArgs& args) {
     try {
       return stage::VerifyTestPiece(layout, problem.observations, problem.options);
     } catch (const std::invalid_argument& e) {
-      throw InputError(fmt::format("{}: {}", problem.readings.source, e.what()));
+      throw VerificationRefusal(problem.readings.source, e);
     }
   }();
   const stage::IdentificationResult& r = v.result.identified;
@@ -216,7 +216,9 @@ void RunVerify(const TestPieceVerifyArgs& args) {
   doc["pose"]["initial"] = PoseJson(v.result.initial_pose, nullptr);
   doc["datum_absorbs"] = nlohmann::json::array();
   for (const stage::FixedCoefficient& f : v.datum_absorbs) doc["datum_absorbs"].push_back({{"name", f.name}, {"reason", f.reason}});
+  doc["plausibility"] = PlausibilityJson(r, args.max_error_mm);
   doc["converged"] = r.converged;
+  if (!r.converged) doc["solver_report"] = r.solver_report;
 
   if (!args.report.empty()) {
     MachineReportData data = MachineVerificationReport(args, doc, v.result, problem.observations,
@@ -262,7 +264,7 @@ void RunVerify(const TestPieceVerifyArgs& args) {
     fmt::print("  datum: {:.4f}, {:.4f}, {:.4f} mm; absorbs {} coefficient(s) (see --json datum_absorbs)\n", r.pose.translation.x(),
                r.pose.translation.y(), r.pose.translation.z(), v.datum_absorbs.size());
   }
-  if (!r.converged) throw NotConvergedError("the identification did not converge: " + r.solver_report);
+  if (!r.converged) throw NotConvergedError(NotConvergedReason(r));
 }
 
 // ---------------------------------------------------------------------------------------------- simulate
@@ -405,6 +407,7 @@ void RegisterTestPiece(CLI::App& app) {
       ->capture_default_str();
   v->add_option("--machine", verify->machine, "domain of the error functions LXxLYxLZ[@X0,Y0,Z0] (default: the span of the points)");
   v->add_option("--validate", verify->validate, "other readings to judge the model on (never fitted)");
+  AddMaxErrorOption(v, *verify);
   v->add_option("--nominal", verify->nominal, "NOMINAL.csv of the piece: its series column selects X1..Z3 for the geometric verification");
   v->add_option("--report", verify->report, "write an HTML report (iterations, histograms, error functions, geometric table)");
   v->add_flag("--json", verify->json, "print the result as JSON");

@@ -125,7 +125,7 @@ void RunStage(const UncertaintyArgs& args) {
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult reference = IdentifyModel(args.model, args.terms, identify, args.settings);
   if (!reference.converged) {
-    throw NotConvergedError("the identification of the batch did not converge: " + reference.solver_report);
+    throw NotConvergedError(NotConvergedReason(reference));
   }
   std::optional<stage::MeasurementSet> validate;
   if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
@@ -362,7 +362,7 @@ void Run(const UncertaintyArgs& args) {
   const stage::VerificationResult reference = VerifyProblem(problem, layout);
   CheckTrackerSight(problem, reference.identified.pose);
   if (!reference.identified.converged) {
-    throw NotConvergedError("the identification of the readings did not converge: " + reference.identified.solver_report);
+    throw NotConvergedError(NotConvergedReason(reference.identified));
   }
 
   if (!args.place_tracker.empty()) {

@@ -228,7 +228,9 @@ void Run(const VerifyArgs& args) {
   const nlohmann::json calibration = stage::CalibrationToJson(r);
   doc["fixed"] = calibration["fixed"];
   doc["parameters"] = calibration["parameters"];
+  doc["plausibility"] = PlausibilityJson(r, args.max_error_mm);
   doc["converged"] = r.converged;
+  if (!r.converged) doc["solver_report"] = r.solver_report;
   if (fits.size() > 1) {
     for (const OrderFit& f : fits) {
       nlohmann::json o{{"order", f.order}, {"bic", f.bic}, {"final", ErrorJson(f.result->final)},
@@ -270,7 +272,7 @@ void Run(const VerifyArgs& args) {
     fmt::print("  {} coefficients free, {} fixed (see --json 'fixed' for each reason){}\n", r.calibration.layout.NumFree(),
                r.fixed.size(), args.output.empty() ? "" : "; model written to " + args.output);
   }
-  if (!r.converged) throw NotConvergedError("the identification did not converge: " + r.solver_report);
+  if (!r.converged) throw NotConvergedError(NotConvergedReason(r));
 }
 
 }  // namespace

@@ -391,6 +391,7 @@ void IdentificationOptions::Check() const {
     throw std::invalid_argument("unknown loss '" + loss + "': use none, huber or cauchy");
   }
   if (num_threads < 0) throw std::invalid_argument("num_threads must be 0 (all cores) or positive");
+  if (!(max_error_mm >= 0)) throw std::invalid_argument("the error bound must be positive (0: the default from the travel)");
   if (!(loss_scale_mm > 0) || !(alias_tolerance > 0) || !(max_relative_uncertainty > 0) || !(noise_floor_mm > 0)) {
     throw std::invalid_argument("identification tolerances must be positive");
   }

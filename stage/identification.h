@@ -88,6 +88,9 @@ struct IdentificationOptions {
   double max_relative_uncertainty = 1.0;    // fix a coefficient whose uncertainty exceeds this share of its
                                             // plausible size: the data cannot determine it
   double noise_floor_mm = 1e-5;             // never assume less noise than 10 nm per coordinate
+  // VerifyMachine's plausibility bound (stage/plausibility.h), mm: no identified error or residual may exceed it.
+  // 0: 1 mm per metre of the longest travel; infinity: no bound.
+  double max_error_mm = 0;
   int max_iterations = 100;
   int num_threads = 0;                      // Jacobian evaluation threads; 0: all cores
   // Called after each solver iteration with the layout being solved (the given one less what the rank treatment

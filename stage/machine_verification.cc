@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "stage/plausibility.h"
 #include "stage/residual_summary.h"
 
 namespace fvm::stage {
@@ -74,6 +75,8 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
   if (options.instrument == InstrumentPose::kNone) {
     throw std::invalid_argument("a verification needs the tracker pose: held or estimated");
   }
+  // With too few readings for the model, Identify's count says what to do; otherwise their span first.
+  if (3 * readings.size() >= static_cast<size_t>(layout.NumFree()) + 6) CheckReadingsSpan(layout, readings, options.tool_offsets);
   if (options.instrument == InstrumentPose::kEstimated && options.pose.translation.isZero() && options.pose.rotation.isZero()) {
     options.pose = RigidStartPose(layout.chain(), readings, options.tool_offsets);
   }
@@ -87,6 +90,7 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
     options.pose = initial_pose;
   }
   VerificationResult result(Identify(layout, readings, options));
+  CheckPlausibleMachine(result.identified, options.max_error_mm);
   result.initial_pose = initial_pose;
   result.initial = SummarizeVolumetric(VolumetricResiduals(layout, nullptr, initial_pose, readings, options.tool_offsets));
   result.final = SummarizeVolumetric(result.identified.residuals);

@@ -41,7 +41,9 @@ Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& read
                     const std::vector<Eigen::Vector3d>& tool_offsets = {});
 
 // Identifies `layout` from the readings. options.instrument must be kHeld or kEstimated; with kEstimated,
-// options.pose is only where the search starts (RigidStartPose when left at zero).
+// options.pose is only where the search starts (RigidStartPose when left at zero). Refuses (ImplausibleFit,
+// stage/plausibility.h) readings that do not span the commanded points, and a result with an error term or a
+// residual beyond options.max_error_mm.
 VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vector<Observation>& readings,
                                  IdentificationOptions options);
 

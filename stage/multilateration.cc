@@ -15,6 +15,7 @@
 #include <Eigen/LU>
 
 #include "stage/linear_dependence.h"
+#include "stage/network_plausibility.h"
 #include "stage/pose.h"
 
 namespace fvm::stage {
@@ -47,10 +48,7 @@ struct Sigmas {
   double range_floor = 1e-3;  // a noise-free preset weighs ranges by 1 um
   double azimuth = 1e-6, elevation = 1e-6;
   const TrackerNoise* noise = nullptr;
-  double Range(double range_mm) const {
-    if (noise == nullptr || noise->IsNoiseFree()) return range_floor;
-    return std::max(noise->RangeSigmaMm(range_mm), 1e-9);
-  }
+  double Range(double range_mm) const { return noise == nullptr ? range_floor : RangeSigmaMm(*noise, range_mm); }
 };
 
 Sigmas SigmasOf(const TrackerNoise& noise) {
@@ -500,6 +498,10 @@ void MultilaterationOptions::Check() const {
   if (!(rank_tolerance > 0.0 && rank_tolerance < 1.0)) throw std::invalid_argument("rank_tolerance must be in (0, 1)");
 }
 
+double RangeSigmaMm(const TrackerNoise& noise, double range_mm) {
+  return noise.IsNoiseFree() ? 1e-3 : std::max(noise.RangeSigmaMm(range_mm), 1e-9);
+}
+
 int MinStationsPerPoint(const MultilaterationOptions& options) { return options.self_calibrate ? 4 : 3; }
 
 void ThreeTwoOneFrame(const std::vector<Eigen::Vector3d>& stations, Eigen::Matrix3d* rotation, Eigen::Vector3d* translation) {
@@ -621,6 +623,7 @@ std::vector<std::string> UnobservableStationParameters(const MultilaterationProb
 }
 
 MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const MultilaterationOptions& options) {
+  CheckRangesSpanANetwork(problem, options);
   Prepared prep = Prepare(problem, options, true);
   const Problem& pr = prep.pr;
   State& st = prep.state;
@@ -697,17 +700,21 @@ MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const
     const Eigen::AngleAxisd aa(st.rotations[i]);
     result.station_rotation[i] = aa.angle() * aa.axis();
   }
-  double sum2 = 0;
+  double sum2 = 0, sigmas2 = 0;
   for (const StationReading& m : problem.readings) {
     const Eigen::Vector3d q = st.rotations[static_cast<size_t>(m.station)].transpose() *
                               (st.points[static_cast<size_t>(m.point)] - st.stations[static_cast<size_t>(m.station)]);
-    result.range_residuals_mm.push_back(q.norm() - m.range_mm);
-    sum2 += result.range_residuals_mm.back() * result.range_residuals_mm.back();
+    const double r = q.norm() - m.range_mm;
+    result.range_residuals_mm.push_back(r);
+    sum2 += r * r;
+    sigmas2 += std::pow(r / RangeSigmaMm(options.noise, m.range_mm), 2);
   }
+  result.range_rms_sigmas = std::sqrt(sigmas2 / static_cast<double>(std::max<size_t>(1, problem.readings.size())));
   result.range_rms_mm = std::sqrt(sum2 / static_cast<double>(std::max<size_t>(1, problem.readings.size())));
   const int dof = n.residuals - 3 * static_cast<int>(st.points.size()) - layout.size();
   result.weighted_rms = dof > 0 ? std::sqrt(n.cost / dof) : 0.0;
   result.geometry = Geometry(pr, st);
+  CheckNetworkPlausible(problem, options, result);
   return result;
 }
 

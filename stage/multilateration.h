@@ -82,10 +82,14 @@ struct MultilaterationResult {
   std::vector<double> range_residuals_mm;          // per reading: |R^T (p - s)| - range
   double range_rms_mm = 0;
   double weighted_rms = 0;                         // sqrt(chi^2 / degrees of freedom); 0 without redundancy
+  double range_rms_sigmas = 0;                     // rms of the range residuals in sigmas of the noise model
   int iterations = 0;
   bool converged = false;
   NetworkGeometry geometry;
 };
+
+// The range sigma the solve weighs a range by (mm): the noise model's a + b * range, or 1 um for a noise-free one.
+double RangeSigmaMm(const TrackerNoise& noise, double range_mm);
 
 // The least number of stations a point needs: 3 with known stations, 4 for a self-calibration.
 int MinStationsPerPoint(const MultilaterationOptions& options);
@@ -93,7 +97,9 @@ int MinStationsPerPoint(const MultilaterationOptions& options);
 // Throws std::invalid_argument naming the point or station on: a station with no readings, a point seen by fewer
 // than MinStationsPerPoint stations, a point read twice by one station, a reading without angles under
 // use_angles, a missing start, a self-calibration with fewer than 3 stations or stations on one line, and a
-// point the geometry cannot fix (its lines of sight and the stations in one plane: its block is singular).
+// point the geometry cannot fix (its lines of sight and the stations in one plane: its block is singular). Throws
+// ImplausibleFit (stage/network_plausibility.h) when the ranges do not meet (residuals of thousands of sigmas) or a
+// self-calibration collapses the stations onto one spot.
 MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const MultilaterationOptions& options);
 
 // The station parameters a self-calibration cannot determine from these readings (at the start values), named

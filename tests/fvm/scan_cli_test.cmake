@@ -80,3 +80,11 @@ file(WRITE ${WORK}/s/same.csv "file,row,col,x,y\nrow/tile_000.tif,0,0,-115,-100\
 refused("tiles that do not register" "no pair of neighbouring tiles registered" --scan ${WORK}/s/same.csv --pixel-mm ${pixel})
 refused("no pixel size" "--scan needs --pixel-mm" ${scans})
 run(2 calibrate ${WORK}/s ${scans} --pixel-mm ${pixel})
+
+# The same scan twice would count its registrations twice and shrink every uncertainty by sqrt(2) (issue 35): the
+# same file however spelt, and a copy of it, are refused by name.
+refused("the same scan file twice" "--scan .*row.csv and --scan .*row.csv are the same file"
+        --scan ${WORK}/s/row.csv --scan ${WORK}/s/column.csv --scan ${WORK}/s/../s/row.csv --pixel-mm ${pixel} --model 15)
+file(COPY_FILE ${WORK}/s/row.csv ${WORK}/s/row_again.csv)
+refused("a copy of a scan" "scans row and row_again are the same scan"
+        --scan ${WORK}/s/row.csv --scan ${WORK}/s/column.csv --scan ${WORK}/s/row_again.csv --pixel-mm ${pixel} --model 15)
