@@ -16,7 +16,7 @@ constexpr double kDefaultErrorPerLength = 1e-3;  // 1 mm per metre
 constexpr int kSamples = 61;
 // Angles are held to ten times the bound over the longest travel (10 mrad by default, the truth files' limit): they
 // act through lever arms the travel does not hold (tool offsets, the tracker's distance), and published test
-// functions reach 1.2 mrad on a 290 mm piece (002 Table 4: yRx).
+// functions reach 1.2 mrad on a 290 mm piece ([Lorente 2021] Table 4: yRx).
 constexpr double kAngleLeverFactor = 10.0;                     // along each axis' travel, as the term tables sample it
 
 double LongestTravel(const ParameterLayout& layout) {

@@ -1,6 +1,6 @@
 // Plausibility of identified machines and multilateration networks (issue 35): results no machine or network can
 // have are refused with the reason, on readings written out here from the ideal chain (no fvm simulation), while a
-// machine with errors of 0.1 mm per metre and the rigid pose of 001 passes with a wide margin.
+// machine with errors of 0.1 mm per metre and the rigid pose of [IJSIMM 2016] passes with a wide margin.
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 namespace fvm::stage {
 namespace {
 
-const Eigen::Vector3d kTravel(2500.0, 1500.0, 1200.0);  // 001 Table I
+const Eigen::Vector3d kTravel(2500.0, 1500.0, 1200.0);  // [IJSIMM 2016] Table I
 
 // A tracker at 1100, -1000, 600 mm turned by 30 deg about z; a point's reading is R^T (p - t).
 Pose TrackerPose() {
