@@ -10,8 +10,8 @@
 //
 // The bound is a length: translation terms are held to it over their axis' travel, rotation and squareness terms
 // to the angle that moves a point by ten times it over the longest travel (10 mrad by default, the truth files'
-// limit: angles act through lever arms the travel does not hold, and the test functions of [Lorente 2021] reach 1.2 mrad on a
-// 290 mm piece). Default: 1 mm per metre of the longest travel.
+// limit: angles act through lever arms the travel does not hold, and the test functions of [Lorente 2021] reach
+// 1.2 mrad on a 290 mm piece). Default: 1 mm per metre of the longest travel.
 
 #include <Eigen/Core>
 #include <stdexcept>
