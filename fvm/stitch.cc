@@ -146,7 +146,7 @@ void RunStitch(const StitchArgs& args) {
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
     if (!result.positions.registered[i]) {
       fallback.push_back(layout.tiles[i].file);
-    } else if (result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
+    } else if (result.positions.anchor[i] == 0 && result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
       // Linked by images, but along one axis only: a texture of parallel marks.
       stage_bound.push_back(layout.tiles[i].file);
     }
@@ -267,11 +267,18 @@ void RunStitch(const StitchArgs& args) {
     fmt::print("  registered across but not along parallel marks, where the stage decides (u above {:g} px): {}\n",
                0.5 * options.stage_sigma_px, list(stage_bound));
   }
-  double worst = 0.0;
+  double worst = 0.0, worst_any = 0.0;
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (result.positions.registered[i]) worst = std::max(worst, result.positions.sigma_px[i].maxCoeff());
+    const double u = result.positions.sigma_px[i].maxCoeff();
+    if (result.positions.anchor[i] == 0) worst = std::max(worst, u);
+    worst_any = std::max(worst_any, u);
   }
   fmt::print("largest standard uncertainty of a registered tile against the first of its chain: {:.4f} px\n", worst);
+  if (worst_any > worst) {
+    fmt::print("largest standard uncertainty of a tile against the first tile: {:.2f} px (the stage's, where no pair "
+               "registered)\n",
+               worst_any);
+  }
   fmt::print("positions written to {}{}\n", args.output, args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic);
 }
 

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <opencv2/imgproc.hpp>
 
@@ -13,26 +14,10 @@ namespace fvm::imaging::detail {
 
 namespace {
 
-// The normalised cross-correlation of two crops of one size over the pixels `usable` marks (all when empty).
-double Ncc(const cv::Mat& w, const cv::Mat& t, const cv::Mat& usable) {
-  cv::Mat mask;
-  if (!usable.empty()) usable.convertTo(mask, CV_8U);
-  cv::Scalar mw, sw, mt, st;
-  cv::meanStdDev(w, mw, sw, mask);
-  cv::meanStdDev(t, mt, st, mask);
-  if (!(sw[0] > 0.0 && st[0] > 0.0)) return 0.0;
-  return (cv::mean(w.mul(t), mask)[0] - mw[0] * mt[0]) / (sw[0] * st[0]);
-}
-
-}  // namespace
-
-Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Vector2d& e, double match_sigma) {
+// The quality and information of aligned crops; `area`: pixels per independent noise sample (1 for the crops as
+// they are, more once smoothed).
+Alignment Measure(const cv::Mat& warped, const cv::Mat& target, const cv::Mat& usable, double area) {
   Alignment out;
-  const auto inner = Interior(b, 4 + static_cast<int>(std::ceil(e.cwiseAbs().maxCoeff())));
-  if (!inner) return out;
-  const cv::Mat target = b.value(*inner);
-  const cv::Mat warped = ShiftedCrop(a.value, e, *inner);
-  const cv::Mat usable = Usable(a.valid, b.valid, e, *inner);
   // Gradients of both aligned crops.
   cv::Mat bx, by, ax, ay;
   InterpolationGradient(target, bx, by);
@@ -70,15 +55,6 @@ Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Ve
   const double covariance = swt / n - (sw / n) * (st / n);
   if (!(var_w > 0.0 && var_t > 0.0)) return out;
   out.quality = covariance / std::sqrt(var_w * var_t);
-  if (match_sigma > 0.0) {
-    // The same with the pixel noise smoothed away: the test of a pair is whether the two tiles show the same
-    // scene, and on camera tiles whose noise matches their finest texture the raw high-pass said 0.1 where the
-    // numbers and dots of the scene overlapped exactly.
-    cv::Mat smooth_w, smooth_t;
-    cv::GaussianBlur(warped, smooth_w, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
-    cv::GaussianBlur(target, smooth_t, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
-    out.quality = Ncc(smooth_w, smooth_t, usable);
-  }
   // The residual's variance: mean of (w - t)^2.
   const double residual = (sww - 2.0 * swt + stt) / n;
   const double variance = std::max(residual, 1e-12 * energy_b.trace() / n);
@@ -88,16 +64,37 @@ Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Ve
     const double texture = directions.eigenvalues()(k);
     // Under noise alone the cross energy along u scatters by sqrt(E_a E_b / n); a direction counts at 8 of
     // those (the filters correlate neighbouring pixels, so n overstates the independent samples a few times).
-    const double spread = std::sqrt(u.dot(energy_a * u) * u.dot(energy_b * u) / n);
+    const double spread = std::sqrt(u.dot(energy_a * u) * u.dot(energy_b * u) * area / n);
     if (!(texture > 8.0 * spread)) continue;
     // Refinement settles where B's gradient, texture and noise, is orthogonal to the residual; so the shift's
     // variance along u is variance E_b / texture^2, B's gradient energy over the texture's squared (the
     // sandwich of Gauss-Newton with a noisy Jacobian). Below it lies what registration leaves when noise does not
     // dominate (Lanczos resampling of texture near 0.2 cycles / px, remnants of the shading): 0.005 px, the rms
     // error of noise-light synthetic pairs; without it the information overstated 512 px pairs 15-fold.
-    const double noise_part = variance * u.dot(energy_b * u) / (texture * texture);
+    const double noise_part = area * variance * u.dot(energy_b * u) / (texture * texture);
     out.information += 1.0 / (noise_part + kSystematicPx * kSystematicPx) * u * u.transpose();
   }
+  return out;
+}
+
+}  // namespace
+
+Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Vector2d& e, double match_sigma) {
+  const auto inner = Interior(b, 4 + static_cast<int>(std::ceil(e.cwiseAbs().maxCoeff())));
+  if (!inner) return {};
+  const cv::Mat target = b.value(*inner);
+  const cv::Mat warped = ShiftedCrop(a.value, e, *inner);
+  const cv::Mat usable = Usable(a.valid, b.valid, e, *inner);
+  Alignment out = Measure(warped, target, usable, 1.0);
+  if (!out.information.isZero() || !(match_sigma > 0.0)) return out;
+  // Where the pixel noise drowns the texture's gradients (camera tiles of a printed grid), the same with the noise
+  // smoothed away: the gradients of the smoothed crops, their noise counted over the pixels one Gaussian of
+  // match_sigma spans (4 pi sigma^2: the smoothed noise's correlation area), so the texture must stand out of fewer,
+  // noisier samples.
+  cv::Mat smooth_w, smooth_t;
+  cv::GaussianBlur(warped, smooth_w, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
+  cv::GaussianBlur(target, smooth_t, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
+  out.information = Measure(smooth_w, smooth_t, usable, 4.0 * std::numbers::pi * match_sigma * match_sigma).information;
   return out;
 }
 

@@ -16,7 +16,8 @@ struct Alignment {
   double quality = 0.0;
   Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
 };
-// `match_sigma` > 0: the quality is that of the aligned crops smoothed by a Gaussian of that sigma (px).
+// `match_sigma` > 0: where the crops' gradients do not stand out of their noise, the information of the crops
+// smoothed by a Gaussian of that sigma (px).
 Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Vector2d& e, double match_sigma);
 
 }  // namespace fvm::imaging::detail

@@ -20,6 +20,14 @@ namespace fvm::imaging {
 
 using namespace detail;
 
+namespace {
+
+MatchScale Scale(const RegistrationOptions& options) {
+  return {std::max(options.match_highpass_sigma_px, options.highpass_sigma_px), options.match_sigma_px};
+}
+
+}  // namespace
+
 void RegistrationOptions::Check() const {
   if (!(min_quality >= -1.0 && min_quality <= 1.0)) throw std::invalid_argument("min_quality must be in [-1, 1]");
   if (!(max_correction > 0.0 && max_correction <= 0.5)) throw std::invalid_argument("max_correction: (0, 0.5]");
@@ -30,6 +38,7 @@ void RegistrationOptions::Check() const {
     throw std::invalid_argument("wide_search_fraction: [search_fraction, 0.5]");
   }
   if (!(match_sigma_px >= 0.0)) throw std::invalid_argument("match_sigma_px must be >= 0");
+  if (!(match_highpass_sigma_px >= 0.0)) throw std::invalid_argument("match_highpass_sigma_px must be >= 0");
   if (!(ambiguous_ncc >= 0.0)) throw std::invalid_argument("ambiguous_ncc must be >= 0");
   if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("stage_sigma_px must be positive");
 }
@@ -116,7 +125,7 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
   if (!pair.rejection.empty() || (offset.array().round().cast<int>() == whole.array()).all()) break;
   }
   const Alignment alignment = MeasureAlignment(overlap->a, overlap->b, e, options.match_sigma_px);
-  pair.quality = alignment.quality;
+  pair.quality = MatchQuality(a, b, offset.array().round().cast<int>(), Scale(options));
   pair.information = alignment.information;
   if (searched && !settled && !pair.information.isZero()) {
     // Not refined (no room, wandered): the offset is a whole-pixel candidate, or the correlation's peak, which
@@ -216,7 +225,7 @@ PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen:
   if (options.crop_to_overlap) {
     pair.candidates =
         SearchCandidates(a, b, nominal_px, search_px, options.candidate_peaks, options.highpass_sigma_px,
-                         options.match_sigma_px, options.ambiguous_ncc, pair.ambiguous);
+                         Scale(options), options.ambiguous_ncc, pair.ambiguous);
     if (pair.candidates.empty()) {
       pair.rejection = "no correlation peak implies an overlap within the search window";
       return pair;

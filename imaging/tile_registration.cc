@@ -21,7 +21,8 @@
 namespace fvm::imaging {
 
 TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
-                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px) {
+                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px,
+                                 const Eigen::Vector2d& unregistered_sigma_px) {
   if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("SolveTilePositions: the stage sigma must be positive");
   const int n = static_cast<int>(nominal_px.size());
   const auto at = [](int i) { return static_cast<size_t>(i); };
@@ -54,7 +55,20 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
     // first group (whose position is where the measurement's coordinates start, by definition).
     out.registered[at(i)] = unknown[at(i)] >= 0 || i == 0;
   }
-  if (m == 0) return out;
+  // A chain that starts at a tile no pair reached stands where the stage put that tile: known to the stage's
+  // uncertainty, never exactly (only the first tile is the origin by definition).
+  const Eigen::Vector2d fallback =
+      unregistered_sigma_px.minCoeff() >= 0.0 ? unregistered_sigma_px : Eigen::Vector2d::Constant(stage_sigma_px);
+  const auto add_anchor = [&] {
+    for (int i = 0; i < n; ++i) {
+      if (out.anchor[at(i)] == 0) continue;
+      out.sigma_px[at(i)] = (out.sigma_px[at(i)].array().square() + fallback.array().square()).sqrt();
+    }
+  };
+  if (m == 0) {
+    add_anchor();
+    return out;
+  }
   // Normal equations of sum (p_b - p_a - o)' W (p_b - p_a - o) + sum |p - nominal|^2 / stage_sigma^2: a graph
   // Laplacian of 2 x 2 blocks plus the stage's diagonal.
   const double prior = 1.0 / (stage_sigma_px * stage_sigma_px);
@@ -111,6 +125,7 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
       out.sigma_px[at(i)](k) = std::sqrt(variance);
     }
   }
+  add_anchor();
   return out;
 }
 
@@ -307,7 +322,13 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   }
   const Eigen::Vector2d& repeatability = model.repeatability_px;
   result.stage_sigma_px = repeatability.minCoeff() > 0.0 ? repeatability.maxCoeff() : options.stage_sigma_px;
-  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px);
+  // A tile no pair registers: the model's repeatability where it has one; before there is one, the spread the
+  // search allowed (uniform over the plausible range; the stage's declared sigma at least).
+  Eigen::Vector2d unregistered = (wide_window / std::sqrt(3.0)).cwiseMax(options.stage_sigma_px);
+  for (int k = 0; k < 2; ++k) {
+    if (repeatability(k) > 0.0) unregistered(k) = repeatability(k);
+  }
+  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px, unregistered);
   return result;
 }
 

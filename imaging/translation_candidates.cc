@@ -32,6 +32,20 @@ double OverlapNcc(const Prepared& a, const Prepared& b, const Eigen::Vector2i& e
   return (product - ma[0] * mb[0]) / (sa[0] * sb[0]);
 }
 
+Prepared MatchingCrop(const cv::Mat& crop, const MatchScale& scale, bool logarithm) {
+  const Prepared high = HighPass(crop, scale.highpass_sigma_px, logarithm);
+  return scale.lowpass_sigma_px > 0.0 ? Blur(high, scale.lowpass_sigma_px) : high;
+}
+
+double MatchQuality(const TileImage& a, const TileImage& b, const Eigen::Vector2i& whole, const MatchScale& scale) {
+  const std::optional<Overlap> overlap = CropOverlap(a, b, whole, scale.highpass_sigma_px, false);
+  if (!overlap) return 0.0;
+  int pixels = 0;
+  if (scale.lowpass_sigma_px <= 0.0) return OverlapNcc(overlap->a, overlap->b, Eigen::Vector2i::Zero(), pixels);
+  return OverlapNcc(Blur(overlap->a, scale.lowpass_sigma_px), Blur(overlap->b, scale.lowpass_sigma_px),
+                    Eigen::Vector2i::Zero(), pixels);
+}
+
 // Candidate offsets of b in a's frame within `search` (per axis) of `nominal`: the nominal overlap widened by the
 // window on every side is cut from each tile (a common size, clipped to the tiles), high-passed, and phase
 // correlated; the `peaks` highest local maxima of the correlation surface, each with the wrap-around
@@ -39,7 +53,7 @@ double OverlapNcc(const Prepared& a, const Prepared& b, const Eigen::Vector2i& e
 // by the normalised cross-correlation of the overlap they imply. Best first.
 std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const TileImage& b,
                                                    const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-                                                   int peaks, double sigma, double match_sigma,
+                                                   int peaks, double sigma, const MatchScale& scale,
                                                    double ambiguous_ncc, bool& ambiguous) {
   const Eigen::Vector2i n = nominal.array().round().cast<int>();
   const Eigen::Vector2i m = search.array().ceil().cast<int>();
@@ -63,8 +77,8 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   // Candidates are judged on the crops with the pixel noise smoothed away (match_sigma): where the noise is as
   // strong as the texture at the finest scale (camera tiles of a printed grid), the correlation of the raw
   // high-pass told the true overlap from a wrong one by a few hundredths only.
-  const Prepared sa = match_sigma > 0.0 ? Blur(pa, match_sigma) : pa;
-  const Prepared sb = match_sigma > 0.0 ? Blur(pb, match_sigma) : pb;
+  const Prepared sa = MatchingCrop(View(a)(ra), scale, logarithm);
+  const Prepared sb = MatchingCrop(View(b)(rb - cv::Point(n.x(), n.y())), scale, logarithm);
   // Phase correlation: the inverse transform of the whitened cross-power spectrum, A's against B's conjugate,
   // peaks at e where B(u) = A(u + e). No window: the overlap lies at opposite edges of the two crops (a's right
   // part, b's left one), where any taper weighs it down, and unevenly, which moved the peaks of thin overlaps by
