@@ -23,7 +23,7 @@ using namespace detail;
 namespace {
 
 MatchScale Scale(const RegistrationOptions& options) {
-  return {std::max(options.match_highpass_sigma_px, options.highpass_sigma_px), options.match_sigma_px};
+  return {options.match_highpass_sigma_px, options.match_sigma_px};
 }
 
 }  // namespace

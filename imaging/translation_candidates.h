@@ -17,7 +17,7 @@ namespace fvm::imaging::detail {
 // The band in which candidates and the quality are judged (RegistrationOptions::match_highpass_sigma_px and
 // match_sigma_px): the scene's coarse structure, without the pixel noise.
 struct MatchScale {
-  double highpass_sigma_px = 32.0;
+  double highpass_sigma_px = 0.0;  // 0: the quadratic shading only
   double lowpass_sigma_px = 2.0;
 };
 // A crop high-passed and smoothed to the matching band.
