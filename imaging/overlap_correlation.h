@@ -11,6 +11,7 @@
 // Pixel frame as in tile_registration.h: x right, y down, positions are the tiles' top-left corners.
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "imaging/io/tile_image.h"
