@@ -1,6 +1,6 @@
 #include "artefacts/simulation/raw_export_simulation.h"
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,21 +14,26 @@ namespace {
 imaging::HeightMap Render(const std::vector<int>& ids, const std::vector<Eigen::Vector3d>& centres,
                           const RawExportSimulationOptions& options, std::uint64_t seed, const std::string& what) {
   Artefact placed{"bar17", {}};
-  Eigen::MatrixXd design(static_cast<Eigen::Index>(centres.size()), 3);
-  Eigen::VectorXd heights(static_cast<Eigen::Index>(centres.size()));
-  for (size_t i = 0; i < centres.size(); ++i) {
-    placed.calottes.push_back({ids[i], centres[i], options.radius_mm});
-    design.row(static_cast<Eigen::Index>(i)) << 1.0, centres[i].x(), centres[i].y();
-    heights(static_cast<Eigen::Index>(i)) = centres[i].z();
+  for (size_t i = 0; i < centres.size(); ++i) placed.calottes.push_back({ids[i], centres[i], options.radius_mm});
+  // The face: the bar's top, rising along the bar as the centres do (least squares), level across it (a plane
+  // through centres that lie on one line would take any cross slope).
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : centres) mean += c / static_cast<double>(centres.size());
+  const Eigen::Vector2d along = centres.size() > 1 ? Eigen::Vector2d((centres.back() - centres.front()).head<2>().normalized())
+                                                   : Eigen::Vector2d::UnitX();
+  double tt = 0, tz = 0;
+  for (const Eigen::Vector3d& c : centres) {
+    const double t = (c - mean).head<2>().dot(along);
+    tt += t * t;
+    tz += t * (c.z() - mean.z());
   }
-  // The face through the centres by least squares: hemispheres cut into a flat bar.
-  const Eigen::Vector3d face = design.colPivHouseholderQr().solve(heights);
+  const double rise = tt > 0 ? tz / tt : 0.0;  // dz per mm along the bar
   CalotteSurfaceOptions surface;
   surface.dx_mm = surface.dy_mm = options.pixel_mm;
   surface.margin_mm = options.margin_mm;
-  surface.z0_mm = face(0);
-  surface.slope_x = face(1);
-  surface.slope_y = face(2);
+  surface.slope_x = rise * along.x();
+  surface.slope_y = rise * along.y();
+  surface.z0_mm = mean.z() - surface.slope_x * mean.x() - surface.slope_y * mean.y();
   surface.centres_as_given = true;
   surface.noise_sigma_mm = options.noise_um * 1e-3;
   surface.seed = seed;

@@ -6,7 +6,7 @@
 //
 // One surface per export spans the placement's calottes; only the face within margin_mm of each rim holds points
 // (the rest is invalid, NaN), as a narrow bar across the stage and stitching-free tiles leave most of the span
-// empty. The face is the plane through the calotte centres (the bar is flat and its calottes are hemispheres),
+// empty. The face rises along the bar as the calotte centres do and lies level across it (hemispheres in a flat bar),
 // each sphere keeps its own height. The pixel is coarse by default (50 um: a bar turned by 45 degrees spans
 // 2300 x 2300 points): a stitched mosaic of a 160 mm bar at the 5x lens' 2.75 um would span 3 billion.
 
