@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -214,6 +215,12 @@ bool HoldsRawExports(const std::filesystem::path& dir) {
 }
 
 void WriteRawExportCentres(const std::filesystem::path& dir, const RawExportBatch& raw) {
+  std::error_code error;
+  if (std::filesystem::weakly_canonical(dir, error) == std::filesystem::weakly_canonical(raw.batch.dir, error)) {
+    throw InputError(fmt::format("{}: the centre exports would go into the batch of surfaces itself (beside, and "
+                                 "over, its batch.json); name another directory",
+                                 dir.string()));
+  }
   Batch roles = raw.batch;
   roles.placements.clear();  // WriteBatch then writes batch.json alone
   WriteBatch(dir, roles);

@@ -60,7 +60,7 @@ RawExportBatch ReadRawExportBatch(const std::filesystem::path& dir, const RawExp
 
 // Writes the centre exports the search made as a CSV batch in `dir` (<placement>.stitched.csv / .free.csv with
 // radius and form deviation, and batch.json when the raw batch had one), file by file atomically: `fvm calibrate
-// DIR` then gives the same calibration without searching again.
+// DIR` then gives the same calibration without searching again. Throws InputError when `dir` is the raw batch.
 void WriteRawExportCentres(const std::filesystem::path& dir, const RawExportBatch& raw);
 
 // The calotte search of `fvm fit --artefact NAME`: the artefact's calottes are all alike, so a window around

@@ -73,6 +73,8 @@ endif()
 if(EXISTS "${WORK}/swapped.json" OR EXISTS "${WORK}/report" OR EXISTS "${WORK}/swapped.centres")
   message(FATAL_ERROR "a refused raw batch left output behind")
 endif()
+# The centres never go into the batch of surfaces itself.
+fails_naming("would go into the batch of surfaces itself" calibrate "${WORK}/raw" --model 27 --centres-dir "${WORK}/raw")
 # A placement with one export only.
 file(REMOVE "${WORK}/swapped/id-x.free.x3p")
 fails_naming("id-x.stitched.x3p: has no partner" calibrate "${WORK}/swapped" --model 27)
