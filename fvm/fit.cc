@@ -136,17 +136,7 @@ void RunFit(const FitArgs& args) {
       "{} calottes{}; sphere fit with the {} residual{}; face noise {:.3f} um", detection.calottes.size(),
       artefact ? " of " + artefact->name + ", numbered by its layout" : "", args.residual,
       args.radius_mm > 0 ? fmt::format(", radius fixed at {} mm", args.radius_mm) : "", detection.face.sigma_mm * 1e3));
-  for (const auto& c : detection.calottes) {
-    artefacts::CentreRecord record;
-    record.id = c.id;
-    record.position = c.fit.centre_mm;
-    record.radius_mm = c.fit.radius_mm;
-    record.form_rms_mm = c.fit.rms_deviation_mm;
-    record.converged = c.fit.converged;
-    out.centres.push_back(record);
-    // The column says 0; the comment says why, for the person who opens the file.
-    if (!c.fit.converged) out.comments.push_back(fmt::format("calotte {}: sphere fit NOT converged ({})", c.id, c.fit.stop_reason));
-  }
+  artefacts::AddFoundCentres(detection, out);
   if (!args.output.empty()) artefacts::WriteCentreExport(args.output, out);
 
   if (args.json) {

@@ -126,18 +126,7 @@ RawExportFit ToExport(const std::string& placement, const std::filesystem::path&
                                              artefact, file.filename().string(),
                                              numbered.layout.rotation_rad * 180 / M_PI,
                                              numbered.detection.face.sigma_mm * 1e3));
-  for (const auto& c : numbered.detection.calottes) {
-    CentreRecord record;
-    record.id = c.id;
-    record.position = c.fit.centre_mm;
-    record.radius_mm = c.fit.radius_mm;
-    record.form_rms_mm = c.fit.rms_deviation_mm;
-    record.converged = c.fit.converged;
-    fit.centres.centres.push_back(record);
-    if (!c.fit.converged) {
-      fit.centres.comments.push_back(fmt::format("calotte {}: sphere fit NOT converged ({})", c.id, c.fit.stop_reason));
-    }
-  }
+  AddFoundCentres(numbered.detection, fit.centres);
   return fit;
 }
 
@@ -193,6 +182,20 @@ void CheckSameNumbering(const RawExportFit& stitched, const RawExportFit& free, 
 const std::vector<std::string>& RawExportExtensions() {
   static const std::vector<std::string> extensions = {".x3p", ".al3d", ".sdf", ".tif", ".tiff"};
   return extensions;
+}
+
+void AddFoundCentres(const imaging::CalotteDetection& detection, CentreExport& out) {
+  for (const auto& c : detection.calottes) {
+    CentreRecord record;
+    record.id = c.id;
+    record.position = c.fit.centre_mm;
+    record.radius_mm = c.fit.radius_mm;
+    record.form_rms_mm = c.fit.rms_deviation_mm;
+    record.converged = c.fit.converged;
+    out.centres.push_back(record);
+    // The column says 0; the comment says why, for the person who opens the file.
+    if (!c.fit.converged) out.comments.push_back(fmt::format("calotte {}: sphere fit NOT converged ({})", c.id, c.fit.stop_reason));
+  }
 }
 
 imaging::CalotteDetectionOptions CalotteSearchFor(const Artefact& artefact) {

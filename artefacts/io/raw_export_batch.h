@@ -63,6 +63,10 @@ RawExportBatch ReadRawExportBatch(const std::filesystem::path& dir, const RawExp
 // DIR` then gives the same calibration without searching again. Throws InputError when `dir` is the raw batch.
 void WriteRawExportCentres(const std::filesystem::path& dir, const RawExportBatch& raw);
 
+// The calottes found, as records of a centre export (id, centre, radius, form deviation, converged) in `out`, with
+// a comment for each sphere fit that did not converge. What `fvm fit -o` writes.
+void AddFoundCentres(const imaging::CalotteDetection& detection, CentreExport& out);
+
 // The calotte search of `fvm fit --artefact NAME`: the artefact's calottes are all alike, so a window around
 // their diameter keeps other dents out (openings of ball-nose calottes can be much narrower than the ball, hence
 // the wide lower bound).
