@@ -3,9 +3,11 @@
 #include <fmt/core.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "core/file_io.h"
 #include "artefacts/io/batch.h"
+#include "artefacts/io/raw_export_batch.h"
 #include "core/input_error.h"
 #include "stage/io/calibration_file.h"
 #include "core/exit_codes.h"
@@ -29,6 +31,8 @@ struct CalibrateArgs {
   std::string terms;
   std::string output;
   std::string report;
+  std::string artefact = "bar17";  // a batch of raw exports: the artefact whose calottes are searched
+  std::string centres_dir;         // ... and where the centre exports found go
   bool json = false;
   IdentifySettings settings;
 };
@@ -186,17 +190,38 @@ nlohmann::json ValidationDocument(const stage::Calibration& calibration, const s
 
 void RunScans(const CalibrateArgs& args);
 
+// A batch of centre exports, or of surfaces searched for calottes (artefacts/io/raw_export_batch.h): the centres
+// found go as a CSV batch into --centres-dir, else REPORT/centres, else beside -o (never into the batch itself).
+artefacts::Batch ReadBatchArgument(const CalibrateArgs& args, nlohmann::json& doc) {
+  if (!artefacts::HoldsRawExports(args.batch)) return artefacts::ReadBatch(args.batch);
+  const artefacts::RawExportBatch raw = artefacts::ReadRawExportBatch(args.batch, {args.artefact});
+  std::filesystem::path dir = args.centres_dir;
+  if (dir.empty() && !args.report.empty()) dir = std::filesystem::path(args.report) / "centres";
+  if (dir.empty() && !args.output.empty()) dir = std::filesystem::path(args.output).replace_extension(".centres");
+  if (!dir.empty()) artefacts::WriteRawExportCentres(dir, raw);
+  doc["centres_dir"] = dir.empty() ? nlohmann::json(nullptr) : nlohmann::json(dir.string());
+  for (const artefacts::RawExportFit& fit : raw.fits) {
+    doc["exports"].push_back({{"file", fit.file.string()}, {"calottes", fit.centres.centres.size()}, {"rejected", fit.rejected}});
+    if (!args.json) fmt::print("{}: {} calottes of {} found\n", fit.file.string(), fit.centres.centres.size(), args.artefact);
+  }
+  if (!args.json) fmt::print("{}\n\n", dir.empty() ? "centre exports not written (give --centres-dir DIR to keep them)"
+                                                    : "centre exports written to " + dir.string());
+  return raw.batch;
+}
+
 void Run(const CalibrateArgs& args) {
   if (args.batch.empty() == args.scans.empty()) {
     throw CLI::ValidationError("BATCH", "give a BATCH directory, or stitched calibration scans with --scan LAYOUT (not both)");
   }
   if (!args.scans.empty()) return RunScans(args);
   if (!args.validate.empty()) throw CLI::ValidationError("--validate", "is for --scan: a batch validates on its own placements");
-  const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
+  nlohmann::json raw;
+  const artefacts::Batch batch = ReadBatchArgument(args, raw);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   const stage::IdentificationResult result = IdentifyModel(args.model, args.terms, identify, args.settings);
 
   nlohmann::json doc = stage::CalibrationToJson(result);
+  if (!raw.is_null()) doc["raw_exports"] = raw;
   doc["batch"] = args.batch;
   doc["anchor"] = args.settings.anchor;
   doc["stitched_frame"] = args.settings.stitched_frame;
@@ -434,10 +459,18 @@ void RegisterCalibrate(CLI::App& app) {
                   "(VDI 2617-3 names; bases power, legendre, chebyshev; orders 0..3)");
   sub->add_option("-o,--output", args->output, "write the calibration (JSON, mm and rad) here");
   sub->add_option("--report", args->report, "write an HTML report with plots into this directory");
+  sub->add_option("--artefact", args->artefact,
+                  "a BATCH of surfaces (<placement>.stitched.x3p / .free.x3p, also .al3d .sdf .tif): the artefact "
+                  "whose calottes are searched and numbered as 'fvm fit --artefact' does, e.g. --artefact grid6x6")
+      ->capture_default_str();
+  sub->add_option("--centres-dir", args->centres_dir,
+                  "a BATCH of surfaces: write the centre exports found here as a CSV batch (default REPORT/centres, "
+                  "else beside -o as CAL.centres), e.g. --centres-dir centres");
   sub->add_flag("--json", args->json, "print the calibration JSON on stdout instead of the table");
   args->settings.AddOptions(*sub);
   sub->footer("Exit 3 when the solver did not converge (the calibration is still written).\n"
               "Examples:\n  fvm calibrate samples/bar17 --model 27 -o stage.json\n"
+              "  fvm calibrate raw --model 27 -o stage.json --report report   # raw/ holds P.stitched.x3p, P.free.x3p\n"
               "  fvm calibrate --scan s/row.csv --scan s/column.csv --scan s/diagonal.csv --pixel-mm 0.00275 --model 27 "
               "-o stage.json --validate samples/bar17");
   sub->callback([args] { Run(*args); });

@@ -15,6 +15,7 @@
 
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/io/centre_export.h"
+#include "artefacts/io/raw_export_batch.h"
 #include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/fit_shape.h"
@@ -79,19 +80,11 @@ void RunFit(const FitArgs& args) {
   const std::optional<artefacts::Artefact> artefact = NamedArtefact(args.artefact);
   const Searched searched = ReadSearched(args);
 
-  imaging::CalotteDetectionOptions options;
+  imaging::CalotteDetectionOptions options = artefact ? artefacts::CalotteSearchFor(*artefact) : imaging::CalotteDetectionOptions{};
   options.fit.fixed_radius_mm = args.radius_mm;
   options.fit.residual =
       args.residual == "orthogonal" ? imaging::SphereResidual::kOrthogonal : imaging::SphereResidual::kHeight;
   options.min_depth_mm = args.min_depth_mm;
-  if (artefact) {
-    // The artefact's calottes are all alike: a window around their diameter keeps other dents out. Openings
-    // of ball-nose calottes can be much narrower than the ball, hence the wide lower bound.
-    double diameter = 0;
-    for (const auto& c : artefact->calottes) diameter = std::max(diameter, 2 * c.radius_mm);
-    options.min_diameter_mm = 0.3 * diameter;
-    options.max_diameter_mm = 1.5 * diameter;
-  }
   if (args.min_diameter_mm > 0) options.min_diameter_mm = args.min_diameter_mm;
   if (args.max_diameter_mm > 0) options.max_diameter_mm = args.max_diameter_mm;
   if (options.max_diameter_mm < options.min_diameter_mm) {
@@ -143,17 +136,7 @@ void RunFit(const FitArgs& args) {
       "{} calottes{}; sphere fit with the {} residual{}; face noise {:.3f} um", detection.calottes.size(),
       artefact ? " of " + artefact->name + ", numbered by its layout" : "", args.residual,
       args.radius_mm > 0 ? fmt::format(", radius fixed at {} mm", args.radius_mm) : "", detection.face.sigma_mm * 1e3));
-  for (const auto& c : detection.calottes) {
-    artefacts::CentreRecord record;
-    record.id = c.id;
-    record.position = c.fit.centre_mm;
-    record.radius_mm = c.fit.radius_mm;
-    record.form_rms_mm = c.fit.rms_deviation_mm;
-    record.converged = c.fit.converged;
-    out.centres.push_back(record);
-    // The column says 0; the comment says why, for the person who opens the file.
-    if (!c.fit.converged) out.comments.push_back(fmt::format("calotte {}: sphere fit NOT converged ({})", c.id, c.fit.stop_reason));
-  }
+  artefacts::AddFoundCentres(detection, out);
   if (!args.output.empty()) artefacts::WriteCentreExport(args.output, out);
 
   if (args.json) {

@@ -17,6 +17,8 @@
 #include "artefacts/io/multilateration_readings.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
+#include "artefacts/simulation/raw_export_simulation.h"
+#include "imaging/io/surface_file.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "core/csv.h"
 #include "core/file_io.h"
@@ -38,13 +40,35 @@ struct SimulateBatchArgs {
   artefacts::FvmBatchOptions options;
   bool different_starts = false;
   std::string stitched_frame = "rotated";
+  std::string surfaces;  // x3p or tif (formats that carry the map's position): a batch of raw exports, the centre exports in OUTPUT/centres
+  artefacts::RawExportSimulationOptions surface;
 };
+
+// The surfaces of every placement as FORMAT files in `dir`, the roles beside them, the centre exports of the same
+// simulation (the CSV route) in dir/centres.
+void WriteRawExports(const std::filesystem::path& dir, const SimulateBatchArgs& args, const artefacts::SimulatedFvmBatch& sim) {
+  artefacts::WriteBatch(dir / "centres", sim.batch);
+  artefacts::Batch roles = sim.batch;
+  roles.placements.clear();
+  artefacts::WriteBatch(dir, roles);  // batch.json alone
+  for (std::size_t i = 0; i < sim.exact.placements.size(); ++i) {
+    const artefacts::Placement& p = sim.exact.placements[i];
+    const artefacts::RawExportPair maps = artefacts::RenderRawExports(p, i, args.surface);
+    imaging::WriteHeightMap(dir / (p.name + ".stitched." + args.surfaces), maps.stitched);
+    imaging::WriteHeightMap(dir / (p.name + ".free." + args.surfaces), maps.free);
+  }
+}
 
 void Run(SimulateBatchArgs args) {
   args.options.same_start = !args.different_starts;
   args.options.stitched_frame = stage::ParseStitchedFrame(args.stitched_frame);
+  args.surface.seed = args.options.seed;
   const artefacts::SimulatedFvmBatch sim = artefacts::SimulateFvmBatch(args.options);
-  artefacts::WriteBatch(args.output, sim.batch);
+  if (args.surfaces.empty()) {
+    artefacts::WriteBatch(args.output, sim.batch);
+  } else {
+    WriteRawExports(args.output, args, sim);
+  }
 
   nlohmann::json truth;
   truth["what"] = "stage error model the batch was simulated with (fvm simulate fvm-batch)";
@@ -58,6 +82,10 @@ void Run(SimulateBatchArgs args) {
   truth["periodic_um"] = args.options.periodic_um;
   truth["period_mm"] = args.options.period_mm;
   truth["stitched_frame"] = args.stitched_frame;
+  if (!args.surfaces.empty()) {
+    truth["surfaces"] = {{"format", args.surfaces}, {"pixel_mm", args.surface.pixel_mm},
+                         {"height_noise_um", args.surface.noise_um}, {"centres", "centres/"}};
+  }
   truth["hidden_effect"] = args.options.hidden_effect.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.options.hidden_effect);
   truth["effect_size"] = args.options.effect_size;
   truth["drift_tau_min"] = args.options.drift_tau_min;
@@ -78,6 +106,11 @@ void Run(SimulateBatchArgs args) {
              sim.batch.placements.size(), centres, args.output, ModelName(args.options.truth_model, args.options.truth_terms),
              sim.truth.mean_error_um,
              sim.truth.max_error_um, args.options.noise_um, args.options.seed);
+  if (!args.surfaces.empty()) {
+    fmt::print("surfaces: {} per placement, stitched and stitching-free ({} um pixel, {} um height noise); the "
+               "centre exports of the same simulation in {}/centres\n",
+               args.surfaces, args.surface.pixel_mm * 1e3, args.surface.noise_um, args.output);
+  }
 }
 
 
@@ -530,7 +563,21 @@ void RegisterSimulate(CLI::App& app) {
                   "as an instrument that registers tiles by translation does (default); translated: the turn left out")
       ->check(CLI::IsMember({"rotated", "translated"}))
       ->capture_default_str();
-  sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5");
+  sub->add_option("--surfaces", args->surfaces,
+                  "write each export as a height map of this format instead of a centre CSV (the bar's calottes where "
+                  "the export places them, with height noise), the centre exports of the same simulation in "
+                  "OUTPUT/centres; 'fvm calibrate OUTPUT' then searches the surfaces, e.g. --surfaces x3p")
+      ->check(CLI::IsMember({"x3p", "tif"}));
+  sub->add_option("--surface-pixel-mm", args->surface.pixel_mm,
+                  "with --surfaces: pixel size of the surfaces (coarse: a 160 mm bar at 45 degrees is 2300 x 2300 "
+                  "points at 0.05 mm), e.g. --surface-pixel-mm 0.1")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--surface-noise-um", args->surface.noise_um, "with --surfaces: height noise per pixel (um)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5\n"
+              "  fvm simulate fvm-batch -o raw --seed 7 --surfaces x3p && fvm calibrate raw --model 27");
   sub->callback([args] { Run(*args); });
   RegisterSimulateTracker(simulate);
   RegisterSimulateScan(simulate);

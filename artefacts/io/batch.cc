@@ -30,23 +30,26 @@ std::string Join(const std::vector<std::string>& names) {
   return out;
 }
 
-// The stitched file defines the calottes and their order; the free file must hold exactly the same ones.
-Placement ReadPlacement(const std::string& name, const std::filesystem::path& stitched_path,
-                        const std::filesystem::path& free_path) {
-  const CentreExport stitched = ReadCentreExport(stitched_path);
-  const CentreExport free = ReadCentreExport(free_path);
+// "FILE:LINE" for a record read from a file, "FILE" for one found in a surface.
+std::string Where(const CentreExport& from, const CentreRecord& record) {
+  return record.line > 0 ? fmt::format("{}:{}", from.source, record.line) : from.source;
+}
+
+}  // namespace
+
+Placement PairCentreExports(const std::string& name, const CentreExport& stitched, const CentreExport& free) {
   for (const CentreRecord& c : stitched.centres) {
     if (free.Find(c.id) == nullptr) {
-      throw InputError(fmt::format("{}:{}: calotte {} is not in {}; a placement needs every calotte measured with "
+      throw InputError(fmt::format("{}: calotte {} is not in {}; a placement needs every calotte measured with "
                                    "and without stitching: add it there or delete it here",
-                                   stitched_path.string(), c.line, c.id, free_path.string()));
+                                   Where(stitched, c), c.id, free.source));
     }
   }
   for (const CentreRecord& c : free.centres) {
     if (stitched.Find(c.id) == nullptr) {
-      throw InputError(fmt::format("{}:{}: calotte {} is not in {}; a placement needs every calotte measured with "
+      throw InputError(fmt::format("{}: calotte {} is not in {}; a placement needs every calotte measured with "
                                    "and without stitching: add it there or delete it here",
-                                   free_path.string(), c.line, c.id, stitched_path.string()));
+                                   Where(free, c), c.id, stitched.source));
     }
   }
   Placement placement;
@@ -61,6 +64,14 @@ Placement ReadPlacement(const std::string& name, const std::filesystem::path& st
     if (timed) placement.t_s.push_back(*f.t_s);
   }
   return placement;
+}
+
+namespace {
+
+// The stitched file defines the calottes and their order; the free file must hold exactly the same ones.
+Placement ReadPlacement(const std::string& name, const std::filesystem::path& stitched_path,
+                        const std::filesystem::path& free_path) {
+  return PairCentreExports(name, ReadCentreExport(stitched_path), ReadCentreExport(free_path));
 }
 
 std::vector<std::string> ReadNameList(const nlohmann::json& roles, const char* key, const std::string& where) {
@@ -213,13 +224,17 @@ Batch ReadBatch(const std::filesystem::path& dir) {
     batch.placements.push_back(ReadPlacement(name, dir / (name + std::string(kStitchedSuffix)),
                                              dir / (name + std::string(kFreeSuffix))));
   }
+  ApplyBatchRoles(dir, batch);
+  return batch;
+}
+
+void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch) {
   const std::filesystem::path roles = dir / kRolesFile;
   if (std::filesystem::exists(roles)) {
     ReadRoles(roles, batch);
   } else {
     for (const Placement& p : batch.placements) batch.identify.push_back(p.name);
   }
-  return batch;
 }
 
 void WriteBatch(const std::filesystem::path& dir, const Batch& batch) {

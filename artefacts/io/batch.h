@@ -35,6 +35,15 @@ struct Batch {
 // ReadCentreExport), a batch.json that is not JSON, names an unknown placement, or puts one in both roles.
 Batch ReadBatch(const std::filesystem::path& dir);
 
+// One placement from its two centre exports (messages name their `source`): the stitched export defines the
+// calottes and their order; throws InputError naming the file, line and calotte id when the free export does not
+// hold exactly the same calottes.
+Placement PairCentreExports(const std::string& name, const CentreExport& stitched, const CentreExport& free);
+
+// Gives batch.placements their roles: from dir/batch.json when it exists (throws as ReadBatch on a bad one), else
+// every placement identifies. ReadBatch calls it; so does a reader of raw exports (raw_export_batch.h).
+void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch);
+
 // Writes a batch (pairs and, when roles are given, batch.json) atomically file by file.
 void WriteBatch(const std::filesystem::path& dir, const Batch& batch);
 

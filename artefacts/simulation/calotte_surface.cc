@@ -49,8 +49,12 @@ Scene PlaceCalottes(const Artefact& artefact, const CalotteSurfaceOptions& optio
     }
     const Eigen::Vector2d xy = turn * c.centre.head<2>() + options.offset_mm;
     // The sphere's centre sits (radius - depth) above the face, along the face's normal.
-    const double above = c.radius_mm - std::min(depth, c.radius_mm);
-    const Eigen::Vector3d centre = Eigen::Vector3d(xy.x(), xy.y(), face_z(xy.x(), xy.y())) + above * normal;
+    double above = c.radius_mm - std::min(depth, c.radius_mm);
+    Eigen::Vector3d centre = Eigen::Vector3d(xy.x(), xy.y(), face_z(xy.x(), xy.y())) + above * normal;
+    if (options.centres_as_given) {
+      centre = Eigen::Vector3d(xy.x(), xy.y(), c.centre.z());
+      above = std::clamp((c.centre.z() - face_z(xy.x(), xy.y())) * normal.z(), -c.radius_mm, c.radius_mm);
+    }
     placed.push_back({c.id, centre, c.radius_mm, std::sqrt(c.radius_mm * c.radius_mm - above * above)});
     const double reach = c.radius_mm + 6 * options.burr_width_mm;
     const Eigen::Vector2d span = Eigen::Vector2d::Constant(reach + options.margin_mm);

@@ -30,6 +30,9 @@ struct CalotteSurfaceOptions {
   // Depth of each dimple below the face along the face's normal; 0 means a hemisphere (depth = radius, the
   // sphere's centre in the face), as the calotte grid of [Pérez 2019] (section 1.2).
   double depth_mm = 0.0;
+  // The sphere centres are the artefact's own (x, y, z) after the placement, each a little above or below the face
+  // as the calottes of a real part are: the face then only decides where the hole opens (depth_mm is unused).
+  bool centres_as_given = false;
   // The optics see no steeper flank: those points come out invalid (NaN), as real exports have a ring of
   // missing points inside the rim of a deep calotte.
   double max_slope_deg = 75.0;

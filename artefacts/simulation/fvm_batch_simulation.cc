@@ -207,7 +207,7 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
     const double tilt_along = tilt(rng);
     // On a wedge the bar rises from calotte 1 to 17 by -step, 0 or +step, in turn.
     const double rise_per_mm = options.height_step_mm * (static_cast<double>(p % 3) - 1.0) / 160.0;
-    Placement placement;
+    Placement placement, exact;
     placement.name = pose.name;
     std::vector<Eigen::Vector3d> commands;
     for (size_t i = 0; i < bar.size(); ++i) {
@@ -224,9 +224,11 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
       placement.ids.push_back(static_cast<int>(i) + 1);
       const double drift_s = options.drift_tau_min > 0 ? options.drift_tau_min * 60.0 * (1.0 - std::exp(-t / (options.drift_tau_min * 60.0))) : t;
       placement.free.push_back(noisy(commands[i]) + drift_mm_per_s * drift_s);
+      exact.free.push_back(commands[i] + drift_mm_per_s * drift_s);
       Eigen::Vector3d stitched = frame.Stitched(stage.Forward(commands[i]));
       if (scale != 0.0) stitched.head<2>() = anchor.head<2>() + (1.0 + scale) * (stitched - anchor).head<2>();
       placement.stitched.push_back(noisy(stitched));
+      exact.stitched.push_back(stitched);
       placement.t_s.push_back(t);
     }
     if (options.Hides("outliers") && pose.name == "id-y") {
@@ -238,11 +240,18 @@ SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options) {
         placement.free[which(effect_rng)] += d * EffectSize(options, 80.0) * 1e-3;
       }
     }
+    exact.name = placement.name;
+    exact.ids = placement.ids;
+    exact.t_s = placement.t_s;
+    out.exact.placements.push_back(std::move(exact));
     out.batch.placements.push_back(std::move(placement));
   }
   out.batch.has_roles = true;
   for (const PlacementPose& p : poses) (p.name.starts_with("id-") ? out.batch.identify : out.batch.validate).push_back(p.name);
   out.batch.lens = "5x";
+  const std::vector<Placement> exact_placements = std::move(out.exact.placements);
+  out.exact = out.batch;
+  out.exact.placements = exact_placements;
   return out;
 }
 

@@ -70,6 +70,9 @@ struct FvmBatchTruth {
 struct SimulatedFvmBatch {
   Batch batch;
   FvmBatchTruth truth;
+  // The same placements without centre noise (and without the hidden outliers, failed fits of centre exports):
+  // where the calottes of each export really are, for rendering the exports' surfaces (raw_export_simulation.h).
+  Batch exact;
 };
 
 SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options);
