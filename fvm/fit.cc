@@ -234,7 +234,7 @@ void RegisterFit(CLI::App& app) {
       "With --artefact the calottes get the artefact's numbers (1..36 row by row for grid6x6, 1..17 along bar17), "
       "matched to its nominal layout. Prints centre, radius, form deviation (RMS) and the centre's standard "
       "uncertainty per calotte; -o writes the centre export (CSV id,x,y,z,radius,form_rms in mm) that fvm "
-      "calibrate reads. Reads what fvm info reads.\n\n"
+      "calibrate reads. Reads what fvm info reads. "
       "With --shape sphere|plane it fits one shape to all points of any cloud or surface (a CMM probing of a "
       "reference sphere, a tracker nest, a cap or a flat of a few dozen points; XYZ text including NIST's .ds "
       "sets whose first line is the count, PLY, PCD, height maps): orthogonal-distance least squares from a "
