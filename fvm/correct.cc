@@ -294,7 +294,7 @@ void RegisterCorrect(CLI::App& app) {
       ->check(NumbersCheck(3, "--origin", "--origin 12.5,-30,0"));
   sub->add_option("--resample", args->resample_mm,
                   "scans: PIXEL_MM, a height map on a regular grid of this pixel again (else a cloud)")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(kPixelMm));
   sub->add_flag("--extrapolate", args->extrapolate, "scans: correct points outside the calibrated travel too");
   args->read.AddOptions(*sub);
   sub->add_flag("--json", args->json, "print the result (frame, points, shifts, uncertainties) as JSON");

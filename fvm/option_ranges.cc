@@ -36,7 +36,7 @@ bool IsWrittenWhole(std::string_view text) {
 std::string SingleNumberRefusal(const std::string& text, const NumberRange& range) {
   const std::optional<double> value = ParseDouble(text);
   if (!value) return fmt::format("{} is not a number; give one from {}", QuotedForMessage(text), range.Text());
-  std::string refusal = range.Refusal(*value);
+  std::string refusal = range.Refusal(*value, text);
   if (refusal.empty() && range.whole && !IsWrittenWhole(text)) {
     refusal = fmt::format("{} is not a whole number: write it in digits, e.g. {}", TrimBlanks(text),
                           FormatFixed(*value, 0));
@@ -94,12 +94,11 @@ std::string NumberRange::Text() const {
   return fmt::format("{} to {}{}", ReadableNumber(min), ReadableNumber(max), unit.empty() ? "" : " " + unit);
 }
 
-std::string NumberRange::Refusal(double value) const {
-  if (!std::isfinite(value)) return fmt::format("{} is not a finite number; give one from {}", ReadableNumber(value), Text());
-  if (value < min || value > max) {
-    return fmt::format("{}{} is outside {}", ReadableNumber(value), unit.empty() ? "" : " " + unit, Text());
-  }
-  if (whole && value != std::floor(value)) return fmt::format("{} is not a whole number (from {})", ReadableNumber(value), Text());
+std::string NumberRange::Refusal(double value, std::string_view written) const {
+  const std::string shown = written.empty() ? ReadableNumber(value) : std::string(TrimBlanks(written));
+  if (!std::isfinite(value)) return fmt::format("{} is not a finite number; give one from {}", shown, Text());
+  if (value < min || value > max) return fmt::format("{}{} is outside {}", shown, unit.empty() ? "" : " " + unit, Text());
+  if (whole && value != std::floor(value)) return fmt::format("{} is not a whole number (from {})", shown, Text());
   return {};
 }
 
@@ -138,8 +137,14 @@ std::string NumericOptionList(CLI::App& app) {
   std::string list;
   for (CLI::App* command : CommandsOf(app)) {
     for (CLI::Option* option : command->get_options()) {
-      const std::optional<std::string> fields = RangeFields(*option);
+      std::optional<std::string> fields = RangeFields(*option);
       if (!fields && !IsNumericType(*option)) continue;
+      // An option of several numbers at once (--from X,Y,Z, split by CLI11): one V per number.
+      if (fields && fields->starts_with("V\t") && option->get_items_expected_min() > 1) {
+        std::string form = "V";
+        for (int k = 1; k < option->get_items_expected_min(); ++k) form += ",V";
+        fields = form + fields->substr(1);
+      }
       // The longest name: what a user types (and what the test passes).
       std::string name = option->get_lnames().empty() ? "-" + option->get_snames().front() : "--" + option->get_lnames().front();
       list += fmt::format("{}\t{}\t{}\n", CommandPath(*command), name, fields ? *fields : "V\tunbounded");

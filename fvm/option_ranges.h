@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <string_view>
 
 namespace fvm::cli {
 
@@ -18,8 +19,9 @@ struct NumberRange {
   bool whole = false;
 
   // Empty when `value` is a finite number inside the span, else why not: "nan is not a finite number",
-  // "1e+308 mm is outside 0.001 to 100000 mm", "1000.5 is not a whole number".
-  std::string Refusal(double value) const;
+  // "1e308 mm is outside 0.001 to 100000 mm", "1000.5 is not a whole number". The value is quoted as `written`
+  // when given (what the user typed), else in readable digits.
+  std::string Refusal(double value, std::string_view written = {}) const;
   std::string Text() const;  // "0.001 to 100000 mm"
 };
 

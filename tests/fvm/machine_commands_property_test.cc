@@ -192,10 +192,14 @@ TEST(MachineCommandsProperty, NoSignalNoHalfOutputNoNonFiniteNumbers) {
     if (run.status == 1 || run.status == 2) {
       ++refused;
       EXPECT_FALSE(run.err.empty()) << "refused without a word: " << what;
-      if (!c.output.empty()) EXPECT_FALSE(fs::exists(c.output)) << "written although refused: " << what;
+      if (!c.output.empty()) {
+        EXPECT_FALSE(fs::exists(c.output)) << "written although refused: " << what;
+      }
     } else {
       EXPECT_FALSE(HoldsNonFinite(run.out)) << "nan or inf printed: " << what << "\nstdout: " << run.out;
-      if (!c.output.empty()) EXPECT_FALSE(HoldsNonFinite(FilesText(c.output))) << "nan or inf written: " << what;
+      if (!c.output.empty()) {
+        EXPECT_FALSE(HoldsNonFinite(FilesText(c.output))) << "nan or inf written: " << what;
+      }
     }
   }
   // The stream must reach both sides of the contract, or it tests nothing.

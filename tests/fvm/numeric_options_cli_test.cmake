@@ -3,6 +3,7 @@
 # and the value; one inside must pass the option checks (each run stops at parse time: --help after the value,
 # which CLI11 honours only once every value passed its checks). A numeric option declared without a span fails
 # the test. Expects FVM.
+cmake_policy(SET CMP0054 NEW)
 
 execute_process(COMMAND ${FVM} --list-numeric-options RESULT_VARIABLE code OUTPUT_VARIABLE list ERROR_VARIABLE err)
 if(NOT code EQUAL 0)
@@ -20,9 +21,11 @@ foreach(line IN LISTS lines)
   if(line STREQUAL "")
     continue()
   endif()
-  string(REPLACE "\t" ";" fields "${line}")
+  # "@" first: the options of fvm itself have an empty command, which a CMake list would drop.
+  string(REPLACE "\t" ";" fields "@${line}")
   list(LENGTH fields count)
   list(GET fields 0 command)
+  string(SUBSTRING "${command}" 1 -1 command)
   list(GET fields 1 flag)
   list(GET fields 2 form)
   list(GET fields 3 min)
