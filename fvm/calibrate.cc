@@ -446,8 +446,10 @@ void RegisterCalibrate(CLI::App& app) {
                    "neighbours registered is a displacement the stage model must explain, turned with the stage; a "
                    "scan cannot tell the pixel size from xTx1, yTy1 (give --pixel-mm) nor constant offsets and turns, "
                    "and a scan at one height cannot tell pitch and roll (scan again at a second height)");
-  sub->add_option("--pixel-mm", args->pixel_mm, "--scan: the pixel size on the part (mm): the scale of every offset");
-  sub->add_option("--pixel-u-mm", args->pixel_u_mm, "--scan: its standard uncertainty (mm), propagated into the result");
+  sub->add_option("--pixel-mm", args->pixel_mm, "--scan: the pixel size on the part (mm): the scale of every offset")
+      ->check(Within(kPixelMm));
+  sub->add_option("--pixel-u-mm", args->pixel_u_mm, "--scan: its standard uncertainty (mm), propagated into the result")
+      ->check(Within(0.0, 0.1, "mm"));
   sub->add_option("--validate", args->validate,
                   "--scan: an artefact batch of the same stage; its validation placements (all, without batch.json) "
                   "judge the scan calibration as they judge a batch's");

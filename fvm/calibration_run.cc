@@ -23,7 +23,7 @@ void IdentifySettings::AddOptions(CLI::App& app) {
       ->check(CLI::IsMember({"none", "huber", "cauchy"}))
       ->capture_default_str();
   app.add_option("--loss-scale-um", loss_scale_um, "error (um) where the robust loss starts to bend")
-      ->check(CLI::PositiveNumber)
+      ->check(Within(1e-3, 1e5, "um"))
       ->capture_default_str();
 }
 

@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "fvm/option_ranges.h"
+
 namespace fvm::cli {
 
 // Options of the whole program (fvm --threads N --quiet), read by the commands that do long work.
@@ -23,10 +25,20 @@ inline void AddDetails(CLI::App* sub, const std::string& details) {
   sub->description(sub->get_description() + "\n\n" + details);
 }
 
-// An old spelling of `new_name` that scripts may still use: it sets the same variable and is left out of --help.
+// An old spelling of `new_name` that scripts may still use: it sets the same variable, takes the same checks (its
+// span) and is left out of --help.
 template <typename T>
 CLI::Option* AddHiddenAlias(CLI::App* app, const std::string& old_name, T& variable, const std::string& new_name) {
-  return app->add_option(old_name, variable, "old spelling of " + new_name)->group("");
+  CLI::Option* alias = app->add_option(old_name, variable, "old spelling of " + new_name)->group("");
+  CLI::Option* current = app->get_option(new_name);
+  for (int k = 0;; ++k) {
+    try {
+      alias->check(*current->get_validator(k));
+    } catch (const CLI::OptionNotFound&) {
+      break;
+    }
+  }
+  return alias;
 }
 
 // A subcommand that is listed in the contract but not built yet: it says so and exits 2.

@@ -291,10 +291,10 @@ void RegisterCorrect(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--layout", args->layout, "scans: tile layout file,row,col,x,y (stage mm): one rigid shift per tile");
   sub->add_option("--origin", args->origin, "scans: X,Y,Z, the stage position (mm) of the file's coordinate origin")
-      ->check(Parses([](const std::string& t) { ParseVector3(t, "--origin", "--origin 12.5,-30,0"); }, "X,Y,Z"));
+      ->check(NumbersCheck(3, "--origin", "--origin 12.5,-30,0"));
   sub->add_option("--resample", args->resample_mm,
                   "scans: PIXEL_MM, a height map on a regular grid of this pixel again (else a cloud)")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(kPixelMm));
   sub->add_flag("--extrapolate", args->extrapolate, "scans: correct points outside the calibrated travel too");
   args->read.AddOptions(*sub);
   sub->add_flag("--json", args->json, "print the result (frame, points, shifts, uncertainties) as JSON");

@@ -189,7 +189,7 @@ void RegisterDiagnose(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--terms", args->terms, "a base model of one's own instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
   sub->add_option("--alpha", args->alpha, "family-wise false-alarm probability of the selection")
-      ->check(CLI::Range(1e-6, 0.5))
+      ->check(Within(1e-6, 0.5))
       ->capture_default_str();
   sub->add_option("--report", args->report, "write residual plots before and after into this directory (HTML)");
   sub->add_flag("--json", args->json, "print one JSON document on stdout");

@@ -249,19 +249,20 @@ void RegisterFit(CLI::App& app) {
                 "print one JSON document {\"calottes\": [{\"id\", \"x\", \"y\", \"z\", \"radius\", \"form_rms_um\", "
                 "\"points\", ...}], ...}");
   sub->add_option("--radius-mm", args->radius_mm, "fix the sphere radius (the ball that made the calottes), in mm")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(1e-3, 1e3, "mm"));
   sub->add_option("--rotation-deg", args->rotation_deg,
                   "how the artefact lies in the map: its frame turned by this (default 0: calotte 1 at lowest x, "
-                  "highest y); needed when two numberings fit equally well, e.g. a bar along y");
+                  "highest y); needed when two numberings fit equally well, e.g. a bar along y")
+      ->check(Within(kAngleDeg));
   sub->add_option("--min-diameter-mm", args->min_diameter_mm,
                   "smallest calotte opening (default 0.3 mm, or 0.3 x the artefact's calotte diameter)")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(1e-3, 1e3, "mm"));
   sub->add_option("--max-diameter-mm", args->max_diameter_mm,
                   "largest calotte opening (default 3 mm, or 1.5 x the artefact's calotte diameter)")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(1e-3, 1e3, "mm"));
   sub->add_option("--min-depth-mm", args->min_depth_mm,
                   "depth below the face that counts as inside a calotte (default: 8 x the face's noise, >= 0.5 um)")
-      ->check(CLI::PositiveNumber);
+      ->check(Within(1e-6, 100.0, "mm"));
   sub->add_option("--residual", args->residual,
                   "height: distance over n_z, the maximum-likelihood fit for height-map noise (default); "
                   "orthogonal: plain distance to the sphere, as instrument software fits")

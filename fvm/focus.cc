@@ -169,12 +169,13 @@ void RegisterFocus(CLI::App& app) {
   sub->add_option("--fit", args->fit, "sub-step peak interpolation through the best image and its neighbours")
       ->check(CLI::IsMember({"gaussian", "parabolic"}))
       ->default_str("gaussian");
-  sub->add_option("--window-px", args->window, "focus window, odd number of px (3 to 51)")->default_str("5");
+  sub->add_option("--window-px", args->window, "focus window, odd number of px (3 to 51)")->check(Count(3, 51))->default_str("5");
   AddHiddenAlias(sub, "--window", args->window, "--window-px");
   sub->add_option("--min-quality", args->min_quality, "peak over mean focus measure below this: invalid")
+      ->check(Within(0.0, 1e6))
       ->default_str("2");
   sub->add_option("--pixel-mm", args->pixel_mm, "pixel size on the object in mm")
-      ->check(CLI::PositiveNumber)
+      ->check(Within(kPixelMm))
       ->default_str("0.001");
   sub->add_option("--quality", args->quality_output, "also write the quality map (.tif, .tiff or .exr)");
   sub->add_flag("--json", args->json,

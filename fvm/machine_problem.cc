@@ -16,9 +16,32 @@
 namespace fvm::cli {
 namespace {
 
+// --machine must hold every commanded point: the polynomial bases are defined on the travel only (Legendre and
+// Chebyshev on [-1, 1]); far outside it their powers mean nothing, and overflow.
+void CheckInsideTravel(const MachineArgs& args, const artefacts::Workspace& ws, const artefacts::TrackerReadings& readings) {
+  constexpr double kToleranceMm = 1e-3;
+  for (const artefacts::TrackerReading& r : readings.points) {
+    for (int k = 0; k < 3; ++k) {
+      if (r.nominal[k] < ws.min[k] - kToleranceMm || r.nominal[k] > ws.max[k] + kToleranceMm) {
+        throw InputError(fmt::format(
+            "--machine '{}': {}:{}: point {} has {} = {} mm, outside the declared {} travel {} .. {} mm; give travels "
+            "that hold every point (LXxLYxLZ@X0,Y0,Z0), or leave --machine out to take the span of the points",
+            args.machine, readings.source, r.line, r.id, "xyz"[k], ReadableNumber(r.nominal[k]), "XYZ"[k],
+            ReadableNumber(ws.min[k]), ReadableNumber(ws.max[k])));
+      }
+    }
+  }
+}
+
 // The workspace the error functions are defined on: --machine, or the span of the commanded points.
-artefacts::Workspace WorkspaceOf(const MachineArgs& args, const artefacts::TrackerReadings& readings) {
-  if (!args.machine.empty()) return ParseMachine(args.machine);
+artefacts::Workspace WorkspaceOf(const MachineArgs& args, const artefacts::TrackerReadings& readings,
+                                 const std::optional<artefacts::TrackerReadings>& validation) {
+  if (!args.machine.empty()) {
+    const artefacts::Workspace ws = ParseMachine(args.machine);
+    CheckInsideTravel(args, ws, readings);
+    if (validation) CheckInsideTravel(args, ws, *validation);
+    return ws;
+  }
   artefacts::Workspace ws;
   ws.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   ws.max = -ws.min;
@@ -46,14 +69,14 @@ void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
   sub->add_option("--basis", args.basis, "polynomial basis")->check(CLI::IsMember({"power", "legendre", "chebyshev"}))
       ->capture_default_str();
   sub->add_option("--tool", args.tools, "tool offset X,Y,Z in mm (give it twice for two tools: a `tool` column says which)")
-      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->check(NumbersCheck(3, "--tool", "0,0,100"))
       ->capture_default_str();
   auto* fit = sub->add_flag("--fit-pose", args.fit_pose, "estimate the tracker pose jointly (the default)");
   sub->add_option("--pose", args.pose, "hold the tracker pose: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
-      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
+      ->check(PoseCheck("--pose"))
       ->excludes(fit);
   sub->add_option("--machine", args.machine, "axis travels LXxLYxLZ[@X0,Y0,Z0] in mm (default: the span of the points)")
-      ->check(Parses([](const std::string& t) { ParseMachine(t); }, "LXxLYxLZ"));
+      ->check(MachineCheck());
   sub->add_option("--tracker", args.tracker, "tracker noise model for the weights")
       ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
       ->capture_default_str();
@@ -102,7 +125,7 @@ MachineProblem LoadMachineProblem(const MachineArgs& args) {
   p.weighted = !args.unweighted && !p.noise.IsNoiseFree();
   p.observations = artefacts::TrackerObservations(p.readings, p.weighted ? &p.noise : nullptr);
   if (p.validation) p.validation_observations = artefacts::TrackerObservations(*p.validation, nullptr);
-  p.workspace = WorkspaceOf(args, p.readings);
+  p.workspace = WorkspaceOf(args, p.readings, p.validation);
   p.basis = *stage::ParseBasis(args.basis);
   p.options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
   if (!args.pose.empty()) p.options.pose = ParsePose(args.pose, "--pose");

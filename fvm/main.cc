@@ -13,6 +13,7 @@
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "fvm/commands.h"
+#include "fvm/option_ranges.h"
 
 namespace fvm::cli {
 
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
   fvm::cli::CommonOptions& common = fvm::cli::Common();
   app.add_option("--threads", common.threads,
                  "threads for identification, registration, mosaics and focus stacks (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(fvm::cli::Count(0, 1024));
   app.add_flag("-q,--quiet", common.quiet, "no progress lines on stderr (they appear only on a terminal anyway)");
 
   fvm::cli::RegisterCalibrate(app);
@@ -109,6 +110,17 @@ int main(int argc, char** argv) {
   fvm::cli::RegisterMultilaterate(app);
   fvm::cli::RegisterUncertainty(app);
   fvm::cli::RegisterTestPiece(app);
+  // Every numeric option, whatever command declared it, refuses nan and inf; --list-numeric-options (hidden)
+  // prints each with its span for the test that tries them all (tests/fvm/numeric_options_cli_test.cmake).
+  fvm::cli::RefuseNonFinite(app);
+  app.add_flag_callback(
+         "--list-numeric-options",
+         [&app] {
+           fmt::print("{}", fvm::cli::NumericOptionList(app));
+           throw CLI::Success();
+         },
+         "print every numeric option: COMMAND, FLAG, FORM, MIN, MAX, whole|real (tab-separated)")
+      ->group("");
 
   try {
     app.parse(argc, argv);

@@ -129,7 +129,7 @@ PointSpec ParsePointSpec(std::string_view text, const std::string& flag) {
   spec.kind = std::string(text.substr(0, colon));
   const std::string_view rest = colon == std::string_view::npos ? std::string_view() : text.substr(colon + 1);
   if (spec.kind == "mesh" || spec.kind == "cloud") {
-    const auto s = ParseNumbers(rest, 3, flag + " " + spec.kind, spec.kind + ":500,500,400 (steps in mm)");
+    const auto s = ParseNumbers(rest, 3, flag + " " + spec.kind, spec.kind + ":500,500,400 (steps in mm)", kStepMm);
     spec.step = Eigen::Vector3d(s[0], s[1], s[2]);
     if (!(spec.step.minCoeff() > 0.0)) throw std::invalid_argument(flag + " '" + std::string(text) + "': steps must be > 0 mm");
     return spec;
@@ -143,6 +143,10 @@ PointSpec ParsePointSpec(std::string_view text, const std::string& flag) {
     return spec;
   }
   throw std::invalid_argument(flag + " '" + std::string(text) + "': use mesh:SX,SY,SZ, cloud:SX,SY,SZ (steps in mm) or diagonals:N");
+}
+
+CLI::Validator PointSpecCheck(const std::string& flag) {
+  return ParsesWithin([flag](const std::string& t) { ParsePointSpec(t, flag); }, "mesh:V,V,V", kStepMm, "SPEC");
 }
 
 std::vector<artefacts::PlannedPoint> Plan(const PointSpec& spec, const artefacts::Workspace& ws, std::uint64_t seed) {
@@ -445,43 +449,44 @@ void RegisterSimulateTracker(CLI::App* simulate) {
              "Table I position 4. Points the tracker cannot see (elevation -60..+77 deg, range 40 m) stop the run.");
   sub->add_option("-o,--output", args->output, "directory to write (created if needed)")->required();
   sub->add_option("--machine", args->machine, "axis travels LXxLYxLZ in mm, optionally @X0,Y0,Z0 (the origin, default 0)")
-      ->check(Parses(ParseMachine, "LXxLYxLZ[@X0,Y0,Z0]"))
+      ->check(MachineCheck())
       ->capture_default_str();
   sub->add_option("--chain", args->chain, "axis chain in F notation (part axes left of F, tool axes right): XFYZ, YXFZ, ...")
       ->check(Parses([](const std::string& t) { stage::AxisChain::Parse(t); }, "CHAIN"))
       ->capture_default_str();
   sub->add_option("--points", args->points, "mesh:SX,SY,SZ | cloud:SX,SY,SZ (steps in mm; cloud seeded by --seed) | diagonals:N")
-      ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--points"); }, "SPEC"))
+      ->check(PointSpecCheck("--points"))
       ->capture_default_str();
   sub->add_option("--tool", args->tool, "tool (reflector) offset X,Y,Z in mm, in the last tool axis' frame")
-      ->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))
+      ->check(NumbersCheck(3, "--tool", "0,0,100"))
       ->capture_default_str();
   sub->add_option("--pose", args->pose,
                   "tracker pose in the machine frame: X,Y,Z (mm) and intrinsic XYZ Euler angles A,B,C (deg); default "
                   "[IJSIMM 2016] Table I position 4")
-      ->check(Parses([](const std::string& t) { ParsePose(t, "--pose"); }, "X,Y,Z,A,B,C"))
+      ->check(PoseCheck("--pose"))
       ->capture_default_str();
   CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: README, Machine tools)")
                             ->check(CLI::ExistingFile);
   CLI::Option* seed = sub->add_option("--seed", args->seed,
                                       "random machine, cloud and tracker noise (same seed, same bytes); with --errors: "
                                       "the cloud and noise only")
+                          ->check(Within(kSeed))
                           ->capture_default_str();
   sub->add_option("--mean-error-um", args->mean_error_um, "mean volumetric error of the random machine (um)")
-      ->check(CLI::Range(1e-3, 1e5))
+      ->check(Within(1e-3, 1e5, "um"))
       ->capture_default_str()
       ->excludes(errors);
   sub->add_option("--tracker", args->tracker, "tracker noise preset (README, Machine tools)")
       ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
       ->capture_default_str();
   sub->add_option("--dwell-s", args->dwell_s, "dwell at each point in the program (s)")
-      ->check(CLI::Range(0.0, 3600.0))
+      ->check(Within(0.0, 3600.0, "s"))
       ->capture_default_str();
   sub->add_option("--feed-mm-min", args->feed_mm_min, "feed between points in the program (mm/min; 0: rapid moves)")
-      ->check(CLI::Range(0.0, 1e6))
+      ->check(Within(0.0, 1e6, "mm/min"))
       ->capture_default_str();
   sub->add_option("--validation", args->validation, "noise-free readings of other points, same SPEC forms as --points")
-      ->check(Parses([](const std::string& t) { ParsePointSpec(t, "--validation"); }, "SPEC"));
+      ->check(PointSpecCheck("--validation"));
   sub->add_option("--stations", args->stations,
                   "several stations instead of one tracker: JSON {\"stations\": [{\"name\", \"x\", \"y\", \"z\"}]} "
                   "in the machine frame (mm); writes readings.csv for fvm multilaterate, stations.json and "
@@ -510,17 +515,23 @@ void RegisterSimulate(CLI::App& app) {
       "fvm-batch", "17-calotte bar placements on the 200 x 200 mm stage (X, Y, oblique to identify; random to "
                    "validate), stitched and stitching-free, plus truth.json");
   sub->add_option("-o,--output", args->output, "batch directory to write")->required();
-  sub->add_option("--seed", args->options.seed, "random seed (same seed, same bytes)")->capture_default_str();
+  sub->add_option("--seed", args->options.seed, "random seed (same seed, same bytes)")->check(Within(kSeed))->capture_default_str();
   sub->add_option("--truth-model", args->options.truth_model, "stage error model of the truth")
       ->check(CLI::IsMember(stage::FvmModelNames()))
       ->capture_default_str();
   sub->add_option("--truth-terms", args->options.truth_terms,
                   "a truth of one's own form instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
-  sub->add_option("--mean-error-um", args->options.mean_error_um, "mean stage error over the stage (um)")->capture_default_str();
-  sub->add_option("--noise-um", args->options.noise_um, "centre noise per coordinate (um)")->capture_default_str();
+  sub->add_option("--mean-error-um", args->options.mean_error_um, "mean stage error over the stage (um)")
+      ->check(Within(0.0, 1e4, "um"))
+      ->capture_default_str();
+  sub->add_option("--noise-um", args->options.noise_um, "centre noise per coordinate (um)")
+      ->check(Within(0.0, 1e3, "um"))
+      ->capture_default_str();
   sub->add_option("--validation-placements", args->options.validation_placements, "number of validation placements")
+      ->check(Count(0, 1000))
       ->capture_default_str();
   sub->add_option("--pitch-error-um", args->options.pitch_error_um, "calotte deviations of the uncalibrated bar (um)")
+      ->check(Within(0.0, 1e3, "um"))
       ->capture_default_str();
   sub->add_option("--hidden-effect", args->options.hidden_effect,
                   "hide effects the stage model lacks, for 'fvm diagnose': one name or several joined by commas, e.g. "
@@ -540,18 +551,20 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--effect-size", args->options.effect_size,
                   "size of the hidden effect; 0 = default: thermal_drift 3 um/min, higher_order 80 um, reference_anchor "
                   "30 mm, z_coupling 500 urad (X; Y half), outliers 80 um, scale 300 ppm")
+      ->check(Within(0.0, 1e5))
       ->capture_default_str();
   sub->add_option("--drift-tau-min", args->options.drift_tau_min,
                   "thermal_drift: 0 drifts linearly in t; > 0 a warm-up B (1 - exp(-t/tau)) with this time constant (min)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(Within(0.0, 1e4, "min"))
       ->capture_default_str();
   sub->add_option("--periodic-um", args->options.periodic_um,
                   "a lead screw's cyclic error along X and Y that no polynomial model takes (um; 0: none)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(Within(0.0, 1e3, "um"))
       ->capture_default_str();
-  sub->add_option("--period-mm", args->options.period_mm, "its period")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--period-mm", args->options.period_mm, "its period")->check(Within(kStepMm))->capture_default_str();
   sub->add_option("--height-step-mm", args->options.height_step_mm,
                   "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")
+      ->check(Within(-100.0, 100.0, "mm"))
       ->capture_default_str();
   sub->add_flag("--serpentine", args->options.serpentine,
                 "measure every other placement from its last calotte back to its first, so that a drift shows at the "

@@ -216,12 +216,14 @@ void RegisterSimulateScan(CLI::App* simulate) {
   sub->add_option("--calibration-truth", args->truth_file,
                   "the stage: a truth.json of fvm simulate fvm-batch, or a calibration file; default: the stage of "
                   "fvm simulate fvm-batch --seed N");
-  sub->add_option("--seed", args->seed, "random seed: the stage (without --calibration-truth), texture and noise")->capture_default_str();
+  sub->add_option("--seed", args->seed, "random seed: the stage (without --calibration-truth), texture and noise")->check(Within(kSeed))->capture_default_str();
   sub->add_option("--lens", args->lens, "lens (field of view): 2.5x, 5x, 10x, ...")->capture_default_str();
-  sub->add_option("--tile-px", args->tile_px, "square tiles of this many pixels")->check(CLI::Range(16, 8192))->capture_default_str();
-  sub->add_option("--overlap", args->overlap, "overlap of consecutive tiles, percent or fraction")->capture_default_str();
-  sub->add_option("--length-mm", args->length_mm, "length of each path")->capture_default_str();
-  sub->add_option("--heights", args->heights, "encoder z of each set of paths (mm), e.g. -50,-40 for a second height")->capture_default_str();
+  sub->add_option("--tile-px", args->tile_px, "square tiles of this many pixels")->check(Count(16, 8192))->capture_default_str();
+  sub->add_option("--overlap", args->overlap, "overlap of consecutive tiles, percent or fraction")->check(OverlapCheck("--overlap"))->capture_default_str();
+  sub->add_option("--length-mm", args->length_mm, "length of each path")->check(Within(kStepMm))->capture_default_str();
+  sub->add_option("--heights", args->heights, "encoder z of each set of paths (mm), e.g. -50,-40 for a second height")
+      ->check(NumbersCheck(0, "--heights", "-50,-40"))
+      ->capture_default_str();
   sub->add_option("--texture", args->texture, "ground (fills the field), milled (a lay), blobs (sparse spots)")
       ->check(CLI::IsMember({"ground", "milled", "blobs"}))
       ->capture_default_str();
@@ -233,9 +235,9 @@ void RegisterSimulateScan(CLI::App* simulate) {
   sub->add_option("--periodic-um", args->periodic_um,
                   "a lead screw's cyclic error along X and Y the model cannot take (um); default: the truth file's, "
                   "else 0.3")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--period-mm", args->period_mm, "its period")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--validation", args->validation, "validation positions to write")->check(CLI::Range(1, 1000000))->capture_default_str();
+      ->check(Within(0.0, 1e3, "um"));
+  sub->add_option("--period-mm", args->period_mm, "its period")->check(Within(kStepMm))->capture_default_str();
+  sub->add_option("--validation", args->validation, "validation positions to write")->check(Count(1, 1e6))->capture_default_str();
   sub->footer("Example:\n  fvm simulate scan -o scans --seed 1 --tile-px 256\n"
               "  fvm calibrate --scan scans/row.csv --scan scans/column.csv --scan scans/diagonal.csv --pixel-mm 0.01101563 "
               "--model 27 -o stage.json\n"

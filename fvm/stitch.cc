@@ -303,6 +303,7 @@ void RegisterStitch(CLI::App& app) {
   sub->add_option("--overlap", args->overlap,
                   "nominal overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: "
                   "0.2 = 20 %)")
+      ->check(OverlapCheck("--overlap"))
       ->required();
   sub->add_option("-o,--output", args->output,
                   "positions CSV file,x,y[,x_mm,y_mm],registered,u_x,u_y (u: standard uncertainty in px against "
@@ -314,12 +315,15 @@ void RegisterStitch(CLI::App& app) {
                   "name ends in .x3p (float tiles holding heights in mm; needs --pixel-mm)");
   sub->add_option("--pixel-mm", args->pixel_mm,
                   "pixel size in mm: adds x_mm,y_mm (stage frame, +Y up) and takes nominal positions from the "
-                  "layout's x,y");
+                  "layout's x,y")
+      ->check(Within(kPixelMm));
   sub->add_option("--min-quality", args->min_quality, "reject pairs whose aligned correlation is below this")
+      ->check(Within(-1.0, 1.0))
       ->capture_default_str();
   sub->add_option("--stage-sigma-px", args->stage_sigma_px,
                   "the stage's positioning error over the grid (px, standard deviation): what holds a tile along a "
                   "direction its images do not determine")
+      ->check(Within(1e-3, 1e4, "px"))
       ->capture_default_str();
   AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
   sub->add_flag("--json", args->json,

@@ -332,7 +332,7 @@ void RunSimulate(const SimulateArgs& args) {
   if (!args.validation.empty()) {
     // A noise-free grid over the whole piece (not only where features are): how well the identified machine
     // predicts the piece everywhere.
-    const Eigen::Vector3d step = ParseVector3(args.validation, "--validation", "30,30,30");
+    const Eigen::Vector3d step = ParseVector3(args.validation, "--validation", "30,30,30", kStepMm);
     std::vector<artefacts::PiecePoint> grid;
     for (const artefacts::PlannedPoint& p : artefacts::PlanMesh(ws, step)) grid.push_back({"G" + p.id.substr(1), p.nominal, "", "", {}});
     artefacts::CmmSimulation exact = cmm;
@@ -402,10 +402,12 @@ void RegisterTestPiece(CLI::App& app) {
   v->add_option("DATA", verify->data, "CMM readings: id,x,y,z,xm,ym,zm (mm)")->required();
   v->add_option("--chain", verify->chain, "F-notation chain")->capture_default_str();
   v->add_option("--basis", verify->basis, "polynomial basis")->check(CLI::IsMember({"power", "legendre", "chebyshev"}))->capture_default_str();
-  v->add_option("--order", verify->order, "polynomial order of each error function")->check(CLI::Range(1, 3))->capture_default_str();
+  v->add_option("--order", verify->order, "polynomial order of each error function")->check(Count(1, 3))->capture_default_str();
   v->add_option("--tool", verify->tools, "tool offset X,Y,Z in mm (tool length along Z); twice for two tools (a `tool` column)")
+      ->check(NumbersCheck(3, "--tool", "0,0,100"))
       ->capture_default_str();
-  v->add_option("--machine", verify->machine, "domain of the error functions LXxLYxLZ[@X0,Y0,Z0] (default: the span of the points)");
+  v->add_option("--machine", verify->machine, "domain of the error functions LXxLYxLZ[@X0,Y0,Z0] (default: the span of the points)")
+      ->check(MachineCheck());
   v->add_option("--validate", verify->validate, "other readings to judge the model on (never fitted)");
   AddMaxErrorOption(v, *verify);
   v->add_option("--nominal", verify->nominal, "NOMINAL.csv of the piece: its series column selects X1..Z3 for the geometric verification");
@@ -428,24 +430,24 @@ void RegisterSimulateTestPiece(CLI::App* simulate) {
   sub->add_option("-o,--output", args->output, "directory to write")->required();
   auto* errors = sub->add_option("--errors", args->errors, "machine truth JSON")->check(CLI::ExistingFile);
   sub->add_option("--mean-error-um", args->mean_error_um, "a random machine (cubics + sines) of this mean volumetric error over the piece")
-      ->check(CLI::Range(1e-3, 1e4))
+      ->check(Within(1e-3, 1e4, "um"))
       ->excludes(errors);
-  sub->add_option("--seed", args->seed, "random machine and CMM noise (same seed, same bytes)")->capture_default_str();
-  sub->add_option("--noise-um", args->noise_um, "CMM noise per coordinate (um)")->check(CLI::Range(0.0, 1e3))->capture_default_str();
+  sub->add_option("--seed", args->seed, "random machine and CMM noise (same seed, same bytes)")->check(Within(kSeed))->capture_default_str();
+  sub->add_option("--noise-um", args->noise_um, "CMM noise per coordinate (um)")->check(Within(0.0, 1e3, "um"))->capture_default_str();
   sub->add_option("--points", args->only, "all, pyramid ([Lorente 2021]'s 167-point test) or series (X1..Z3 only)")
       ->check(CLI::IsMember({"all", "pyramid", "series"}))
       ->capture_default_str();
   sub->add_option("--chain", args->chain, "F-notation chain")->check(Parses([](const std::string& t) { stage::AxisChain::Parse(t); }, "CHAIN"))->capture_default_str();
-  sub->add_option("--tool", args->tool, "tool offset X,Y,Z (mm)")->check(Parses([](const std::string& t) { ParseVector3(t, "--tool", "0,0,100"); }, "X,Y,Z"))->capture_default_str();
+  sub->add_option("--tool", args->tool, "tool offset X,Y,Z (mm)")->check(NumbersCheck(3, "--tool", "0,0,100"))->capture_default_str();
   sub->add_option("--datum", args->datum, "the piece's pose on the CMM: X,Y,Z (mm), A,B,C (XYZ Euler, deg)")
-      ->check(Parses([](const std::string& t) { ParsePose(t, "--datum"); }, "X,Y,Z,A,B,C"))
+      ->check(PoseCheck("--datum"))
       ->capture_default_str();
   sub->add_flag("--json", args->json, "print what was written as JSON: output, points, errors, noise, seed, datum");
   sub->add_flag("--proposed-series", args->proposed,
                 "also cut the series X1..Z3 with an oriented boring bar 30 mm off the spindle axis (at 0 and 180 deg) and "
                 "a tool 50 mm longer: the series that recover ECZ, ECY, EAZ and EBZ");
   sub->add_option("--validation", args->validation, "also a noise-free grid with these steps SX,SY,SZ (mm) over the piece")
-      ->check(Parses([](const std::string& t) { ParseVector3(t, "--validation", "30,30,30"); }, "SX,SY,SZ"));
+      ->check(NumbersCheck(3, "--validation", "30,30,30", kStepMm));
   sub->footer("Example:\n  fvm simulate testpiece -o tp --seed 1 --validation 30,30,30\n  fvm simulate testpiece -o pyr --points pyramid");
   sub->callback([args] { RunSimulate(*args); });
 }

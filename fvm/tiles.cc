@@ -546,22 +546,27 @@ void RegisterTiles(CLI::App& app) {
   plan->add_option("--lens", plan_args->lens, "lens: 2.5x (5.63 mm field), 5x (2.82), 10x (1.62), 20x (0.81), "
                                               "50x (0.32), 100x (0.16)")
       ->capture_default_str();
-  plan->add_option("--fov-mm", plan_args->fov_mm, "field of view in mm, instead of the lens table's");
+  plan->add_option("--fov-mm", plan_args->fov_mm, "field of view in mm, instead of the lens table's")->check(Within(1e-3, 1e3, "mm"));
   AddHiddenAlias(plan, "--fov", plan_args->fov_mm, "--fov-mm");
   plan->add_option("--region", plan_args->region,
-                   "x0,y0,x1,y1 in mm (default: the bounding box of the features)");
+                   "x0,y0,x1,y1 in mm (default: the bounding box of the features)")
+      ->check(NumbersCheck(4, "--region", "--region 0,0,20,20 (x0,y0,x1,y1 in mm)"));
   plan->add_option("--overlap", plan_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")
+      ->check(OverlapCheck("--overlap"))
       ->capture_default_str();
   plan->add_option("--features", plan_args->features,
                    "centre export (CSV id,x,y,z[,radius], mm) of the features a stitching-free scan must cover");
   plan->add_option("--artefact", plan_args->artefact, "cover the calottes of a known artefact: grid6x6 or bar17, in "
                                                       "its own frame");
-  plan->add_option("--radius-mm", plan_args->radius_mm, "feature radius in mm (overrides the file's or artefact's)");
+  plan->add_option("--radius-mm", plan_args->radius_mm, "feature radius in mm (overrides the file's or artefact's)")->check(Within(1e-3, 1e3, "mm"));
   AddHiddenAlias(plan, "--radius", plan_args->radius_mm, "--radius-mm");
-  plan->add_option("--seconds-per-tile", plan_args->seconds_per_tile, "scan time per tile (s)")->capture_default_str();
-  plan->add_option("--tile-px", plan_args->tile_pixels, "pixels per tile, WxH")->capture_default_str();
+  plan->add_option("--seconds-per-tile", plan_args->seconds_per_tile, "scan time per tile (s)")->check(Within(1e-3, 3600.0, "s"))->capture_default_str();
+  plan->add_option("--tile-px", plan_args->tile_pixels, "pixels per tile, WxH")
+      ->check(NumbersCheck(2, "--tile-px", "1024x1024", {16, 65536, "px", true}, 'x'))
+      ->capture_default_str();
   AddHiddenAlias(plan, "--tile-pixels", plan_args->tile_pixels, "--tile-px");
   plan->add_option("--bytes-per-pixel", plan_args->bytes_per_pixel, "stored bytes per pixel (height + colour)")
+      ->check(Count(1, 64))
       ->capture_default_str();
   plan->add_option("-o,--layout", plan_args->output, "write the stitched layout CSV file,row,col,x,y");
   plan->add_option("--free-layout", plan_args->free_output, "write the stitching-free layout CSV file,row,col,x,y");
@@ -569,9 +574,11 @@ void RegisterTiles(CLI::App& app) {
                  "plan stitched calibration scans for fvm calibrate --scan instead: a row along X, a column along Y and "
                  "a diagonal through the travel's centre (any textured part; no artefact)");
   plan->add_option("--travel", plan_args->travel, "--calibration-scan: the stage travel WxH (mm), coordinates -W..0, -H..0")
+      ->check(NumbersCheck(2, "--travel", "200x200", kTravelMm, 'x'))
       ->capture_default_str();
-  plan->add_option("--length-mm", plan_args->length_mm, "--calibration-scan: length of each path")->capture_default_str();
+  plan->add_option("--length-mm", plan_args->length_mm, "--calibration-scan: length of each path")->check(Within(kStepMm))->capture_default_str();
   plan->add_option("--heights", plan_args->heights, "--calibration-scan: encoder z of each set of paths (mm), e.g. -50,-40")
+      ->check(NumbersCheck(0, "--heights", "-50,-40"))
       ->capture_default_str();
   plan->add_option("--scan-dir", plan_args->scan_dir, "--calibration-scan: write each path's layout (file,row,col,x,y,z) here");
   plan->add_flag("--json", plan_args->json,
@@ -594,20 +601,23 @@ void RegisterTiles(CLI::App& app) {
       "synthesize", "synthetic overlapping tiles with known positions, for trying fvm stitch");
   synth->add_option("-o,--output", synth_args->output, "directory for the tiles, layout.csv and truth.csv")
       ->required();
-  synth->add_option("--rows", synth_args->rows, "tile rows (default 3; with --artefact, as many as cover it)");
-  synth->add_option("--cols", synth_args->cols, "tile columns (default 3; with --artefact, as many as cover it)");
+  synth->add_option("--rows", synth_args->rows, "tile rows (default 3; with --artefact, as many as cover it)")->check(Count(1, 100));
+  synth->add_option("--cols", synth_args->cols, "tile columns (default 3; with --artefact, as many as cover it)")->check(Count(1, 100));
   synth->add_option("--tile-px", synth_args->size, "tile width and height (px; --texture sparse: 245 x 183)")
+      ->check(Count(16, 8192))
       ->capture_default_str()
       ->each([synth_args](const std::string&) { synth_args->size_given = true; });
   AddHiddenAlias(synth, "--size", synth_args->size, "--tile-px")->each([synth_args](const std::string&) {
     synth_args->size_given = true;
   });
   synth->add_option("--overlap", synth_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %; --texture sparse: 6)")
+      ->check(OverlapCheck("--overlap"))
       ->capture_default_str()
       ->each([synth_args](const std::string&) { synth_args->overlap_given = true; });
   synth->add_option("--stage-sigma-px", synth_args->sigma_px,
                     "standard deviation of the stage error per axis (px; with --texture sparse the repeatability "
                     "on top of the systematic step error)")
+      ->check(Within(0.0, 1e3, "px"))
       ->capture_default_str();
   synth->add_option("--texture", synth_args->texture,
                     "waves: a dense random texture; sparse: 16-bit blobs on a smooth background with shot noise, "
@@ -615,11 +625,11 @@ void RegisterTiles(CLI::App& app) {
                     "microscope set of a sparse sample)")
       ->capture_default_str();
   AddHiddenAlias(synth, "--stage-error", synth_args->sigma_px, "--stage-sigma-px");
-  synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer, the default) or 32 (float)");
+  synth->add_option("--bits", synth_args->bits, "pixel type: 8, 16 (integer, the default) or 32 (float)")->check(Count(8, 32));
   synth->add_option("--artefact", synth_args->artefact,
                     "height-map tiles of grid6x6 or bar17 instead (float, mm, 10 um pixels, NaN on steep flanks), "
                     "with calottes.csv, the true calottes");
-  synth->add_option("--seed", synth_args->seed, "random seed")->capture_default_str();
+  synth->add_option("--seed", synth_args->seed, "random seed")->check(Within(kSeed))->capture_default_str();
   synth->footer("Tiles are cut from one random texture with 30 % vignetting and 3 % noise; truth.csv holds the "
                 "true top-left corners, the first tile at 0,0. With --artefact they are cut from one height map of "
                 "the artefact (0.5 um of roughness, 0.1 um of noise per tile) and the layout holds the stage "
@@ -635,22 +645,27 @@ void RegisterTiles(CLI::App& app) {
       ->required();
   strategies->add_option("--lens", strategy_args->lens, "lens (field of view from the lens table)")->capture_default_str();
   strategies->add_option("--overlap", strategy_args->overlap, "overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: 0.2 = 20 %)")
+      ->check(OverlapCheck("--overlap"))
       ->capture_default_str();
   strategies->add_option("--from", strategy_args->from, "first calotte x,y,z in mm (default: [Pérez 2019] Table 1, calotte 1)")
+      ->check(Within(kCoordinateMm))
       ->delimiter(',')
       ->expected(3);
   strategies->add_option("--to", strategy_args->to, "last calotte x,y,z in mm (default: [Pérez 2019] Table 1, calotte 6)")
+      ->check(Within(kCoordinateMm))
       ->delimiter(',')
       ->expected(3);
   strategies->add_flag("--render", strategy_args->render,
                        "also render the row's tiles where the stage really puts them, register them as fvm stitch "
                        "does and fit the calottes in their tiles (a few seconds)");
   strategies->add_option("--tile-px", strategy_args->tile_px, "with --render: pixels across a tile")
+      ->check(Count(16, 8192))
       ->capture_default_str();
   strategies->add_option("--tiles", strategy_args->tiles_output,
                          "with --render: write the row's tiles (16-bit TIFF) and layout.csv (encoder positions) to "
                          "this directory, ready for fvm stitch");
   strategies->add_option("--seed", strategy_args->seed, "with --render: seed of the texture and the noise")
+      ->check(Within(kSeed))
       ->capture_default_str();
   strategies->add_flag("--json", strategy_args->json,
                        "print {\"cases\": [{\"case\", \"description\", \"tiles\", \"encoder_tiles\", "

@@ -501,16 +501,16 @@ void RegisterUncertainty(CLI::App& app) {
              "centres are drawn again around it with their noise, and the validation rms over the runs is shown next "
              "to the covariance-based prediction of fvm calibrate.");
   AddMachineOptions(sub, *args);
-  sub->add_option("--order", args->order, "polynomial order of each error function")->check(CLI::Range(1, 3))->capture_default_str();
-  sub->add_option("--runs", args->runs, "Monte Carlo runs")->check(CLI::Range(1, 1'000'000))->capture_default_str();
-  sub->add_option("--seed", args->seed, "seed of the noise draws")->capture_default_str();
+  sub->add_option("--order", args->order, "polynomial order of each error function")->check(Count(1, 3))->capture_default_str();
+  sub->add_option("--runs", args->runs, "Monte Carlo runs")->check(Count(1, 100'000))->capture_default_str();
+  sub->add_option("--seed", args->seed, "seed of the noise draws")->check(Within(kSeed))->capture_default_str();
   sub->add_option("--u-cal-um", args->u_cal_um, "standard uncertainty of the reference's calibration (um)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(Within(0.0, 1e3, "um"))->capture_default_str();
   sub->add_option("--temperature-c", args->temperature_c, "half-range of the temperature, rectangular (C)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(Within(0.0, 50.0, "C"))->capture_default_str();
   sub->add_option("--cte-per-k", args->cte_per_k, "expansion coefficient of the workpiece (1/K; aluminium 24e-6)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
-  sub->add_option("--k", args->k, "coverage factor")->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(Within(0.0, 1e-3, "1/K"))->capture_default_str();
+  sub->add_option("--k", args->k, "coverage factor")->check(Within(0.5, 10.0))->capture_default_str();
   sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
   sub->add_option("--model", args->model, "microscope stage (DATA a batch): [Pérez 2019] model 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
@@ -518,17 +518,16 @@ void RegisterUncertainty(CLI::App& app) {
   sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");
   sub->add_option("--centre-noise-um", args->centre_noise_um,
                   "microscope stage: standard deviation of a stitched centre per coordinate (default: the fit's residual)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(Within(0.0, 1e3, "um"));
   args->settings.AddOptions(*sub);
   sub->add_option("--place-tracker", args->place_tracker,
                   "rank tracker positions on a grid of this box X0,Y0,Z0,X1,Y1,Z1 (machine frame, mm) by the largest "
                   "95 % radius over the points: covariance propagation for all, --runs Monte Carlo runs for the best")
-      ->check(Parses([](const std::string& t) { ParseNumbers(t, 6, "--place-tracker", "1000,-1500,0,2000,-500,800"); },
-                     "X0,Y0,Z0,X1,Y1,Z1"));
+      ->check(NumbersCheck(6, "--place-tracker", "1000,-1500,0,2000,-500,800"));
   sub->add_option("--place-steps", args->place_steps, "grid positions per axis of the --place-tracker box")
-      ->check(CLI::Range(1, 50))->capture_default_str();
+      ->check(Count(1, 50))->capture_default_str();
   sub->add_option("--place-confirm", args->place_confirm, "best positions the Monte Carlo confirms")
-      ->check(CLI::Range(0, 100))->capture_default_str();
+      ->check(Count(0, 100))->capture_default_str();
   sub->add_flag("--json", args->json, "print the result as JSON");
   sub->footer(
       "Example:\n  fvm simulate tracker --seed 1 --validation mesh:250,250,200 -o plan\n"

@@ -494,6 +494,12 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     Eigen::VectorXd r0;
     Eigen::MatrixXd j;
     Linearise(layout, zeros, start_pose, prepared, &r0, &j);
+    // Polynomial bases are defined on their travel; far outside it (or on a travel of 1e-300 mm) their powers
+    // overflow, and a rank search on inf and NaN reads memory it does not own (Eigen's pivoting).
+    if (!j.allFinite() || !r0.allFinite()) {
+      throw std::invalid_argument("the model cannot be evaluated at these points (its derivatives overflow): do the "
+                                  "points lie inside the travel the error functions are defined on?");
+    }
     const Eigen::Index n_coefficients = layout.NumFree();
     Eigen::VectorXd tau(n_coefficients + pose_count);
     tau << PlausibleSizes(layout), prepared.pose_scale.head(pose_count);

@@ -2,11 +2,14 @@
 
 #include <Eigen/QR>
 #include <cmath>
+#include <stdexcept>
 
 namespace fvm::stage {
 
 std::vector<ColumnDependence> FindDependentColumns(const Eigen::MatrixXd& j, const std::vector<int>& order,
                                                    double relative_tolerance) {
+  // Pivoting on NaN picks no column at all (Eigen then indexes out of bounds): refuse it here, where it would crash.
+  if (!j.allFinite()) throw std::invalid_argument("FindDependentColumns: the matrix holds inf or NaN");
   std::vector<ColumnDependence> dependent;
   std::vector<int> kept;
   Eigen::MatrixXd basis(j.rows(), 0);  // orthonormal basis of the kept columns

@@ -13,7 +13,8 @@ struct ColumnDependence {
 };
 
 // Walks the columns in `order`; a column whose residual after projection onto the kept columns is below
-// `relative_tolerance` times its norm depends on them (factors by least squares); otherwise it is kept.
+// `relative_tolerance` times its norm depends on them (factors by least squares); otherwise it is kept. A matrix
+// holding inf or NaN is refused (std::invalid_argument).
 std::vector<ColumnDependence> FindDependentColumns(const Eigen::MatrixXd& j, const std::vector<int>& order,
                                                    double relative_tolerance);
 
