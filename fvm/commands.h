@@ -31,9 +31,16 @@ template <typename T>
 CLI::Option* AddHiddenAlias(CLI::App* app, const std::string& old_name, T& variable, const std::string& new_name) {
   CLI::Option* alias = app->add_option(old_name, variable, "old spelling of " + new_name)->group("");
   CLI::Option* current = app->get_option(new_name);
+  // CLI11 leaves a hidden option's name out of its refusals, so the alias's checks name it themselves.
   for (int k = 0;; ++k) {
     try {
-      alias->check(*current->get_validator(k));
+      const CLI::Validator check = *current->get_validator(k);
+      alias->check(CLI::Validator(
+          [check, old_name](std::string& text) {
+            const std::string refusal = check(text);
+            return refusal.empty() ? refusal : old_name + ": " + refusal;
+          },
+          check.get_description(), check.get_name()));
     } catch (const CLI::OptionNotFound&) {
       break;
     }

@@ -129,7 +129,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all, --version
     const std::string command = fvm::cli::CommandPath(app);
-    fmt::print(stderr, "{}: {}\nRun '{} --help' for its options.\n", command, e.what(), command);
+    // A hidden option (an old spelling) has an empty name in CLI11's message, ": why"; its checks name it.
+    std::string why = e.what();
+    if (why.starts_with(": ")) why.erase(0, 2);
+    fmt::print(stderr, "{}: {}\nRun '{} --help' for its options.\n", command, why, command);
     return fvm::kExitUsage;
   } catch (const fvm::InputError& e) {
     fmt::print(stderr, "fvm: error: {}\n", e.what());
