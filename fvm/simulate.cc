@@ -584,10 +584,10 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--surface-pixel-mm", args->surface.pixel_mm,
                   "with --surfaces: pixel size of the surfaces (coarse: a 160 mm bar at 45 degrees is 2300 x 2300 "
                   "points at 0.05 mm), e.g. --surface-pixel-mm 0.1")
-      ->check(CLI::PositiveNumber)
+      ->check(Within(0.02, 0.5, "mm"))  // finer: a bar's mosaic of billions of points; coarser: no calotte left
       ->capture_default_str();
   sub->add_option("--surface-noise-um", args->surface.noise_um, "with --surfaces: height noise per pixel (um)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(Within(0.0, 100.0, "um"))
       ->capture_default_str();
   sub->footer("Example:\n  fvm simulate fvm-batch -o batch --seed 7 --noise-um 0.5\n"
               "  fvm simulate fvm-batch -o raw --seed 7 --surfaces x3p && fvm calibrate raw --model 27");
