@@ -90,7 +90,7 @@ void AddMaxErrorOption(CLI::App* sub, MachineArgs& args) {
                   "plausibility bound: refuse a result with an error term or residual beyond it, which means wrong data "
                   "(mirrored axes, units, columns), not a machine (default: 1 mm per metre of the longest travel; "
                   "e.g. --max-error-mm 5)")
-      ->check(Within(1e-3, 1e3, "mm"));
+      ->check(Within(1e-3, 1e5, "mm"));
 }
 
 std::string MachineProblem::WeightsName() const { return weighted ? "tracker " + noise.name : std::string("equal"); }

@@ -128,8 +128,8 @@ endif()
 run(0 --threads 1 --quiet tiles plan --lens 5x --region 0,0,10,10 --overlap 20)
 run(0 tiles plan --lens 5x --region 0,0,10,10 --overlap 20 --threads 1 -q)
 
-# Bad input is exit 1 (a number the tile size cannot be).
-run(1 tiles plan --lens 5x --region 0,0,10,10 --tile-px 1024xABC)
-if(NOT ERR MATCHES "--tile-px 1024xABC")
+# An option value the tile size cannot be is a usage error (exit 2) that names the option and the value.
+run(2 tiles plan --lens 5x --region 0,0,10,10 --tile-px 1024xABC)
+if(NOT ERR MATCHES "--tile-px '1024xABC'")
   message(FATAL_ERROR "--tile-px 1024xABC: the message does not name the option:\n${ERR}")
 endif()

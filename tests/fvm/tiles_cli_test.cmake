@@ -120,8 +120,8 @@ foreach(k RANGE ${last})
   expect_near("stitched distance ${k}" ${d} 0 0.5)
 endforeach()
 
-# Bad input: exit 1, the message names the culprit, no output written.
-run(1 stitch --layout ${WORK}/set/layout.csv --overlap 0 -o ${WORK}/bad.csv)
+# Bad input: exit 1 (2 for an option value), the message names the culprit, no output written.
+run(2 stitch --layout ${WORK}/set/layout.csv --overlap 0 -o ${WORK}/bad.csv)
 if(NOT ERR MATCHES "--overlap '0': tiles must overlap" OR EXISTS ${WORK}/bad.csv)
   message(FATAL_ERROR "overlap 0 was not refused:\n${ERR}")
 endif()
