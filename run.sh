@@ -49,12 +49,12 @@ sanitize() {
     -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
     -DCMAKE_MODULE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
   cmake --build build-asan
+  # fvm_cli_numeric_options starts fvm 500 times only to parse options: 7 minutes under ASan on 2 cores. It stays in
+  # the Release suite; the option layer runs under the sanitizers in the fuzz target option_values_fuzz.
   ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1" \
     LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0" \
     UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
     ctest --test-dir build-asan --output-on-failure -j2 -E '^fvm_cli_numeric_options$'
-  # fvm_cli_numeric_options starts fvm 500 times only to parse options: 7 minutes under ASan on 2 cores. The option
-  # layer runs under the sanitizers in the fuzz target option_values_fuzz instead.
 }
 
 fuzz() {
