@@ -11,7 +11,8 @@
 #include "core/input_error.h"
 #include "stage/io/calibration_file.h"
 #include "core/exit_codes.h"
-#include "fvm/calibration_run.h"
+#include "fvm/identify_options.h"
+#include "artefacts/batch_observations.h"
 #include "fvm/scan_input.h"
 #include "artefacts/scan_observations.h"
 #include "stage/calibration.h"
@@ -27,14 +28,13 @@ struct CalibrateArgs {
   std::vector<std::string> scans;  // stitched calibration scans instead of a batch
   double pixel_mm = 0.0, pixel_u_mm = 0.0;
   std::string validate;            // --scan: an artefact batch whose validation placements judge the result
-  std::string model = "27";
-  std::string terms;
+  workflows::ModelChoice model;
   std::string output;
   std::string report;
   std::string artefact = "bar17";  // a batch of raw exports: the artefact whose calottes are searched
   std::string centres_dir;         // ... and where the centre exports found go
   bool json = false;
-  IdentifySettings settings;
+  workflows::IdentifySettings settings;
 };
 
 nlohmann::json StatsJson(const stage::ValidationStats& s) {
@@ -218,7 +218,7 @@ void Run(const CalibrateArgs& args) {
   nlohmann::json raw;
   const artefacts::Batch batch = ReadBatchArgument(args, raw);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  const stage::IdentificationResult result = IdentifyModel(args.model, args.terms, identify, args.settings);
+  const stage::IdentificationResult result = workflows::IdentifyModel(args.model, identify, Threaded(args.settings));
 
   nlohmann::json doc = stage::CalibrationToJson(result);
   if (!raw.is_null()) doc["raw_exports"] = raw;
@@ -304,16 +304,16 @@ void RunScans(const CalibrateArgs& args) {
                      scans.front().registration.pairs.front().rejection +
                      "): the tiles need a texture that registers, and encoder readings of their centres");
   }
-  const stage::ParameterLayout layout = ModelLayout(args.model, args.terms);
+  const stage::ParameterLayout layout = args.model.Layout();
   // Without the pixel size's share first, to say how much it adds.
   const auto identify = [&](double pixel_u_mm) {
     try {
       artefacts::ScanCalibration c = artefacts::IdentifyFromScans(layout, scans, args.pixel_mm, pixel_u_mm,
-                                                                  args.settings.ToOptions(stage::MeasurementSet{}));
-      c.result.calibration.model = ModelName(args.model, args.terms);
+                                                                  Threaded(args.settings).ToOptions(stage::MeasurementSet{}));
+      c.result.calibration.model = args.model.Name();
       return c;
     } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("model ") + ModelName(args.model, args.terms) + ": " + e.what());
+      throw InputError(std::string("model ") + args.model.Name() + ": " + e.what());
     }
   };
   artefacts::ScanCalibration fitted = identify(args.pixel_u_mm);
@@ -324,7 +324,7 @@ void RunScans(const CalibrateArgs& args) {
   const double predicted_um = PredictedXyUm(cal, scans);
   // What treating the chained positions as independent points of equal weight would have predicted.
   const stage::MeasurementSet positions = artefacts::ScanPositions(scans, args.pixel_mm);
-  stage::IdentificationOptions chained_options = args.settings.ToOptions(positions);
+  stage::IdentificationOptions chained_options = Threaded(args.settings).ToOptions(positions);
   chained_options.anchor = stage::Anchor::kFirstTile;
   const stage::IdentificationResult chained = stage::Identify(layout, positions.observations, chained_options);
 
@@ -453,10 +453,10 @@ void RegisterCalibrate(CLI::App& app) {
   sub->add_option("--validate", args->validate,
                   "--scan: an artefact batch of the same stage; its validation placements (all, without batch.json) "
                   "judge the scan calibration as they judge a batch's");
-  sub->add_option("--model", args->model, "[Pérez 2019] model: 9 (eq. 15), 15 (order 0), 27 (order 1), 42 (order 2)")
+  sub->add_option("--model", args->model.model, "[Pérez 2019] model: 9 (eq. 15), 15 (order 0), 27 (order 1), 42 (order 2)")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
-  sub->add_option("--terms", args->terms,
+  sub->add_option("--terms", args->model.terms,
                   "compose your own model instead: TERM[:BASIS][:ORDER],... e.g. 'xTx:legendre:2,yRz:1,xWy' "
                   "(VDI 2617-3 names; bases power, legendre, chebyshev; orders 0..3)");
   sub->add_option("-o,--output", args->output, "write the calibration (JSON, mm and rad) here");
@@ -469,7 +469,7 @@ void RegisterCalibrate(CLI::App& app) {
                   "a BATCH of surfaces: write the centre exports found here as a CSV batch (default REPORT/centres, "
                   "else beside -o as CAL.centres), e.g. --centres-dir centres");
   sub->add_flag("--json", args->json, "print the calibration JSON on stdout instead of the table");
-  args->settings.AddOptions(*sub);
+  AddIdentifyOptions(*sub, args->settings);
   sub->footer("Exit 3 when the solver did not converge (the calibration is still written).\n"
               "Examples:\n  fvm calibrate samples/bar17 --model 27 -o stage.json\n"
               "  fvm calibrate raw --model 27 -o stage.json --report report   # raw/ holds P.stitched.x3p, P.free.x3p\n"

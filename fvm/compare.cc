@@ -7,7 +7,8 @@
 
 #include "artefacts/io/batch.h"
 #include "core/input_error.h"
-#include "fvm/calibration_run.h"
+#include "fvm/identify_options.h"
+#include "artefacts/batch_observations.h"
 #include "fvm/commands.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/validation.h"
@@ -19,7 +20,7 @@ struct CompareArgs {
   std::string batch;
   std::vector<std::string> models = stage::FvmModelNames();
   bool json = false;
-  IdentifySettings settings;
+  workflows::IdentifySettings settings;
 };
 
 struct ModelScore {
@@ -50,9 +51,9 @@ double Rms(const std::vector<double>& v) {
 }
 
 // Validation residuals on held-out placements: the batch.json roles, or each placement left out in turn.
-ModelScore Score(const std::string& model, const artefacts::Batch& batch, const IdentifySettings& settings) {
+ModelScore Score(const std::string& model, const artefacts::Batch& batch, const workflows::IdentifySettings& settings) {
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  ModelScore score{model, stage::FvmModelLayout(model).NumFree(), IdentifyModel(model, "", identify, settings), {}, {}, {}, {}};
+  ModelScore score{model, stage::FvmModelLayout(model).NumFree(), workflows::IdentifyModel({model, ""}, identify, settings), {}, {}, {}, {}};
   const stage::IdentificationResult& id = score.identification;
   const double m = 3.0 * static_cast<double>(id.residuals.size());
   double rss = 0;
@@ -80,7 +81,7 @@ ModelScore Score(const std::string& model, const artefacts::Batch& batch, const 
         if (n != left_out) rest.push_back(n);
       }
       if (rest.empty()) break;
-      add(IdentifyModel(model, "", artefacts::Observations(batch, rest), settings), artefacts::Observations(batch, {left_out}));
+      add(workflows::IdentifyModel({model, ""}, artefacts::Observations(batch, rest), settings), artefacts::Observations(batch, {left_out}));
     }
   }
   stage::ValidationStats& v = score.validation;
@@ -124,7 +125,7 @@ void Run(const CompareArgs& args) {
   std::vector<ModelScore> scores;
   for (const std::string& model : args.models) {
     if (!args.json) fmt::print(stderr, "  identifying model {} ...\n", model);
-    scores.push_back(Score(model, batch, args.settings));
+    scores.push_back(Score(model, batch, Threaded(args.settings)));
   }
   const std::string recommendation = Recommend(scores, batch.has_roles && !batch.validate.empty());
   nlohmann::json doc;
@@ -187,7 +188,7 @@ void RegisterCompare(CLI::App& app) {
   sub->add_option("BATCH", args->batch, "batch directory (see 'fvm calibrate --help')")->required();
   sub->add_option("--models", args->models, "models to compare")->delimiter(',')->check(CLI::IsMember(stage::FvmModelNames()));
   sub->add_flag("--json", args->json, "print one JSON document on stdout");
-  args->settings.AddOptions(*sub);
+  AddIdentifyOptions(*sub, args->settings);
   sub->footer("Example:\n  fvm compare samples/bar17 --models 15,27,42");
   sub->callback([args] { Run(*args); });
 }

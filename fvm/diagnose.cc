@@ -10,7 +10,7 @@
 
 #include "artefacts/io/batch.h"
 #include "artefacts/batch_observations.h"
-#include "fvm/calibration_run.h"
+#include "fvm/identify_options.h"
 #include "fvm/commands.h"
 #include "fvm/report.h"
 #include "stage/discrepancy.h"
@@ -20,12 +20,11 @@ namespace {
 
 struct DiagnoseArgs {
   std::string batch;
-  std::string model = "27";
-  std::string terms;
+  workflows::ModelChoice model;
   std::string report;
   double alpha = 0.01;
   bool json = false;
-  IdentifySettings settings;
+  workflows::IdentifySettings settings;
 };
 
 nlohmann::json SummaryJson(const stage::ResidualSummary& s) {
@@ -52,7 +51,7 @@ std::string AlternativesSentence(const stage::DiagnosisStep& s) {
 
 ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
   ReportData data;
-  data.title = fmt::format("fvm diagnose: model {} on {}", ModelName(args.model, args.terms), args.batch);
+  data.title = fmt::format("fvm diagnose: model {} on {}", args.model.Name(), args.batch);
   std::string added;
   for (const stage::DiagnosisStep& s : d.steps) added += (added.empty() ? "adding " : ", then ") + s.effect;
   data.change = d.steps.empty() ? "(no effect accepted)" : added;
@@ -97,13 +96,13 @@ void Run(const DiagnoseArgs& args) {
   const stage::MeasurementSet validate = artefacts::Observations(batch, batch.validate);
   stage::DiagnosisOptions options;
   options.alpha = args.alpha;
-  options.identification = args.settings.ToOptions(identify);
-  const stage::Diagnosis d = stage::Diagnose(ModelLayout(args.model, args.terms), identify, validate, options);
+  options.identification = Threaded(args.settings).ToOptions(identify);
+  const stage::Diagnosis d = stage::Diagnose(args.model.Layout(), identify, validate, options);
   if (!args.report.empty()) WriteReport(args.report, MakeReport(args, d, identify));
 
   nlohmann::json doc;
   doc["batch"] = args.batch;
-  doc["model"] = ModelName(args.model, args.terms);
+  doc["model"] = args.model.Name();
   doc["effect"] = d.effect ? nlohmann::json(*d.effect) : nlohmann::json(nullptr);
   doc["component"] = d.component;
   doc["explanation"] = d.explanation;
@@ -139,7 +138,7 @@ void Run(const DiagnoseArgs& args) {
     fmt::print("{}\n", doc.dump(2));
     return;
   }
-  fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", ModelName(args.model, args.terms), args.batch,
+  fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", args.model.Name(), args.batch,
              identify.observations.size(), validate.observations.size());
   fmt::print("  residual analysis:\n");
   for (const std::string& f : d.findings) fmt::print("    - {}\n", f);
@@ -184,10 +183,10 @@ void RegisterDiagnose(CLI::App& app) {
       "diagnose", "find where model and measurements disagree, name the missing effect, add it, show the gap shrink");
   sub->add_option("BATCH", args->batch, "batch directory (see 'fvm calibrate --help'); held-out placements confirm")
       ->required();
-  sub->add_option("--model", args->model, "base model: 9, 15, 27 or 42")
+  sub->add_option("--model", args->model.model, "base model: 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
-  sub->add_option("--terms", args->terms, "a base model of one's own instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
+  sub->add_option("--terms", args->model.terms, "a base model of one's own instead: TERM[:BASIS][:ORDER],... as 'fvm calibrate --terms'");
   sub->add_option("--alpha", args->alpha, "family-wise false-alarm probability of the selection")
       ->check(Within(1e-6, 0.5))
       ->capture_default_str();
@@ -196,7 +195,7 @@ void RegisterDiagnose(CLI::App& app) {
   // The workflow starts from the translation-only frame, so that a turn of the stitched frames shows up on the
   // held-out placements as the frame_rotation effect, named and sized, instead of being hidden by the model's.
   args->settings.stitched_frame = "translated";
-  args->settings.AddOptions(*sub);
+  AddIdentifyOptions(*sub, args->settings);
   sub->footer("The stitched frame defaults to 'translated' here (not 'rotated' as in calibrate): the diagnosis starts from "
               "the plainest convention, so that a turn of each stitched export about its first tile is found and named "
               "(frame_rotation).\n"

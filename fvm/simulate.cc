@@ -24,7 +24,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
-#include "fvm/calibration_run.h"
+#include "workflows/model_choice.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "stage/fvm_stage_models.h"
@@ -72,7 +72,7 @@ void Run(SimulateBatchArgs args) {
 
   nlohmann::json truth;
   truth["what"] = "stage error model the batch was simulated with (fvm simulate fvm-batch)";
-  truth["model"] = ModelName(args.options.truth_model, args.options.truth_terms);
+  truth["model"] = workflows::ModelChoice{args.options.truth_model, args.options.truth_terms}.Name();
   truth["seed"] = args.options.seed;
   truth["noise_um"] = args.options.noise_um;
   truth["pitch_error_um"] = args.options.pitch_error_um;
@@ -103,7 +103,7 @@ void Run(SimulateBatchArgs args) {
   for (const auto& p : sim.batch.placements) centres += p.ids.size();
   fmt::print("simulated {} placements ({} centres) into {}: truth model {}, mean stage error {:.1f} um (max {:.1f} um), "
              "noise {} um, seed {}\n",
-             sim.batch.placements.size(), centres, args.output, ModelName(args.options.truth_model, args.options.truth_terms),
+             sim.batch.placements.size(), centres, args.output, workflows::ModelChoice{args.options.truth_model, args.options.truth_terms}.Name(),
              sim.truth.mean_error_um,
              sim.truth.max_error_um, args.options.noise_um, args.options.seed);
   if (!args.surfaces.empty()) {

@@ -15,7 +15,7 @@
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/progress.h"
-#include "fvm/calibration_run.h"
+#include "fvm/identify_options.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/option_parsing.h"
@@ -36,10 +36,9 @@ struct UncertaintyArgs : MachineArgs {
   std::string report;
   bool json = false;
   // The microscope stage (DATA is a batch directory).
-  std::string model = "27";
-  std::string terms;
+  workflows::ModelChoice model;
   double centre_noise_um = -1.0;  // < 0: the identification's residual standard deviation per coordinate
-  IdentifySettings settings;
+  workflows::IdentifySettings settings;
   // Tracker placement.
   std::string place_tracker;
   int place_steps = 4;
@@ -123,7 +122,7 @@ void RunStage(const UncertaintyArgs& args) {
   }
   const artefacts::Batch batch = artefacts::ReadBatch(args.data);
   const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  const stage::IdentificationResult reference = IdentifyModel(args.model, args.terms, identify, args.settings);
+  const stage::IdentificationResult reference = workflows::IdentifyModel(args.model, identify, Threaded(args.settings));
   if (!reference.converged) {
     throw NotConvergedError(NotConvergedReason(reference));
   }
@@ -135,8 +134,8 @@ void RunStage(const UncertaintyArgs& args) {
   const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, false, &progress);
   const auto start = std::chrono::steady_clock::now();
   const std::vector<stage::StageMonteCarloRun> runs =
-      stage::StageMonteCarlo(ModelLayout(args.model, args.terms), reference, identify, validate ? &*validate : nullptr,
-                             sigma_mm, args.settings.ToOptions(identify), mc);
+      stage::StageMonteCarlo(args.model.Layout(), reference, identify, validate ? &*validate : nullptr,
+                             sigma_mm, Threaded(args.settings).ToOptions(identify), mc);
   progress.Finish();
   const double seconds = Seconds(start);
 
@@ -512,14 +511,14 @@ void RegisterUncertainty(CLI::App& app) {
       ->check(Within(0.0, 1e-3, "1/K"))->capture_default_str();
   sub->add_option("--k", args->k, "coverage factor")->check(Within(0.5, 10.0))->capture_default_str();
   sub->add_option("--report", args->report, "write an HTML report with SVG plots and CSV tables to this directory");
-  sub->add_option("--model", args->model, "microscope stage (DATA a batch): [Pérez 2019] model 9, 15, 27 or 42")
+  sub->add_option("--model", args->model.model, "microscope stage (DATA a batch): [Pérez 2019] model 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
       ->capture_default_str();
-  sub->add_option("--terms", args->terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");
+  sub->add_option("--terms", args->model.terms, "microscope stage: your own model, TERM[:BASIS][:ORDER],... as in fvm calibrate");
   sub->add_option("--centre-noise-um", args->centre_noise_um,
                   "microscope stage: standard deviation of a stitched centre per coordinate (default: the fit's residual)")
       ->check(Within(0.0, 1e3, "um"));
-  args->settings.AddOptions(*sub);
+  AddIdentifyOptions(*sub, args->settings);
   sub->add_option("--place-tracker", args->place_tracker,
                   "rank tracker positions on a grid of this box X0,Y0,Z0,X1,Y1,Z1 (machine frame, mm) by the largest "
                   "95 % radius over the points: covariance propagation for all, --runs Monte Carlo runs for the best")
