@@ -45,6 +45,30 @@ void RefuseRepeatedScans(const std::vector<RegisteredScan>& scans) {
 
 }  // namespace
 
+std::vector<Eigen::Vector2d> NominalOffsetsPx(const std::vector<Eigen::Vector3d>& encoder_mm, double pixel_mm) {
+  std::vector<Eigen::Vector2d> nominal;
+  for (const Eigen::Vector3d& e : encoder_mm) {
+    nominal.push_back(Eigen::Vector2d(e.x() - encoder_mm[0].x(), encoder_mm[0].y() - e.y()) / pixel_mm);
+  }
+  return nominal;
+}
+
+RegisteredScan RegisterScan(std::string name, std::vector<Eigen::Vector3d> encoder_mm,
+                            const std::vector<imaging::TileImage>& tiles, double pixel_mm, bool height_maps,
+                            const imaging::RegistrationOptions& options,
+                            const std::function<void(int done, int total)>& on_pair) {
+  RegisteredScan scan{std::move(name), std::move(encoder_mm), {}, {}};
+  scan.registration = imaging::RegisterTileChain(tiles, NominalOffsetsPx(scan.encoder_mm, pixel_mm), options, on_pair);
+  if (height_maps) {
+    for (const imaging::PairRegistration& pair : scan.registration.pairs) {
+      scan.height_steps.push_back(pair.accepted ? imaging::OverlapHeightStep(tiles[static_cast<size_t>(pair.a)],
+                                                                             tiles[static_cast<size_t>(pair.b)], pair.offset_px)
+                                                : imaging::HeightStep{});
+    }
+  }
+  return scan;
+}
+
 stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans, double pixel_mm) {
   RefuseRepeatedScans(scans);
   stage::MeasurementSet set;

@@ -4,6 +4,7 @@
 // from its first tile; its stitching-free coordinates are the encoder readings.
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,16 @@ struct RegisteredScan {
   // height.
   std::vector<imaging::HeightStep> height_steps;
 };
+
+// A scan's tiles registered as a chain from where the encoders say they are (the stage's mm turned into pixels,
+// x right and y down, from the first tile); height-map tiles (`height_maps`) also give each registered pair's z
+// step from the overlap. `on_pair` is called as each pair is registered (progress).
+RegisteredScan RegisterScan(std::string name, std::vector<Eigen::Vector3d> encoder_mm,
+                            const std::vector<imaging::TileImage>& tiles, double pixel_mm, bool height_maps,
+                            const imaging::RegistrationOptions& options = {},
+                            const std::function<void(int done, int total)>& on_pair = {});
+// The offsets the encoders command from the first tile, in pixels (x right, y down).
+std::vector<Eigen::Vector2d> NominalOffsetsPx(const std::vector<Eigen::Vector3d>& encoder_mm, double pixel_mm);
 
 // One displacement observation per accepted pair of neighbours (Observation::from = the earlier tile's encoder
 // reading, command = the later one's): measured (o_x p, -o_y p) from the registered offset o (px, y down) and the

@@ -13,7 +13,8 @@
 #include "core/exit_codes.h"
 #include "fvm/identify_options.h"
 #include "artefacts/batch_observations.h"
-#include "fvm/scan_input.h"
+#include "workflows/calibrate.h"
+#include "workflows/calibration_scans.h"
 #include "artefacts/scan_observations.h"
 #include "stage/calibration.h"
 #include "fvm/commands.h"
@@ -46,20 +47,8 @@ nlohmann::json FrameFreeJson(const stage::FrameFreeStats& s) {
   return {{"count", s.count}, {"rms_um", s.rms_mm * 1e3}, {"max_um", s.max_mm * 1e3}, {"predicted_rms_um", s.predicted_rms_mm * 1e3}};
 }
 
-// A calibration judged on held-out measurements: first what no frame changes, then the first-tile figure.
-struct Judged {
-  stage::FrameFreeStats rigid, distances;
-  stage::ValidationStats first_tile;
-};
-Judged Judge(const stage::Calibration* calibration, const stage::MeasurementSet& set, stage::StitchedFrame frame) {
-  return {stage::RigidValidation(calibration, set.observations), stage::PairDistanceValidation(calibration, set.observations),
-          stage::Validate(calibration, set.observations, set.anchors, frame)};
-}
-
-// The shown measurements without compensation and with the calibration: what the JSON and the report quote.
-struct BeforeAfter {
-  Judged before, after;
-};
+using workflows::BeforeAfter;
+using workflows::Judgement;
 
 // What the first-tile figure did with each measurement's turn, for people.
 std::string TurnText(const stage::ValidationStats& s, stage::StitchedFrame frame) {
@@ -71,7 +60,7 @@ std::string TurnText(const stage::ValidationStats& s, stage::StitchedFrame frame
   return frame == stage::StitchedFrame::kTranslated ? "no turn" : "no model, no turn";
 }
 
-nlohmann::json ValidationJson(const Judged& before, const Judged& after, stage::StitchedFrame frame) {
+nlohmann::json ValidationJson(const Judgement& before, const Judgement& after, stage::StitchedFrame frame) {
   nlohmann::json v = StatsJson(after.first_tile);
   v["rigid"] = FrameFreeJson(after.rigid);
   v["distances"] = FrameFreeJson(after.distances);
@@ -115,7 +104,7 @@ ReportData MakeReport(const CalibrateArgs& args, const std::string& source, cons
   ReportData data;
   data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, source);
   const stage::StitchedFrame frame = args.settings.Frame();
-  const Judged& judged_after = judged.after;
+  const Judgement& judged_after = judged.after;
   const stage::ValidationStats& before = judged.before.first_tile;
   const stage::ValidationStats& after = judged_after.first_tile;
   const auto frame_free = [](const stage::FrameFreeStats& s) {
@@ -133,8 +122,8 @@ ReportData MakeReport(const CalibrateArgs& args, const std::string& source, cons
                                                                  after.max_mm * 1e3, after.predicted_rms_mm * 1e3)},
                   {"first-tile frame", fmt::format("{}: {}", stage::StitchedFrameName(frame), TurnText(after, frame))},
                   {"condition number", fmt::format("{:.3g}", r.condition_number)}};
-  for (double e : stage::DistanceErrors(nullptr, shown.observations)) data.distance_errors_before_um.push_back(e * 1e3);
-  for (double e : stage::DistanceErrors(&r.calibration, shown.observations)) data.distance_errors_after_um.push_back(e * 1e3);
+  for (double e : judged.distance_errors_before_mm) data.distance_errors_before_um.push_back(e * 1e3);
+  for (double e : judged.distance_errors_after_mm) data.distance_errors_after_um.push_back(e * 1e3);
   for (size_t i = 0; i < shown.observations.size(); ++i) {
     const Eigen::Vector3d& q = shown.observations[i].command;
     data.errors_before.push_back({q.x(), q.y(), -before.residuals[i].x() * 1e3, -before.residuals[i].y() * 1e3});
@@ -180,11 +169,10 @@ void PrintValidation(const nlohmann::json& v) {
 }
 
 // The validation block of the JSON: held-out placements before and after, in the given frame.
-nlohmann::json ValidationDocument(const stage::Calibration& calibration, const stage::MeasurementSet& shown,
-                                  const BeforeAfter& judged, stage::StitchedFrame frame) {
+nlohmann::json ValidationDocument(const BeforeAfter& judged, stage::StitchedFrame frame) {
   nlohmann::json v = ValidationJson(judged.before, judged.after, frame);
-  v["distance_error_max_um"] = {{"before", MaxAbs(stage::DistanceErrors(nullptr, shown.observations)) * 1e3},
-                                {"after", MaxAbs(stage::DistanceErrors(&calibration, shown.observations)) * 1e3}};
+  v["distance_error_max_um"] = {{"before", MaxAbs(judged.distance_errors_before_mm) * 1e3},
+                                {"after", MaxAbs(judged.distance_errors_after_mm) * 1e3}};
   return v;
 }
 
@@ -217,8 +205,9 @@ void Run(const CalibrateArgs& args) {
   if (!args.validate.empty()) throw CLI::ValidationError("--validate", "is for --scan: a batch validates on its own placements");
   nlohmann::json raw;
   const artefacts::Batch batch = ReadBatchArgument(args, raw);
-  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  const stage::IdentificationResult result = workflows::IdentifyModel(args.model, identify, Threaded(args.settings));
+  const workflows::BatchCalibration c =
+      workflows::CalibrateBatch(batch, {args.model, Threaded(args.settings), !args.report.empty()});
+  const stage::IdentificationResult& result = c.result;
 
   nlohmann::json doc = stage::CalibrationToJson(result);
   if (!raw.is_null()) doc["raw_exports"] = raw;
@@ -226,23 +215,18 @@ void Run(const CalibrateArgs& args) {
   doc["anchor"] = args.settings.anchor;
   doc["stitched_frame"] = args.settings.stitched_frame;
   doc["identification"]["placements"] = batch.identify;
-  const stage::ValidationStats id_before = stage::Validate(nullptr, identify.observations, identify.anchors);
+  const stage::ValidationStats& id_before = c.identification_before;
   doc["identification"]["before_mean_um"] = id_before.mean_mm * 1e3;
-  std::optional<stage::MeasurementSet> validate;
-  if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
-  // Validation placements when the batch has them, else the identification ones (report only), judged once.
-  const stage::MeasurementSet& shown = validate ? *validate : identify;
+  const std::optional<stage::MeasurementSet>& validate = c.validation;
   const stage::StitchedFrame frame = args.settings.Frame();
-  std::optional<BeforeAfter> judged;
-  if (validate || !args.report.empty()) judged = BeforeAfter{Judge(nullptr, shown, frame), Judge(&result.calibration, shown, frame)};
   if (validate) {
-    doc["validation"] = ValidationDocument(result.calibration, *validate, *judged, frame);
+    doc["validation"] = ValidationDocument(*c.judged, frame);
     doc["validation"]["placements"] = batch.validate;
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
-    WriteReport(args.report, MakeReport(args, args.batch, result, shown,
-                                        validate ? "validation placements" : "identification placements", *judged));
+    WriteReport(args.report, MakeReport(args, args.batch, result, c.Shown(),
+                                        validate ? "validation placements" : "identification placements", *c.judged));
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
@@ -268,65 +252,23 @@ void Run(const CalibrateArgs& args) {
   FailIfNotConverged(result);
 }
 
-// The standard uncertainty (k = 1) of the xy stage error a calibration predicts, rms over an 11 x 11 grid of the
-// box the scans cover, um: the figure that compares weightings and the pixel size's share.
-double PredictedXyUm(const stage::Calibration& calibration, const std::vector<artefacts::RegisteredScan>& scans) {
-  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
-  for (const auto& scan : scans) {
-    for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
-  }
-  double sum = 0.0;
-  int count = 0;
-  for (int i = 0; i <= 10; ++i) {
-    for (int j = 0; j <= 10; ++j) {
-      const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * i / 10.0, lo.y() + (hi.y() - lo.y()) * j / 10.0, lo.z());
-      const Eigen::Matrix3d c = stage::Correct(calibration, q).covariance;
-      sum += c(0, 0) + c(1, 1);
-      ++count;
-    }
-  }
-  return std::sqrt(sum / count) * 1e3;
-}
-
 void RunScans(const CalibrateArgs& args) {
   if (!(args.pixel_mm > 0.0) || !std::isfinite(args.pixel_mm)) {
     throw InputError("--scan needs --pixel-mm: the size of a camera pixel on the part (mm), e.g. 0.00275 for the 5x "
                      "lens's 2.82 mm field on 1024 px; it sets the scale of every registered offset");
   }
   if (!(args.pixel_u_mm >= 0.0) || !std::isfinite(args.pixel_u_mm)) throw InputError("--pixel-u-mm: give a standard uncertainty >= 0 (mm)");
-  const std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(args.scans, args.pixel_mm);
-  bool any = false;
-  for (const auto& scan : scans) {
-    for (const auto& pair : scan.registration.pairs) any = any || pair.accepted;
-  }
-  if (!any) {
-    throw InputError("no pair of neighbouring tiles registered in any scan (first: " +
-                     scans.front().registration.pairs.front().rejection +
-                     "): the tiles need a texture that registers, and encoder readings of their centres");
-  }
-  const stage::ParameterLayout layout = args.model.Layout();
-  // Without the pixel size's share first, to say how much it adds.
-  const auto identify = [&](double pixel_u_mm) {
-    try {
-      artefacts::ScanCalibration c = artefacts::IdentifyFromScans(layout, scans, args.pixel_mm, pixel_u_mm,
-                                                                  Threaded(args.settings).ToOptions(stage::MeasurementSet{}));
-      c.result.calibration.model = args.model.Name();
-      return c;
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("model ") + args.model.Name() + ": " + e.what());
-    }
-  };
-  artefacts::ScanCalibration fitted = identify(args.pixel_u_mm);
-  stage::IdentificationResult& result = fitted.result;
-  const artefacts::ScanResidualSplit& split = fitted.split;
+  const std::vector<artefacts::RegisteredScan> scans =
+      workflows::ReadAndRegisterScans(args.scans, args.pixel_mm, ThreadCount(), ShowProgress());
+  std::optional<artefacts::Batch> validation_batch;
+  if (!args.validate.empty()) validation_batch = artefacts::ReadBatch(args.validate);
+  workflows::ScanCalibrationResult scan_result = workflows::CalibrateScans(
+      scans, {args.model, Threaded(args.settings), args.pixel_mm, args.pixel_u_mm}, validation_batch ? &*validation_batch : nullptr);
+  stage::IdentificationResult& result = scan_result.fitted.result;
+  const artefacts::ScanResidualSplit& split = scan_result.fitted.split;
   stage::Calibration& cal = result.calibration;
-  const double without_pixel_um = args.pixel_u_mm > 0.0 ? PredictedXyUm(identify(0.0).result.calibration, scans) : 0.0;
-  const double predicted_um = PredictedXyUm(cal, scans);
-  // What treating the chained positions as independent points of equal weight would have predicted.
-  const stage::MeasurementSet positions = artefacts::ScanPositions(scans, args.pixel_mm);
-  stage::IdentificationOptions chained_options = Threaded(args.settings).ToOptions(positions);
-  chained_options.anchor = stage::Anchor::kFirstTile;
-  const stage::IdentificationResult chained = stage::Identify(layout, positions.observations, chained_options);
+  const double without_pixel_um = scan_result.predicted_without_pixel_um;
+  const double predicted_um = scan_result.predicted_xy_um;
 
   nlohmann::json doc = stage::CalibrationToJson(result);
   doc["stitched_frame"] = args.settings.stitched_frame;
@@ -360,28 +302,20 @@ void RunScans(const CalibrateArgs& args) {
   const double misfit_um = split.misfit_mm * 1e3;
   doc["predicted_xy_u_um"] = {{"pair_weights", predicted_um},
                               {"pair_weights_without_pixel_size", without_pixel_um},
-                              {"independent_positions", PredictedXyUm(chained.calibration, scans)},
+                              {"independent_positions", scan_result.predicted_independent_um},
                               {"model_misfit_along_scans", misfit_um},
                               {"combined", std::hypot(predicted_um, misfit_um)},
                               {"white_residual_ratio", split.white_ratio},
                               {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover: "
                                        "from the coefficients' covariance (pair weights, the white part of the "
                                        "residuals), and what the model leaves along the scans (misfit), combined"}};
-  std::optional<stage::MeasurementSet> validate;
-  std::optional<BeforeAfter> judged;
-  const stage::StitchedFrame frame = args.settings.Frame();
-  if (!args.validate.empty()) {
-    const artefacts::Batch batch = artefacts::ReadBatch(args.validate);
-    std::vector<std::string> names = batch.validate;
-    if (names.empty()) {
-      for (const auto& p : batch.placements) names.push_back(p.name);
-    }
-    validate = artefacts::Observations(batch, names);
-    judged = BeforeAfter{Judge(nullptr, *validate, frame), Judge(&cal, *validate, frame)};
-    doc["validation"] = ValidationDocument(cal, *validate, *judged, frame);
+  const std::optional<stage::MeasurementSet>& validate = scan_result.validation;
+  const std::optional<BeforeAfter>& judged = scan_result.judged;
+  if (judged) {
+    doc["validation"] = ValidationDocument(*judged, args.settings.Frame());
     doc["validation"]["batch"] = args.validate;
     doc["validation"]["note"] = "grey tiles show no heights: z terms stay at 0; the 3-D figures keep the stage's z errors, the distances hardly see them";
-    doc["validation"]["placements"] = names;
+    doc["validation"]["placements"] = scan_result.validation_placements;
   }
   const std::string source = fmt::format("{} scans ({})", scans.size(), JoinNames(args.scans));
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");

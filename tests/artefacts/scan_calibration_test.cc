@@ -50,19 +50,8 @@ Scanned ScanAndRegister(const StageTruth& truth, const std::vector<double>& heig
   options.heights = height_maps;
   Scanned out;
   out.pixel_mm = options.pixel_mm;
-  for (SimulatedScan& scan : SimulateScans(truth, imaging::PlanCalibrationScans(plan, lens), options)) {
-    std::vector<Eigen::Vector2d> nominal;
-    for (const Eigen::Vector3d& e : scan.encoder_mm) {
-      nominal.push_back(Eigen::Vector2d(e.x() - scan.encoder_mm[0].x(), scan.encoder_mm[0].y() - e.y()) / options.pixel_mm);
-    }
-    RegisteredScan registered{scan.name, scan.encoder_mm, imaging::RegisterTileChain(scan.images, nominal, {}), {}};
-    for (const imaging::PairRegistration& p : registered.registration.pairs) {
-      if (height_maps) {
-        registered.height_steps.push_back(imaging::OverlapHeightStep(scan.images[static_cast<size_t>(p.a)],
-                                                                     scan.images[static_cast<size_t>(p.b)], p.offset_px));
-      }
-    }
-    out.scans.push_back(std::move(registered));
+  for (const SimulatedScan& scan : SimulateScans(truth, imaging::PlanCalibrationScans(plan, lens), options)) {
+    out.scans.push_back(RegisterScan(scan.name, scan.encoder_mm, scan.images, options.pixel_mm, height_maps));
   }
   return out;
 }

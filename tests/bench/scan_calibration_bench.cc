@@ -20,14 +20,6 @@ struct Scans {
   double pixel_mm = 0.0;
 };
 
-std::vector<Eigen::Vector2d> Nominal(const artefacts::SimulatedScan& scan, double pixel_mm) {
-  std::vector<Eigen::Vector2d> nominal;
-  for (const Eigen::Vector3d& e : scan.encoder_mm) {
-    nominal.push_back(Eigen::Vector2d(e.x() - scan.encoder_mm[0].x(), scan.encoder_mm[0].y() - e.y()) / pixel_mm);
-  }
-  return nominal;
-}
-
 const Scans& ThreeScans() {
   static const Scans scans = [] {
     artefacts::FvmBatchOptions batch;
@@ -44,7 +36,7 @@ const Scans& ThreeScans() {
     s.pixel_mm = options.pixel_mm;
     s.rendered = artefacts::SimulateScans(truth, imaging::PlanCalibrationScans({}, lens), options);
     for (const auto& scan : s.rendered) {
-      s.registered.push_back({scan.name, scan.encoder_mm, imaging::RegisterTileChain(scan.images, Nominal(scan, s.pixel_mm), {})});
+      s.registered.push_back(artefacts::RegisterScan(scan.name, scan.encoder_mm, scan.images, s.pixel_mm, false));
     }
     return s;
   }();
@@ -59,7 +51,7 @@ void BM_RegisterScans(benchmark::State& state, bool parallel) {
   for (auto _ : state) {
     tiles = 0;
     for (const auto& scan : s.rendered) {
-      benchmark::DoNotOptimize(imaging::RegisterTileChain(scan.images, Nominal(scan, s.pixel_mm), options));
+      benchmark::DoNotOptimize(imaging::RegisterTileChain(scan.images, artefacts::NominalOffsetsPx(scan.encoder_mm, s.pixel_mm), options));
       tiles += static_cast<int>(scan.images.size());
     }
   }
