@@ -164,12 +164,6 @@ std::vector<double> Finite(const std::vector<double>& values) {
   return out;
 }
 
-double Rms(const std::vector<double>& values) {
-  double sum = 0;
-  for (const double v : values) sum += v * v;
-  return values.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(values.size()));
-}
-
 SvgPlot::SvgPlot(PLINT width_px, PLINT height_px) : width_px_(width_px), height_px_(height_px) {
   RequireSvgDriver();
   temp_ = MakeTempFile();

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/statistics.h"
+
 namespace fvm::cli::report {
 
 // Indices into PLplot's colour map 0. Before and after use the Okabe-Ito vermilion and blue, which stay apart for
@@ -38,7 +40,6 @@ std::string UnitLabel(std::string_view unit);  // "um" -> "µm", "urad" -> "µra
 double NiceCeil(double x);
 double NiceFloor(double x);
 std::vector<double> Finite(const std::vector<double>& values);
-double Rms(const std::vector<double>& values);
 
 // One plot: its own PLplot stream rendering to a temporary SVG file, so plots never share state with each other
 // or with a stream the caller has open. PLplot's device writes to a file by name, hence the temporary file.

@@ -1,3 +1,4 @@
+#include "core/statistics.h"
 #include "fvm/scan_correction_run.h"
 
 #include <fmt/core.h>
@@ -188,9 +189,7 @@ double MedianZ(const imaging::PointCloud& cloud) {
   for (const Eigen::Vector3d& p : cloud.points) {
     if (p.allFinite()) z.push_back(p.z());
   }
-  if (z.empty()) return NAN;
-  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
-  return z[z.size() / 2];
+  return HighMedian(std::move(z));
 }
 
 // One tile of a stitching-free scan: the whole tile moved by the stage model at its stage position.

@@ -1,3 +1,4 @@
+#include "core/statistics.h"
 #include "imaging/calotte_detection.h"
 
 #include <Eigen/Dense>
@@ -30,12 +31,6 @@ __attribute__((format(printf, 1, 2))) std::string Format(const char* format, ...
   std::vsnprintf(buffer, sizeof buffer, format, args);
   va_end(args);
   return buffer;
-}
-
-double Median(std::vector<double> values) {
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
 }
 
 // Least squares plane z = a + b x + c y through the points with keep[i]; coordinates relative to `origin`.
@@ -80,7 +75,7 @@ FacePlane FitFace(const HeightMap& map, std::uint64_t seed) {
   // Should every trial be degenerate (the valid points on one line), a level plane at the median height.
   std::vector<double> heights;
   for (const auto& p : samples) heights.push_back(p.z());
-  Eigen::Vector3d best(Median(std::move(heights)), 0.0, 0.0);
+  Eigen::Vector3d best(HighMedian(std::move(heights)), 0.0, 0.0);
   double best_median = std::numeric_limits<double>::infinity();
   std::vector<double> r2(score.size());
   for (int t = 0; t < kLmedsTrials; ++t) {

@@ -1,3 +1,4 @@
+#include "core/statistics.h"
 #include "imaging/shape_fit.h"
 
 #include <Eigen/Dense>
@@ -225,9 +226,8 @@ std::vector<bool> LeastMedianPlane(std::span<const Eigen::Vector3d> points, std:
     const Eigen::Vector3d normal = cross.normalized();
     squared.clear();
     for (const std::size_t i : subset) squared.push_back(std::pow(normal.dot(points[i] - a), 2));
-    const auto mid = squared.begin() + static_cast<std::ptrdiff_t>(squared.size() / 2);
-    std::nth_element(squared.begin(), mid, squared.end());
-    if (*mid < best) best = *mid, best_point = a, best_normal = normal;
+    const double median = HighMedianInPlace(squared);
+    if (median < best) best = median, best_point = a, best_normal = normal;
   }
   std::vector<bool> inlier(points.size(), true);
   if (!std::isfinite(best)) return inlier;  // every triple collinear: the plane fit says so
@@ -259,9 +259,7 @@ ShapeFit FitPlaneShape(std::span<const Eigen::Vector3d> points, const ShapeFitOp
       distance[i] = static_cast<double>(std::abs(normal.dot(points[i].cast<Real>() - plane.centroid)));
       if (fit.inlier[i]) kept.push_back(distance[i]);
     }
-    const auto mid = kept.begin() + static_cast<std::ptrdiff_t>(kept.size() / 2);
-    std::nth_element(kept.begin(), mid, kept.end());
-    const double threshold = std::max(options.outlier_sigmas * 1.4826 * *mid, kMinThresholdMm);
+    const double threshold = std::max(options.outlier_sigmas * 1.4826 * HighMedian(std::move(kept)), kMinThresholdMm);
     std::vector<bool> next(points.size());
     for (std::size_t i = 0; i < points.size(); ++i) next[i] = distance[i] <= threshold;
     if (next == fit.inlier || Count(next) < 3) break;

@@ -1,3 +1,4 @@
+#include "core/statistics.h"
 #include "imaging/sphere_fit.h"
 
 #include <ceres/ceres.h>
@@ -251,12 +252,6 @@ SolveResult SolveCeres(std::span<const Eigen::Vector3d> points, const std::vecto
   return out;
 }
 
-double Median(std::vector<double>& values) {
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
-}
-
 struct Algebraic {
   Sphere sphere;
   Eigen::Vector3d origin;  // a point of the set: coordinates relative to it keep their digits
@@ -338,7 +333,7 @@ std::vector<bool> RansacInliers(std::span<const Eigen::Vector3d> points, const S
     if (least_median) {
       squared.clear();
       for (const std::size_t i : subset) squared.push_back(std::pow((points[i] - s.centre_mm).norm() - s.radius_mm, 2));
-      score = Median(squared);
+      score = HighMedianInPlace(squared);
     } else {
       for (const std::size_t i : subset) {
         const double r = (points[i] - s.centre_mm).norm() - s.radius_mm;
@@ -449,7 +444,7 @@ SphereFit FitSphere(std::span<const Eigen::Vector3d> points, const SphereFitOpti
       for (std::size_t i = 0; i < points.size(); i += stride) {
         if (fit.inlier[i]) sample.push_back(std::abs(EvaluatePoint(points[i] - c, theta.w(), options.residual).value));
       }
-      threshold = std::max(options.outlier_sigmas * 1.4826 * Median(sample), options.min_threshold_mm);
+      threshold = std::max(options.outlier_sigmas * 1.4826 * HighMedian(std::move(sample)), options.min_threshold_mm);
     }
     Selection select{&fit.inlier, threshold, &next};
     *trimmed = Accumulate(points, select, origin, theta, options.residual);

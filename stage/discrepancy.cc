@@ -1,3 +1,4 @@
+#include "core/statistics.h"
 #include "stage/discrepancy.h"
 
 #include <fmt/core.h>
@@ -448,8 +449,7 @@ double RobustSigma(const std::vector<Eigen::Vector3d>& residuals, double floor_m
   std::vector<double> components;
   for (const Eigen::Vector3d& r : residuals) components.insert(components.end(), {std::abs(r.x()), std::abs(r.y()), std::abs(r.z())});
   if (components.empty()) return floor_mm;
-  std::nth_element(components.begin(), components.begin() + static_cast<long>(components.size() / 2), components.end());
-  return std::max(1.4826 * components[components.size() / 2], floor_mm);
+  return std::max(1.4826 * HighMedian(std::move(components)), floor_mm);
 }
 
 // What sets observation i's residual apart from those of its neighbours in the same group (the calottes before and
