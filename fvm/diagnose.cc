@@ -4,13 +4,12 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <map>
 
 #include <nlohmann/json.hpp>
 
 #include "artefacts/io/batch.h"
-#include "artefacts/batch_observations.h"
 #include "fvm/identify_options.h"
+#include "workflows/diagnose.h"
 #include "fvm/commands.h"
 #include "fvm/report.h"
 #include "stage/discrepancy.h"
@@ -31,25 +30,14 @@ nlohmann::json SummaryJson(const stage::ResidualSummary& s) {
   return {{"centres", s.count}, {"mean_um", s.mean_mm * 1e3}, {"rms_um", s.rms_mm * 1e3}};
 }
 
-// First-order change of each distance from a placement's first centre to the others, from the residuals.
-std::vector<double> DistanceErrorsUm(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
-  std::vector<double> errors;
-  std::map<int, size_t> first;
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    const auto [it, inserted] = first.emplace(set.observations[i].group, i);
-    if (inserted) continue;
-    const Eigen::Vector3d d = set.observations[i].measured - set.observations[it->second].measured;
-    if (d.norm() > 0) errors.push_back(d.normalized().dot(residuals[i] - residuals[it->second]) * 1e3);
-  }
-  return errors;
-}
-
 // A step's alternatives, for the text and the report alike.
 std::string AlternativesSentence(const stage::DiagnosisStep& s) {
   return fmt::format("These data fit {} exactly as well: one cannot be told from the other here.", fmt::join(s.alternatives, ", "));
 }
 
-ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const stage::MeasurementSet& identify) {
+ReportData MakeReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis& diagnosis) {
+  const stage::Diagnosis& d = diagnosis.diagnosis;
+  const stage::MeasurementSet& identify = diagnosis.identification;
   ReportData data;
   data.title = fmt::format("fvm diagnose: model {} on {}", args.model.Name(), args.batch);
   std::string added;
@@ -65,8 +53,8 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
                               fmt::format("{:.2f} / {:.2f} um", d.validation_before.mean_mm * 1e3, d.validation_after.mean_mm * 1e3));
   }
   for (const std::string& f : d.findings) data.summary.emplace_back("residual analysis", f);
-  data.distance_errors_before_um = DistanceErrorsUm(identify, d.residuals_before);
-  data.distance_errors_after_um = DistanceErrorsUm(identify, d.residuals_after);
+  for (double e : diagnosis.distance_errors_before_mm) data.distance_errors_before_um.push_back(e * 1e3);
+  for (double e : diagnosis.distance_errors_after_mm) data.distance_errors_after_um.push_back(e * 1e3);
   for (size_t i = 0; i < identify.observations.size() && i < d.residuals_after.size(); ++i) {
     const Eigen::Vector3d& q = identify.observations[i].command;
     data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
@@ -92,13 +80,10 @@ ReportData MakeReport(const DiagnoseArgs& args, const stage::Diagnosis& d, const
 
 void Run(const DiagnoseArgs& args) {
   const artefacts::Batch batch = artefacts::ReadBatch(args.batch);
-  stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  const stage::MeasurementSet validate = artefacts::Observations(batch, batch.validate);
-  stage::DiagnosisOptions options;
-  options.alpha = args.alpha;
-  options.identification = Threaded(args.settings).ToOptions(identify);
-  const stage::Diagnosis d = stage::Diagnose(args.model.Layout(), identify, validate, options);
-  if (!args.report.empty()) WriteReport(args.report, MakeReport(args, d, identify));
+  const workflows::BatchDiagnosis diagnosis =
+      workflows::DiagnoseBatch(batch, {args.model, Threaded(args.settings), args.alpha});
+  const stage::Diagnosis& d = diagnosis.diagnosis;
+  if (!args.report.empty()) WriteReport(args.report, MakeReport(args, diagnosis));
 
   nlohmann::json doc;
   doc["batch"] = args.batch;
@@ -139,7 +124,7 @@ void Run(const DiagnoseArgs& args) {
     return;
   }
   fmt::print("fvm diagnose: model {} on {} ({} identification centres, {} held out)\n\n", args.model.Name(), args.batch,
-             identify.observations.size(), validate.observations.size());
+             diagnosis.identification.observations.size(), diagnosis.validation.observations.size());
   fmt::print("  residual analysis:\n");
   for (const std::string& f : d.findings) fmt::print("    - {}\n", f);
   fmt::print("\n  {:<22} {:>6} {:>10} {:>10} {:>9}\n", "candidate", "extra", "F", "p", "dBIC");

@@ -1,0 +1,37 @@
+#include "workflows/diagnose.h"
+
+#include <gtest/gtest.h>
+
+#include "artefacts/simulation/fvm_batch_simulation.h"
+
+namespace fvm::workflows {
+namespace {
+
+// A lens scale error of 300 ppm hidden in the stitched exports, which the 15 model cannot take: the workflow names
+// it and the held-out placements confirm it (their mean error falls).
+TEST(DiagnoseBatch, NamesAHiddenScaleAndTheHeldOutPlacementsConfirmIt) {
+  artefacts::FvmBatchOptions sim;
+  sim.seed = 2;
+  sim.truth_model = "15";
+  sim.hidden_effect = "scale";
+  const artefacts::SimulatedFvmBatch batch = artefacts::SimulateFvmBatch(sim);
+  DiagnoseOptions options;
+  options.model = {"15", ""};
+  const BatchDiagnosis d = DiagnoseBatch(batch.batch, options);
+  ASSERT_TRUE(d.diagnosis.effect.has_value());
+  EXPECT_EQ(*d.diagnosis.effect, "scale");
+  EXPECT_LT(d.diagnosis.validation_after.mean_mm, 0.5 * d.diagnosis.validation_before.mean_mm);
+  EXPECT_EQ(d.identification.observations.size(), 17u * batch.batch.identify.size());
+  EXPECT_EQ(d.validation.observations.size(), 17u * batch.batch.validate.size());
+  // One distance per centre but the first of each placement, and the scale shows in them: 300 ppm of up to
+  // 160 mm is up to 48 um before; after, the noise of two exports (under 5 um).
+  ASSERT_EQ(d.distance_errors_before_mm.size(), 16u * batch.batch.identify.size());
+  double before = 0, after = 0;
+  for (double e : d.distance_errors_before_mm) before = std::max(before, std::abs(e));
+  for (double e : d.distance_errors_after_mm) after = std::max(after, std::abs(e));
+  EXPECT_GT(before * 1e3, 20.0);
+  EXPECT_LT(after * 1e3, 5.0);
+}
+
+}  // namespace
+}  // namespace fvm::workflows

@@ -1,0 +1,37 @@
+#include "workflows/diagnose.h"
+
+#include <map>
+
+#include "artefacts/batch_observations.h"
+
+namespace fvm::workflows {
+namespace {
+
+std::vector<double> DistanceErrors(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
+  std::vector<double> errors;
+  std::map<int, size_t> first;
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const auto [it, inserted] = first.emplace(set.observations[i].group, i);
+    if (inserted) continue;
+    const Eigen::Vector3d d = set.observations[i].measured - set.observations[it->second].measured;
+    if (d.norm() > 0) errors.push_back(d.normalized().dot(residuals[i] - residuals[it->second]));
+  }
+  return errors;
+}
+
+}  // namespace
+
+BatchDiagnosis DiagnoseBatch(const artefacts::Batch& batch, const DiagnoseOptions& options) {
+  stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
+  stage::MeasurementSet validate = artefacts::Observations(batch, batch.validate);
+  stage::DiagnosisOptions diagnosis;
+  diagnosis.alpha = options.alpha;
+  diagnosis.identification = options.settings.ToOptions(identify);
+  BatchDiagnosis d{stage::Diagnose(options.model.Layout(), identify, validate, diagnosis), std::move(identify),
+                   std::move(validate), {}, {}};
+  d.distance_errors_before_mm = DistanceErrors(d.identification, d.diagnosis.residuals_before);
+  d.distance_errors_after_mm = DistanceErrors(d.identification, d.diagnosis.residuals_after);
+  return d;
+}
+
+}  // namespace fvm::workflows

@@ -1,0 +1,30 @@
+#pragma once
+// The discrepancy workflow on a batch (`fvm diagnose`): which physical effect the stage model misses, added step
+// by step while held-out placements confirm it (stage/discrepancy.h).
+
+#include <vector>
+
+#include "artefacts/io/batch.h"
+#include "stage/discrepancy.h"
+#include "workflows/model_choice.h"
+
+namespace fvm::workflows {
+
+struct DiagnoseOptions {
+  ModelChoice model;
+  // Translated: the plainest convention, so that a turn of the stitched frame is found and named (frame_rotation).
+  IdentifySettings settings{.stitched_frame = "translated"};
+  double alpha = 0.01;  // significance of an effect's F test
+};
+
+struct BatchDiagnosis {
+  stage::Diagnosis diagnosis;
+  stage::MeasurementSet identification, validation;
+  // The first-order change of each distance from a placement's first centre to the others (mm), from the
+  // identification residuals before and after the effects accepted.
+  std::vector<double> distance_errors_before_mm, distance_errors_after_mm;
+};
+
+BatchDiagnosis DiagnoseBatch(const artefacts::Batch& batch, const DiagnoseOptions& options);
+
+}  // namespace fvm::workflows
