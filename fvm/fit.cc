@@ -15,16 +15,13 @@
 
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/io/centre_export.h"
-#include "artefacts/io/raw_export_batch.h"
 #include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/fit_shape.h"
 #include "fvm/surface_read_args.h"
-#include "imaging/calotte_detection.h"
-#include "imaging/calotte_numbering.h"
-#include "imaging/cloud_calotte_detection.h"
+#include "workflows/find_calottes.h"
+#include "artefacts/io/raw_export_batch.h"
 #include "imaging/height_map.h"
-#include "imaging/point_cloud.h"
 #include "imaging/io/surface_file.h"
 
 namespace fvm::cli {
@@ -46,19 +43,6 @@ struct FitArgs {
   bool robust = false;
 };
 
-// What fit searched: a height map (a file's, or an organised cloud's grid), or an unorganised cloud.
-struct Searched {
-  std::optional<imaging::HeightMap> map;
-  std::optional<imaging::PointCloud> cloud;
-};
-
-Searched ReadSearched(const FitArgs& args) {
-  imaging::Surface surface = imaging::ReadSurface(args.file, args.read.ToOptions());
-  if (surface.height_map) return {std::move(surface.height_map), std::nullopt};
-  if (!surface.cloud->IsOrganised()) return {std::nullopt, std::move(surface.cloud)};
-  return {imaging::CloudToHeightMap(*surface.cloud, args.file), std::nullopt};
-}
-
 std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
   if (name.empty()) return std::nullopt;
   return artefacts::KnownArtefact(name);
@@ -77,57 +61,21 @@ void RunFit(const FitArgs& args) {
     return;
   }
   if (args.robust) throw InputError("--robust goes with --shape; the calotte search always trims outliers");
-  const std::optional<artefacts::Artefact> artefact = NamedArtefact(args.artefact);
-  const Searched searched = ReadSearched(args);
-
-  imaging::CalotteDetectionOptions options = artefact ? artefacts::CalotteSearchFor(*artefact) : imaging::CalotteDetectionOptions{};
-  options.fit.fixed_radius_mm = args.radius_mm;
-  options.fit.residual =
-      args.residual == "orthogonal" ? imaging::SphereResidual::kOrthogonal : imaging::SphereResidual::kHeight;
+  workflows::FindCalottesOptions options;
+  options.artefact = NamedArtefact(args.artefact);
+  options.radius_mm = args.radius_mm;
+  options.rotation_deg = args.rotation_deg;
+  options.min_diameter_mm = args.min_diameter_mm;
+  options.max_diameter_mm = args.max_diameter_mm;
   options.min_depth_mm = args.min_depth_mm;
-  if (args.min_diameter_mm > 0) options.min_diameter_mm = args.min_diameter_mm;
-  if (args.max_diameter_mm > 0) options.max_diameter_mm = args.max_diameter_mm;
-  if (options.max_diameter_mm < options.min_diameter_mm) {
-    throw InputError(fmt::format("--min-diameter-mm {} is larger than --max-diameter-mm {}", options.min_diameter_mm,
-                                 options.max_diameter_mm));
-  }
-
-  imaging::CalotteDetection detection;
-  std::string method = "height map";  // how the calottes were found, said in the export, the JSON and the table
-  std::optional<imaging::LayoutMatch> layout;
-  try {
-    if (searched.map) {
-      detection = imaging::DetectCalottes(*searched.map, options);
-    } else {
-      imaging::CloudCalotteDetection found = imaging::DetectCalottesInCloud(*searched.cloud, options, args.file);
-      detection = std::move(found.detection);
-      method = found.method;
-    }
-    if (detection.calottes.empty()) {
-      std::string why;
-      for (std::size_t i = 0; i < std::min<std::size_t>(detection.rejected.size(), 5); ++i) {
-        const auto& r = detection.rejected[i];
-        why += fmt::format("\n  at ({:.3f}, {:.3f}) mm: {}", r.centre_mm.x(), r.centre_mm.y(), r.reason);
-      }
-      if (detection.rejected.size() > 5) why += fmt::format("\n  and {} more", detection.rejected.size() - 5);
-      throw InputError(fmt::format(
-          "no calotte found: no round depression {}-{} mm across and more than {:.2f} um below the face{}{}",
-          options.min_diameter_mm, options.max_diameter_mm, detection.min_depth_mm * 1e3,
-          why.empty() ? "" : "; rejected:", why));
-    }
-    if (artefact) {
-      std::vector<imaging::NominalCalotte> nominal;
-      for (const auto& c : artefact->calottes) nominal.push_back({c.id, c.centre.head<2>()});
-      imaging::LayoutMatchOptions match;
-      if (args.rotation_deg) match.expected_rotation_rad = *args.rotation_deg * M_PI / 180.0;
-      std::vector<Eigen::Vector2d> found;
-      for (const auto& c : detection.calottes) found.push_back(c.fit.centre_mm.head<2>());
-      layout = imaging::MatchLayout(found, nominal, match);
-      imaging::NumberCalottes(detection, nominal, match);
-    }
-  } catch (const InputError& e) {
-    throw InputError(args.file + ": " + e.what());
-  }
+  options.residual = args.residual == "orthogonal" ? imaging::SphereResidual::kOrthogonal : imaging::SphereResidual::kHeight;
+  const workflows::FoundCalottes found =
+      workflows::FindCalottes(imaging::ReadSurface(args.file, args.read.ToOptions()), options, args.file);
+  const imaging::CalotteDetection& detection = found.detection;
+  const std::optional<artefacts::Artefact>& artefact = found.artefact;
+  const std::optional<imaging::LayoutMatch>& layout = found.layout;
+  const std::string& method = found.method;
+  const std::optional<imaging::HeightMap>& searched_map = found.map;
 
   artefacts::CentreExport out;
   out.source = args.output;
@@ -182,9 +130,9 @@ void RunFit(const FitArgs& args) {
     return;
   }
 
-  if (searched.map) {
+  if (searched_map) {
     fmt::print("{}: {} x {} points of {:.3g} x {:.3g} um; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n", args.file,
-               searched.map->size_x, searched.map->size_y, searched.map->dx_mm * 1e3, searched.map->dy_mm * 1e3,
+               searched_map->size_x, searched_map->size_y, searched_map->dx_mm * 1e3, searched_map->dy_mm * 1e3,
                detection.face.sigma_mm * 1e3, detection.face.b * 1e3, detection.face.c * 1e3);
   } else {
     fmt::print("{}: unorganised cloud, calottes found by {}; face noise {:.3f} um, tilt ({:.3g}, {:.3g}) mrad\n",

@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 
+#include "artefacts/calotte_numbering_by_layout.h"
 #include "core/input_error.h"
 #include "imaging/calotte_numbering.h"
 #include "imaging/io/surface_file.h"
@@ -92,25 +93,7 @@ Numbered SearchAndNumber(const std::filesystem::path& file, const Artefact& arte
       throw InputError(fmt::format("no calotte of {} found: no round depression {}-{} mm across below the face",
                                    artefact.name, options.min_diameter_mm, options.max_diameter_mm));
     }
-    std::vector<imaging::NominalCalotte> nominal;
-    for (const Calotte& c : artefact.calottes) nominal.push_back({c.id, c.centre.head<2>()});
-    std::vector<Eigen::Vector2d> found;
-    for (const auto& c : out.detection.calottes) found.push_back(c.fit.centre_mm.head<2>());
-    imaging::LayoutMatchOptions used = match;
-    try {
-      out.layout = imaging::MatchLayout(found, nominal, used);
-    } catch (const InputError&) {
-      if (!retry_turned) throw;
-      // Two symmetric numberings equally near the expected turn (a bar along y): expecting a turn 45 degrees on
-      // picks one of them; a partial view of a regular pattern stays ambiguous and throws the first message.
-      used.expected_rotation_rad += M_PI / 4;
-      try {
-        out.layout = imaging::MatchLayout(found, nominal, used);
-      } catch (const InputError&) {
-        out.layout = imaging::MatchLayout(found, nominal, match);  // throws the first message
-      }
-    }
-    imaging::NumberCalottes(out.detection, nominal, used);
+    out.layout = NumberByLayout(out.detection, artefact, match, retry_turned);
   } catch (const InputError& e) {
     throw InputError(file.string() + ": " + e.what());
   }
