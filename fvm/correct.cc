@@ -17,6 +17,7 @@
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "fvm/scan_correction_run.h"
+#include "workflows/correct.h"
 #include "fvm/surface_read_args.h"
 #include "stage/axis_chain.h"
 
@@ -49,43 +50,11 @@ bool IsMachineModel(const std::string& path) {
   return doc.is_object() && (doc.contains("instrument_pose") || doc.contains("tool_offset_mm"));
 }
 
-struct NominalPoint {
-  std::string id;
-  Eigen::Vector3d position;
-};
-
-// id,x,y,z (ids as text, mm; other columns ignored): the points.csv of `fvm simulate tracker`, or any point list.
-std::vector<NominalPoint> ReadPointList(const std::string& path) {
-  CsvOptions options;
-  options.expected_header = "id,x,y,z";
-  const CsvTable table = ReadCsv(path, options);
-  const int id_column = table.Require("id");
-  const std::array<int, 3> columns = {table.Require("x"), table.Require("y"), table.Require("z")};
-  std::vector<NominalPoint> points;
-  std::set<std::string, std::less<>> seen;
-  for (const CsvRow& row : table.rows()) {
-    const std::string id(table.Text(row, id_column));
-    if (id.empty()) table.Fail(row, "the point has no id; give every point a text id such as P0001");
-    if (!seen.insert(id).second) table.Fail(row, fmt::format("point {}: the id appears twice; ids must be unique", id));
-    NominalPoint p{id, Eigen::Vector3d::Zero()};
-    for (int k = 0; k < 3; ++k) {
-      p.position[k] = table.Double(row, columns[static_cast<size_t>(k)], "point " + id);
-      if (std::abs(p.position[k]) > 1e5) {
-        table.Fail(row, fmt::format("point {}: {} = {} mm lies beyond 100 m; the list must be in mm", id, "xyz"[k],
-                                    FormatShortest(p.position[k])));
-      }
-    }
-    points.push_back(std::move(p));
-  }
-  if (points.empty()) throw InputError(fmt::format("{}: no points; write a header id,x,y,z and one row per point", path));
-  return points;
-}
-
 // The compensation table: per nominal point the command that puts the tool point where the error-free machine
 // would (stage::CompensateCommand) and the correction command - nominal. Commands are written to 1 nm (6 decimals),
 // corrections to 1 nm in um (3 decimals); no "-0".
 void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
-  const std::vector<NominalPoint> points = ReadPointList(args.input);
+  const std::vector<artefacts::ListedPoint> points = artefacts::ReadPointList(args.input);
   std::string csv = fmt::format(
       "# compensation table by fvm {} with {} (model {}, tool offset {}, {}, {} mm): command xc,yc,zc puts the tool "
       "point where the error-free machine puts it for x,y,z; d = command - nominal\n",
@@ -94,14 +63,9 @@ void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
   csv += "id,x,y,z,xc,yc,zc,dx_um,dy_um,dz_um\n";
   nlohmann::json doc;
   double largest = 0.0;
-  for (const NominalPoint& p : points) {
-    const stage::Compensation c = stage::CompensateCommand(cal, p.position);
-    if (!c.converged || !c.command.allFinite()) {
-      throw InputError(fmt::format("{}: point {}: the model's inverse did not converge at {}, {}, {} mm; is the point "
-                                   "inside the travel the model was identified on?",
-                                   args.input, p.id, p.position.x(), p.position.y(), p.position.z()));
-    }
-    const Eigen::Vector3d d_um = (c.command - p.position) * 1e3;
+  for (const workflows::CompensatedPoint& c : workflows::CompensationTable(cal, points, args.input)) {
+    const artefacts::ListedPoint& p = *c.nominal;
+    const Eigen::Vector3d d_um = c.correction_mm * 1e3;
     largest = std::max(largest, d_um.norm());
     std::vector<std::string> fields{p.id};
     for (int k = 0; k < 3; ++k) fields.push_back(FormatShortest(p.position[k]));
@@ -127,17 +91,17 @@ void RunMachine(const CorrectArgs& args, const stage::Calibration& cal) {
 }
 
 // The frame a corrected export is in, as its header comment, --help and the JSON say it.
-std::string FrameText(const CorrectArgs& args, const stage::FirstTileCompensation* first_tile) {
+std::string FrameText(const CorrectArgs& args, const std::optional<Eigen::Vector3d>& first_tile) {
   if (!first_tile) return "stage (the model's part frame: stage coordinates compensated)";
-  const Eigen::Vector3d& a = first_tile->frame().first_tile;
+  const Eigen::Vector3d& a = *first_tile;
   return fmt::format("first-tile (as a stitched measurement started at the first tile ({:.4f}, {:.4f}, {:.4f}) mm puts "
                      "it, {})", a.x(), a.y(), a.z(), args.stitched_frame);
 }
 
-nlohmann::json FrameJson(const CorrectArgs& args, const stage::FirstTileCompensation* first_tile) {
+nlohmann::json FrameJson(const CorrectArgs& args, const std::optional<Eigen::Vector3d>& first_tile) {
   nlohmann::json frame = {{"frame", args.frame}};
   if (first_tile) {
-    const Eigen::Vector3d& a = first_tile->frame().first_tile;
+    const Eigen::Vector3d& a = *first_tile;
     frame["stitched_frame"] = args.stitched_frame;
     frame["first_tile_mm"] = {a.x(), a.y(), a.z()};
   }
@@ -148,14 +112,10 @@ void RunCentres(const CorrectArgs& args, const stage::Calibration& cal) {
   const artefacts::CentreExport input = artefacts::ReadCentreExport(args.input);
   // The stage frame: the model's part frame. The first tile's: where a stitched measurement of the same centres
   // would put them, started at the first tile of this export (its encoder reading) and turned with the stage there.
-  std::optional<stage::FirstTileCompensation> first_tile;
-  if (args.frame == "first-tile") {
-    std::vector<Eigen::Vector3d> positions;
-    for (const artefacts::CentreRecord& r : input.centres) positions.push_back(r.position);
-    if (positions.empty()) throw InputError(args.input + ": no centres, so no first tile");
-    first_tile.emplace(cal, stage::ParseStitchedFrame(args.stitched_frame), stage::FirstTile(positions));
-  }
-  const stage::FirstTileCompensation* frame = first_tile ? &*first_tile : nullptr;
+  std::optional<stage::StitchedFrame> first_tile_frame;
+  if (args.frame == "first-tile") first_tile_frame = stage::ParseStitchedFrame(args.stitched_frame);
+  const workflows::CentreCorrection corrected = workflows::CorrectCentres(cal, input, first_tile_frame, args.input);
+  const std::optional<Eigen::Vector3d>& frame = corrected.first_tile_mm;
   // Same rows, compensated; u_x, u_y, u_z are the standard uncertainties the model's covariance gives each point.
   std::string csv = fmt::format("# corrected by fvm {} with {} (model {})\n", FVM_VERSION, args.calibration, cal.model);
   csv += "# frame: " + FrameText(args, frame) + "\n";
@@ -165,18 +125,16 @@ void RunCentres(const CorrectArgs& args, const stage::Calibration& cal) {
   if (has_t) csv += ",t";
   csv += "\n";
   nlohmann::json doc = FrameJson(args, frame);
-  double largest_shift = 0.0;
-  for (const artefacts::CentreRecord& r : input.centres) {
-    const stage::CorrectedPoint p = first_tile ? first_tile->Correct(r.position) : stage::Correct(cal, r.position);
-    const Eigen::Vector3d u = p.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-    csv += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}", r.id, p.position.x(), p.position.y(), p.position.z(),
-                       u.x(), u.y(), u.z());
+  for (const workflows::CorrectedCentre& c : corrected.centres) {
+    const artefacts::CentreRecord& r = *c.input;
+    const Eigen::Vector3d& p = c.position;
+    const Eigen::Vector3d& u = c.u;
+    csv += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}", r.id, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
     if (has_t) csv += fmt::format(",{:.3f}", r.t_s.value_or(NAN));
     csv += "\n";
-    largest_shift = std::max(largest_shift, (p.position - r.position).norm());
-    doc["centres"].push_back({{"id", r.id}, {"x", p.position.x()}, {"y", p.position.y()}, {"z", p.position.z()},
+    doc["centres"].push_back({{"id", r.id}, {"x", p.x()}, {"y", p.y()}, {"z", p.z()},
                               {"u_um", {u.x() * 1e3, u.y() * 1e3, u.z() * 1e3}},
-                              {"shift_um", (p.position - r.position).norm() * 1e3}});
+                              {"shift_um", c.shift_mm * 1e3}});
   }
   WriteFileAtomically(args.output, csv);
   if (args.json) {
@@ -185,7 +143,7 @@ void RunCentres(const CorrectArgs& args, const stage::Calibration& cal) {
     return;
   }
   fmt::print("corrected {} centres of {} with model {} in the {} frame; largest shift {:.1f} um; written to {}\n",
-             input.centres.size(), args.input, cal.model, args.frame, largest_shift * 1e3, args.output);
+             input.centres.size(), args.input, cal.model, args.frame, corrected.largest_shift_mm * 1e3, args.output);
 }
 
 // A .csv file is a centre export when its header names an id column; otherwise it is an XYZ/CSV point cloud.
