@@ -1,4 +1,3 @@
-#include "core/statistics.h"
 #include "imaging/calotte_detection.h"
 
 #include <Eigen/Dense>
@@ -14,6 +13,7 @@
 #include <string>
 
 #include "core/input_error.h"
+#include "core/statistics.h"
 
 namespace fvm::imaging {
 namespace {

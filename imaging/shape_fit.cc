@@ -1,4 +1,3 @@
-#include "core/statistics.h"
 #include "imaging/shape_fit.h"
 
 #include <Eigen/Dense>
@@ -12,6 +11,7 @@
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
+#include "core/statistics.h"
 #include "imaging/sphere_fit.h"
 
 namespace fvm::imaging {

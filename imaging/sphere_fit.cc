@@ -1,4 +1,3 @@
-#include "core/statistics.h"
 #include "imaging/sphere_fit.h"
 
 #include <ceres/ceres.h>
@@ -13,6 +12,7 @@
 #include <string>
 
 #include "core/input_error.h"
+#include "core/statistics.h"
 
 namespace fvm::imaging {
 namespace {

@@ -1,4 +1,3 @@
-#include "core/statistics.h"
 #include "stage/discrepancy.h"
 
 #include <fmt/core.h>
@@ -13,118 +12,15 @@
 #include <map>
 #include <numeric>
 
+#include "stage/discrepancy_scoring.h"
+#include "stage/held_out_turn_test.h"
+#include "stage/outlier_flagging.h"
+#include "stage/residual_findings.h"
 #include "stage/stitched_frame.h"
 #include "stage/validation.h"
 
 namespace fvm::stage {
 namespace {
-
-Eigen::VectorXd Stack(const std::vector<Eigen::Vector3d>& v) {
-  Eigen::VectorXd out(3 * static_cast<Eigen::Index>(v.size()));
-  for (size_t i = 0; i < v.size(); ++i) out.segment<3>(3 * static_cast<Eigen::Index>(i)) = v[i];
-  return out;
-}
-
-// d(residual)/d(coefficients named) for every observation, columns scaled to unit norm (the F-test and the
-// rank decisions do not depend on units).
-Eigen::MatrixXd CoefficientColumns(const ParameterLayout& layout, const std::vector<double>& values,
-                                   const std::vector<std::string>& names, const MeasurementSet& set, bool anchored) {
-  Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(set.observations.size()),
-                                                  static_cast<Eigen::Index>(names.size()));
-  std::vector<Eigen::MatrixXd> anchor_jacobians;
-  for (const Eigen::Vector3d& a : set.anchors) anchor_jacobians.push_back(ForwardJacobian(layout, values.data(), a));
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    Eigen::MatrixXd j = ForwardJacobian(layout, values.data(), set.observations[i].command);
-    if (anchored) j -= anchor_jacobians[static_cast<size_t>(set.observations[i].group)];
-    for (size_t c = 0; c < names.size(); ++c) {
-      columns.block<3, 1>(3 * static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(c)) = j.col(layout.FreeIndexOf(names[c]));
-    }
-  }
-  return columns;
-}
-
-std::vector<double> ValuesByName(const ParameterLayout& from, const std::vector<double>& values, const ParameterLayout& to) {
-  std::vector<double> out;
-  for (const std::string& name : to.FreeNames()) {
-    const int slot = from.FreeIndexOf(name);
-    out.push_back(slot >= 0 ? values[static_cast<size_t>(slot)] : 0.0);
-  }
-  return out;
-}
-
-struct LinearScore {
-  double rss_base = 0, rss = 0;
-  double rows = 0;     // equations it was scored on
-  double own = 0;      // the least share of a column's pattern (norm) that the base model cannot take
-  int extra = 0;       // rank the candidate adds
-  int rank = 0;        // rank of base + candidate
-  Eigen::VectorXd effect;      // least-squares values of the candidate's columns (in the columns' units)
-  Eigen::VectorXd effect_u;    // their standard uncertainties
-};
-
-// Extra sum of squares of the candidate columns over the base model, on the linearised problem.
-//
-// Only the part of a candidate that the base model leaves above 1 % of its norm counts as new. Below that, its
-// estimate would rest on what the model does not describe rather than on the effect: a scale about a shared start
-// is the model's linear terms xTx1 and yTy1 but for the noise, the bar's pitch errors and the stage's own
-// non-polynomial error in the stitched coordinates it is built from (about 1e-4 of them), and fitted to that
-// remainder it comes out at 1e6 ppm.
-LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra) {
-  constexpr double kNewDirection = 1e-2;
-  LinearScore s;
-  s.rows = static_cast<double>(r0.size());
-  Eigen::MatrixXd all(base.rows(), base.cols() + extra.cols());
-  all << base, extra;
-  Eigen::VectorXd norms = all.colwise().norm();
-  for (Eigen::Index c = 0; c < all.cols(); ++c) {
-    if (norms[c] > 0) all.col(c) /= norms[c];
-  }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> base_qr(all.leftCols(base.cols()));
-  base_qr.setThreshold(1e-9);
-  const int base_rank = static_cast<int>(base_qr.rank());
-  const Eigen::MatrixXd q_base = Eigen::MatrixXd(base_qr.householderQ()).leftCols(base_rank);
-  const Eigen::VectorXd r_base = r0 - q_base * (q_base.transpose() * r0);
-  s.rss_base = r_base.squaredNorm();
-  Eigen::MatrixXd unique = all.rightCols(extra.cols()) - q_base * (q_base.transpose() * all.rightCols(extra.cols()));
-  s.own = 1.0;
-  for (Eigen::Index c = 0; c < unique.cols(); ++c) {
-    if (unique.col(c).norm() < kNewDirection) unique.col(c).setZero();
-    else s.own = std::min(s.own, unique.col(c).norm());
-  }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> extra_qr(unique);
-  extra_qr.setThreshold(kNewDirection);
-  s.extra = static_cast<int>(extra_qr.rank());
-  s.rank = base_rank + s.extra;
-  const Eigen::MatrixXd q_extra = Eigen::MatrixXd(extra_qr.householderQ()).leftCols(s.extra);
-  s.rss = std::max(0.0, s.rss_base - (q_extra.transpose() * r_base).squaredNorm());
-  // Effect estimates: minimum-norm least squares on the whole system, then undo the column scaling.
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(all);
-  const Eigen::VectorXd solution = cod.solve(-r0);
-  const double dof = std::max(1.0, static_cast<double>(all.rows() - s.rank));
-  const double sigma2 = s.rss / dof;
-  const Eigen::MatrixXd normal_inverse = cod.pseudoInverse() * cod.pseudoInverse().transpose();
-  s.effect.resize(extra.cols());
-  s.effect_u.resize(extra.cols());
-  for (Eigen::Index c = 0; c < extra.cols(); ++c) {
-    const Eigen::Index k = base.cols() + c;
-    const double n = norms[k] > 0 ? norms[k] : 1.0;
-    s.effect[c] = solution[k] / n;
-    s.effect_u[c] = std::sqrt(std::max(0.0, sigma2 * normal_inverse(k, k))) / n;
-  }
-  return s;
-}
-
-// ScoreColumns without the equations of some observations: centres flagged as blunders, whose 80 um would otherwise
-// swamp the F-test of a 5 um effect (and pull its estimate).
-LinearScore ScoreColumnsWithout(const std::vector<int>& left_out, const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
-                                const Eigen::MatrixXd& extra) {
-  if (left_out.empty()) return ScoreColumns(r0, base, extra);
-  std::vector<Eigen::Index> rows;
-  for (Eigen::Index i = 0; i < r0.size(); ++i) {
-    if (std::find(left_out.begin(), left_out.end(), static_cast<int>(i / 3)) == left_out.end()) rows.push_back(i);
-  }
-  return ScoreColumns(r0(rows), base(rows, Eigen::all), extra(rows, Eigen::all));
-}
 
 struct Candidate {
   EffectScore score;
@@ -133,10 +29,6 @@ struct Candidate {
   std::vector<int> flagged;                    // outliers: observation indices
   double tau_s = 0.0;                          // thermal_drift: 0 linear, else the warm-up's time constant
 };
-
-// How far a drift of initial rate 1 has gone after t: t itself (linear), or tau (1 - exp(-t/tau)), the warm-up
-// rho(t) = A + B (1 - exp(-t/tau)) of [Pérez thesis] eqs. 5.1-5.2 with B = rate * tau (A is the model's constant).
-double DriftShape(double t, double tau) { return tau > 0 ? tau * (1.0 - std::exp(-t / tau)) : t; }
 
 void Test(Candidate& c, double alpha_each) {
   const LinearScore& l = c.linear;
@@ -149,69 +41,6 @@ void Test(Candidate& c, double alpha_each) {
   c.score.p_value = c.score.f_statistic > 0 ? boost::math::cdf(boost::math::complement(f, c.score.f_statistic)) : 1.0;
   c.score.delta_bic = m * std::log(l.rss / l.rss_base) + d1 * std::log(m);
   c.score.significant = c.score.p_value < alpha_each && c.score.delta_bic < 0;
-}
-
-double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
-  const Eigen::Map<const Eigen::VectorXd> x(a.data(), static_cast<Eigen::Index>(a.size()));
-  const Eigen::Map<const Eigen::VectorXd> y(b.data(), static_cast<Eigen::Index>(b.size()));
-  const Eigen::VectorXd dx = x.array() - x.mean(), dy = y.array() - y.mean();
-  const double d = dx.norm() * dy.norm();
-  return d > 0 ? dx.dot(dy) / d : 0.0;
-}
-
-// What a metrologist would look at first: residuals against position, height, time, calotte index; per-placement
-// offsets; the largest standardised residual.
-std::vector<std::string> Findings(const std::vector<Eigen::Vector3d>& residuals, const MeasurementSet& set, double sigma) {
-  std::vector<std::pair<double, std::string>> found;
-  std::map<std::string, std::vector<double>> covariates;
-  std::map<int, int> index_in_group;
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    const Observation& o = set.observations[i];
-    covariates["x"].push_back(o.command.x());
-    covariates["y"].push_back(o.command.y());
-    covariates["height z"].push_back(o.command.z());
-    covariates["calotte index"].push_back(index_in_group[o.group]++);
-    if (!set.t_s.empty()) covariates["time"].push_back(set.t_s[i]);
-  }
-  for (int c = 0; c < 3; ++c) {
-    std::vector<double> component;
-    for (const Eigen::Vector3d& r : residuals) component.push_back(r[c]);
-    for (const auto& [name, values] : covariates) {
-      const double rho = Correlation(component, values);
-      if (std::abs(rho) > 0.3) {
-        found.emplace_back(std::abs(rho), fmt::format("residual {} follows {} (correlation {:+.2f})", "xyz"[c], name, rho));
-      }
-    }
-  }
-  std::map<int, std::pair<Eigen::Vector3d, int>> per_group;
-  for (size_t i = 0; i < residuals.size(); ++i) {
-    auto& [sum, n] = per_group[set.observations[i].group];
-    if (n == 0) sum.setZero();
-    sum += residuals[i];
-    ++n;
-  }
-  for (const auto& [group, sum_n] : per_group) {
-    const Eigen::Vector3d mean = sum_n.first / sum_n.second;
-    const double z = mean.norm() / (sigma / std::sqrt(sum_n.second));
-    if (z > 4) {
-      const std::string name = static_cast<size_t>(group) < set.groups.size() ? set.groups[static_cast<size_t>(group)] : std::to_string(group);
-      found.emplace_back(z / 10, fmt::format("placement {} sits {:.1f} um off on average ({:.1f} sigma)", name, mean.norm() * 1e3, z));
-    }
-  }
-  size_t worst = 0;
-  for (size_t i = 1; i < residuals.size(); ++i) {
-    if (residuals[i].norm() > residuals[worst].norm()) worst = i;
-  }
-  if (!residuals.empty() && residuals[worst].norm() > 5 * sigma * std::sqrt(3.0)) {
-    found.emplace_back(1.0, fmt::format("largest residual {:.1f} um at {} ({:.1f} sigma)", residuals[worst].norm() * 1e3,
-                                        set.labels.empty() ? std::to_string(worst) : set.labels[worst],
-                                        residuals[worst].norm() / sigma));
-  }
-  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  std::vector<std::string> out;
-  for (size_t i = 0; i < found.size() && i < 5; ++i) out.push_back(found[i].second);
-  if (out.empty()) out.push_back("no structure: residuals look like noise against position, height, time and index");
-  return out;
 }
 
 // The next power of a term's polynomial; its existing coefficients keep their states (dropped stay dropped,
@@ -247,132 +76,6 @@ MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Obser
   MeasurementSet out = set;
   for (size_t i = 0; i < out.observations.size(); ++i) change(out.observations[i], i);
   return out;
-}
-
-// frame_rotation on the held-out placements: each one's turn about its first tile, fitted to the calibration's
-// residuals (PlacementTurns) and tested against what the calibration's covariance and the noise predict for
-// it when there is no turn: chi^2 of the yaws; the step then takes each placement's whole turn out.
-struct TurnTest {
-  EffectScore score{"frame_rotation", "", 0, 0.0, 1.0, 0.0, false};
-  std::vector<PlacementTurn> turns;
-  std::vector<Eigen::Vector3d> residuals_after;  // with each placement's turn taken out
-};
-
-// A drift the data were corrected by. Its rates were estimated together with the model's coefficients, which along
-// bars measured in order trade off against them: the turn test takes their joint covariance, from the equations
-// of both on the identification data.
-struct DriftCorrection {
-  Eigen::MatrixXd model_columns, drift_columns;  // d(identification residual) / d(free coefficients), / d(rates)
-  double tau_s = 0.0;
-};
-
-// What the coefficients the identification data could not determine (fixed, e.g. pitch and roll on flat bars) add
-// to the covariance of the held-out yaws: their true values still act on placements the identification did not
-// cover. Without a truth to go by, each gets the mean square of the determined coefficients of its kind (rotation,
-// translation, squareness) and power as its variance: empirical Bayes, as large as its determined kin. Their yaw
-// sensitivities are those PlacementTurns gives for the calibration with them set free, in the same frame.
-Eigen::MatrixXd UndeterminedYawCovariance(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
-                                          Eigen::Index placements) {
-  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(placements, placements);
-  const ParameterLayout& layout = calibration.layout;
-  std::map<std::pair<int, int>, std::pair<double, int>> kin;  // (kind, power) -> (sum of squares, count)
-  std::vector<const ParameterLayout::Coefficient*> fixed;
-  for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
-    const std::pair<int, int> key{static_cast<int>(GetErrorTerm(c.term).kind), c.power};
-    const int slot = layout.FreeIndexOf(c.name);
-    if (slot >= 0) {
-      kin[key].first += std::pow(calibration.values[static_cast<size_t>(slot)], 2);
-      ++kin[key].second;
-    } else if (c.state == ParameterLayout::State::kFixed) {
-      fixed.push_back(&c);
-    }
-  }
-  if (fixed.empty()) return covariance;
-  Calibration freed = calibration;
-  for (const ParameterLayout::Coefficient* c : fixed) freed.layout.Free(c->name);
-  freed.values = ValuesByName(layout, calibration.values, freed.layout);
-  for (const ParameterLayout::Coefficient* c : fixed) freed.values[static_cast<size_t>(freed.layout.FreeIndexOf(c->name))] = c->value;
-  freed.covariance = Eigen::MatrixXd::Zero(freed.layout.NumFree(), freed.layout.NumFree());  // asks for the sensitivities
-  const ValidationStats v = Validate(&freed, validate.observations, validate.anchors, frame);
-  const std::vector<PlacementTurn> turns = PlacementTurns(freed, v, validate.observations, validate.anchors);
-  if (static_cast<Eigen::Index>(turns.size()) != placements) return covariance;
-  for (const ParameterLayout::Coefficient* c : fixed) {
-    const auto it = kin.find({static_cast<int>(GetErrorTerm(c->term).kind), c->power});
-    if (it == kin.end()) continue;
-    Eigen::VectorXd yaw(placements);
-    for (Eigen::Index g = 0; g < placements; ++g) yaw[g] = turns[static_cast<size_t>(g)].sensitivity(2, freed.layout.FreeIndexOf(c->name));
-    covariance += it->second.first / it->second.second * yaw * yaw.transpose();
-  }
-  return covariance;
-}
-
-TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
-                          const std::optional<DriftCorrection>& drift, double alpha_each) {
-  TurnTest t;
-  const ValidationStats v = Validate(&calibration, validate.observations, validate.anchors, frame);
-  t.turns = PlacementTurns(calibration, v, validate.observations, validate.anchors);
-  t.residuals_after = v.residuals;
-  for (const PlacementTurn& turn : t.turns) {
-    for (size_t k = 0; k < turn.observations.size(); ++k) {
-      t.residuals_after[turn.observations[k]] -= TurnDisplacement(turn.rotation, turn.arms[k]);
-    }
-  }
-  // The test looks at the yaws, which an in-plane placement always shows (tilts about the first tile are also what
-  // a model that cannot determine pitch and roll gets wrong), jointly: an error of the model turns every
-  // placement alike, so their yaws are correlated through the calibration's covariance.
-  const Eigen::Index n = static_cast<Eigen::Index>(t.turns.size());
-  if (n == 0) return t;
-  Eigen::VectorXd yaw(n);
-  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
-  const bool model = calibration.covariance.size() > 0;
-  // With a drift: the yaw's sensitivity to its three rates joins that to the coefficients, under their joint
-  // covariance.
-  Eigen::MatrixXd joint = calibration.covariance;
-  Eigen::MatrixXd drift_yaw = Eigen::MatrixXd::Zero(n, drift ? 3 : 0);
-  if (drift && model && !validate.t_s.empty()) {
-    Eigen::MatrixXd a(drift->model_columns.rows(), drift->model_columns.cols() + 3);
-    a << drift->model_columns, drift->drift_columns;
-    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a.transpose() * a);
-    joint = calibration.sigma_mm * calibration.sigma_mm * cod.pseudoInverse();
-    for (Eigen::Index g = 0; g < n; ++g) {
-      const PlacementTurn& turn = t.turns[static_cast<size_t>(g)];
-      for (size_t i = 0; i < turn.observations.size(); ++i) {
-        const double shift = -DriftShape(validate.t_s[turn.observations[i]], drift->tau_s);
-        drift_yaw.row(g) += shift * turn.solve.block<1, 3>(2, 3 * static_cast<Eigen::Index>(i));
-      }
-    }
-  }
-  const auto yaw_sensitivity = [&](Eigen::Index g) {
-    const PlacementTurn& turn = t.turns[static_cast<size_t>(g)];
-    Eigen::RowVectorXd row(turn.sensitivity.cols() + drift_yaw.cols());
-    row << turn.sensitivity.row(2), drift_yaw.row(g);
-    return row;
-  };
-  for (Eigen::Index g = 0; g < n; ++g) {
-    const PlacementTurn& a = t.turns[static_cast<size_t>(g)];
-    yaw[g] = a.rotation.z();
-    covariance(g, g) = a.noise(2, 2);
-    for (Eigen::Index h = 0; h < n && model && a.sensitivity.size() > 0; ++h) {
-      covariance(g, h) += yaw_sensitivity(g).dot(joint * yaw_sensitivity(h).transpose());
-    }
-  }
-  if (model) covariance += UndeterminedYawCovariance(calibration, validate, frame, n);
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
-  if (ldlt.info() != Eigen::Success || !(covariance.diagonal().minCoeff() > 0)) return t;
-  const double chi2 = yaw.dot(ldlt.solve(yaw));
-  const int dof = static_cast<int>(n);
-  const double m = 3.0 * static_cast<double>(v.residuals.size());
-  double rss_before = 0, rss_after = 0;
-  for (size_t i = 0; i < v.residuals.size(); ++i) {
-    rss_before += v.residuals[i].squaredNorm();
-    rss_after += t.residuals_after[i].squaredNorm();
-  }
-  t.score.extra_parameters = dof;
-  t.score.f_statistic = chi2 / dof;
-  t.score.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared_distribution<double>(dof), chi2));
-  t.score.delta_bic = m * std::log(rss_after / rss_before) + dof * std::log(m);
-  t.score.significant = t.score.p_value < alpha_each && t.score.delta_bic < 0;
-  return t;
 }
 
 // What an accepted step added, with the values it was estimated at: enough to rebuild the problem with or without
@@ -444,103 +147,6 @@ bool IsApplied(const std::vector<Applied>& applied, const std::string& effect) {
   return std::any_of(applied.begin(), applied.end(), [&](const Applied& a) { return a.step.effect == effect; });
 }
 
-// Noise per coordinate that a few blunders cannot inflate: the median absolute residual (MAD) scaled to sigma.
-double RobustSigma(const std::vector<Eigen::Vector3d>& residuals, double floor_mm) {
-  std::vector<double> components;
-  for (const Eigen::Vector3d& r : residuals) components.insert(components.end(), {std::abs(r.x()), std::abs(r.y()), std::abs(r.z())});
-  if (components.empty()) return floor_mm;
-  return std::max(1.4826 * HighMedian(std::move(components)), floor_mm);
-}
-
-// What sets observation i's residual apart from those of its neighbours in the same group (the calottes before and
-// after it along the bar): r_i less their mean or, at the end of a bar, less the straight line through the two
-// before it. Smooth along the bar, a missing effect leaves little of it; a blunder leaves nearly all. `noise` is
-// its variance in units of one residual's (white noise): 1 + 1/2, or 1 + 4 + 1 for the straight line.
-struct Spike {
-  Eigen::Vector3d value;
-  double noise;
-};
-
-Spike SpikeOf(const std::vector<Observation>& observations, const std::vector<Eigen::Vector3d>& residuals, size_t i) {
-  const auto same = [&](long k) {
-    return k >= 0 && k < static_cast<long>(observations.size()) && observations[static_cast<size_t>(k)].group == observations[i].group;
-  };
-  const long n = static_cast<long>(i);
-  const auto r = [&](long k) { return residuals[static_cast<size_t>(k)]; };
-  if (same(n - 1) && same(n + 1)) return {residuals[i] - (r(n - 1) + r(n + 1)) / 2, 1.5};
-  if (same(n - 2) && same(n - 1)) return {residuals[i] - (2 * r(n - 1) - r(n - 2)), 6.0};
-  if (same(n + 2) && same(n + 1)) return {residuals[i] - (2 * r(n + 1) - r(n + 2)), 6.0};
-  if (same(n - 1)) return {residuals[i] - r(n - 1), 2.0};
-  if (same(n + 1)) return {residuals[i] - r(n + 1), 2.0};
-  return {residuals[i], 1.0};
-}
-
-// Centres whose error is improbable for Gaussian noise of the robust scale (Bonferroni [Dunn 1961] over the centres),
-// and as improbable against their neighbours' (SpikeOf), found one at a time: the worst is taken out and the model
-// refitted before the next is judged, so that a large blunder, which drags the fit towards itself, cannot make its
-// good neighbours look bad. Indices into p.identify.
-std::vector<int> FlagOutliers(const Problem& p, const IdentificationResult& fit, const IdentificationOptions& base_options,
-                              double alpha) {
-  std::vector<int> flagged;
-  std::vector<int> index(p.identify.observations.size());
-  std::iota(index.begin(), index.end(), 0);
-  std::vector<Observation> kept = p.identify.observations;
-  std::vector<Eigen::Vector3d> residuals = fit.residuals;
-  const boost::math::chi_squared_distribution<double> chi2(3.0);
-  const double limit = boost::math::quantile(boost::math::complement(chi2, alpha / static_cast<double>(kept.size())));
-  const size_t most = kept.size() / 5;  // beyond a fifth of the centres, the "outliers" are the model's failure
-  while (flagged.size() < most && !residuals.empty()) {
-    const double sigma = RobustSigma(residuals, base_options.noise_floor_mm);
-    // The worst centre beyond the limit that also stands out from its neighbours by as much (SpikeOf): a failed
-    // sphere fit moves one centre, while an effect the model lacks moves its neighbours along the bar with it.
-    std::vector<size_t> order(residuals.size());
-    std::iota(order.begin(), order.end(), size_t{0});
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return residuals[a].squaredNorm() > residuals[b].squaredNorm(); });
-    size_t worst = residuals.size();
-    for (const size_t i : order) {
-      if (residuals[i].squaredNorm() / (sigma * sigma) <= limit) break;
-      const Spike spike = SpikeOf(kept, residuals, i);
-      if (spike.value.squaredNorm() / (spike.noise * sigma * sigma) > limit) {
-        worst = i;
-        break;
-      }
-    }
-    if (worst == residuals.size()) break;
-    flagged.push_back(index[worst]);
-    kept.erase(kept.begin() + static_cast<long>(worst));
-    index.erase(index.begin() + static_cast<long>(worst));
-    IdentificationOptions o = base_options;
-    o.anchor = p.anchor;
-    o.anchors = p.identify.anchors;
-    try {
-      residuals = Identify(p.layout, kept, o).residuals;
-    } catch (const std::invalid_argument&) {
-      break;  // too few centres left for the model: stop flagging
-    }
-  }
-  return flagged;
-}
-
-// d(residual)/d(drift rate) per coordinate: the centres move by rate * DriftShape(t).
-Eigen::MatrixXd DriftColumns(const MeasurementSet& set, double tau) {
-  Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(set.observations.size()), 3);
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, c) = -DriftShape(set.t_s[i], tau);
-  }
-  return columns;
-}
-
-// d(residual)/d(scale): stitched xy distances from the first tile grow by scale * (s - a).
-Eigen::MatrixXd ScaleColumn(const MeasurementSet& set) {
-  Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(set.observations.size()), 1);
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    const Observation& o = set.observations[i];
-    const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
-    columns.block<2, 1>(3 * static_cast<Eigen::Index>(i), 0) = -(o.measured - a).head<2>();
-  }
-  return columns;
-}
-
 // Every candidate effect scored against the current fit (CoefficientColumns, ScoreColumns), but those already
 // applied once (an anchor, a drift, a scale, outliers cannot be added twice). An applied drift or scale is a value
 // the data were corrected by, not a model term: its directions join the base here, so that a later candidate is
@@ -566,7 +172,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
   // Blunders first: the other candidates are scored without them, so a large one cannot hide a small effect.
   std::vector<int> blunders;
   if (!IsApplied(applied, "outliers")) {
-    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p, fit, base_options, alpha)};
+    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p.layout, p.identify, p.anchor, fit.residuals, base_options, alpha)};
     if (!c.flagged.empty()) {
       Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(c.flagged.size()));
       for (size_t k = 0; k < c.flagged.size(); ++k) {
