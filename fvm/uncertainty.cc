@@ -12,6 +12,7 @@
 
 #include "artefacts/batch_observations.h"
 #include "artefacts/io/batch.h"
+#include "artefacts/tracker_sight.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/progress.h"
