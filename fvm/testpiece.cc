@@ -7,19 +7,15 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <set>
 
 #include "artefacts/geometry/test_piece.h"
 #include "artefacts/io/machine_truth_file.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "artefacts/simulation/test_piece_simulation.h"
-#include "artefacts/tracker_observations.h"
-#include "core/csv.h"
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
-#include "core/number_text.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/machine_report.h"
