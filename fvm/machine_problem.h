@@ -40,11 +40,8 @@ workflows::MachineProblemOptions ProblemOptions(const MachineArgs& args);
 // point.
 workflows::MachineProblem LoadMachineProblem(const MachineArgs& args);
 
-using workflows::CheckTrackerSight;
 using workflows::MachineProblem;
 using workflows::NotConvergedReason;
-using workflows::VerificationRefusal;
-using workflows::VerifyProblem;
 
 // {"max_error_mm", "largest_term", "largest_share"}: the plausibility bound applied and the identified term that
 // comes nearest it (share 1 is the bound).
