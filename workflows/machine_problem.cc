@@ -103,11 +103,7 @@ MachineProblem LoadMachineProblem(const MachineProblemOptions& o) {
 }
 
 stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout) {
-  try {
-    return stage::VerifyMachine(layout, problem.observations, problem.options);
-  } catch (const std::invalid_argument& e) {
-    throw VerificationRefusal(problem.readings.source, e);
-  }
+  return RefusalsNamingTheData(problem, [&] { return stage::VerifyMachine(layout, problem.observations, problem.options); });
 }
 
 InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal) {

@@ -58,6 +58,15 @@ stage::VerificationResult VerifyProblem(const MachineProblem& problem, const sta
 // The InputError for a verification's refusal: the data file and the reason; for an implausible result
 // (stage::ImplausibleFit) also how to raise the bound.
 InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal);
+// What `identify` (a stage verification of the problem's readings) returns; its refusal as VerificationRefusal's.
+template <typename Identify>
+auto RefusalsNamingTheData(const MachineProblem& problem, Identify identify) -> decltype(identify()) {
+  try {
+    return identify();
+  } catch (const std::invalid_argument& e) {
+    throw VerificationRefusal(problem.readings.source, e);
+  }
+}
 // Refuses readings the tracker could not have made from `pose` (artefacts/tracker_sight.h): a mistake in the file.
 void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
 

@@ -20,21 +20,15 @@ std::map<std::string, std::string> ReadSeries(const std::string& path) {
   return out;
 }
 
-stage::TestPieceVerification Verified(const MachineProblem& problem, const stage::ParameterLayout& layout) {
-  try {
-    return stage::VerifyTestPiece(layout, problem.observations, problem.options);
-  } catch (const std::invalid_argument& e) {
-    throw VerificationRefusal(problem.readings.source, e);
-  }
-}
-
 }  // namespace
 
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
 
 TestPieceVerifyResult VerifyTestPiece(const MachineProblem& problem, const TestPieceVerifyOptions& options) {
   const stage::ParameterLayout layout = problem.Layout(options.order);
-  TestPieceVerifyResult out{Verified(problem, layout), std::nullopt, {}, "all points", std::nullopt};
+  TestPieceVerifyResult out{
+      RefusalsNamingTheData(problem, [&] { return stage::VerifyTestPiece(layout, problem.observations, problem.options); }),
+      std::nullopt, {}, "all points", std::nullopt};
   const stage::TestPieceVerification& v = out.verification;
   const stage::IdentificationResult& r = v.result.identified;
   if (problem.validation) out.validation = JudgeOn(v.result, problem.validation_observations, problem.options.tool_offsets);
