@@ -4,62 +4,13 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <limits>
 
-#include "artefacts/tracker_observations.h"
-#include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "stage/error_terms.h"
 #include "stage/plausibility.h"
 
 namespace fvm::cli {
-namespace {
-
-// --machine must hold every commanded point: the polynomial bases are defined on the travel only (Legendre and
-// Chebyshev on [-1, 1]); far outside it their powers mean nothing, and overflow.
-void CheckInsideTravel(const MachineArgs& args, const artefacts::Workspace& ws, const artefacts::TrackerReadings& readings) {
-  constexpr double kToleranceMm = 1e-3;
-  for (const artefacts::TrackerReading& r : readings.points) {
-    for (int k = 0; k < 3; ++k) {
-      if (r.nominal[k] < ws.min[k] - kToleranceMm || r.nominal[k] > ws.max[k] + kToleranceMm) {
-        throw InputError(fmt::format(
-            "--machine '{}': {}:{}: point {} has {} = {} mm, outside the declared {} travel {} .. {} mm; give travels "
-            "that hold every point (LXxLYxLZ@X0,Y0,Z0), or leave --machine out to take the span of the points",
-            args.machine, readings.source, r.line, r.id, "xyz"[k], ReadableNumber(r.nominal[k]), "XYZ"[k],
-            ReadableNumber(ws.min[k]), ReadableNumber(ws.max[k])));
-      }
-    }
-  }
-}
-
-// The workspace the error functions are defined on: --machine, or the span of the commanded points.
-artefacts::Workspace WorkspaceOf(const MachineArgs& args, const artefacts::TrackerReadings& readings,
-                                 const std::optional<artefacts::TrackerReadings>& validation) {
-  if (!args.machine.empty()) {
-    const artefacts::Workspace ws = ParseMachine(args.machine);
-    CheckInsideTravel(args, ws, readings);
-    if (validation) CheckInsideTravel(args, ws, *validation);
-    return ws;
-  }
-  artefacts::Workspace ws;
-  ws.min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  ws.max = -ws.min;
-  for (const artefacts::TrackerReading& r : readings.points) {
-    ws.min = ws.min.cwiseMin(r.nominal);
-    ws.max = ws.max.cwiseMax(r.nominal);
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (!(ws.max[k] > ws.min[k])) {
-      throw InputError(fmt::format("{}: every point has {} = {} mm: the {} axis never moves, so its errors cannot be "
-                                   "identified; measure points along all three axes",
-                                   readings.source, "xyz"[k], ws.min[k], "XYZ"[k]));
-    }
-  }
-  return ws;
-}
-
-}  // namespace
 
 void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
   sub->add_option("DATA", args.data, "tracker readings: id,x,y,z + xt,yt,zt or range,azimuth,elevation (mm, rad); fvm uncertainty also takes a batch directory")
@@ -93,74 +44,28 @@ void AddMaxErrorOption(CLI::App* sub, MachineArgs& args) {
       ->check(Within(1e-3, 1e5, "mm"));
 }
 
-std::string MachineProblem::WeightsName() const { return weighted ? "tracker " + noise.name : std::string("equal"); }
-
-stage::ParameterLayout MachineProblem::Layout(int order) const {
-  std::array<stage::Travel, 3> travel;
-  for (int k = 0; k < 3; ++k) travel[static_cast<size_t>(k)] = stage::Travel{workspace.min[k], workspace.max[k]};
-  return stage::MachineLayout(chain, travel, basis, order);
+workflows::MachineProblemOptions ProblemOptions(const MachineArgs& args) {
+  workflows::MachineProblemOptions o;
+  o.data = args.data;
+  o.validate = args.validate;
+  o.chain = args.chain;
+  o.basis = args.basis;
+  o.tools.clear();
+  for (const std::string& t : args.tools) o.tools.push_back(ParseVector3(t, "--tool", "0,0,100"));
+  if (!args.pose.empty()) o.pose = ParsePose(args.pose, "--pose");
+  if (!args.machine.empty()) {
+    o.travel = ParseMachine(args.machine);
+    o.travel_name = fmt::format("--machine '{}'", args.machine);
+  }
+  o.tracker = args.tracker;
+  o.unweighted = args.unweighted;
+  o.max_error_mm = args.max_error_mm;
+  o.threads = ThreadCount();
+  return o;
 }
 
-MachineProblem LoadMachineProblem(const MachineArgs& args) {
-  MachineProblem p;
-  p.readings = artefacts::ReadTrackerReadings(args.data);
-  if (!args.validate.empty()) p.validation = artefacts::ReadTrackerReadings(args.validate);
-  try {
-    p.chain = stage::AxisChain::Parse(args.chain);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(fmt::format("--chain {}: {}", args.chain, e.what()));
-  }
-  for (const std::string& t : args.tools) p.options.tool_offsets.push_back(ParseVector3(t, "--tool", "0,0,100"));
-  p.chain.tool_offset = p.options.tool_offsets.front();
-  for (const artefacts::TrackerReadings* file : {&p.readings, p.validation ? &*p.validation : nullptr}) {
-    if (file == nullptr) continue;
-    for (const artefacts::TrackerReading& r : file->points) {
-      if (r.tool >= static_cast<int>(p.options.tool_offsets.size())) {
-        throw InputError(fmt::format("{}:{}: point {} was measured with tool {}, but only {} --tool offset(s) were given",
-                                     file->source, r.line, r.id, r.tool + 1, p.options.tool_offsets.size()));
-      }
-    }
-  }
-  p.noise = stage::TrackerNoise::Preset(args.tracker);
-  p.weighted = !args.unweighted && !p.noise.IsNoiseFree();
-  p.observations = artefacts::TrackerObservations(p.readings, p.weighted ? &p.noise : nullptr);
-  if (p.validation) p.validation_observations = artefacts::TrackerObservations(*p.validation, nullptr);
-  p.workspace = WorkspaceOf(args, p.readings, p.validation);
-  p.basis = *stage::ParseBasis(args.basis);
-  p.options.instrument = args.pose.empty() ? stage::InstrumentPose::kEstimated : stage::InstrumentPose::kHeld;
-  if (!args.pose.empty()) p.options.pose = ParsePose(args.pose, "--pose");
-  p.options.num_threads = ThreadCount();
-  p.options.max_error_mm = args.max_error_mm;
-  return p;
-}
-
-stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout) {
-  try {
-    return stage::VerifyMachine(layout, problem.observations, problem.options);
-  } catch (const std::invalid_argument& e) {
-    throw VerificationRefusal(problem.readings.source, e);
-  }
-}
-
-InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal) {
-  const bool implausible = dynamic_cast<const stage::ImplausibleFit*>(&refusal) != nullptr &&
-                           dynamic_cast<const stage::DegenerateReadings*>(&refusal) == nullptr;
-  return InputError(fmt::format("{}: {}{}", source, refusal.what(),
-                                implausible ? " (a machine really this far out: raise the bound with --max-error-mm)" : ""));
-}
-
-std::string NotConvergedReason(const stage::IdentificationResult& identified) {
-  const std::string& report = identified.solver_report;
-  const size_t at = report.find("Termination: ");
-  const std::string termination = at == std::string::npos ? std::string() : report.substr(at + 13, report.find_first_of(" ,\n", at + 13) - at - 13);
-  const std::string advice = "the results are written but must not be trusted as they are: check the readings (units, "
-                             "ids, outliers) or try a smaller model";
-  if (termination == "NO_CONVERGENCE") {
-    return fmt::format("the identification stopped at its limit of {} iterations before the fit settled; {}",
-                       identified.iterations, advice);
-  }
-  return fmt::format("the identification failed after {} iterations ({}); {}", identified.iterations,
-                     termination.empty() ? "the solver gave no reason" : "the solver ended with " + termination, advice);
+workflows::MachineProblem LoadMachineProblem(const MachineArgs& args) {
+  return workflows::LoadMachineProblem(ProblemOptions(args));
 }
 
 nlohmann::json PlausibilityJson(const stage::IdentificationResult& identified, double max_error_mm) {
@@ -186,16 +91,6 @@ nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 
     j["u_rotation_urad"] = {u[3] * 1e6, u[4] * 1e6, u[5] * 1e6};
   }
   return j;
-}
-
-void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose) {
-  // Points the tracker could not have seen from the pose found: a reading there is a mistake in the file.
-  const std::vector<std::string> beyond = artefacts::PointsBeyondTrackerLimits(problem.readings, pose);
-  if (!beyond.empty()) {
-    throw InputError(fmt::format("{}: {} of {} readings lie outside the tracker's range or angle limits from the pose "
-                                 "found (first: {}); check the file's units and columns",
-                                 problem.readings.source, beyond.size(), problem.readings.points.size(), beyond.front()));
-  }
 }
 
 }  // namespace fvm::cli

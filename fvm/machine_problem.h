@@ -1,21 +1,17 @@
 #pragma once
-// What fvm verify and fvm uncertainty share: the tracker readings and their options turned into an identification
-// problem (chain, tool offsets, weights, workspace, pose held or estimated), with the same checks and messages.
+// The command-line face of the machine-tool jobs (fvm verify, fvm uncertainty, fvm testpiece verify): their shared
+// options, which workflows/machine_problem.h turns into an identification problem, and the JSON and report pieces
+// their outputs share.
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
-#include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "artefacts/io/tracker_readings.h"
-#include "core/input_error.h"
-#include "artefacts/simulation/machine_tool_simulation.h"
 #include "fvm/machine_report.h"
 #include "stage/identification.h"
 #include "stage/machine_verification.h"
-#include "stage/tracker.h"
+#include "workflows/machine_problem.h"
 
 namespace fvm::cli {
 
@@ -38,36 +34,14 @@ void AddMachineOptions(CLI::App* sub, MachineArgs& args);
 // --max-error-mm alone (fvm testpiece verify adds its options itself).
 void AddMaxErrorOption(CLI::App* sub, MachineArgs& args);
 
-struct MachineProblem {
-  artefacts::TrackerReadings readings;
-  std::optional<artefacts::TrackerReadings> validation;
-  stage::AxisChain chain;              // tool offset: the first --tool
-  stage::IdentificationOptions options;  // tool offsets, instrument held or estimated, pose, threads
-  stage::TrackerNoise noise;
-  bool weighted = true;
-  std::vector<stage::Observation> observations;  // the readings, weighted by the noise model when `weighted`
-  std::vector<stage::Observation> validation_observations;  // unweighted; empty without --validate
-  artefacts::Workspace workspace;      // --machine, or the span of the commanded points
-  stage::Basis basis = stage::Basis::kLegendre;
-  std::string WeightsName() const;     // "tracker published" or "equal"
-  stage::ParameterLayout Layout(int order) const;
-};
+// The options as the job takes them (workflows/machine_problem.h); --threads from the program.
+workflows::MachineProblemOptions ProblemOptions(const MachineArgs& args);
+// Reads and checks everything (workflows::LoadMachineProblem); bad input is an InputError naming the file, line and
+// point.
+workflows::MachineProblem LoadMachineProblem(const MachineArgs& args);
 
-// Reads and checks everything; bad input is an InputError naming the file, line and point.
-MachineProblem LoadMachineProblem(const MachineArgs& args);
-
-// Identifies `layout` (VerifyMachine); a refusal is an InputError naming the data file (an implausible result says
-// how to raise the bound). Then refuses readings the tracker could not have made from the pose found.
-stage::VerificationResult VerifyProblem(const MachineProblem& problem, const stage::ParameterLayout& layout);
-// The InputError for a verification's refusal: the data file and the reason; for an implausible result
-// (stage::ImplausibleFit) also how to raise the bound.
-InputError VerificationRefusal(const std::string& source, const std::invalid_argument& refusal);
-void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
-
-// The one-line reason an identification did not converge, for exit 3 ("the identification stopped at its limit of
-// 100 iterations before the fit settled: ..."): what happened and what to try, without the solver's raw report
-// (which --json carries as "solver_report").
-std::string NotConvergedReason(const stage::IdentificationResult& identified);
+using workflows::MachineProblem;
+using workflows::NotConvergedReason;
 
 // {"max_error_mm", "largest_term", "largest_share"}: the plausibility bound applied and the identified term that
 // comes nearest it (share 1 is the bound).

@@ -3,21 +3,13 @@
 
 #include <fmt/core.h>
 
-#include <algorithm>
-#include <cmath>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <stdexcept>
 
-#include "artefacts/io/multilateration_readings.h"
-#include "artefacts/io/tracker_readings.h"
 #include "core/exit_codes.h"
-#include "core/file_io.h"
-#include "core/input_error.h"
 #include "fvm/commands.h"
-#include "stage/multilateration.h"
 #include "stage/tracker.h"
+#include "workflows/multilaterate.h"
 
 namespace fvm::cli {
 namespace {
@@ -35,137 +27,34 @@ struct MultilaterateArgs {
   bool json = false;
 };
 
-std::string Join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 void Run(const MultilaterateArgs& args) {
-  const artefacts::MultilaterationReadings data = artefacts::ReadMultilaterationReadings(args.readings);
-  std::optional<std::vector<artefacts::Station>> stations;
-  if (!args.stations.empty()) stations = artefacts::ReadStations(args.stations);
-  if (!stations && !(args.self_calibrate && data.angles)) {
-    throw InputError(fmt::format("{}: no stations: give --stations S.json (known positions, or starting values with "
-                                 "--self-calibrate); a self-calibration without them starts from the angles, which "
-                                 "this file does not have",
-                                 args.readings));
-  }
-  if (args.angles && !data.angles) {
-    throw InputError(fmt::format("{}: --angles needs azimuth,elevation columns (rad) beside id,station,range", args.readings));
-  }
-
-  // The problem: points in file order, stations in the stations file's order (or of first appearance).
-  stage::MultilaterationProblem problem;
-  std::map<std::string, int, std::less<>> point_index, station_index;
-  if (stations) {
-    for (const artefacts::Station& s : *stations) {
-      station_index.emplace(s.name, static_cast<int>(problem.station_names.size()));
-      problem.station_names.push_back(s.name);
-      problem.stations.push_back(s.position);
-    }
-  }
-  std::vector<int> readings_per_station(problem.station_names.size(), 0);
-  for (const artefacts::StationReadingRow& r : data.rows) {
-    auto s = station_index.find(r.station);
-    if (s == station_index.end()) {
-      if (stations) {
-        throw InputError(fmt::format("{}:{}: point {}: station {} is not in {} (stations: {})", data.source, r.line, r.id,
-                                     r.station, args.stations, Join(problem.station_names)));
-      }
-      s = station_index.emplace(r.station, static_cast<int>(problem.station_names.size())).first;
-      problem.station_names.push_back(r.station);
-      readings_per_station.push_back(0);
-    }
-    auto p = point_index.find(r.id);
-    if (p == point_index.end()) {
-      p = point_index.emplace(r.id, static_cast<int>(problem.point_ids.size())).first;
-      problem.point_ids.push_back(r.id);
-    }
-    ++readings_per_station[static_cast<size_t>(s->second)];
-    stage::StationReading m;
-    m.point = p->second;
-    m.station = s->second;
-    m.range_mm = r.range_mm;
-    m.has_angles = data.angles;
-    m.azimuth_rad = r.azimuth_rad;
-    m.elevation_rad = r.elevation_rad;
-    problem.readings.push_back(m);
-  }
-  for (size_t i = 0; i < readings_per_station.size(); ++i) {
-    if (readings_per_station[i] == 0) {
-      throw InputError(fmt::format("{}: station {} has no readings in {}; remove it or add its readings", args.stations,
-                                   problem.station_names[i], args.readings));
-    }
-  }
-
-  stage::MultilaterationOptions options;
-  options.noise = stage::TrackerNoise::Preset(args.tracker);
-  options.self_calibrate = args.self_calibrate;
-  options.use_angles = args.angles;
-  const std::string mode = args.angles ? "bundle adjustment: ranges and angles" : "ranges only";
-  stage::MultilaterationResult result;
-  try {
-    if (args.self_calibrate && problem.station_names.size() < 4) {
-      const std::vector<std::string> lost = stage::UnobservableStationParameters(problem, options);
-      std::string list;
-      for (const std::string& u : lost) list += "\n  " + u;
-      throw InputError(fmt::format("{}: self-calibration needs every point seen by at least 4 stations; with {} stations "
-                                   "{} direction(s) of the stations stay unobservable whatever the number of points:{}\n"
-                                   "add a station, or give the stations' positions and leave out --self-calibrate",
-                                   args.readings, problem.station_names.size(), lost.size(), list));
-    }
-    result = stage::Multilaterate(problem, options);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(fmt::format("{}: {}", args.readings, e.what()));
-  }
+  workflows::MultilaterateOptions job;
+  job.readings = args.readings;
+  job.stations = args.stations;
+  job.self_calibrate = args.self_calibrate;
+  job.angles = args.angles;
+  job.tracker = args.tracker;
+  const workflows::Multilateration m = workflows::Multilaterate(job);
+  const stage::MultilaterationProblem& problem = m.problem;
+  const stage::MultilaterationResult& result = m.result;
+  const stage::MultilaterationOptions& options = m.options;
+  const std::string mode = m.Mode();
 
   // Nominal coordinates for fvm verify: from the readings' x,y,z or --nominal.
-  std::map<std::string, artefacts::NominalPoint, std::less<>> nominal;
-  if (!args.nominal.empty()) {
-    nominal = artefacts::ReadNominalPoints(args.nominal);
-  } else if (data.nominal) {
-    for (const artefacts::StationReadingRow& r : data.rows) nominal.emplace(r.id, artefacts::NominalPoint{r.nominal, ""});
-  }
+  const auto nominal = workflows::NominalCoordinates(m, args.nominal);
   std::optional<artefacts::TrackerReadings> for_verify;
   if (!args.verify_readings.empty()) {
-    if (nominal.empty()) {
-      throw InputError(fmt::format("--verify-readings {}: needs each point's nominal machine coordinates: x,y,z columns in "
-                                   "{} or --nominal POINTS.csv (id,x,y,z)",
-                                   args.verify_readings, args.readings));
-    }
-    for_verify.emplace();
-    for_verify->comments = {"fvm multilaterate: multilaterated points as tracker readings for fvm verify",
-                            fmt::format("from {} ({}, {} stations{}); xt,yt,zt in the stations' frame (mm)", args.readings,
-                                        mode, problem.station_names.size(), args.self_calibrate ? ", self-calibrated" : "")};
-    for (size_t j = 0; j < problem.point_ids.size(); ++j) {
-      const auto it = nominal.find(problem.point_ids[j]);
-      if (it == nominal.end()) {
-        throw InputError(fmt::format("{}: point {} has no nominal coordinates there", args.nominal.empty() ? args.readings : args.nominal,
-                                     problem.point_ids[j]));
-      }
-      artefacts::TrackerReading t;
-      t.id = problem.point_ids[j];
-      t.nominal = it->second.position;
-      t.measured = result.points[j];
-      t.approach = it->second.approach;
-      for_verify->points.push_back(std::move(t));
-    }
+    for_verify = workflows::VerifyReadings(m, job, nominal, args.nominal, args.verify_readings);
   }
 
   // Summaries.
-  std::vector<artefacts::MultilateratedPoint> points;
-  double u_sum = 0, u_max = 0;
+  const std::vector<artefacts::MultilateratedPoint> points = m.Points();
   nlohmann::json jpoints = nlohmann::json::array();
-  for (size_t j = 0; j < result.points.size(); ++j) {
-    const Eigen::Vector3d u = result.point_covariance[j].diagonal().cwiseMax(0.0).cwiseSqrt();
-    points.push_back({problem.point_ids[j], result.points[j], u});
-    u_sum += u.norm();
-    u_max = std::max(u_max, u.norm());
-    jpoints.push_back({{"id", problem.point_ids[j]}, {"x", result.points[j].x()}, {"y", result.points[j].y()},
-                       {"z", result.points[j].z()}, {"u_x", u.x()}, {"u_y", u.y()}, {"u_z", u.z()}});
+  for (const artefacts::MultilateratedPoint& p : points) {
+    jpoints.push_back({{"id", p.id}, {"x", p.position.x()}, {"y", p.position.y()}, {"z", p.position.z()},
+                       {"u_x", p.u.x()}, {"u_y", p.u.y()}, {"u_z", p.u.z()}});
   }
-  const double u_mean = u_sum / static_cast<double>(result.points.size());
+  const double u_mean = m.u_mean_mm, u_max = m.u_max_mm;
   nlohmann::json jstations = nlohmann::json::array();
   for (size_t i = 0; i < result.stations.size(); ++i) {
     nlohmann::json s{{"name", problem.station_names[i]},
@@ -205,21 +94,11 @@ void Run(const MultilaterateArgs& args) {
   doc["converged"] = result.converged;
 
   // --truth: the error of each point against known true positions (simulations: true_points.csv).
-  std::optional<std::pair<double, double>> truth_error;  // mean, max (mm)
+  std::optional<workflows::TruthError> truth_error;
   if (!args.truth.empty()) {
-    const auto truth = artefacts::ReadNominalPoints(args.truth);
-    double sum = 0, worst = 0, sum2 = 0;
-    for (size_t j = 0; j < result.points.size(); ++j) {
-      const auto it = truth.find(problem.point_ids[j]);
-      if (it == truth.end()) throw InputError(fmt::format("{}: point {} is not there", args.truth, problem.point_ids[j]));
-      const double e = (result.points[j] - it->second.position).norm();
-      sum += e;
-      sum2 += e * e;
-      worst = std::max(worst, e);
-    }
-    const double n = static_cast<double>(result.points.size());
-    truth_error = std::make_pair(sum / n, worst);
-    doc["truth_error"] = {{"mean_um", sum / n * 1e3}, {"rms_um", std::sqrt(sum2 / n) * 1e3}, {"max_um", worst * 1e3}};
+    truth_error = workflows::ErrorAgainstTruth(m, args.truth);
+    doc["truth_error"] = {{"mean_um", truth_error->mean_mm * 1e3}, {"rms_um", truth_error->rms_mm * 1e3},
+                          {"max_um", truth_error->max_mm * 1e3}};
   }
 
   // Outputs only after every check.
@@ -253,8 +132,8 @@ void Run(const MultilaterateArgs& args) {
                               : std::string(args.self_calibrate ? " (held)" : ""));
     }
     if (truth_error) {
-      fmt::print("  error against {}: mean {:.1f} um, max {:.1f} um\n", args.truth, truth_error->first * 1e3,
-                 truth_error->second * 1e3);
+      fmt::print("  error against {}: mean {:.1f} um, max {:.1f} um\n", args.truth, truth_error->mean_mm * 1e3,
+                 truth_error->max_mm * 1e3);
     }
     for (const std::string& u : result.unobservable) fmt::print("  unobservable, held at its start: {}\n", u);
     std::string written;

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "artefacts/simulation/machine_tool_simulation.h"
+#include "artefacts/machine_truth.h"
 #include "fvm/option_ranges.h"
 #include "stage/pose.h"
 

@@ -7,19 +7,15 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <set>
 
 #include "artefacts/geometry/test_piece.h"
 #include "artefacts/io/machine_truth_file.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "artefacts/simulation/test_piece_simulation.h"
-#include "artefacts/tracker_observations.h"
-#include "core/csv.h"
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
-#include "core/number_text.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/machine_report.h"
@@ -27,6 +23,7 @@
 #include "stage/io/calibration_file.h"
 #include "stage/series_extraction.h"
 #include "stage/test_piece_verification.h"
+#include "workflows/test_piece_verify.h"
 
 namespace fvm::cli {
 namespace {
@@ -40,7 +37,7 @@ void AddPieceArgument(CLI::App* sub, std::string& piece) {
   sub->add_option("PIECE", piece, "piece description (JSON); default: the published piece of [Lorente 2021]")->check(CLI::ExistingFile);
 }
 
-bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
+using workflows::IsSeries;
 
 // ---------------------------------------------------------------------------------------------- design
 
@@ -88,15 +85,6 @@ struct TestPieceVerifyArgs : MachineArgs {
   bool json = false;
 };
 
-// Series of each point id from NOMINAL.csv (id,x,y,z,series).
-std::map<std::string, std::string> ReadSeries(const std::string& path) {
-  const CsvTable table = ReadCsv(path, CsvOptions{0, "id,x,y,z,series"});
-  const int id = table.Require("id"), series = table.Require("series");
-  std::map<std::string, std::string> out;
-  for (const CsvRow& row : table.rows()) out[std::string(TrimBlanks(table.Text(row, id)))] = std::string(TrimBlanks(table.Text(row, series)));
-  return out;
-}
-
 nlohmann::json TermsJson(const std::vector<stage::TermRecovery>& terms) {
   nlohmann::json out = nlohmann::json::array();
   for (const stage::TermRecovery& t : terms) {
@@ -134,15 +122,11 @@ MachineReportData::Table Histogram(const std::vector<MachineReportData::PointErr
 
 void RunVerify(const TestPieceVerifyArgs& args) {
   const MachineProblem problem = LoadMachineProblem(args);
-  const stage::ParameterLayout layout = problem.Layout(args.order);
-  stage::TestPieceVerification v = [&] {
-    try {
-      return stage::VerifyTestPiece(layout, problem.observations, problem.options);
-    } catch (const std::invalid_argument& e) {
-      throw VerificationRefusal(problem.readings.source, e);
-    }
-  }();
+  const workflows::TestPieceVerifyResult verified = workflows::VerifyTestPiece(problem, {args.order, args.nominal});
+  const stage::TestPieceVerification& v = verified.verification;
   const stage::IdentificationResult& r = v.result.identified;
+  const std::vector<stage::TermRecovery>& geometric = verified.geometric;
+  const std::string& geometric_from = verified.geometric_from;
 
   nlohmann::json doc;
   doc["data"] = args.data;
@@ -154,52 +138,15 @@ void RunVerify(const TestPieceVerifyArgs& args) {
   doc["initial"] = ErrorJson(v.result.initial);
   doc["final"] = ErrorJson(v.result.final);
   doc["final"]["rms_um"] = r.rms_mm * 1e3;
-  std::optional<stage::VolumetricError> validation_before, validation_after;
-  if (problem.validation) {
-    const auto& others = problem.validation_observations;
-    validation_before = stage::SummarizeVolumetric(
-        stage::VolumetricResiduals(r.calibration.layout, nullptr, v.result.initial_pose, others, problem.options.tool_offsets));
-    validation_after = stage::SummarizeVolumetric(
-        stage::VolumetricResiduals(r.calibration.layout, &r.calibration.values, r.pose, others, problem.options.tool_offsets));
-    doc["validation"] = {{"points", problem.validation->points.size()}, {"initial", ErrorJson(*validation_before)},
-                         {"final", ErrorJson(*validation_after)}};
+  if (verified.validation) {
+    doc["validation"] = {{"points", problem.validation->points.size()}, {"initial", ErrorJson(verified.validation->before)},
+                         {"final", ErrorJson(verified.validation->after)}};
   }
   doc["iterations"] = nlohmann::json::array();
   for (const stage::VolumetricError& e : v.iterations) doc["iterations"].push_back(ErrorJson(e));
-
-  // Geometric verification: which terms the series X1..Z3 alone recover (the rank of the Jacobian on them), when
-  // NOMINAL.csv says which points they are; otherwise what all the points recover.
-  std::vector<stage::TermRecovery> geometric = v.terms;
-  std::string geometric_from = "all points";
-  if (!args.nominal.empty()) {
-    const std::map<std::string, std::string> series = ReadSeries(args.nominal);
-    std::vector<stage::Observation> on_series;
-    for (size_t i = 0; i < problem.readings.points.size(); ++i) {
-      const auto it = series.find(problem.readings.points[i].id);
-      if (it != series.end() && IsSeries(it->second)) on_series.push_back(problem.observations[i]);
-    }
-    if (on_series.empty()) {
-      throw InputError(fmt::format("{}: no point of {} belongs to a series X1..Z3; give the NOMINAL.csv of the same piece",
-                                   args.nominal, args.data));
-    }
-    try {
-      geometric = stage::VerifyTestPiece(layout, on_series, problem.options).terms;
-    } catch (const std::invalid_argument& e) {
-      throw InputError(fmt::format("{}: the series alone: {}", args.nominal, e.what()));
-    }
-    geometric_from = fmt::format("series X1..Z3 ({} points)", on_series.size());
-    // The extraction formulas on the series, in the machine frame of the datum found (the CMM readings turned back
-    // by it): each error along its axis, zero-referenced at the axis' origin.
-    const Eigen::Matrix3d turn = r.pose.Rotation();
-    std::map<std::string, std::vector<stage::SeriesPoint>> by_series;
-    for (size_t i = 0; i < problem.readings.points.size(); ++i) {
-      const artefacts::TrackerReading& p = problem.readings.points[i];
-      const auto it = series.find(p.id);
-      if (it == series.end() || !IsSeries(it->second) || p.tool != 0) continue;
-      by_series[it->second].push_back({p.nominal, turn * p.measured + r.pose.translation - (p.nominal + problem.chain.tool_offset)});
-    }
+  if (verified.extraction) {
     doc["extraction"] = nlohmann::json::array();
-    for (const stage::ExtractedError& e : stage::ExtractGeometricErrors(by_series, problem.chain.tool_offset.z(), problem.workspace.min)) {
+    for (const stage::ExtractedError& e : *verified.extraction) {
       const bool angle = e.error[1] == 'A' || e.error[1] == 'B' || e.error[1] == 'C';
       nlohmann::json values = nlohmann::json::array();
       for (double x : e.value) values.push_back(x * (angle ? 1e6 : 1e3));
@@ -254,7 +201,8 @@ void RunVerify(const TestPieceVerifyArgs& args) {
     }
     if (problem.validation) {
       fmt::print("  validation ({} points): mean {:.2f} -> {:.2f} um, max {:.2f} -> {:.2f} um\n", problem.validation->points.size(),
-                 validation_before->mean_um, validation_after->mean_um, validation_before->max_um, validation_after->max_um);
+                 verified.validation->before.mean_um, verified.validation->after.mean_um, verified.validation->before.max_um,
+                 verified.validation->after.max_um);
     }
     std::string lost;
     for (const stage::TermRecovery& t : geometric) {

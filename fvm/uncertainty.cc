@@ -4,14 +4,11 @@
 
 #include <fmt/core.h>
 
-#include <chrono>
-#include <cmath>
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <nlohmann/json.hpp>
 
-#include "artefacts/batch_observations.h"
-#include "artefacts/io/batch.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/progress.h"
@@ -21,6 +18,8 @@
 #include "fvm/option_parsing.h"
 #include "fvm/uncertainty_report.h"
 #include "stage/monte_carlo.h"
+#include "workflows/tracker_placement.h"
+#include "workflows/uncertainty.h"
 
 namespace fvm::cli {
 namespace {
@@ -92,13 +91,12 @@ std::vector<std::string> IdsOf(const artefacts::TrackerReadings& readings) {
   return ids;
 }
 
-// The Monte Carlo options of the command line; `progress` (may be null) advances with every run.
-stage::MonteCarloOptions MonteCarloOptionsOf(const UncertaintyArgs& args, bool weighted, Progress* progress) {
-  stage::MonteCarloOptions mc;
+// The Monte Carlo settings of the command line; `progress` (may be null) advances with every run.
+workflows::MonteCarloSettings MonteCarloSettingsOf(const UncertaintyArgs& args, Progress* progress) {
+  workflows::MonteCarloSettings mc;
   mc.runs = args.runs;
   mc.seed = args.seed;
   mc.threads = Common().threads;
-  mc.weighted = weighted;
   if (progress != nullptr) mc.on_run_done = [progress] { progress->Advance(); };
   return mc;
 }
@@ -109,10 +107,6 @@ UncertaintyReportData::Point ReportPoint(const std::string& id, const Eigen::Vec
           {s.covariance(0, 0) * 1e6, s.covariance(0, 1) * 1e6, s.covariance(1, 1) * 1e6}};
 }
 
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // fvm uncertainty BATCH --model 27: the microscope stage, its centre noise resampled.
 void RunStage(const UncertaintyArgs& args) {
   if (!args.validate.empty() || !args.place_tracker.empty()) {
@@ -120,35 +114,27 @@ void RunStage(const UncertaintyArgs& args) {
                                  "placements in batch.json)",
                                  args.data, args.validate.empty() ? "--place-tracker" : "--validate"));
   }
-  const artefacts::Batch batch = artefacts::ReadBatch(args.data);
-  const stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
-  const stage::IdentificationResult reference = workflows::IdentifyModel(args.model, identify, Threaded(args.settings));
-  if (!reference.converged) {
-    throw NotConvergedError(NotConvergedReason(reference));
-  }
-  std::optional<stage::MeasurementSet> validate;
-  if (!batch.validate.empty()) validate = artefacts::Observations(batch, batch.validate);
-  const double sigma_mm = args.centre_noise_um >= 0 ? args.centre_noise_um * 1e-3 : reference.calibration.sigma_mm;
+  workflows::StageUncertaintyOptions job;
+  job.batch = args.data;
+  job.model = args.model;
+  job.settings = Threaded(args.settings);
+  job.centre_noise_um = args.centre_noise_um;
+  const workflows::StageReference ref = workflows::IdentifyStageReference(job);
+  const stage::MeasurementSet& identify = ref.identify;
+  const std::optional<stage::MeasurementSet>& validate = ref.validate;
+  const stage::IdentificationResult& reference = ref.identified;
+  const double sigma_mm = ref.sigma_mm;
 
   Progress progress("monte carlo runs", args.runs, ShowProgress());
-  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, false, &progress);
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<stage::StageMonteCarloRun> runs =
-      stage::StageMonteCarlo(args.model.Layout(), reference, identify, validate ? &*validate : nullptr,
-                             sigma_mm, Threaded(args.settings).ToOptions(identify), mc);
+  const workflows::StageUncertainty u =
+      workflows::RunStageMonteCarlo(job, ref, MonteCarloSettingsOf(args, &progress), BudgetInputsOf(args));
   progress.Finish();
-  const double seconds = Seconds(start);
-
-  std::vector<double> finals, validation_means, validation_rms;
-  int converged = 0;
-  for (const stage::StageMonteCarloRun& r : runs) {
-    finals.push_back(r.fit_mean_mm * 1e3);
-    if (validate) validation_means.push_back(r.validation.mean_mm * 1e3), validation_rms.push_back(r.validation.rms_mm * 1e3);
-    converged += r.converged ? 1 : 0;
-  }
-  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
-  const stage::UncertaintyBudget budget =
-      stage::Budget(spreads, identify.observations, std::sqrt(3.0) * sigma_mm, BudgetInputsOf(args));
+  const double seconds = u.seconds;
+  const std::vector<double>& finals = u.final_mean_um;
+  const std::vector<double>& validation_means = u.validation_mean_um;
+  const int converged = u.converged;
+  const std::vector<stage::PointSpread>& spreads = u.spreads;
+  const stage::UncertaintyBudget& budget = u.budget;
 
   nlohmann::json doc;
   doc["data"] = args.data;
@@ -160,10 +146,9 @@ void RunStage(const UncertaintyArgs& args) {
   doc["centre_noise_um"] = sigma_mm * 1e3;
   doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
   doc["validation_mean_um"] = validate ? DistributionJson(stage::SummarizeSample(validation_means)) : nlohmann::json(nullptr);
-  std::optional<stage::ValidationStats> stats;
+  const std::optional<stage::ValidationStats>& stats = u.validation;
   if (validate) {
-    stats = stage::Validate(&reference.calibration, validate->observations, validate->anchors, args.settings.Frame());
-    doc["validation_rms_um"] = DistributionJson(stage::SummarizeSample(validation_rms));
+    doc["validation_rms_um"] = DistributionJson(stage::SummarizeSample(u.validation_rms_um));
     doc["reference"] = {{"validation_rms_um", stats->rms_mm * 1e3}, {"predicted_rms_um", stats->predicted_rms_mm * 1e3}};
   }
   nlohmann::json points = nlohmann::json::array();
@@ -217,100 +202,26 @@ void RunStage(const UncertaintyArgs& args) {
   PrintBudget(budget);
 }
 
-// --place-tracker X0,Y0,Z0,X1,Y1,Z1: tracker positions on a grid of the box (machine frame, mm; the estimated
-// orientation kept: the noise is the same in any orientation of the tracker's frame), each ranked by the largest
-// 95 % radius over the readings' points that covariance propagation predicts; the best few confirmed by the Monte
-// Carlo. Positions from which the tracker could not see every point are left out.
-void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, const stage::ParameterLayout& layout,
-                  const stage::VerificationResult& reference) {
+// --place-tracker X0,Y0,Z0,X1,Y1,Z1: workflows/tracker_placement.h.
+void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, const workflows::MachineReference& reference) {
   const std::vector<double> box = ParseNumbers(args.place_tracker, 6, "--place-tracker", "1000,-1500,0,2000,-500,800");
-  const stage::Calibration& truth = reference.identified.calibration;
-  const bool estimate_pose = problem.options.instrument == stage::InstrumentPose::kEstimated;
-  struct Candidate {
-    Eigen::Vector3d position;
-    double predicted_max_um = 0;
-    double monte_carlo_max_um = -1;
-    bool current = false;
-  };
-  std::vector<Candidate> candidates;
-  const int steps = args.place_steps;
-  for (int i = 0; i < steps; ++i) {
-    for (int j = 0; j < steps; ++j) {
-      for (int k = 0; k < steps; ++k) {
-        const Eigen::Vector3d t(i, j, k);
-        Candidate c;
-        for (int a = 0; a < 3; ++a) {
-          c.position[a] = steps == 1 ? 0.5 * (box[a] + box[3 + a]) : box[a] + (box[3 + a] - box[a]) * t[a] / (steps - 1);
-        }
-        candidates.push_back(c);
-      }
-    }
-  }
-  Candidate current;
-  current.position = reference.identified.pose.translation;
-  current.current = true;
-  candidates.push_back(current);
-
-  const auto pose_at = [&](const Eigen::Vector3d& position) {
-    stage::Pose p = reference.identified.pose;
-    p.translation = position;
-    return p;
-  };
-  const auto start = std::chrono::steady_clock::now();
-  Progress progress("tracker positions", static_cast<int>(candidates.size()), ShowProgress());
-  std::vector<char> visible(candidates.size(), 0);
-  stage::ForEachRun(static_cast<int>(candidates.size()), Common().threads, [&](int index) {
-    Candidate& c = candidates[static_cast<size_t>(index)];
-    const stage::Pose pose = pose_at(c.position);
-    artefacts::TrackerReadings seen = problem.readings;
-    const std::vector<Eigen::Vector3d> predicted =
-        stage::PredictedReadings(truth.layout, &truth.values, pose, problem.observations, problem.options.tool_offsets);
-    for (size_t i = 0; i < predicted.size(); ++i) seen.points[i].measured = predicted[i];
-    if (artefacts::PointsBeyondTrackerLimits(seen, pose).empty()) {
-      visible[static_cast<size_t>(index)] = 1;
-      for (const Eigen::Matrix3d& cov : stage::PredictedPointCovariances(truth, pose, estimate_pose, problem.observations,
-                                                                         problem.options.tool_offsets, problem.noise)) {
-        c.predicted_max_um = std::max(c.predicted_max_um, stage::U95OfCovariance(cov) * 1e3);
-      }
-    }
-    progress.Advance();
-  });
-  progress.Finish();
-  std::vector<Candidate> ranked;
-  size_t visible_in_box = 0;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    if (visible[i]) ranked.push_back(candidates[i]), visible_in_box += candidates[i].current ? 0 : 1;
-  }
-  if (visible_in_box == 0) {
-    throw InputError(fmt::format("--place-tracker {}: from no position of the box can the tracker see every point; "
-                                 "move the box away from the machine or below the points",
-                                 args.place_tracker));
-  }
-  std::stable_sort(ranked.begin(), ranked.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.predicted_max_um < b.predicted_max_um; });
-  const double propagation_seconds = Seconds(start);
-
-  // The Monte Carlo confirms the best few and the current position.
-  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, nullptr);
-  for (size_t r = 0; r < ranked.size(); ++r) {
-    Candidate& c = ranked[r];
-    if (!(r < static_cast<size_t>(args.place_confirm) || c.current)) continue;
-    stage::VerificationResult at = reference;
-    at.identified.pose = pose_at(c.position);
-    at.initial_pose = at.identified.pose;
-    stage::IdentificationOptions options = problem.options;
-    options.pose = at.identified.pose;
-    const std::vector<stage::MachineMonteCarloRun> runs =
-        stage::MachineMonteCarlo(layout, at, problem.observations, {}, problem.noise, options, mc);
-    c.monte_carlo_max_um = 0;
-    for (const stage::PointSpread& s : stage::PointSpreads(runs)) c.monte_carlo_max_um = std::max(c.monte_carlo_max_um, s.u95_mm * 1e3);
-  }
-  const double seconds = Seconds(start);
+  workflows::TrackerPlacementOptions job;
+  std::copy(box.begin(), box.end(), job.box.begin());
+  job.box_name = "--place-tracker " + args.place_tracker;
+  job.steps = args.place_steps;
+  job.confirm = args.place_confirm;
+  job.monte_carlo = MonteCarloSettingsOf(args, nullptr);
+  Progress progress("tracker positions", workflows::PlacementPositions(job), ShowProgress());
+  job.on_position_done = [&progress] { progress.Advance(); };
+  const workflows::TrackerPlacement placed = workflows::PlaceTracker(problem, reference, job);
+  const std::vector<workflows::PlacementCandidate>& ranked = placed.ranked;
+  const double seconds = placed.seconds, propagation_seconds = placed.propagation_seconds;
+  const size_t visible_in_box = placed.visible_in_box;
 
   nlohmann::json doc;
   doc["data"] = args.data;
   doc["box_mm"] = box;
-  doc["candidates"] = candidates.size() - 1;
+  doc["candidates"] = placed.candidates;
   doc["visible"] = visible_in_box;
   doc["runs"] = args.runs;
   doc["seed"] = args.seed;
@@ -318,7 +229,7 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   doc["propagation_seconds"] = propagation_seconds;
   nlohmann::json list = nlohmann::json::array();
   for (size_t r = 0; r < ranked.size(); ++r) {
-    const Candidate& c = ranked[r];
+    const workflows::PlacementCandidate& c = ranked[r];
     nlohmann::json e{{"rank", r + 1},
                      {"position_mm", {c.position.x(), c.position.y(), c.position.z()}},
                      {"predicted_max_U95_um", c.predicted_max_um},
@@ -334,11 +245,11 @@ void RunPlacement(const UncertaintyArgs& args, const MachineProblem& problem, co
   fmt::print("{} tracker positions in the box ({} see every point), ranked by the largest 95 % radius over {} points "
              "(covariance propagation {:.1f} s; Monte Carlo {} runs each for the best {} and the current position; "
              "{:.1f} s in all)\n",
-             candidates.size() - 1, visible_in_box, problem.readings.points.size(), propagation_seconds, args.runs,
+             placed.candidates, visible_in_box, problem.readings.points.size(), propagation_seconds, args.runs,
              args.place_confirm, seconds);
   fmt::print("  {:>4}  {:>28}  {:>14}  {:>14}\n", "rank", "position (mm)", "predicted (um)", "Monte Carlo");
   for (size_t r = 0; r < ranked.size(); ++r) {
-    const Candidate& c = ranked[r];
+    const workflows::PlacementCandidate& c = ranked[r];
     if (!(r < 10 || c.current || r + 1 == ranked.size())) continue;
     fmt::print("  {:>4}  {:>8.1f} {:>9.1f} {:>9.1f}  {:>14.2f}  {:>14}{}\n", r + 1, c.position.x(), c.position.y(),
                c.position.z(), c.predicted_max_um,
@@ -353,51 +264,25 @@ void Run(const UncertaintyArgs& args) {
     return;
   }
   const MachineProblem problem = LoadMachineProblem(args);
-  if (problem.noise.IsNoiseFree()) {
-    throw InputError("--tracker none: a noise-free tracker gives every run the same readings; name the tracker's noise "
-                     "(published, ifm, adm)");
-  }
-  const stage::ParameterLayout layout = problem.Layout(args.order);
-  const stage::VerificationResult reference = VerifyProblem(problem, layout);
-  CheckTrackerSight(problem, reference.identified.pose);
-  if (!reference.identified.converged) {
-    throw NotConvergedError(NotConvergedReason(reference.identified));
-  }
+  const workflows::MachineReference machine = workflows::IdentifyMachineReference(problem, args.order);
+  const stage::VerificationResult& reference = machine.verification;
 
   if (!args.place_tracker.empty()) {
-    RunPlacement(args, problem, layout, reference);
+    RunPlacement(args, problem, machine);
     return;
   }
 
   Progress progress("monte carlo runs", args.runs, ShowProgress());
-  const stage::MonteCarloOptions mc = MonteCarloOptionsOf(args, problem.weighted, &progress);
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<stage::MachineMonteCarloRun> runs = stage::MachineMonteCarlo(
-      layout, reference, problem.observations, problem.validation_observations, problem.noise, problem.options, mc);
+  const workflows::MachineUncertainty u =
+      workflows::RunMachineMonteCarlo(problem, machine, MonteCarloSettingsOf(args, &progress), BudgetInputsOf(args));
   progress.Finish();
-  const double seconds = Seconds(start);
-
-  std::vector<double> finals, validations;
-  int converged = 0;
-  for (const stage::MachineMonteCarloRun& r : runs) {
-    finals.push_back(r.final.mean_um);
-    if (problem.validation) validations.push_back(r.validation.mean_um);
-    converged += r.converged ? 1 : 0;
-  }
-  // Pooled over runs and readings: the ideal machine's error (initial), the fit's residual (final), and the run's
-  // model against the simulated truth (model error: what the published studies call the residual).
-  std::vector<double> initial_pooled, final_pooled, model_pooled;
-  for (const stage::MachineMonteCarloRun& r : runs) {
-    initial_pooled.insert(initial_pooled.end(), r.initial_um.begin(), r.initial_um.end());
-    final_pooled.insert(final_pooled.end(), r.final_um.begin(), r.final_um.end());
-    for (size_t i = 0; i < problem.observations.size(); ++i) model_pooled.push_back(r.deviation_mm[i].norm() * 1e3);
-  }
-  const std::vector<stage::PointSpread> spreads = stage::PointSpreads(runs);
-  std::vector<Eigen::Vector3d> commands;
-  for (const stage::Observation& o : problem.observations) commands.push_back(o.command);
-  const stage::PairSpread pairs = stage::PairDistanceSpread(runs, commands, 100);
-  const stage::UncertaintyBudget budget = stage::Budget(
-      spreads, problem.observations, stage::TrackerReadingSd(problem.observations, problem.noise), BudgetInputsOf(args));
+  const double seconds = u.seconds;
+  const std::vector<double>& finals = u.final_mean_um;
+  const std::vector<double>& validations = u.validation_mean_um;
+  const int converged = u.converged;
+  const std::vector<stage::PointSpread>& spreads = u.spreads;
+  const stage::PairSpread& pairs = u.pairs;
+  const stage::UncertaintyBudget& budget = u.budget;
 
   nlohmann::json doc;
   doc["data"] = args.data;
@@ -411,9 +296,9 @@ void Run(const UncertaintyArgs& args) {
   doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
   doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::SummarizeSample(validations)) : nlohmann::json(nullptr);
   doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
-  const stage::SampleSummary model_error = stage::SummarizeSample(model_pooled);
-  doc["pooled_um"] = {{"initial", DistributionJson(stage::SummarizeSample(initial_pooled))},
-                      {"final", DistributionJson(stage::SummarizeSample(final_pooled))},
+  const stage::SampleSummary model_error = stage::SummarizeSample(u.model_error_pooled_um);
+  doc["pooled_um"] = {{"initial", DistributionJson(stage::SummarizeSample(u.initial_pooled_um))},
+                      {"final", DistributionJson(stage::SummarizeSample(u.final_pooled_um))},
                       {"model_error", DistributionJson(model_error)}};
   nlohmann::json points = nlohmann::json::array();
   std::vector<double> u95s;

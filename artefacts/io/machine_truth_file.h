@@ -22,7 +22,7 @@
 #include <string>
 #include <string_view>
 
-#include "artefacts/simulation/machine_tool_simulation.h"
+#include "artefacts/machine_truth.h"
 
 namespace fvm::artefacts {
 

@@ -89,19 +89,7 @@ std::array<std::vector<double>, 3> MeshNodes(const Workspace& ws, const Eigen::V
   return nodes;
 }
 
-stage::ErrorKind KindOf(int term) { return stage::GetErrorTerm(term).kind; }
-
 }  // namespace
-
-void Workspace::Check() const {
-  if (!min.allFinite() || !max.allFinite()) throw std::invalid_argument("workspace limits must be finite numbers (mm)");
-  for (int k = 0; k < 3; ++k) {
-    if (!(max[k] > min[k])) {
-      throw std::invalid_argument(fmt::format("workspace: the travel of {} must have max > min (got {} .. {} mm)",
-                                              "xyz"[k], min[k], max[k]));
-    }
-  }
-}
 
 std::vector<PlannedPoint> PlanMesh(const Workspace& ws, const Eigen::Vector3d& step) {
   const auto nodes = MeshNodes(ws, step);
@@ -207,24 +195,6 @@ std::string GCodeProgram(const std::vector<PlannedPoint>& points, double dwell_s
   return out;
 }
 
-double TermTruth::Value(double u) const {
-  double v = poly[0] + u * (poly[1] + u * (poly[2] + u * poly[3]));
-  if (sine_pitch_mm > 0.0) v += sine_amplitude * std::sin(2.0 * kPi * u / sine_pitch_mm + sine_phase_rad);
-  return v;
-}
-
-void TermValuesAt(const MachineTruth& truth, const Eigen::Vector3d& q, double e[stage::kNumErrorTerms]) {
-  for (int t = 0; t < stage::kNumErrorTerms; ++t) {
-    const TermTruth& term = truth.terms[static_cast<size_t>(t)];
-    if (KindOf(t) == stage::ErrorKind::kSquareness) {
-      e[t] = term.poly[0];  // one angle
-      continue;
-    }
-    const int k = static_cast<int>(stage::GetErrorTerm(t).axis);
-    e[t] = term.Value(q[k] - truth.workspace.min[k]);
-  }
-}
-
 double VolumetricErrorMm(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q) {
   stage::AxisChain machine = chain;
   machine.instrument.reset();
@@ -298,28 +268,6 @@ MachineTruth RandomMachineTruth(const Workspace& ws, std::uint64_t seed, double 
   stage::AxisChain chain = stage::AxisChain::Parse("XFYZ");
   chain.tool_offset = Eigen::Vector3d(0.0, 0.0, 100.0);
   return RandomMachineTruth(chain, ws, seed, mean_error_um);
-}
-
-std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readings, const stage::Pose& tracker,
-                                                   const TrackerLimits& limits) {
-  const Eigen::Matrix3d to_machine = tracker.Rotation();
-  std::vector<std::string> out;
-  for (const TrackerReading& r : readings.points) {
-    // The beam in machine axes (z up): the levelled head's range and elevation.
-    const stage::Spherical s = stage::ToSpherical(to_machine * r.measured);
-    const double elevation_deg = s.elevation_rad * 180.0 / kPi;
-    if (s.range_mm > limits.max_range_mm) {
-      out.push_back(fmt::format("{}: range {:.0f} mm beyond the tracker's {:.0f} mm", r.id, s.range_mm,
-                                limits.max_range_mm));
-    } else if (elevation_deg > limits.max_elevation_deg) {
-      out.push_back(fmt::format("{}: elevation {:.1f} deg above the tracker's {:+.0f} deg", r.id, elevation_deg,
-                                limits.max_elevation_deg));
-    } else if (elevation_deg < limits.min_elevation_deg) {
-      out.push_back(fmt::format("{}: elevation {:.1f} deg below the tracker's {:+.0f} deg", r.id, elevation_deg,
-                                limits.min_elevation_deg));
-    }
-  }
-  return out;
 }
 
 TrackerReadings SimulateTrackerReadings(const stage::AxisChain& chain, const MachineTruth& truth,

@@ -17,19 +17,14 @@
 
 #include "artefacts/io/multilateration_readings.h"
 #include "artefacts/io/tracker_readings.h"
+#include "artefacts/machine_truth.h"
+#include "artefacts/tracker_sight.h"
 #include "stage/axis_chain.h"
 #include "stage/error_terms.h"
 #include "stage/pose.h"
 #include "stage/tracker.h"
 
 namespace fvm::artefacts {
-
-// The travel of the three axes (mm): axis k runs from min[k] (its origin, where every error term is zero) to max[k].
-struct Workspace {
-  Eigen::Vector3d min = Eigen::Vector3d::Zero();
-  Eigen::Vector3d max = Eigen::Vector3d(2500.0, 1500.0, 1200.0);
-  void Check() const;  // throws std::invalid_argument unless min < max on each axis, all finite
-};
 
 struct PlannedPoint {
   std::string id;                                     // P0001, P0002, ... in visiting order
@@ -68,29 +63,6 @@ std::vector<PlannedPoint> PlanDiagonals(const Workspace& ws, int points_per_diag
 // a negative or non-finite dwell.
 std::string GCodeProgram(const std::vector<PlannedPoint>& points, double dwell_s, double feed_mm_min = 2000.0);
 
-// One geometric error term as a function of its axis coordinate q, with u = q - origin (mm):
-//   value(u) = poly[0] + poly[1] u + poly[2] u^2 + poly[3] u^3 + sine_amplitude sin(2 pi u / sine_pitch_mm + sine_phase_rad)
-// in mm (translation terms) or rad (rotation and squareness terms). sine_pitch_mm 0: no sine. A squareness term
-// is one angle: poly[0] only.
-struct TermTruth {
-  std::array<double, 4> poly{};
-  double sine_amplitude = 0.0;
-  double sine_pitch_mm = 0.0;
-  double sine_phase_rad = 0.0;
-  double Value(double u) const;
-};
-
-// The machine's true errors: the 21 terms of stage/error_terms.h, each over the travel of its own axis
-// (u = q_k - workspace.min[k]). Random truths vanish at each axis' origin (poly[0] = -A sin(phase)); the effect of
-// a squareness term, -q W, vanishes there when the origin is 0.
-struct MachineTruth {
-  Workspace workspace;
-  std::array<TermTruth, stage::kNumErrorTerms> terms{};
-};
-
-// The values e[0..20] of the 21 terms at command q (what stage::ChainForward takes).
-void TermValuesAt(const MachineTruth& truth, const Eigen::Vector3d& q, double e[stage::kNumErrorTerms]);
-
 // A random machine for `chain` (tool offset included; its instrument pose plays no part), seeded. Per term a
 // cubic with random coefficients plus a sine:
 //   positioning xTx, yTy, zTz: a ball-screw-like periodic error, pitch 10-40 mm, amplitude 8 % of the term's size;
@@ -114,21 +86,6 @@ struct ErrorSummary {
 };
 ErrorSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
                                     const std::vector<PlannedPoint>& points);
-
-// What a tracker can see. Defaults: elevation -60..+77 deg (a typical tracker head's vertical travel) and range
-// up to 40 m. The elevation is taken against the horizontal (the machine's xy plane, z up) at the tracker's
-// position, not in the frame its readings are expressed in: a tracker head stands levelled, while the frame of a
-// pose such as [IJSIMM 2016] Table I (rotations of up to 65 deg) is a coordinate frame, not a tilt of the head. In the
-// tracker's own frame position 4 would put 24 of the 96 mesh points below -60 deg.
-struct TrackerLimits {
-  double min_elevation_deg = -60.0;
-  double max_elevation_deg = 77.0;
-  double max_range_mm = 40'000.0;
-};
-// One message per point out of the limits ("P0007: elevation 81.2 deg above the tracker's +77 deg"), empty when
-// all are in. `readings` are in the frame of `tracker` (its pose in the machine frame).
-std::vector<std::string> PointsBeyondTrackerLimits(const TrackerReadings& readings, const stage::Pose& tracker,
-                                                   const TrackerLimits& limits = {});
 
 // The tracker readings of the machine `truth` at `points`: the tool point ChainForward(chain, e(q), q) in the
 // tracker frame (chain.instrument must be set: throws std::invalid_argument otherwise), converted to spherical

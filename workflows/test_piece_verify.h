@@ -1,0 +1,39 @@
+#pragma once
+// fvm testpiece verify as a job: a machine verified from the CMM measurement of the test piece it cut [Lorente 2021].
+// The kinematics are fvm verify's (workflows/machine_problem.h): a CMM-measured piece is a tracker whose pose is the
+// piece's datum. Adds the iteration log, which errors the points (or the series X1..Z3 alone) recover, and the
+// series' extraction formulas.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stage/series_extraction.h"
+#include "stage/test_piece_verification.h"
+#include "workflows/machine_problem.h"
+
+namespace fvm::workflows {
+
+struct TestPieceVerifyOptions {
+  int order = 2;        // polynomial order of each error function
+  std::string nominal;  // NOMINAL.csv id,x,y,z,series of the piece: its series X1..Z3; empty: all points judge
+};
+
+struct TestPieceVerifyResult {
+  stage::TestPieceVerification verification;
+  std::optional<VolumetricChange> validation;  // the held-out readings, when the problem has them
+  std::vector<stage::TermRecovery> geometric;  // per error: recovered by the series alone (or all points)
+  std::string geometric_from;                  // "all points" or "series X1..Z3 (N points)"
+  // With a nominal file: each error along its axis from the series' extraction formulas, in the machine frame of
+  // the datum found, zero-referenced at the axis' origin (mm or rad).
+  std::optional<std::vector<stage::ExtractedError>> extraction;
+};
+
+// Refusals name the data or nominal file: a verification the data refuse, a nominal file with no point of a series,
+// series that alone cannot be verified.
+TestPieceVerifyResult VerifyTestPiece(const MachineProblem& problem, const TestPieceVerifyOptions& options);
+
+// "X1".."Z3": the series of the geometric verification.
+bool IsSeries(const std::string& name);
+
+}  // namespace fvm::workflows
