@@ -88,7 +88,7 @@ std::string TileFile(int row, int col) { return fmt::format("tile_r{:03d}_c{:03d
 
 std::string LayoutText(const std::vector<imaging::Tile>& tiles, const std::string& comment) {
   std::vector<imaging::TileLayoutEntry> entries;
-  for (const auto& t : tiles) entries.push_back({TileFile(t.row, t.col), t.row, t.col, t.centre_mm, 0});
+  for (const auto& t : tiles) entries.push_back({TileFile(t.row, t.col), t.row, t.col, t.centre_mm, 0, std::nullopt});
   return "# " + comment + "\n" + imaging::FormatTileLayout(entries);
 }
 
@@ -107,7 +107,7 @@ std::vector<std::string> WriteTileSet(const std::filesystem::path& directory,
     files.push_back(TileFile(t.row, t.col));
     imaging::WriteTileImage(directory / files.back(), images[i], type);
     entries.push_back({files.back(), t.row, t.col,
-                       stage_mm.empty() ? std::nullopt : std::optional<Eigen::Vector2d>(stage_mm[i]), 0});
+                       stage_mm.empty() ? std::nullopt : std::optional<Eigen::Vector2d>(stage_mm[i]), 0, std::nullopt});
   }
   std::string header;
   std::stringstream lines(comment);

@@ -95,7 +95,7 @@ TEST_F(MachineCompensation, TheModelFileReadsBackWithItsToolOffset) {
   EXPECT_EQ(read_->layout.chain().code, "XFYZ");
   EXPECT_EQ(read_->values, written_->values);
   EXPECT_EQ(read_->covariance, written_->covariance);
-  for (const Eigen::Vector3d q : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1234.5, 678.9, 1000)}) {
+  for (const Eigen::Vector3d& q : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1234.5, 678.9, 1000)}) {
     EXPECT_EQ(stage::Forward(read_->layout, read_->values, q), stage::Forward(written_->layout, written_->values, q));
   }
 }
