@@ -2,6 +2,7 @@
 // distances between calottes (the measure of the published stitching-strategy study, [Pérez 2019] Tables 1-2).
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -80,11 +81,6 @@ std::vector<std::pair<int, int>> ParsePairs(const std::string& text) {
   return pairs;
 }
 
-std::string IdList(const std::vector<int>& ids) {
-  std::string out;
-  for (const int id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
-  return out;
-}
 
 // Fixed decimals without "-0.0": a difference that rounds to nothing has no sign.
 std::string Fixed(double v, int decimals) {
@@ -122,10 +118,10 @@ void RunDiff(const DiffOptions& options) {
     if (!ref.Find(c.id)) only_test.push_back(c.id);
   }
   if (!only_ref.empty()) {
-    fmt::print(stderr, "fvm diff: warning: calotte {} only in {}; left out\n", IdList(only_ref), options.ref);
+    fmt::print(stderr, "fvm diff: warning: calotte {} only in {}; left out\n", fmt::join(only_ref, ", "), options.ref);
   }
   if (!only_test.empty()) {
-    fmt::print(stderr, "fvm diff: warning: calotte {} only in {}; left out\n", IdList(only_test), options.test);
+    fmt::print(stderr, "fvm diff: warning: calotte {} only in {}; left out\n", fmt::join(only_test, ", "), options.test);
   }
   if (common.empty()) {
     throw InputError(fmt::format("{} and {} have no calotte id in common; compare two exports of the same artefact",
@@ -152,7 +148,7 @@ void RunDiff(const DiffOptions& options) {
                                                                    : options.ref;
         throw InputError(fmt::format("--pairs {}:{}: calotte {} is not in {}; pair calottes present in both files "
                                      "(common ids: {})",
-                                     a, b, id, where, IdList(common)));
+                                     a, b, id, where, fmt::join(common, ", ")));
       }
     }
     pair_diffs.push_back({a, b, distance(ref.Find(a)->position, ref.Find(b)->position),

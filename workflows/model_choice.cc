@@ -1,5 +1,7 @@
 #include "workflows/model_choice.h"
 
+#include <fmt/format.h>
+
 #include <stdexcept>
 
 #include "core/input_error.h"
@@ -40,10 +42,6 @@ stage::IdentificationResult IdentifyModel(const ModelChoice& model, const stage:
   }
 }
 
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
+std::string JoinNames(const std::vector<std::string>& names) { return fmt::format("{}", fmt::join(names, ", ")); }
 
 }  // namespace fvm::workflows

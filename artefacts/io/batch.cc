@@ -1,6 +1,7 @@
 #include "artefacts/io/batch.h"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <fstream>
@@ -24,11 +25,6 @@ bool EndsWith(const std::string& s, std::string_view suffix) {
   return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-std::string Join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
-  return out;
-}
 
 // "FILE:LINE" for a record read from a file, "FILE" for one found in a surface.
 std::string Where(const CentreExport& from, const CentreRecord& record) {
@@ -137,7 +133,7 @@ void ReadRoles(const std::filesystem::path& path, Batch& batch) {
     for (const std::string& name : *list) {
       if (std::find(all.begin(), all.end(), name) == all.end()) {
         throw InputError(fmt::format("{}: placement '{}' has no {}{} / {}{} pair here; the placements are {}", where,
-                                     name, name, kStitchedSuffix, name, kFreeSuffix, Join(all)));
+                                     name, name, kStitchedSuffix, name, kFreeSuffix, fmt::join(all, ", ")));
       }
     }
   }
@@ -178,7 +174,7 @@ const Placement& Batch::Get(const std::string& name) const {
   }
   std::vector<std::string> names;
   for (const Placement& p : placements) names.push_back(p.name);
-  throw InputError(fmt::format("{}: no placement '{}'; the placements are {}", dir.string(), name, Join(names)));
+  throw InputError(fmt::format("{}: no placement '{}'; the placements are {}", dir.string(), name, fmt::join(names, ", ")));
 }
 
 Batch ReadBatch(const std::filesystem::path& dir) {

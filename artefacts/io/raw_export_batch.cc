@@ -1,6 +1,7 @@
 #include "artefacts/io/raw_export_batch.h"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cctype>
@@ -58,11 +59,6 @@ std::map<std::string, ExportFiles> FindExports(const std::filesystem::path& dir)
   return found;
 }
 
-std::string IdList(const std::vector<int>& ids) {
-  std::string out;
-  for (int id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
-  return out;
-}
 
 // The calotte search and numbering of `fvm fit --artefact`, on one surface.
 struct Numbered {
@@ -126,11 +122,11 @@ void CheckSameNumbering(const RawExportFit& stitched, const RawExportFit& free, 
   if (!only_stitched.empty() || !only_free.empty()) {
     std::string what;
     if (!only_stitched.empty()) {
-      what += fmt::format("calotte {} found in {} but not in {}", IdList(only_stitched), stitched.file.string(),
+      what += fmt::format("calotte {} found in {} but not in {}", fmt::join(only_stitched, ", "), stitched.file.string(),
                           free.file.string());
     }
     if (!only_free.empty()) {
-      what += fmt::format("{}calotte {} found in {} but not in {}", what.empty() ? "" : "; ", IdList(only_free),
+      what += fmt::format("{}calotte {} found in {} but not in {}", what.empty() ? "" : "; ", fmt::join(only_free, ", "),
                           free.file.string(), stitched.file.string());
     }
     throw InputError(fmt::format("placement {}: the two exports do not number the same calottes: {}; measure the "
@@ -156,7 +152,7 @@ void CheckSameNumbering(const RawExportFit& stitched, const RawExportFit& free, 
         "the {:.3g} mm spacing (the stitched export lies at its first tile's stage reading, so one calotte lies "
         "within the stage error in both); check that both exports show the same placement and carry the stage "
         "position",
-        stitched.placement, IdList(astray), stitched.file.string(), free.file.string(), worst, spacing));
+        stitched.placement, fmt::join(astray, ", "), stitched.file.string(), free.file.string(), worst, spacing));
   }
 }
 
