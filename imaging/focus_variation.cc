@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -38,42 +39,74 @@ std::size_t PixelCount(const StackImageView& image) {
   return std::visit([](auto span) { return span.size(); }, image.pixels);
 }
 
-// The focus measure of a band of rows (float, same size). The band carries a margin of rows beyond the rows
-// that are kept, so that the filters see real neighbours there; at the image's own edges they reflect.
-cv::Mat MeasureBand(const cv::Mat& band, FocusMeasure measure, int window) {
+// The windows of the adaptive mode: the smallest two average on walls, the largest on flats.
+constexpr int kAdaptiveWindows[] = {3, 5, 9};
+// The large window is taken where the surface's height changes by at most this many steps over its half-width.
+constexpr double kSpreadLimitSteps = 0.5;
+constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
+// The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
+// of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
+// the step the interpolation leaves, the share of the height spread in the window.
+constexpr double kNoiseScale = 1.0;
+constexpr double kStepFraction = 0.03;
+constexpr double kSlopeFraction = 0.1;
+
+// The measure per pixel before it is averaged over a window: the modified Laplacian or the gradient energy; for
+// the variance the grey levels themselves (shifted by the band's mean: E[I^2] - E[I]^2 in float loses
+// everything to cancellation when the grey level is large against the contrast, as in 16-bit images).
+cv::Mat PixelMeasure(const cv::Mat& band, FocusMeasure measure) {
   cv::Mat grey;
   band.convertTo(grey, CV_32F);
-  cv::Mat out;
-  const cv::Size box(window, window);
   switch (measure) {
     case FocusMeasure::kModifiedLaplacian: {
       cv::Mat lx, ly;
       cv::Sobel(grey, lx, CV_32F, 2, 0, 1, 1.0, 0.0, cv::BORDER_REFLECT);  // ksize 1: the bare [1 -2 1]
       cv::Sobel(grey, ly, CV_32F, 0, 2, 1, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::Mat ml = cv::abs(lx) + cv::abs(ly);
-      cv::boxFilter(ml, out, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-      break;
+      return cv::abs(lx) + cv::abs(ly);
     }
     case FocusMeasure::kTenengrad: {
       cv::Mat gx, gy;
       cv::Sobel(grey, gx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT);
       cv::Sobel(grey, gy, CV_32F, 0, 1, 3, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::Mat energy = gx.mul(gx) + gy.mul(gy);
-      cv::boxFilter(energy, out, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-      break;
+      return gx.mul(gx) + gy.mul(gy);
     }
-    case FocusMeasure::kVariance: {
-      // Shifted by the band's mean first: E[I^2] - E[I]^2 in float loses everything to cancellation when the
-      // grey level is large against the contrast (16-bit images).
+    case FocusMeasure::kVariance:
       grey -= cv::mean(grey)[0];
-      cv::Mat mean, mean_sq;
-      cv::boxFilter(grey, mean, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-      cv::boxFilter(grey.mul(grey), mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-      out = cv::max(mean_sq - mean.mul(mean), 0.0);
-      break;
-    }
+      return grey;
+  }
+  return grey;
+}
+
+// The focus measure over window x window pixels (float, same size as the band). The band carries a margin of
+// rows beyond the rows that are kept, so that the filters see real neighbours there; at the image's own edges
+// they reflect.
+cv::Mat WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure, int window) {
+  const cv::Size box(window, window);
+  cv::Mat out;
+  if (measure == FocusMeasure::kVariance) {
+    cv::Mat mean, mean_sq;
+    cv::boxFilter(pixel_measure, mean, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+    cv::boxFilter(pixel_measure.mul(pixel_measure), mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+    out = cv::max(mean_sq - mean.mul(mean), 0.0);
+  } else {
+    cv::boxFilter(pixel_measure, out, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
   }
   return out;
+}
+
+// The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
+// modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
+// derivative (s^-4), the variance of a texture smoothed by s falls as s^-2.
+double BlurExponent(FocusMeasure measure) {
+  switch (measure) {
+    case FocusMeasure::kModifiedLaplacian:
+      return 3.0;
+    case FocusMeasure::kTenengrad:
+      return 4.0;
+    case FocusMeasure::kVariance:
+      return 2.0;
+  }
+  return 2.0;
 }
 
 // The vertex of the parabola through (z0, f0), (z1, f1), (z2, f2), with f1 the largest; z1 when the three are
@@ -134,14 +167,32 @@ void FocusVariationOptions::Check() const {
   }
 }
 
+// One window's focus curves, reduced as the images come: per pixel the largest measure so far, its image, the
+// measure in the images before and after it (NaN until seen), the sum and the smallest over all images (mean and
+// floor), and the previous image's measure.
+struct WindowCurves {
+  int window = 5;
+  std::vector<float> best, left, right, sum, floor, previous;
+  std::vector<std::int32_t> index;
+
+  void Reset(int w, std::size_t n) {
+    window = w;
+    best.assign(n, 0.0f);
+    left.assign(n, kNaN);
+    right.assign(n, kNaN);
+    sum.assign(n, 0.0f);
+    floor.assign(n, std::numeric_limits<float>::max());
+    previous.assign(n, kNaN);
+    index.assign(n, 0);
+  }
+};
+
 struct FocusAccumulator::State {
   FocusVariationOptions options;
   int width = 0, height = 0;
   std::vector<double> z;
-  // Per pixel: the largest measure so far, its image, the measure in the images before and after it (NaN until
-  // seen), the sum over all images (for the mean), and the previous image's measure.
-  std::vector<float> best, left, right, sum, previous;
-  std::vector<std::int32_t> index;
+  std::vector<WindowCurves> windows;
+  std::vector<float> texture;  // the grey level at the best image of the first window
 };
 
 FocusAccumulator::FocusAccumulator(const FocusVariationOptions& options) : state_(std::make_unique<State>()) {
@@ -162,7 +213,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   }
   if (!std::isfinite(z_mm)) throw InputError(what + ": the z position is not a finite number");
   if (k == 0) {
-    const int window = s.options.window;
+    const int window = s.options.adaptive_window ? kAdaptiveWindows[std::size(kAdaptiveWindows) - 1] : s.options.window;
     if (image.width < window || image.height < window) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
                        " px is smaller than the focus window (" + std::to_string(window) + " px)");
@@ -170,12 +221,13 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     s.width = image.width;
     s.height = image.height;
     const std::size_t n = std::size_t(s.width) * std::size_t(s.height);
-    s.best.assign(n, 0.0f);
-    s.left.assign(n, kNaN);
-    s.right.assign(n, kNaN);
-    s.sum.assign(n, 0.0f);
-    s.previous.assign(n, kNaN);
-    s.index.assign(n, 0);
+    s.windows.clear();
+    if (s.options.adaptive_window) {
+      for (int w : kAdaptiveWindows) s.windows.emplace_back().Reset(w, n);
+    } else {
+      s.windows.emplace_back().Reset(s.options.window, n);
+    }
+    s.texture.assign(n, 0.0f);
   } else {
     if (image.width != s.width || image.height != s.height) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -196,32 +248,130 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   s.z.push_back(z_mm);
 
   const cv::Mat pixels = WrapPixels(image);
+  int largest = 0;
+  for (const WindowCurves& c : s.windows) largest = std::max(largest, c.window);
   // Derivative (1 px) plus box half-width: beyond that, a band's edge does not reach the rows it keeps.
-  const int margin = s.options.window / 2 + 1;
+  const int margin = largest / 2 + 1;
   const FocusMeasure measure = s.options.measure;
-  const int window = s.options.window;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     const int b0 = std::max(0, r0 - margin), b1 = std::min(s.height, r1 + margin);
-    const cv::Mat band = MeasureBand(pixels.rowRange(b0, b1), measure, window);
-    for (int r = r0; r < r1; ++r) {
-      const float* m = band.ptr<float>(r - b0);
-      const std::size_t row = std::size_t(r) * std::size_t(s.width);
-      for (int c = 0; c < s.width; ++c) {
-        const std::size_t i = row + std::size_t(c);
-        const float v = m[c];
-        if (s.index[i] == k - 1) s.right[i] = v;
-        if (k == 0 || v > s.best[i]) {
-          s.best[i] = v;
-          s.index[i] = k;
-          s.left[i] = s.previous[i];
-          s.right[i] = kNaN;
+    const cv::Mat band = pixels.rowRange(b0, b1);
+    const cv::Mat per_pixel = PixelMeasure(band, measure);
+    for (std::size_t w = 0; w < s.windows.size(); ++w) {
+      WindowCurves& c = s.windows[w];
+      const cv::Mat m = WindowMeasure(per_pixel, measure, c.window);
+      cv::Mat grey;
+      if (w == 0) band.convertTo(grey, CV_32F);
+      for (int r = r0; r < r1; ++r) {
+        const float* row_m = m.ptr<float>(r - b0);
+        const float* row_g = w == 0 ? grey.ptr<float>(r - b0) : nullptr;
+        const std::size_t row = std::size_t(r) * std::size_t(s.width);
+        for (int col = 0; col < s.width; ++col) {
+          const std::size_t i = row + std::size_t(col);
+          const float v = row_m[col];
+          if (c.index[i] == k - 1) c.right[i] = v;
+          if (k == 0 || v > c.best[i]) {
+            c.best[i] = v;
+            c.index[i] = k;
+            c.left[i] = c.previous[i];
+            c.right[i] = kNaN;
+            if (row_g) s.texture[i] = row_g[col];
+          }
+          c.sum[i] += v;
+          c.floor[i] = std::min(c.floor[i], v);
+          c.previous[i] = v;
         }
-        s.sum[i] += v;
-        s.previous[i] = v;
       }
     }
   });
 }
+
+namespace {
+
+// One window's heights and their noise: the peak fit per pixel, and the change of its vertex when each of the
+// three measures moves by its noise (the floor of the curve, the measure far out of focus, over the window's
+// side: the sum of window^2 pixels of independent noise).
+struct WindowHeights {
+  std::vector<double> z;      // mm, NaN where invalid
+  std::vector<double> u;      // mm, the noise part of the uncertainty
+  std::vector<float> quality;
+};
+
+WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
+                       int width, int height) {
+  const int n = static_cast<int>(z.size());
+  const std::size_t size = c.best.size();
+  WindowHeights out;
+  out.z.assign(size, std::numeric_limits<double>::quiet_NaN());
+  out.u.assign(size, std::numeric_limits<double>::quiet_NaN());
+  out.quality.assign(size, 0.0f);
+  const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
+  const float min_quality = static_cast<float>(options.min_quality);
+  const double noise_scale = kNoiseScale / double(c.window);
+  ForStripes(height, options.parallel, [&](int r0, int r1) {
+    for (std::size_t i = std::size_t(r0) * std::size_t(width); i < std::size_t(r1) * std::size_t(width); ++i) {
+      const float mean = c.sum[i] / static_cast<float>(n);
+      const float quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
+      out.quality[i] = quality;
+      const int k = c.index[i];
+      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z.
+      if (k == 0 || k == n - 1 || !(quality >= min_quality)) continue;
+      const std::array<double, 3> f = {c.left[i], c.best[i], c.right[i]};
+      const auto vertex = [&](std::array<double, 3> g) {
+        switch (options.peak_fit) {
+          case PeakFit::kPower:
+            if (g[0] > 0.0 && g[2] > 0.0) {
+              for (double& v : g) v = -std::pow(v, power);
+            }
+            break;
+          case PeakFit::kGaussian:
+            if (g[0] > 0.0 && g[2] > 0.0) {
+              for (double& v : g) v = std::log(v);
+            }
+            break;
+          case PeakFit::kParabolic:
+            break;
+        }
+        return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], g[0], g[1], g[2]);
+      };
+      const double z0 = vertex(f);
+      out.z[i] = z0;
+      const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
+      double variance = 0.0;
+      for (std::size_t j = 0; j < 3; ++j) {
+        std::array<double, 3> g = f;
+        g[j] += sigma;
+        const double d = vertex(g) - z0;
+        variance += d * d;
+      }
+      out.u[i] = std::sqrt(variance);
+    }
+  });
+  return out;
+}
+
+// The local slope (height change per pixel, mm) of a map with holes: a Gaussian average over the valid points
+// only (the blur of the heights over the blur of the valid mask), then Sobel.
+cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
+  cv::Mat heights(height, width, CV_64F), valid(height, width, CV_64F);
+  for (int r = 0; r < height; ++r) {
+    for (int col = 0; col < width; ++col) {
+      const double v = z[std::size_t(r) * std::size_t(width) + std::size_t(col)];
+      heights.at<double>(r, col) = std::isfinite(v) ? v : 0.0;
+      valid.at<double>(r, col) = std::isfinite(v) ? 1.0 : 0.0;
+    }
+  }
+  cv::GaussianBlur(heights, heights, cv::Size(), kSlopeSmoothingPx, 0.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(valid, valid, cv::Size(), kSlopeSmoothingPx, 0.0, cv::BORDER_REFLECT);
+  heights /= cv::max(valid, 1e-6);
+  cv::Mat gx, gy, slope;
+  cv::Sobel(heights, gx, CV_64F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::Sobel(heights, gy, CV_64F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::magnitude(gx, gy, slope);
+  return slope;
+}
+
+}  // namespace
 
 FocusResult FocusAccumulator::Finish() const {
   const State& s = *state_;
@@ -236,27 +386,59 @@ FocusResult FocusAccumulator::Finish() const {
   map.size_y = s.height;
   map.dx_mm = s.options.dx_mm;
   map.dy_mm = s.options.dy_mm > 0.0 ? s.options.dy_mm : s.options.dx_mm;
-  map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", window " +
-               std::to_string(s.options.window) + " px, " + std::to_string(n) + " images)";
-  const std::size_t size = s.best.size();
-  map.z_mm.assign(size, kNaN);
-  result.quality.assign(size, 0.0f);
-  result.peak_index = s.index;
-  const bool gaussian = s.options.peak_fit == PeakFit::kGaussian;
-  const float min_quality = static_cast<float>(s.options.min_quality);
+  const std::string windows =
+      s.options.adaptive_window ? "adaptive window 3/5/9 px" : "window " + std::to_string(s.options.window) + " px";
+  map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
+               std::to_string(n) + " images)";
+  const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
+  map.z_mm.assign(size, std::numeric_limits<double>::quiet_NaN());
+  result.u_z_mm.assign(size, kNaN);
+  result.window_px.assign(size, kNaN);
+  result.texture = s.texture;
+  const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
+
+  std::vector<WindowHeights> heights;
+  for (const WindowCurves& c : s.windows) heights.push_back(FitPeaks(c, s.z, s.options, s.width, s.height));
+  const WindowCurves& last = s.windows.back();
+  result.quality = heights.back().quality;
+  result.peak_index = s.windows.size() > 1 ? s.windows[1].index : last.index;
+  const cv::Mat slope = SlopePerPixel(heights.back().z, s.width, s.height);
+
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
-    for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
-      const float mean = s.sum[i] / static_cast<float>(n);
-      const float quality = mean > 0.0f ? s.best[i] / mean : 0.0f;
-      result.quality[i] = quality;
-      const int k = s.index[i];
-      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z.
-      if (k == 0 || k == n - 1 || !(quality >= min_quality)) continue;
-      double f0 = s.left[i], f1 = s.best[i], f2 = s.right[i];
-      if (gaussian && f0 > 0.0 && f2 > 0.0) {
-        f0 = std::log(f0), f1 = std::log(f1), f2 = std::log(f2);
+    for (int r = r0; r < r1; ++r) {
+      for (int col = 0; col < s.width; ++col) {
+        const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
+        const double g = slope.at<double>(r, col);  // mm per px
+        double z = kNaN, u_noise = 0.0, window = 0.0;
+        // The largest window's quality decides validity: its peak over mean is the least noisy, and a small
+        // window's noise peak on a texture-free spot must not pass for a height.
+        if (!(result.quality[i] >= s.options.min_quality)) continue;
+        if (s.windows.size() == 1) {
+          z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
+        } else {
+          // The largest window whose half-width spans at most half a step of height; else the mean of the
+          // smaller two (their errors on a wall are partly independent textures' weights).
+          const std::size_t large = heights.size() - 1;
+          if (g * (s.windows[large].window / 2) <= kSpreadLimitSteps * step && std::isfinite(heights[large].z[i])) {
+            z = heights[large].z[i], u_noise = heights[large].u[i], window = s.windows[large].window;
+          } else if (g * (s.windows[1].window / 2) <= kSpreadLimitSteps * step || !std::isfinite(heights[0].z[i])) {
+            z = heights[1].z[i], u_noise = heights[1].u[i], window = s.windows[1].window;
+          } else if (!std::isfinite(heights[1].z[i])) {
+            z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
+          } else {
+            z = 0.5 * (heights[0].z[i] + heights[1].z[i]);
+            u_noise = 0.5 * std::hypot(heights[0].u[i], heights[1].u[i]);
+            window = 0.5 * (s.windows[0].window + s.windows[1].window);
+          }
+        }
+        if (!std::isfinite(z)) continue;
+        map.z_mm[i] = z;
+        result.window_px[i] = static_cast<float>(window);
+        // The model's part: the interpolation between images (a fraction of the step) and the heights mixed
+        // in the window on a slope (a fraction of the height spread over the window).
+        const double u_step = kStepFraction * step, u_slope = kSlopeFraction * g * window;
+        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_step * u_step + u_slope * u_slope));
       }
-      map.z_mm[i] = static_cast<float>(Vertex(s.z[k - 1], s.z[k], s.z[k + 1], f0, f1, f2));
     }
   });
   return result;
