@@ -47,9 +47,11 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 // The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
 // of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
 // the step the interpolation leaves, the share of the height spread in the window.
-constexpr double kNoiseScale = 1.0;
+constexpr double kNoiseScale = 0.2;
+constexpr double kFloorShare = 1.0;
 constexpr double kStepFraction = 0.03;
-constexpr double kSlopeFraction = 0.1;
+constexpr double kScatterScale = 1.35;
+constexpr int kScatterWindowPx = 9;
 
 // The measure per pixel before it is averaged over a window: the modified Laplacian or the gradient energy; for
 // the variance the grey levels themselves (shifted by the band's mean: E[I^2] - E[I]^2 in float loses
@@ -172,14 +174,17 @@ void FocusVariationOptions::Check() const {
 // floor), and the previous image's measure.
 struct WindowCurves {
   int window = 5;
-  std::vector<float> best, left, right, sum, floor, previous;
+  std::vector<float> best, left2, left, right, right2, sum, floor, previous2, previous;
   std::vector<std::int32_t> index;
 
   void Reset(int w, std::size_t n) {
     window = w;
     best.assign(n, 0.0f);
+    left2.assign(n, kNaN);
     left.assign(n, kNaN);
     right.assign(n, kNaN);
+    right2.assign(n, kNaN);
+    previous2.assign(n, kNaN);
     sum.assign(n, 0.0f);
     floor.assign(n, std::numeric_limits<float>::max());
     previous.assign(n, kNaN);
@@ -270,15 +275,19 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
           const std::size_t i = row + std::size_t(col);
           const float v = row_m[col];
           if (c.index[i] == k - 1) c.right[i] = v;
+          if (c.index[i] == k - 2) c.right2[i] = v;
           if (k == 0 || v > c.best[i]) {
             c.best[i] = v;
             c.index[i] = k;
+            c.left2[i] = c.previous2[i];
             c.left[i] = c.previous[i];
             c.right[i] = kNaN;
+            c.right2[i] = kNaN;
             if (row_g) s.texture[i] = row_g[col];
           }
           c.sum[i] += v;
           c.floor[i] = std::min(c.floor[i], v);
+          c.previous2[i] = c.previous[i];
           c.previous[i] = v;
         }
       }
@@ -296,6 +305,41 @@ struct WindowHeights {
   std::vector<double> u;      // mm, the noise part of the uncertainty
   std::vector<float> quality;
 };
+
+// The vertex of the parabola fitted by weighted least squares through the transformed measures P = f^power
+// (power < 0: P is smallest at the peak) of the best image k and up to two images on either side. Each point is
+// weighted by 1 / var(P) ~ f^(2 - 2 power) for a measure of constant noise, so that the points near the floor
+// of a narrow focus curve, where the transform blows the noise up, barely count: a narrow curve is fitted by
+// its three top points, a wide one (small aperture, fine steps) by five. Stays between the best image's
+// neighbours; z (mm) of the images, NaN measures (beyond the stack) left out.
+double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power) {
+  for (double& v : f) v -= floor;
+  const double z1 = z[std::size_t(k)];
+  const double scale = std::abs(z[std::size_t(k) + 1] - z[std::size_t(k) - 1]) / 2.0;
+  double a[3][3] = {}, b[3] = {};
+  for (int j = 0; j < 5; ++j) {
+    const int image = k + j - 2;
+    if (!(f[std::size_t(j)] > 0.0) || image < 0 || image >= int(z.size())) continue;
+    const double ratio = f[std::size_t(j)] / f[2];
+    const double weight = std::pow(ratio, 2.0 - 2.0 * power);
+    const double u = (z[std::size_t(image)] - z1) / scale;
+    const double p = std::pow(ratio, power);
+    const double phi[3] = {1.0, u, u * u};
+    for (int r = 0; r < 3; ++r) {
+      b[r] += weight * phi[r] * p;
+      for (int q = 0; q < 3; ++q) a[r][q] += weight * phi[r] * phi[q];
+    }
+  }
+  cv::Matx33d m(a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2]);
+  cv::Vec3d coefficients;
+  if (!cv::solve(m, cv::Vec3d(b[0], b[1], b[2]), coefficients, cv::DECOMP_LU) || !(coefficients[2] > 0.0)) {
+    return z1;
+  }
+  const double u = std::clamp(-coefficients[1] / (2.0 * coefficients[2]), -1.0, 1.0);
+  const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  const double hi = std::max(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  return std::clamp(z1 + u * scale, lo, hi);
+}
 
 WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
                        int width, int height) {
@@ -316,30 +360,22 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       const int k = c.index[i];
       // A peak at either end may lie beyond the stack: its height is unknown, not the end's z.
       if (k == 0 || k == n - 1 || !(quality >= min_quality)) continue;
-      const std::array<double, 3> f = {c.left[i], c.best[i], c.right[i]};
-      const auto vertex = [&](std::array<double, 3> g) {
-        switch (options.peak_fit) {
-          case PeakFit::kPower:
-            if (g[0] > 0.0 && g[2] > 0.0) {
-              for (double& v : g) v = -std::pow(v, power);
-            }
-            break;
-          case PeakFit::kGaussian:
-            if (g[0] > 0.0 && g[2] > 0.0) {
-              for (double& v : g) v = std::log(v);
-            }
-            break;
-          case PeakFit::kParabolic:
-            break;
+      const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
+      const auto vertex = [&](const std::array<double, 5>& g) {
+        if (options.peak_fit == PeakFit::kPower) return PowerVertex(z, k, g, kFloorShare * c.floor[i], power);
+        std::array<double, 3> h = {g[1], g[2], g[3]};
+        if (options.peak_fit == PeakFit::kGaussian && h[0] > 0.0 && h[2] > 0.0) {
+          for (double& v : h) v = std::log(v);
         }
-        return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], g[0], g[1], g[2]);
+        return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
       };
       const double z0 = vertex(f);
       out.z[i] = z0;
       const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
       double variance = 0.0;
-      for (std::size_t j = 0; j < 3; ++j) {
-        std::array<double, 3> g = f;
+      for (std::size_t j = 0; j < 5; ++j) {
+        if (!std::isfinite(f[j])) continue;
+        std::array<double, 5> g = f;
         g[j] += sigma;
         const double d = vertex(g) - z0;
         variance += d * d;
@@ -352,8 +388,10 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
 
 // The local slope (height change per pixel, mm) of a map with holes: a Gaussian average over the valid points
 // only (the blur of the heights over the blur of the valid mask), then Sobel.
-cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
-  cv::Mat heights(height, width, CV_64F), valid(height, width, CV_64F);
+// A map with holes as heights (0 in the holes) and a mask of its valid points.
+void SplitValid(const std::vector<double>& z, int width, int height, cv::Mat& heights, cv::Mat& valid) {
+  heights.create(height, width, CV_64F);
+  valid.create(height, width, CV_64F);
   for (int r = 0; r < height; ++r) {
     for (int col = 0; col < width; ++col) {
       const double v = z[std::size_t(r) * std::size_t(width) + std::size_t(col)];
@@ -361,9 +399,37 @@ cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
       valid.at<double>(r, col) = std::isfinite(v) ? 1.0 : 0.0;
     }
   }
-  cv::GaussianBlur(heights, heights, cv::Size(), kSlopeSmoothingPx, 0.0, cv::BORDER_REFLECT);
-  cv::GaussianBlur(valid, valid, cv::Size(), kSlopeSmoothingPx, 0.0, cv::BORDER_REFLECT);
-  heights /= cv::max(valid, 1e-6);
+}
+
+// The local mean of a map with holes: a Gaussian average over the valid points only (the blur of the heights
+// over the blur of the valid mask).
+cv::Mat SmoothValid(const cv::Mat& heights, const cv::Mat& valid, double sigma_px) {
+  cv::Mat sum, weight;
+  cv::GaussianBlur(heights, sum, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(valid, weight, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  return sum / cv::max(weight, 1e-6);
+}
+
+// The rms of the heights about their smooth local mean, over a window around each valid point.
+cv::Mat LocalScatter(const std::vector<double>& z, int width, int height) {
+  cv::Mat heights, valid;
+  SplitValid(z, width, height, heights, valid);
+  cv::Mat residual = heights - SmoothValid(heights, valid, kSlopeSmoothingPx);
+  residual = residual.mul(residual).mul(valid);
+  cv::Mat sum, count;
+  const cv::Size box(kScatterWindowPx, kScatterWindowPx);
+  cv::boxFilter(residual, sum, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  cv::boxFilter(valid, count, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  cv::Mat scatter;
+  cv::sqrt(sum / cv::max(count, 1.0), scatter);
+  return scatter;
+}
+
+// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean.
+cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
+  cv::Mat heights, valid;
+  SplitValid(z, width, height, heights, valid);
+  heights = SmoothValid(heights, valid, kSlopeSmoothingPx);
   cv::Mat gx, gy, slope;
   cv::Sobel(heights, gx, CV_64F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
   cv::Sobel(heights, gy, CV_64F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
@@ -436,11 +502,23 @@ FocusResult FocusAccumulator::Finish() const {
         result.window_px[i] = static_cast<float>(window);
         // The model's part: the interpolation between images (a fraction of the step) and the heights mixed
         // in the window on a slope (a fraction of the height spread over the window).
-        const double u_step = kStepFraction * step, u_slope = kSlopeFraction * g * window;
-        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_step * u_step + u_slope * u_slope));
+        result.u_z_mm[i] = static_cast<float>(u_noise);
       }
     }
   });
+  // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
+  // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
+  // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
+  const cv::Mat scatter = LocalScatter(map.z_mm, s.width, s.height);
+  for (int r = 0; r < s.height; ++r) {
+    for (int col = 0; col < s.width; ++col) {
+      const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
+      if (!std::isfinite(map.z_mm[i])) continue;
+      const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter.at<double>(r, col);
+      const double u_step = kStepFraction * step;
+      result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step));
+    }
+  }
   return result;
 }
 
