@@ -30,7 +30,7 @@ cv::Mat WrapPixels(const StackImageView& image) {
         using T = typename decltype(span)::element_type;
         const int type = std::is_same_v<T, const std::uint8_t> ? CV_8U : std::is_same_v<T, const std::uint16_t> ? CV_16U : CV_32F;
         // OpenCV never writes through this header; it only lacks a const Mat type.
-        return cv::Mat(image.height, image.width, type, const_cast<void*>(static_cast<const void*>(span.data())));
+        return cv::Mat(image.height, image.width, CV_MAKETYPE(type, image.channels), const_cast<void*>(static_cast<const void*>(span.data())));
       },
       image.pixels);
 }
@@ -197,7 +197,8 @@ struct FocusAccumulator::State {
   int width = 0, height = 0;
   std::vector<double> z;
   std::vector<WindowCurves> windows;
-  std::vector<float> texture;  // the grey level at the best image of the first window
+  std::vector<float> texture;  // the all-in-focus pixels: their values in the first window's best image
+  int texture_channels = 1;
 };
 
 FocusAccumulator::FocusAccumulator(const FocusVariationOptions& options) : state_(std::make_unique<State>()) {
@@ -209,12 +210,24 @@ FocusAccumulator::~FocusAccumulator() = default;
 
 int FocusAccumulator::count() const { return static_cast<int>(state_->z.size()); }
 
-void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string_view name) {
+void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string_view name,
+                           const StackImageView* colour) {
   State& s = *state_;
   const int k = count();
   const std::string what = Describe(name, k);
-  if (image.width <= 0 || image.height <= 0 || PixelCount(image) != std::size_t(image.width) * std::size_t(image.height)) {
-    throw InputError(what + ": empty image or pixel count that does not match its size");
+  if (image.width <= 0 || image.height <= 0 || image.channels != 1 ||
+      PixelCount(image) != std::size_t(image.width) * std::size_t(image.height)) {
+    throw InputError(what + ": empty image, not one grey channel, or a pixel count that does not match its size");
+  }
+  const StackImageView& texture = colour ? *colour : image;
+  if (texture.width != image.width || texture.height != image.height ||
+      (texture.channels != 1 && texture.channels != 3) ||
+      PixelCount(texture) != std::size_t(image.width) * std::size_t(image.height) * std::size_t(texture.channels)) {
+    throw InputError(what + ": the colour image differs in size from the grey one or has not 1 or 3 channels");
+  }
+  if (k > 0 && texture.channels != s.texture_channels) {
+    throw InputError(what + ": " + std::to_string(texture.channels) + " colour channel(s), unlike the first image's " +
+                     std::to_string(s.texture_channels));
   }
   if (!std::isfinite(z_mm)) throw InputError(what + ": the z position is not a finite number");
   if (k == 0) {
@@ -232,7 +245,8 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     } else {
       s.windows.emplace_back().Reset(s.options.window, n);
     }
-    s.texture.assign(n, 0.0f);
+    s.texture_channels = texture.channels;
+    s.texture.assign(n * std::size_t(texture.channels), 0.0f);
   } else {
     if (image.width != s.width || image.height != s.height) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -252,7 +266,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   }
   s.z.push_back(z_mm);
 
-  const cv::Mat pixels = WrapPixels(image);
+  const cv::Mat pixels = WrapPixels(image), texture_pixels = WrapPixels(texture);
   int largest = 0;
   for (const WindowCurves& c : s.windows) largest = std::max(largest, c.window);
   // Derivative (1 px) plus box half-width: beyond that, a band's edge does not reach the rows it keeps.
@@ -265,11 +279,12 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     for (std::size_t w = 0; w < s.windows.size(); ++w) {
       WindowCurves& c = s.windows[w];
       const cv::Mat m = WindowMeasure(per_pixel, measure, c.window);
-      cv::Mat grey;
-      if (w == 0) band.convertTo(grey, CV_32F);
+      cv::Mat values;
+      if (w == 0) texture_pixels.rowRange(b0, b1).convertTo(values, CV_MAKETYPE(CV_32F, texture.channels));
+      const std::size_t channels = std::size_t(texture.channels);
       for (int r = r0; r < r1; ++r) {
         const float* row_m = m.ptr<float>(r - b0);
-        const float* row_g = w == 0 ? grey.ptr<float>(r - b0) : nullptr;
+        const float* row_g = w == 0 ? values.ptr<float>(r - b0) : nullptr;
         const std::size_t row = std::size_t(r) * std::size_t(s.width);
         for (int col = 0; col < s.width; ++col) {
           const std::size_t i = row + std::size_t(col);
@@ -283,7 +298,9 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
             c.left[i] = c.previous[i];
             c.right[i] = kNaN;
             c.right2[i] = kNaN;
-            if (row_g) s.texture[i] = row_g[col];
+            if (row_g) {
+              std::copy_n(row_g + std::size_t(col) * channels, channels, s.texture.begin() + std::ptrdiff_t(i * channels));
+            }
           }
           c.sum[i] += v;
           c.floor[i] = std::min(c.floor[i], v);
@@ -461,6 +478,7 @@ FocusResult FocusAccumulator::Finish() const {
   result.u_z_mm.assign(size, kNaN);
   result.window_px.assign(size, kNaN);
   result.texture = s.texture;
+  result.texture_channels = s.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
 
   std::vector<WindowHeights> heights;

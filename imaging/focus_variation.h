@@ -68,7 +68,10 @@ struct FocusResult {
   std::vector<float> quality;  // peak over mean measure per pixel (row-major, same grid); 0 where flat
   std::vector<std::int32_t> peak_index;  // the image with the largest measure per pixel
   std::vector<float> window_px;
-  std::vector<float> texture;    // the all-in-focus image: each pixel's grey level in its sharpest image  // the window each height comes from (the mean of two where two are averaged)
+  // The all-in-focus image: each pixel as it is in the image where its neighbourhood is sharpest (the 3 px
+  // window's peak), texture_channels values per pixel (1 grey or 3 colour, interleaved), in the images' scale.
+  std::vector<float> texture;
+  int texture_channels = 1;  // the window each height comes from (the mean of two where two are averaged)
 };
 
 // Takes the images of a stack in order. Not thread-safe itself; it parallelises each image over rows.
@@ -82,7 +85,10 @@ class FocusAccumulator {
   // Throws InputError (naming `name`, else the image's index) when the image is empty, differs in size from the
   // first one, is smaller than the window, or its z is not beyond the previous one in the stack's direction
   // (z must be strictly increasing or strictly decreasing: repeated or unsorted positions are refused).
-  void Add(const StackImageView& image, double z_mm, std::string_view name = {});
+  // `colour`, when given (same size, 1 or 3 channels), is what the all-in-focus image is made of; else the
+  // grey image itself.
+  void Add(const StackImageView& image, double z_mm, std::string_view name = {},
+           const StackImageView* colour = nullptr);
   int count() const;
 
   // Throws InputError for a stack of fewer than 3 images (a peak needs a neighbour on either side).
