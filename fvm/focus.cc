@@ -32,6 +32,7 @@ struct FocusArgs {
   std::vector<std::string> stack;
   std::optional<double> z_step_mm;
   bool align = false;
+  bool keep_end_peaks = false;
   std::string texture_output;
   std::string uncertainty_output;
   std::string output;
@@ -78,6 +79,7 @@ void RunFocus(const FocusArgs& args) {
   options.adaptive_window = args.window == 0;
   if (args.window != 0) options.window = args.window;
   options.min_quality = args.min_quality;
+  options.keep_end_peaks = args.keep_end_peaks;
   options.dx_mm = args.pixel_mm;
   options.Check();
   // Before any work: an output we could not write should not cost the whole stack's reading.
@@ -205,6 +207,10 @@ void RegisterFocus(CLI::App& app) {
                 "register each image to its neighbour (enhanced correlation, affine) and resample it into the "
                 "first image's frame, for a lens that breathes or a camera that shifts. Example: fvm focus "
                 "frames/ -o h.tif --align --texture sharp.png");
+  sub->add_flag("--keep-end-peaks", args->keep_end_peaks,
+                "give pixels sharpest in the first or last image that image's z (u_z one step) instead of leaving "
+                "them invalid, for a stack that ends on the scene's nearest and farthest parts. Example: fvm focus "
+                "frames/ -o h.tif --align --keep-end-peaks");
   sub->add_option("--texture", args->texture_output,
                   "also write the all-in-focus image (.png, .tif, .jpg; colour when the images are). "
                   "Example: --texture sharp.png");

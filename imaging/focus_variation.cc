@@ -375,8 +375,14 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       const float quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
       out.quality[i] = quality;
       const int k = c.index[i];
-      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z.
-      if (k == 0 || k == n - 1 || !(quality >= min_quality)) continue;
+      if (!(quality >= min_quality)) continue;
+      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user
+      // asks for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step
+      // of uncertainty.
+      if (k == 0 || k == n - 1) {
+        if (options.keep_end_peaks) out.z[i] = z[std::size_t(k)], out.u[i] = std::abs(z[1] - z[0]);
+        continue;
+      }
       const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
       const auto vertex = [&](const std::array<double, 5>& g) {
         if (options.peak_fit == PeakFit::kPower) return PowerVertex(z, k, g, kFloorShare * c.floor[i], power);

@@ -52,6 +52,9 @@ struct FocusVariationOptions {
   // times its mean over a stack of ~30 images (the largest of N noisy samples); a textured surface in focus has
   // several times that.
   double min_quality = 2.0;
+  // A peak on the first or last image: invalid (the surface may lie beyond the stack), or, when kept, the end
+  // image's z with a step of uncertainty (for stacks that end on the nearest and farthest parts of the scene).
+  bool keep_end_peaks = false;
   double dx_mm = 0.001;  // pixel size of the height map (the camera pixel on the object)
   double dy_mm = 0.0;    // 0: same as dx
   bool parallel = true;  // stripes of rows on OpenCV's thread pool; false: one thread (the benchmark's baseline)
