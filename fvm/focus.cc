@@ -149,6 +149,7 @@ void RunFocus(const FocusArgs& args) {
     out["z_unit"] = unit;
     out["u_z_median"] = stats.valid_points > 0 ? nlohmann::ordered_json(median_u) : nlohmann::ordered_json();
     out["aligned"] = args.align;
+    out["unregistered_images"] = read.unregistered;
     out["median_quality"] = median_quality;
     out["median_quality_valid"] = median_valid_quality;
     out["measure"] = imaging::FocusMeasureName(options.measure);
@@ -163,6 +164,10 @@ void RunFocus(const FocusArgs& args) {
   fmt::print("  measure        {}, window {}, min quality {:g}\n", imaging::FocusMeasureName(options.measure),
              options.adaptive_window ? std::string("adaptive 3/5/9 px") : fmt::format("{} px", options.window),
              options.min_quality);
+  if (read.unregistered > 0) {
+    fmt::print("  alignment      {} image(s) shared no sharp texture with their neighbour: kept its place\n",
+               read.unregistered);
+  }
   fmt::print("  grid           {} x {} points, {:g} um pixels\n", map.size_x, map.size_y, map.dx_mm * 1e3);
   fmt::print("  valid points   {} of {} ({:.2f} %)\n", stats.valid_points, points,
              points > 0 ? 100.0 * double(stats.valid_points) / double(points) : 0.0);

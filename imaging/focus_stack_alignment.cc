@@ -17,6 +17,7 @@ namespace {
 // Registration runs on a copy at most this wide: breathing and shifts are smooth over the image, and the
 // enhanced correlation's cost grows with the pixels.
 constexpr int kRegistrationWidth = 800;
+constexpr double kRegistrationBlurPx = 3.0;
 
 int CvDepth(const StackImageView& image) {
   return std::visit(
@@ -46,6 +47,8 @@ FrameTransform FocusStackAligner::Register(const StackImageView& grey) {
   cv::Mat small;
   image.convertTo(small, CV_32F);
   if (scale < 1.0) cv::resize(small, small, cv::Size(), scale, scale, cv::INTER_AREA);
+  // Neighbours differ in focus: smoothed alike, their sharp and blurred parts correlate.
+  cv::GaussianBlur(small, small, cv::Size(), kRegistrationBlurPx, 0.0, cv::BORDER_REFLECT);
   const int index = count_++;
   if (index == 0) {
     width_ = grey.width, height_ = grey.height;
@@ -60,11 +63,13 @@ FrameTransform FocusStackAligner::Register(const StackImageView& grey) {
     try {
       cv::findTransformECC(previous, small, warp, cv::MOTION_AFFINE,
                            cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-6), cv::noArray(),
-                           5);
+                           1);
     } catch (const cv::Exception&) {
-      throw InputError("image " + std::to_string(index + 1) +
-                       " of the stack: cannot align it to the previous image (too little common texture); "
-                       "leave out alignment if the stack does not move");
+      // No common sharp texture (both images far out of focus, or a texture-free scene): the image is taken
+      // where the previous one was, and counted.
+      ++unregistered_;
+      previous_.assign(small.ptr<float>(), small.ptr<float>() + small.total());
+      return from_first_;
     }
     // The map from the previous image into this one, at full resolution: S^-1 W S with S the scaling.
     cv::Matx33d w(warp.at<float>(0, 0), warp.at<float>(0, 1), warp.at<float>(0, 2), warp.at<float>(1, 0),

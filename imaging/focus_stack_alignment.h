@@ -20,16 +20,18 @@ using FrameTransform = std::array<double, 6>;
 class FocusStackAligner {
  public:
   // Registers `grey` (one channel) to the previous image given, and returns the map from the first image into
-  // this one. The first image gets the identity. Throws InputError naming the image when the registration
-  // does not converge (the images share too little texture).
+  // this one. The first image gets the identity. Where the registration does not converge (the two images share
+  // no sharp texture: both far out of focus, or a texture-free scene) the image keeps the previous one's map and
+  // is counted in unregistered(). Throws InputError for an image of another size.
   FrameTransform Register(const StackImageView& grey);
+  int unregistered() const { return unregistered_; }
 
   // The image resampled into the first image's frame (bilinear; pixels outside it repeat the edge).
   static StackImage Warp(const StackImageView& image, const FrameTransform& from_first);
 
  private:
   std::vector<float> previous_;  // the previous image, grey, at the registration's scale
-  int width_ = 0, height_ = 0, count_ = 0;
+  int width_ = 0, height_ = 0, count_ = 0, unregistered_ = 0;
   FrameTransform from_first_{1, 0, 0, 0, 1, 0};
 };
 

@@ -63,8 +63,9 @@ FocusStackFilesResult ReconstructFocusStackFiles(const std::vector<FocusStackEnt
   FocusStackAligner aligner;
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const FocusStackEntry& entry = entries[k];
-    const std::string where = entry.line > 0 ? entry.file.string() + " (line " + std::to_string(entry.line) + ")"
-                                             : entry.file.string();
+    // A list's images are named by the list's line (and the file), as the user wrote them.
+    const std::string line = entry.list.empty() ? "" : entry.list.string() + ":" + std::to_string(entry.line);
+    const std::string where = line.empty() ? entry.file.string() : line + " (" + entry.file.string() + ")";
     try {
       StackImage grey = ReadStackImage(entry.file);
       StackImage colour;
@@ -85,10 +86,12 @@ FocusStackFilesResult ReconstructFocusStackFiles(const std::vector<FocusStackEnt
       accumulator.Add(grey.View(), entry.z_mm, where, options.colour ? &colour_view : nullptr);
     } catch (const InputError& e) {
       const std::string message = e.what();
-      throw InputError(message.rfind(entry.file.string(), 0) == 0 ? message : where + ": " + message);
+      if (!line.empty() && message.rfind(where, 0) != 0) throw InputError(line + ": " + message);
+      throw;
     }
     if (on_image) on_image();
   }
+  out.unregistered = aligner.unregistered();
   out.focus = accumulator.Finish();
   return out;
 }

@@ -31,6 +31,7 @@ struct FocusStackFilesOptions {
 struct FocusStackFilesResult {
   FocusResult focus;
   std::vector<FrameTransform> alignment;  // per image, when aligned: the first image's pixels in this one
+  int unregistered = 0;                   // images aligned as their neighbour (no common sharp texture)
   bool eight_bit = true;                  // the images (so the all-in-focus image) are 8-bit
 };
 

@@ -56,7 +56,7 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
                             " mm is out of order; list the images by increasing or decreasing z");
       }
     }
-    entries.push_back({file, z, row.line});
+    entries.push_back({file, z, row.line, list});
   }
   if (entries.size() < 3) {
     throw InputError(list.string() + ": " + std::to_string(entries.size()) +
@@ -152,7 +152,7 @@ std::vector<FocusStackEntry> FocusStackFromImages(const std::vector<std::filesys
   }
   if (!(step_mm != 0.0) || !std::isfinite(step_mm)) throw InputError("the z step must be a finite non-zero number");
   std::vector<FocusStackEntry> entries;
-  for (std::size_t i = 0; i < paths.size(); ++i) entries.push_back({paths[i], double(i) * step_mm, 0});
+  for (std::size_t i = 0; i < paths.size(); ++i) entries.push_back({paths[i], double(i) * step_mm, 0, {}});
   return entries;
 }
 

@@ -13,6 +13,7 @@ struct FocusStackEntry {
   std::filesystem::path file;  // relative paths in the list are resolved against the list's directory
   double z_mm = 0.0;
   int line = 0;  // in the list, for errors
+  std::filesystem::path list{};  // the list that names the image; empty for images named directly
 };
 
 // Throws InputError naming the list and line for a missing header, a row without a file or a number, a z that

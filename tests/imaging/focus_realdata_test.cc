@@ -51,7 +51,12 @@ double MeanTenengrad(const imaging::StackImage& image, int border) {
 TEST(FocusRealData, PcbAllInFocusAndDepth) {
   if (!std::filesystem::exists(kStack / "pcb_001.jpg")) GTEST_SKIP() << kStack << " is absent";
   std::vector<std::filesystem::path> frames;
-  for (int k = 1; k <= 7; ++k) frames.push_back(kStack / ("pcb_00" + std::to_string(k) + ".jpg"));
+  for (int k = 1; k <= 7; ++k) {
+    std::string name = "pcb_00";  // appended, not `"pcb_00" + ...`: GCC 12 warns falsely (-Wrestrict) on that
+    name += std::to_string(k);
+    name += ".jpg";
+    frames.push_back(kStack / name);
+  }
   imaging::FocusStackFilesOptions o;
   o.align = true;
   o.colour = true;
