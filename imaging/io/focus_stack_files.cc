@@ -25,6 +25,27 @@ bool IsImage(const std::filesystem::path& path) {
   return kImages.count(ext) > 0;
 }
 
+// The mean of the channels, as float.
+StackImage GreyOf(const StackImage& colour) {
+  StackImage grey;
+  grey.width = colour.width;
+  grey.height = colour.height;
+  const std::size_t n = std::size_t(colour.width) * std::size_t(colour.height);
+  const std::size_t channels = std::size_t(colour.channels);
+  std::vector<float> pixels(n);
+  std::visit(
+      [&](const auto& v) {
+        for (std::size_t i = 0; i < n; ++i) {
+          float sum = 0.0f;
+          for (std::size_t c = 0; c < channels; ++c) sum += static_cast<float>(v[i * channels + c]);
+          pixels[i] = sum / static_cast<float>(channels);
+        }
+      },
+      colour.pixels);
+  grey.pixels = std::move(pixels);
+  return grey;
+}
+
 }  // namespace
 
 std::vector<FocusStackEntry> ResolveFocusStack(const std::vector<std::filesystem::path>& inputs,
@@ -67,9 +88,9 @@ FocusStackFilesResult ReconstructFocusStackFiles(const std::vector<FocusStackEnt
     const std::string line = entry.list.empty() ? "" : entry.list.string() + ":" + std::to_string(entry.line);
     const std::string where = line.empty() ? entry.file.string() : line + " (" + entry.file.string() + ")";
     try {
-      StackImage grey = ReadStackImage(entry.file);
-      StackImage colour;
-      if (options.colour) colour = ReadStackColour(entry.file);
+      // One decode per file: with colour, the grey image is its channels' mean.
+      StackImage colour = options.colour ? ReadStackColour(entry.file) : StackImage{};
+      StackImage grey = options.colour ? GreyOf(colour) : ReadStackImage(entry.file);
       if (k == 0) {
         const StackImage& texture = options.colour ? colour : grey;
         out.eight_bit = std::holds_alternative<std::vector<std::uint8_t>>(texture.pixels);
