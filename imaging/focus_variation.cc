@@ -329,33 +329,66 @@ struct WindowHeights {
 // of a narrow focus curve, where the transform blows the noise up, barely count: a narrow curve is fitted by
 // its three top points, a wide one (small aperture, fine steps) by five. Stays between the best image's
 // neighbours; z (mm) of the images, NaN measures (beyond the stack) left out.
-double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power) {
+//
+// With `u_noise`, also the vertex's standard deviation when each measure carries noise `sigma`: the change of
+// the vertex when one measure moves by sigma, linearised in the transform (dP = power P sigma / f), summed in
+// quadrature over the points.
+double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
+                   double sigma = 0.0, double* u_noise = nullptr) {
   for (double& v : f) v -= floor;
   const double z1 = z[std::size_t(k)];
+  if (u_noise) *u_noise = 0.0;
+  if (!(f[2] > 0.0)) return z1;
   const double scale = std::abs(z[std::size_t(k) + 1] - z[std::size_t(k) - 1]) / 2.0;
-  double a[3][3] = {}, b[3] = {};
+  const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  const double hi = std::max(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  // Normal equations of the weighted fit P = c0 + c1 u + c2 u^2: sums of w u^n (n = 0..4) and w P u^n (0..2).
+  double s[5] = {}, t[3] = {};
+  double weight[5] = {}, u[5] = {}, p[5] = {};
   for (int j = 0; j < 5; ++j) {
     const int image = k + j - 2;
     if (!(f[std::size_t(j)] > 0.0) || image < 0 || image >= int(z.size())) continue;
     const double ratio = f[std::size_t(j)] / f[2];
-    const double weight = std::pow(ratio, 2.0 - 2.0 * power);
-    const double u = (z[std::size_t(image)] - z1) / scale;
-    const double p = std::pow(ratio, power);
-    const double phi[3] = {1.0, u, u * u};
-    for (int r = 0; r < 3; ++r) {
-      b[r] += weight * phi[r] * p;
-      for (int q = 0; q < 3; ++q) a[r][q] += weight * phi[r] * phi[q];
+    p[j] = std::pow(ratio, power);
+    weight[j] = ratio * ratio / (p[j] * p[j]);  // ratio^(2 - 2 power)
+    u[j] = (z[std::size_t(image)] - z1) / scale;
+    double un = weight[j];
+    for (int n = 0; n < 5; ++n, un *= u[j]) {
+      s[n] += un;
+      if (n < 3) t[n] += un * p[j];
     }
   }
-  cv::Matx33d m(a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2]);
-  cv::Vec3d coefficients;
-  if (!cv::solve(m, cv::Vec3d(b[0], b[1], b[2]), coefficients, cv::DECOMP_LU) || !(coefficients[2] > 0.0)) {
-    return z1;
+  // Cramer's rule on [[s0 s1 s2] [s1 s2 s3] [s2 s3 s4]] (c0 c1 c2) = (t0 t1 t2): the vertex -c1 / (2 c2) needs
+  // only the determinants of the matrix with its second and third columns replaced, and their signs the main one.
+  const double det = s[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (s[1] * s[4] - s[3] * s[2]) +
+                     s[2] * (s[1] * s[3] - s[2] * s[2]);
+  if (!(std::abs(det) > 0.0)) return z1;
+  const auto solve = [&](const double* tt, double& vertex) {
+    const double det1 = s[0] * (tt[1] * s[4] - s[3] * tt[2]) - tt[0] * (s[1] * s[4] - s[3] * s[2]) +
+                        s[2] * (s[1] * tt[2] - tt[1] * s[2]);
+    const double det2 = s[0] * (s[2] * tt[2] - tt[1] * s[3]) - s[1] * (s[1] * tt[2] - tt[1] * s[2]) +
+                        tt[0] * (s[1] * s[3] - s[2] * s[2]);
+    if (!(det2 / det > 0.0)) return false;  // no minimum of P: no peak
+    const double v = std::clamp(-det1 / (2.0 * det2), -1.0, 1.0);
+    if (!std::isfinite(v)) return false;
+    vertex = std::clamp(z1 + v * scale, lo, hi);
+    return true;
+  };
+  double z0 = z1;
+  if (!solve(t, z0)) return z1;
+  if (u_noise) {
+    double variance = 0.0;
+    for (int j = 0; j < 5; ++j) {
+      if (!(weight[j] > 0.0)) continue;
+      const double dp = power * p[j] * sigma / f[std::size_t(j)];
+      double moved[3], un = weight[j] * dp, vertex = z1;
+      for (int n = 0; n < 3; ++n, un *= u[j]) moved[n] = t[n] + un;
+      if (!solve(moved, vertex)) vertex = z1;
+      variance += (vertex - z0) * (vertex - z0);
+    }
+    *u_noise = std::sqrt(variance);
   }
-  const double u = std::clamp(-coefficients[1] / (2.0 * coefficients[2]), -1.0, 1.0);
-  const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
-  const double hi = std::max(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
-  return std::clamp(z1 + u * scale, lo, hi);
+  return z0;
 }
 
 WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
@@ -384,8 +417,15 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
         continue;
       }
       const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
+      const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
+      if (options.peak_fit == PeakFit::kPower) {
+        double u_noise = 0.0;
+        out.z[i] = PowerVertex(z, k, f, kFloorShare * c.floor[i], power, sigma, &u_noise);
+        out.u[i] = u_noise;
+        continue;
+      }
+      // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
       const auto vertex = [&](const std::array<double, 5>& g) {
-        if (options.peak_fit == PeakFit::kPower) return PowerVertex(z, k, g, kFloorShare * c.floor[i], power);
         std::array<double, 3> h = {g[1], g[2], g[3]};
         if (options.peak_fit == PeakFit::kGaussian && h[0] > 0.0 && h[2] > 0.0) {
           for (double& v : h) v = std::log(v);
@@ -394,9 +434,8 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       };
       const double z0 = vertex(f);
       out.z[i] = z0;
-      const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
       double variance = 0.0;
-      for (std::size_t j = 0; j < 5; ++j) {
+      for (std::size_t j = 1; j < 4; ++j) {
         if (!std::isfinite(f[j])) continue;
         std::array<double, 5> g = f;
         g[j] += sigma;
