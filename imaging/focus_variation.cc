@@ -43,7 +43,8 @@ std::size_t PixelCount(const StackImageView& image) {
 constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // The large window is taken where the surface's height changes by at most this many steps over its half-width.
 constexpr double kSpreadLimitSteps = 0.5;
-constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
+constexpr double kSlopeSmoothingPx = 2.0;
+constexpr double kGaussianWindowSigma = 0.3;  // per px of window: 0.9 px for 3, 1.5 px for 5  // sigma of the smoothing of the heights before their slope
 // The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
 // of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
 // the step the interpolation leaves, the share of the height spread in the window.
@@ -92,11 +93,20 @@ const cv::Mat& PixelMeasure(const cv::Mat& band, FocusMeasure measure, Scratch& 
 }
 
 // The focus measure over window x window pixels (float, same size as the band). The band carries a margin of
-// rows beyond the rows that are kept, so that the filters see real neighbours there; at the image's own edges
-// they reflect.
-const cv::Mat& WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure, int window, Scratch& b) {
+// rows beyond the rows that are kept (WindowReach), so that the filters see real neighbours there; at the
+// image's own edges they reflect.
+// `gaussian`: weighted by a Gaussian of sigma 0.3 window instead of evenly (the adaptive mode's wall windows:
+// the centre's own height weighs most, where a box mixes in the heights at its edge as much).
+const cv::Mat& WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure, int window, bool gaussian,
+                             Scratch& b) {
   const cv::Size box(window, window);
-  cv::boxFilter(pixel_measure, b.window, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+  if (gaussian) {
+    const int side = 2 * window + 1;  // +-3.3 sigma
+    cv::GaussianBlur(pixel_measure, b.window, cv::Size(side, side), kGaussianWindowSigma * window, 0.0,
+                     cv::BORDER_REFLECT);
+  } else {
+    cv::boxFilter(pixel_measure, b.window, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+  }
   if (measure == FocusMeasure::kVariance) {
     cv::multiply(pixel_measure, pixel_measure, b.dx);
     cv::boxFilter(b.dx, b.mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
@@ -185,6 +195,7 @@ void FocusVariationOptions::Check() const {
 // floor), and the previous image's measure.
 struct WindowCurves {
   int window = 5;
+  bool gaussian = false;  // Gaussian-weighted window (the adaptive mode's small ones)
   std::vector<float> best, left2, left, right, right2, sum, floor, previous2, previous;
   std::vector<std::int32_t> index;
 
@@ -252,7 +263,11 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     const std::size_t n = std::size_t(s.width) * std::size_t(s.height);
     s.windows.clear();
     if (s.options.adaptive_window) {
-      for (int w : kAdaptiveWindows) s.windows.emplace_back().Reset(w, n);
+      for (int w : kAdaptiveWindows) {
+        WindowCurves& c = s.windows.emplace_back();
+        c.Reset(w, n);
+        c.gaussian = w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1];
+      }
     } else {
       s.windows.emplace_back().Reset(s.options.window, n);
     }
@@ -278,10 +293,10 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   s.z.push_back(z_mm);
 
   const cv::Mat pixels = WrapPixels(image), texture_pixels = WrapPixels(texture);
-  int largest = 0;
-  for (const WindowCurves& c : s.windows) largest = std::max(largest, c.window);
-  // Derivative (1 px) plus box half-width: beyond that, a band's edge does not reach the rows it keeps.
-  const int margin = largest / 2 + 1;
+  // Derivative (1 px) plus the window's half-width (a Gaussian window's kernel reaches one window out):
+  // beyond that, a band's edge does not reach the rows it keeps.
+  int margin = 0;
+  for (const WindowCurves& c : s.windows) margin = std::max(margin, (c.gaussian ? c.window : c.window / 2) + 1);
   const FocusMeasure measure = s.options.measure;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     const int b0 = std::max(0, r0 - margin), b1 = std::min(s.height, r1 + margin);
@@ -290,7 +305,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     const cv::Mat& per_pixel = PixelMeasure(band, measure, scratch);
     for (std::size_t w = 0; w < s.windows.size(); ++w) {
       WindowCurves& c = s.windows[w];
-      const cv::Mat& m = WindowMeasure(per_pixel, measure, c.window, scratch);
+      const cv::Mat& m = WindowMeasure(per_pixel, measure, c.window, c.gaussian, scratch);
       cv::Mat& values = scratch.values;
       if (w == 0) texture_pixels.rowRange(b0, b1).convertTo(values, CV_MAKETYPE(CV_32F, texture.channels));
       const std::size_t channels = std::size_t(texture.channels);
