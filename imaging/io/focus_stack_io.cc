@@ -65,25 +65,40 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
   return entries;
 }
 
-StackImage ReadStackImage(const std::filesystem::path& path) {
+namespace {
+
+// An image file opened for its pixels, its header checked against the file's size, refused unless 2-D.
+std::unique_ptr<ImageFileReader> OpenStackImage(const std::filesystem::path& path) {
   const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
-  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
+  std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) throw InputError(path.string() + ": cannot read the image (" + error + ")");
   const ImageHeader& spec = input->Header();
   CheckPixelsFitFile(path, spec, file_bytes);
   if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.channels < 1) {
     throw InputError(path.string() + ": not a 2D image");
   }
+  return input;
+}
+
+void ReadChannels(ImageFileReader& input, const std::filesystem::path& path, int channels, PixelType type,
+                  void* data) {
+  std::string error;
+  if (!input.ReadPixels(0, channels, type, data, &error) || !error.empty()) {
+    throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
+  }
+}
+
+}  // namespace
+
+StackImage ReadStackImage(const std::filesystem::path& path) {
+  const std::unique_ptr<ImageFileReader> input = OpenStackImage(path);
+  const ImageHeader& spec = input->Header();
   StackImage image;
   image.width = spec.width;
   image.height = spec.height;
   const std::size_t n = std::size_t(spec.width) * std::size_t(spec.height);
-  const auto read = [&](PixelType type, void* data, int channels) {
-    if (!input->ReadPixels(0, channels, type, data, &error) || !error.empty()) {
-      throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
-    }
-  };
+  const auto read = [&](PixelType type, void* data, int channels) { ReadChannels(*input, path, channels, type, data); };
   if (spec.channels == 1 && spec.type == PixelType::kUint8) {
     std::vector<std::uint8_t> pixels(n);
     read(PixelType::kUint8, pixels.data(), 1);
@@ -110,25 +125,14 @@ StackImage ReadStackImage(const std::filesystem::path& path) {
 }
 
 StackImage ReadStackColour(const std::filesystem::path& path) {
-  const std::size_t file_bytes = CheckReadableFile(path);
-  std::string error;
-  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
-  if (!input) throw InputError(path.string() + ": cannot read the image (" + error + ")");
+  const std::unique_ptr<ImageFileReader> input = OpenStackImage(path);
   const ImageHeader& spec = input->Header();
-  CheckPixelsFitFile(path, spec, file_bytes);
-  if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.channels < 1) {
-    throw InputError(path.string() + ": not a 2D image");
-  }
   StackImage image;
   image.width = spec.width;
   image.height = spec.height;
   image.channels = spec.channels >= 3 ? 3 : 1;
   const std::size_t n = std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(image.channels);
-  const auto read = [&](PixelType type, void* data) {
-    if (!input->ReadPixels(0, image.channels, type, data, &error) || !error.empty()) {
-      throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
-    }
-  };
+  const auto read = [&](PixelType type, void* data) { ReadChannels(*input, path, image.channels, type, data); };
   if (spec.type == PixelType::kUint8) {
     std::vector<std::uint8_t> pixels(n);
     read(PixelType::kUint8, pixels.data());

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "artefacts/simulation/focus_stack_render.h"
@@ -154,7 +155,11 @@ INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                                            Case{1.0, 0.7, 0.1, 0.105, 0.7, 1.0},
                                            Case{1.0, 0.5, 0.1, 0.115, 0.85, 1.0},
                                            Case{0.5, 0.9, 0.155, 0.205, 0.75, 1.0},
-                                           Case{2.0, 0.9, 0.375, 0.425, 0.72, 1.0}));
+                                           Case{2.0, 0.9, 0.375, 0.425, 0.72, 1.0}),
+                         [](const auto& info) {
+                           return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
+                                  std::to_string(int(std::lround(info.param.na * 10)));
+                         });
 
 }  // namespace
 }  // namespace fvm
