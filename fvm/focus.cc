@@ -37,7 +37,7 @@ struct FocusArgs {
   std::string uncertainty_output;
   std::string output;
   std::string measure = "laplacian";
-  std::string fit = "gaussian";
+  std::string fit = "power";
   int window = 0;  // 0: adaptive
   double min_quality = 2.0;
   double pixel_mm = 0.001;
@@ -75,7 +75,9 @@ void RunFocus(const FocusArgs& args) {
   const auto measure = imaging::ParseFocusMeasure(args.measure);
   if (!measure) throw InputError("--measure: '" + args.measure + "' is not one of laplacian, tenengrad, variance");
   options.measure = *measure;
-  options.peak_fit = args.fit == "parabolic" ? imaging::PeakFit::kParabolic : imaging::PeakFit::kGaussian;
+  options.peak_fit = args.fit == "parabolic" ? imaging::PeakFit::kParabolic
+                     : args.fit == "gaussian"  ? imaging::PeakFit::kGaussian
+                                               : imaging::PeakFit::kPower;
   options.adaptive_window = args.window == 0;
   if (args.window != 0) options.window = args.window;
   options.min_quality = args.min_quality;
@@ -226,9 +228,12 @@ void RegisterFocus(CLI::App& app) {
   sub->add_option("--measure", args->measure, "focus measure")
       ->check(CLI::IsMember({"laplacian", "tenengrad", "variance"}))
       ->default_str("laplacian");
-  sub->add_option("--fit", args->fit, "sub-step peak interpolation through the best image and its neighbours")
-      ->check(CLI::IsMember({"gaussian", "parabolic"}))
-      ->default_str("gaussian");
+  sub->add_option("--fit", args->fit,
+                  "sub-step peak interpolation: power (a parabola through the measure's -2/p power, up to 2 "
+                  "images either side), gaussian (through its log) or parabolic (through the measure), both "
+                  "through the best image and its neighbours")
+      ->check(CLI::IsMember({"power", "gaussian", "parabolic"}))
+      ->default_str("power");
   sub->add_option("--window-px", args->window, "a fixed focus window, odd number of px (3 to 51); default adaptive")
       ->check(Count(3, 51));
   AddHiddenAlias(sub, "--window", args->window, "--window-px");
