@@ -45,7 +45,9 @@ constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // The large window is taken where the surface's height changes by at most this many steps over its half-width.
 constexpr double kSpreadLimitSteps = 0.5;
 constexpr double kSlopeSmoothingPx = 2.0;
-constexpr double kGaussianWindowSigma = 0.3;  // per px of window: 0.9 px for 3, 1.5 px for 5  // sigma of the smoothing of the heights before their slope
+constexpr double kGaussianWindowSigma = 0.3;
+// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeaks).
+constexpr double kNarrowShare = 0.05;  // per px of window: 0.9 px for 3, 1.5 px for 5  // sigma of the smoothing of the heights before their slope
 // The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
 // of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
 // the step the interpolation leaves, the share of the height spread in the window.
@@ -367,7 +369,12 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       }
       const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
       const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
-      if (options.peak_fit == PeakFit::kPower) {
+      const double floor_i = kFloorShare * c.floor[i];
+      // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
+      // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
+      // through the raw measures does better.
+      const bool narrow = std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
+      if (options.peak_fit == PeakFit::kPower && !narrow) {
         double u_noise = 0.0;
         out.z[i] = PowerVertex(z, k, f, kFloorShare * c.floor[i], power, sigma, &u_noise);
         out.u[i] = u_noise;
@@ -376,7 +383,7 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
       const auto vertex = [&](const std::array<double, 5>& g) {
         std::array<double, 3> h = {g[1], g[2], g[3]};
-        if (options.peak_fit == PeakFit::kGaussian && h[0] > 0.0 && h[2] > 0.0) {
+        if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
           for (double& v : h) v = std::log(v);
         }
         return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
