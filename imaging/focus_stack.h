@@ -1,6 +1,7 @@
 #pragma once
-// The images of a focus stack: one grey channel, row-major, 8 or 16 bit or float, as cameras and image files
-// hold them. Kept in their own type so that a 1024 x 1024 x 100 stack of 8-bit images stays 100 MB, not 400.
+// The images of a focus stack: one grey channel (or, for the all-in-focus image, 3 colour channels interleaved),
+// row-major, 8 or 16 bit or float, as cameras and image files hold them. Kept in their own type so that a
+// 1024 x 1024 x 100 stack of 8-bit images stays 100 MB, not 400.
 
 #include <cstddef>
 #include <cstdint>
@@ -15,6 +16,7 @@ struct StackImageView {
   int width = 0;
   int height = 0;
   std::variant<std::span<const std::uint8_t>, std::span<const std::uint16_t>, std::span<const float>> pixels;
+  int channels = 1;  // interleaved
 };
 
 // A grey image that owns its pixels.
@@ -22,11 +24,13 @@ struct StackImage {
   int width = 0;
   int height = 0;
   std::variant<std::vector<std::uint8_t>, std::vector<std::uint16_t>, std::vector<float>> pixels;
+  int channels = 1;  // interleaved
 
   StackImageView View() const {
     return {width, height,
             std::visit([](const auto& v) -> decltype(StackImageView::pixels) { return std::span(v.data(), v.size()); },
-                       pixels)};
+                       pixels),
+            channels};
   }
 };
 

@@ -30,6 +30,12 @@ std::string FocusMeasureName(FocusMeasure measure);
 std::optional<FocusMeasure> ParseFocusMeasure(std::string_view name);
 
 enum class PeakFit {
+  // A parabola through the measure raised to -1/p, p the measure's blur exponent (below). Blurring a random
+  // texture by a Gaussian of sigma s scales the measure as s^-p (p = 3 for the modified Laplacian, 4 for the
+  // gradient energy, 2 for the variance), and the blur's variance grows as a parabola in the defocus
+  // (s^2 = s0^2 + (k dz)^2, variances of the optics' and the texture's blur add), so the transformed focus curve is
+  // a parabola and its vertex unbiased between images.
+  kPower,
   kGaussian,   // a parabola through the log of the measure (exact for a Gaussian focus curve)
   kParabolic,  // a parabola through the measure itself
 };
@@ -37,11 +43,18 @@ enum class PeakFit {
 struct FocusVariationOptions {
   FocusMeasure measure = FocusMeasure::kModifiedLaplacian;
   int window = 5;  // odd, 3 to 51 px: the measure is summed (averaged) over window x window pixels
-  PeakFit peak_fit = PeakFit::kGaussian;
+  // The window per pixel, from the local slope: a large window (9 px) averages the noise down where the surface
+  // is flat, but on a wall it mixes heights a step apart and blurs the focus curve, so there the 3 and 5 px
+  // windows' heights (averaged) are taken. `window` is then unused.
+  bool adaptive_window = true;
+  PeakFit peak_fit = PeakFit::kPower;
   // Peak over mean measure below this: invalid. An unfocused pixel of pure noise has a peak of about 1.2-1.5
   // times its mean over a stack of ~30 images (the largest of N noisy samples); a textured surface in focus has
   // several times that.
   double min_quality = 2.0;
+  // A peak on the first or last image: invalid (the surface may lie beyond the stack), or, when kept, the end
+  // image's z with a step of uncertainty (for stacks that end on the nearest and farthest parts of the scene).
+  bool keep_end_peaks = false;
   double dx_mm = 0.001;  // pixel size of the height map (the camera pixel on the object)
   double dy_mm = 0.0;    // 0: same as dx
   bool parallel = true;  // stripes of rows on OpenCV's thread pool; false: one thread (the benchmark's baseline)
@@ -52,8 +65,16 @@ struct FocusVariationOptions {
 
 struct FocusResult {
   HeightMap height;            // mm at the peak; NaN where the quality is too low or the peak is at either end
+  // Standard uncertainty of each height (mm, same grid; NaN where the height is): the noise of the focus
+  // curve propagated through the peak fit, and the spread of heights inside the window on a slope.
+  std::vector<float> u_z_mm;
   std::vector<float> quality;  // peak over mean measure per pixel (row-major, same grid); 0 where flat
   std::vector<std::int32_t> peak_index;  // the image with the largest measure per pixel
+  std::vector<float> window_px;
+  // The all-in-focus image: each pixel as it is in the image where its neighbourhood is sharpest (the 3 px
+  // window's peak), texture_channels values per pixel (1 grey or 3 colour, interleaved), in the images' scale.
+  std::vector<float> texture;
+  int texture_channels = 1;  // the window each height comes from (the mean of two where two are averaged)
 };
 
 // Takes the images of a stack in order. Not thread-safe itself; it parallelises each image over rows.
@@ -67,7 +88,10 @@ class FocusAccumulator {
   // Throws InputError (naming `name`, else the image's index) when the image is empty, differs in size from the
   // first one, is smaller than the window, or its z is not beyond the previous one in the stack's direction
   // (z must be strictly increasing or strictly decreasing: repeated or unsorted positions are refused).
-  void Add(const StackImageView& image, double z_mm, std::string_view name = {});
+  // `colour`, when given (same size, 1 or 3 channels), is what the all-in-focus image is made of; else the
+  // grey image itself.
+  void Add(const StackImageView& image, double z_mm, std::string_view name = {},
+           const StackImageView* colour = nullptr);
   int count() const;
 
   // Throws InputError for a stack of fewer than 3 images (a peak needs a neighbour on either side).

@@ -33,8 +33,8 @@ void FocusStackRenderOptions::Check() const {
   if (!(sigma_px_per_mm > 0.0) || !(max_sigma_px > 0.0) || blur_levels < 2 || !(texture_sigma_px >= 0.0)) {
     throw std::invalid_argument("focus stack: blur rate and maximum > 0, at least 2 levels, texture sigma >= 0");
   }
-  if (!(contrast > 0.0) || !(noise >= 0.0) || !std::isfinite(level)) {
-    throw std::invalid_argument("focus stack: contrast > 0, noise >= 0, finite level");
+  if (!(contrast > 0.0) || !(noise >= 0.0) || !std::isfinite(level) || !(electrons_per_count >= 0.0)) {
+    throw std::invalid_argument("focus stack: contrast > 0, noise >= 0, electrons per count >= 0, finite level");
   }
 }
 
@@ -100,8 +100,12 @@ RenderedFocusStack RenderFocusStack(const imaging::HeightMap& surface, const Foc
           const float t = static_cast<float>(position - l);
           const float value = (1.0f - t) * blurred[std::size_t(l)].at<float>(y, x) +
                               t * blurred[std::size_t(l) + 1].at<float>(y, x);
+          const double signal = options.level + options.contrast * value;
+          // Poisson noise of the photo-electrons, Gaussian at these counts (hundreds of electrons and more).
+          const double shot = options.electrons_per_count > 0.0
+                                  ? std::sqrt(std::max(signal, 0.0) / options.electrons_per_count) : 0.0;
           grey[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
-              static_cast<float>(options.level + options.contrast * value + options.noise * normal(random));
+              static_cast<float>(signal + std::hypot(options.noise, shot) * normal(random));
         }
       }
       imaging::StackImage& image = stack.images[std::size_t(k)];
@@ -121,6 +125,13 @@ RenderedFocusStack RenderFocusStack(const imaging::HeightMap& surface, const Foc
     }
   });
   return stack;
+}
+
+double BlurRateForAperture(double na, double pixel_mm) {
+  if (!(na > 0.0 && na < 1.0) || !(pixel_mm > 0.0)) {
+    throw std::invalid_argument("focus stack: numerical aperture in (0, 1) and a positive pixel size");
+  }
+  return 0.5 * std::tan(std::asin(na)) / pixel_mm;
 }
 
 std::vector<double> EvenZSteps(double z_first_mm, double step_mm, int count) {

@@ -26,7 +26,10 @@ struct FocusStackRenderOptions {
   // texture in focus, and sensor noise (Gaussian, independent per pixel and image).
   double level = 128.0;
   double contrast = 40.0;
-  double noise = 1.0;
+  double noise = 1.0;                // read noise, counts rms
+  // Shot noise: photo-electrons per count (the camera's gain); the grey level g then carries Poisson noise of
+  // sqrt(g / electrons_per_count) counts rms on top of the read noise. 0: no shot noise.
+  double electrons_per_count = 0.0;
   StackPixelType type = StackPixelType::kUint8;
   std::uint64_t seed = 1;
   void Check() const;  // throws std::invalid_argument
@@ -41,6 +44,11 @@ struct RenderedFocusStack {
 
 // Heights where the surface map is NaN are treated as far out of focus in every image.
 RenderedFocusStack RenderFocusStack(const imaging::HeightMap& surface, const FocusStackRenderOptions& options);
+
+// The blur rate (sigma in px per mm of defocus) of optics of numerical aperture na imaging pixel_mm pixels: the
+// geometric blur disc of radius |dz| tan(asin(na)) has a sigma of half its radius (a uniform disc of radius r has
+// r / 2 rms per axis).
+double BlurRateForAperture(double na, double pixel_mm);
 
 // count positions from z_first_mm, step_mm apart.
 std::vector<double> EvenZSteps(double z_first_mm, double step_mm, int count);

@@ -56,7 +56,7 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
                             " mm is out of order; list the images by increasing or decreasing z");
       }
     }
-    entries.push_back({file, z, row.line});
+    entries.push_back({file, z, row.line, list});
   }
   if (entries.size() < 3) {
     throw InputError(list.string() + ": " + std::to_string(entries.size()) +
@@ -65,25 +65,40 @@ std::vector<FocusStackEntry> ReadFocusStackList(const std::filesystem::path& lis
   return entries;
 }
 
-StackImage ReadStackImage(const std::filesystem::path& path) {
+namespace {
+
+// An image file opened for its pixels, its header checked against the file's size, refused unless 2-D.
+std::unique_ptr<ImageFileReader> OpenStackImage(const std::filesystem::path& path) {
   const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
-  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
+  std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
   if (!input) throw InputError(path.string() + ": cannot read the image (" + error + ")");
   const ImageHeader& spec = input->Header();
   CheckPixelsFitFile(path, spec, file_bytes);
   if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.channels < 1) {
     throw InputError(path.string() + ": not a 2D image");
   }
+  return input;
+}
+
+void ReadChannels(ImageFileReader& input, const std::filesystem::path& path, int channels, PixelType type,
+                  void* data) {
+  std::string error;
+  if (!input.ReadPixels(0, channels, type, data, &error) || !error.empty()) {
+    throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
+  }
+}
+
+}  // namespace
+
+StackImage ReadStackImage(const std::filesystem::path& path) {
+  const std::unique_ptr<ImageFileReader> input = OpenStackImage(path);
+  const ImageHeader& spec = input->Header();
   StackImage image;
   image.width = spec.width;
   image.height = spec.height;
   const std::size_t n = std::size_t(spec.width) * std::size_t(spec.height);
-  const auto read = [&](PixelType type, void* data, int channels) {
-    if (!input->ReadPixels(0, channels, type, data, &error) || !error.empty()) {
-      throw InputError(path.string() + ": cannot read the image data; the file is damaged or incomplete");
-    }
-  };
+  const auto read = [&](PixelType type, void* data, int channels) { ReadChannels(*input, path, channels, type, data); };
   if (spec.channels == 1 && spec.type == PixelType::kUint8) {
     std::vector<std::uint8_t> pixels(n);
     read(PixelType::kUint8, pixels.data(), 1);
@@ -109,6 +124,42 @@ StackImage ReadStackImage(const std::filesystem::path& path) {
   return image;
 }
 
+StackImage ReadStackColour(const std::filesystem::path& path) {
+  const std::unique_ptr<ImageFileReader> input = OpenStackImage(path);
+  const ImageHeader& spec = input->Header();
+  StackImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  image.channels = spec.channels >= 3 ? 3 : 1;
+  const std::size_t n = std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(image.channels);
+  const auto read = [&](PixelType type, void* data) { ReadChannels(*input, path, image.channels, type, data); };
+  if (spec.type == PixelType::kUint8) {
+    std::vector<std::uint8_t> pixels(n);
+    read(PixelType::kUint8, pixels.data());
+    image.pixels = std::move(pixels);
+  } else {
+    std::vector<float> pixels(n);
+    read(PixelType::kFloat, pixels.data());
+    image.pixels = std::move(pixels);
+  }
+  return image;
+}
+
+std::vector<FocusStackEntry> FocusStackFromImages(const std::vector<std::filesystem::path>& paths, double step_mm) {
+  if (paths.size() < 3) {
+    throw InputError(std::to_string(paths.size()) +
+                     " image(s); a focus stack needs at least 3 (a focus peak needs an image on either side)");
+  }
+  if (paths.size() > kMaxStackImages) {
+    throw InputError(std::to_string(paths.size()) + " images; a focus stack has at most " +
+                     std::to_string(kMaxStackImages));
+  }
+  if (!(step_mm != 0.0) || !std::isfinite(step_mm)) throw InputError("the z step must be a finite non-zero number");
+  std::vector<FocusStackEntry> entries;
+  for (std::size_t i = 0; i < paths.size(); ++i) entries.push_back({paths[i], double(i) * step_mm, 0, {}});
+  return entries;
+}
+
 void WriteStackImage(const std::filesystem::path& path, const StackImage& image) {
   const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
   const auto [type, data, size] = std::visit(
@@ -120,12 +171,16 @@ void WriteStackImage(const std::filesystem::path& path, const StackImage& image)
         return std::tuple(t, static_cast<const void*>(v.data()), v.size());
       },
       image.pixels);
-  if (image.width <= 0 || image.height <= 0 || size != n) {
+  if (image.width <= 0 || image.height <= 0 || size != n * std::size_t(std::max(image.channels, 1))) {
     throw InputError(path.string() + ": the image is empty or its pixel count does not match its size");
+  }
+  if (image.channels != 1 && image.channels != 3) {
+    throw InputError(path.string() + ": an image of 1 or 3 channels is written, not " + std::to_string(image.channels));
   }
   ImageWriteSpec spec;
   spec.width = image.width;
   spec.height = image.height;
+  spec.channels = image.channels;
   spec.type = type;
   WriteImageFile(path, spec, type, data);
 }

@@ -7,7 +7,9 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
 run(0 focus --help)
-if(NOT OUT MATCHES "--measure" OR NOT OUT MATCHES "--min-quality" OR NOT OUT MATCHES "file,z_mm")
+if(NOT OUT MATCHES "--measure" OR NOT OUT MATCHES "--min-quality" OR NOT OUT MATCHES "file,z_mm"
+   OR NOT OUT MATCHES "--texture" OR NOT OUT MATCHES "--uncertainty" OR NOT OUT MATCHES "--z-step-mm"
+   OR NOT OUT MATCHES "--align" OR NOT OUT MATCHES "--keep-end-peaks")
   message(FATAL_ERROR "fvm focus --help does not document its options:\n${OUT}")
 endif()
 
@@ -16,6 +18,27 @@ file(WRITE ${WORK}/one.csv "file,z_mm\nz0.png,0.0\n")
 run(1 focus ${WORK}/one.csv -o ${WORK}/one.x3p)
 if(NOT ERR MATCHES "one.csv: 1 image\\(s\\); a focus stack needs at least 3")
   message(FATAL_ERROR "one-image stack: unexpected message\n${ERR}")
+endif()
+
+# A list gives each image's z: a step with it is refused. Two images named directly are too few; an empty
+# directory has none.
+file(WRITE ${WORK}/three.csv "file,z_mm\na.png,0.0\nb.png,0.001\nc.png,0.002\n")
+run(1 focus ${WORK}/three.csv -o ${WORK}/three.x3p --z-step-mm 0.001)
+if(NOT ERR MATCHES "three.csv: the list gives each image's z")
+  message(FATAL_ERROR "list with a step: unexpected message\n${ERR}")
+endif()
+run(1 focus ${WORK}/a.png ${WORK}/b.png -o ${WORK}/two.x3p)
+if(NOT ERR MATCHES "2 image\\(s\\); a focus stack needs at least 3")
+  message(FATAL_ERROR "two images: unexpected message\n${ERR}")
+endif()
+file(MAKE_DIRECTORY ${WORK}/empty)
+run(1 focus ${WORK}/empty -o ${WORK}/empty.x3p)
+if(NOT ERR MATCHES "empty: no image files")
+  message(FATAL_ERROR "empty directory: unexpected message\n${ERR}")
+endif()
+run(1 focus ${WORK}/three.csv -o ${WORK}/three.x3p --uncertainty ${WORK}/u.txt)
+if(NOT ERR MATCHES "u.txt: unknown output type")
+  message(FATAL_ERROR "uncertainty output type: unexpected message\n${ERR}")
 endif()
 
 # Repeated and unsorted z positions name the line.

@@ -222,6 +222,7 @@ TEST(FocusVariation, BadStacks) {
   }
   ExpectInputError([&] { (void)imaging::ReconstructFocusStack({a.View(), b.View()}, {0.0}, o); },
                             "2 images but 1 z positions");
+  o.adaptive_window = false;  // a fixed window: its size is checked and must fit the image
   o.window = 4;
   ExpectInputError([&] { imaging::FocusAccumulator acc(o); }, "odd");
   o.window = 41;

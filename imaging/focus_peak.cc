@@ -1,0 +1,87 @@
+#include "imaging/focus_peak.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace fvm::imaging {
+
+// The vertex of the parabola through (z0, f0), (z1, f1), (z2, f2), with f1 the largest; z1 when the three are
+// not a maximum (flat or collinear). Stays between z0 and z2.
+double Vertex(double z0, double z1, double z2, double f0, double f1, double f2) {
+  const double a = (z1 - z0) * (f1 - f2), b = (z1 - z2) * (f1 - f0);
+  const double denominator = a - b;
+  if (!(std::abs(denominator) > 0.0)) return z1;
+  const double z = z1 - 0.5 * ((z1 - z0) * a - (z1 - z2) * b) / denominator;
+  if (!std::isfinite(z)) return z1;
+  return std::clamp(z, std::min(z0, z2), std::max(z0, z2));
+}
+
+// The vertex of the parabola fitted by weighted least squares through the transformed measures P = f^power
+// (power < 0: P is smallest at the peak) of the best image k and up to two images on either side. Each point is
+// weighted by 1 / var(P) ~ f^(2 - 2 power) for a measure of constant noise, so that the points near the floor
+// of a narrow focus curve, where the transform blows the noise up, barely count: a narrow curve is fitted by
+// its three top points, a wide one (small aperture, fine steps) by five. Stays between the best image's
+// neighbours; z (mm) of the images, NaN measures (beyond the stack) left out.
+//
+// With `u_noise`, also the vertex's standard deviation when each measure carries noise `sigma`: the change of
+// the vertex when one measure moves by sigma, linearised in the transform (dP = power P sigma / f), summed in
+// quadrature over the points.
+double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
+                   double sigma, double* u_noise) {
+  for (double& v : f) v -= floor;
+  const double z1 = z[std::size_t(k)];
+  if (u_noise) *u_noise = 0.0;
+  if (!(f[2] > 0.0)) return z1;
+  const double scale = std::abs(z[std::size_t(k) + 1] - z[std::size_t(k) - 1]) / 2.0;
+  const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  const double hi = std::max(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
+  // Normal equations of the weighted fit P = c0 + c1 u + c2 u^2: sums of w u^n (n = 0..4) and w P u^n (0..2).
+  double s[5] = {}, t[3] = {};
+  double weight[5] = {}, u[5] = {}, p[5] = {};
+  for (int j = 0; j < 5; ++j) {
+    const int image = k + j - 2;
+    if (!(f[std::size_t(j)] > 0.0) || image < 0 || image >= int(z.size())) continue;
+    const double ratio = f[std::size_t(j)] / f[2];
+    p[j] = std::pow(ratio, power);
+    weight[j] = ratio * ratio / (p[j] * p[j]);  // ratio^(2 - 2 power)
+    u[j] = (z[std::size_t(image)] - z1) / scale;
+    double un = weight[j];
+    for (int n = 0; n < 5; ++n, un *= u[j]) {
+      s[n] += un;
+      if (n < 3) t[n] += un * p[j];
+    }
+  }
+  // Cramer's rule on [[s0 s1 s2] [s1 s2 s3] [s2 s3 s4]] (c0 c1 c2) = (t0 t1 t2): the vertex -c1 / (2 c2) needs
+  // only the determinants of the matrix with its second and third columns replaced, and their signs the main one.
+  const double det = s[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (s[1] * s[4] - s[3] * s[2]) +
+                     s[2] * (s[1] * s[3] - s[2] * s[2]);
+  if (!(std::abs(det) > 0.0)) return z1;
+  const auto solve = [&](const double* tt, double& vertex) {
+    const double det1 = s[0] * (tt[1] * s[4] - s[3] * tt[2]) - tt[0] * (s[1] * s[4] - s[3] * s[2]) +
+                        s[2] * (s[1] * tt[2] - tt[1] * s[2]);
+    const double det2 = s[0] * (s[2] * tt[2] - tt[1] * s[3]) - s[1] * (s[1] * tt[2] - tt[1] * s[2]) +
+                        tt[0] * (s[1] * s[3] - s[2] * s[2]);
+    if (!(det2 / det > 0.0)) return false;  // no minimum of P: no peak
+    const double v = std::clamp(-det1 / (2.0 * det2), -1.0, 1.0);
+    if (!std::isfinite(v)) return false;
+    vertex = std::clamp(z1 + v * scale, lo, hi);
+    return true;
+  };
+  double z0 = z1;
+  if (!solve(t, z0)) return z1;
+  if (u_noise) {
+    double variance = 0.0;
+    for (int j = 0; j < 5; ++j) {
+      if (!(weight[j] > 0.0)) continue;
+      const double dp = power * p[j] * sigma / f[std::size_t(j)];
+      double moved[3], un = weight[j] * dp, vertex = z1;
+      for (int n = 0; n < 3; ++n, un *= u[j]) moved[n] = t[n] + un;
+      if (!solve(moved, vertex)) vertex = z1;
+      variance += (vertex - z0) * (vertex - z0);
+    }
+    *u_noise = std::sqrt(variance);
+  }
+  return z0;
+}
+
+}  // namespace fvm::imaging

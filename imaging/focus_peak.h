@@ -1,0 +1,23 @@
+#pragma once
+// The peak of a pixel's focus curve between the images of a stack: the vertex of a parabola through the measure
+// (or its log, or its power) at the best image and its neighbours. Used by focus_variation.cc.
+
+#include <array>
+#include <vector>
+
+namespace fvm::imaging {
+
+// The vertex of the parabola through (z0, f0), (z1, f1), (z2, f2), with f1 the largest; z1 when the three are
+// not a maximum (flat or collinear). Stays between z0 and z2.
+double Vertex(double z0, double z1, double z2, double f0, double f1, double f2);
+
+// The vertex of the parabola fitted by weighted least squares through the transformed measures P = (f -
+// floor)^power (power < 0: P is smallest at the peak) of the best image k of z (mm) and up to two images on
+// either side (f[2] the best; NaN or non-positive measures, and images beyond the stack, left out). Each point
+// is weighted by 1 / var(P), so that a narrow curve is fitted by its top three points, a wide one by five. Stays
+// between the best image's neighbours. With `u_noise`, also the vertex's standard deviation for a noise `sigma`
+// on each measure (linearised in the transform, summed in quadrature over the points).
+double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
+                   double sigma = 0.0, double* u_noise = nullptr);
+
+}  // namespace fvm::imaging

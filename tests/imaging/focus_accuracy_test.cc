@@ -1,0 +1,165 @@
+// Focus variation to a tenth of the z step, walls included, with an uncertainty per pixel that covers: stacks
+// rendered (artefacts/focus_stack_render.h) from a surface whose true heights this test writes itself, as the
+// issue's scene has it: a textured flat tilted by 1.1 and 0.6 deg with a 35 um deep spherical calotte whose walls
+// reach 24 deg, 1 um pixels, depth-dependent Gaussian blur, shot noise (40 electrons per count) and read noise (2
+// counts) on 8-bit images. Heights are compared per region: the flat, the wall (slope >= 12 deg, rim included),
+// the bottom (slope < 12 deg).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "artefacts/simulation/focus_stack_render.h"
+#include "imaging/focus_variation.h"
+
+namespace fvm {
+namespace {
+
+constexpr int kSize = 400;             // px, 1 um each: the calotte's rim (radius 165 um) with 35 um of flat around
+constexpr double kPixelMm = 0.001;
+constexpr double kDepthMm = 0.035;
+constexpr double kWallDeg = 24.0;
+constexpr double kSlopeX = 0.02, kSlopeY = -0.01;  // the flat's tilt
+constexpr double kWallThresholdDeg = 12.0;
+
+enum Region { kFlat = 0, kWall = 1, kBottom = 2 };
+
+// The true surface, written here from the geometry (not from the project's calotte renderer): the face
+// z = slope . (x, y), and below it the sphere of radius R = depth / (1 - cos 24 deg) whose lowest point is
+// `depth` below the face at the image centre (measured along z; the tilt of 1 deg changes it by 0.02 %).
+struct Scene {
+  imaging::HeightMap truth;
+  std::vector<Region> region;
+};
+
+Scene MakeScene() {
+  const double radius = kDepthMm / (1.0 - std::cos(kWallDeg * std::numbers::pi / 180.0));
+  const double c = 0.5 * (kSize - 1) * kPixelMm;
+  Scene scene;
+  scene.truth.size_x = scene.truth.size_y = kSize;
+  scene.truth.dx_mm = scene.truth.dy_mm = kPixelMm;
+  scene.truth.z_mm.resize(std::size_t(kSize) * kSize);
+  scene.region.resize(scene.truth.z_mm.size());
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      const double px = x * kPixelMm, py = y * kPixelMm;
+      const double face = kSlopeX * px + kSlopeY * py;
+      const double centre_z = kSlopeX * c + kSlopeY * c - kDepthMm + radius;
+      const double r2 = (px - c) * (px - c) + (py - c) * (py - c);
+      double z = face;
+      Region region = kFlat;
+      if (r2 < radius * radius) {
+        const double sphere = centre_z - std::sqrt(radius * radius - r2);
+        if (sphere < face) {
+          z = sphere;
+          // The sphere's slope at this point, relative to the flat (whose tilt is 1.3 deg).
+          const double slope_deg = std::asin(std::sqrt(r2) / radius) * 180.0 / std::numbers::pi;
+          region = slope_deg >= kWallThresholdDeg ? kWall : kBottom;
+        }
+      }
+      scene.truth.at(x, y) = z;
+      scene.region[std::size_t(y) * kSize + std::size_t(x)] = region;
+    }
+  }
+  return scene;
+}
+
+struct RegionErrors {
+  double rms_steps[3] = {0, 0, 0};
+  double all_rms_steps = 0.0;
+  double coverage = 0.0;        // share of |error| <= 1.96 u_z over the valid pixels
+  double valid_share = 0.0;     // of the pixels compared
+  std::size_t count[3] = {0, 0, 0};
+};
+
+RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_t seed) {
+  double z_min = 1e9, z_max = -1e9;
+  for (double z : scene.truth.z_mm) z_min = std::min(z_min, z), z_max = std::max(z_max, z);
+  artefacts::FocusStackRenderOptions o;
+  // 55 um of z range (55 images at 1 um), centred on the surface's 43 um.
+  const int count = int(std::lround(55.0 / step_um));
+  const double step_mm = step_um * 1e-3;
+  o.z_mm = artefacts::EvenZSteps(0.5 * (z_min + z_max) - 0.5 * (count - 1) * step_mm, step_mm, count);
+  o.sigma_px_per_mm = artefacts::BlurRateForAperture(na, kPixelMm);
+  o.blur_levels = 65;  // 0.125 px apart: the blend between levels stays far below the errors measured
+  o.noise = 2.0;
+  o.electrons_per_count = 40.0;
+  o.seed = seed;
+  const artefacts::RenderedFocusStack stack = artefacts::RenderFocusStack(scene.truth, o);
+  imaging::FocusVariationOptions fo;
+  fo.dx_mm = kPixelMm;
+  const imaging::FocusResult result = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, fo);
+  RegionErrors e;
+  double sum[3] = {0, 0, 0};
+  std::size_t covered = 0, valid = 0, compared = 0;
+  const int border = 9;  // the largest window's reach, where it reflects at the image's edge
+  for (int y = border; y < kSize - border; ++y) {
+    for (int x = border; x < kSize - border; ++x) {
+      const std::size_t i = std::size_t(y) * kSize + std::size_t(x);
+      ++compared;
+      const double z = result.height.z_mm[i];
+      if (!std::isfinite(z)) continue;
+      ++valid;
+      const double d = z - scene.truth.z_mm[i];
+      sum[scene.region[i]] += d * d;
+      ++e.count[scene.region[i]];
+      covered += std::abs(d) <= 1.96 * result.u_z_mm[i];
+    }
+  }
+  for (int r = 0; r < 3; ++r) e.rms_steps[r] = std::sqrt(sum[r] / double(e.count[r])) / step_mm;
+  e.all_rms_steps = std::sqrt((sum[0] + sum[1] + sum[2]) / double(valid)) / step_mm;
+  e.coverage = double(covered) / double(valid);
+  e.valid_share = double(valid) / double(compared);
+  std::printf("step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
+              "coverage %.3f, valid %.4f\n",
+              step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
+              e.all_rms_steps, e.coverage, e.valid_share);
+  return e;
+}
+
+// Tolerances: measured with this seed, plus 15 % for another seed's texture and noise (the rms over ~150 000
+// pixels whose errors are correlated over the 9 px window, i.e. ~2000 independent patches, varies by ~2 %; the
+// texture's draw moves it more). Where a figure misses the goal it is asserted at what is measured, so
+// that it cannot get worse unseen, and named here:
+//   the scene (1 um, NA 0.9) is held to the goal itself: 0.1 step per region (wall 0.098 measured);
+//   at 0.5 um steps the wall is 0.18 step (0.09 um: the error on a wall is in um, set by the texture's weights
+//   in the window, not by the step); at 2 um steps with NA 0.9 the blur grows by 2 px per step and the focus
+//   curve falls to its floor within one step: 0.235 step, undersampled (the old 3-point Gaussian default: 0.175); coverage is within 93-97 % only at 1 um,
+//   NA 0.9 (0.75 to 0.91 elsewhere).
+struct Case {
+  double step_um, na;
+  double max_all, max_region, min_coverage, max_coverage;
+};
+
+class FocusAccuracy : public ::testing::TestWithParam<Case> {};
+
+TEST_P(FocusAccuracy, PerRegionAndCoverage) {
+  static const Scene scene = MakeScene();
+  const Case& c = GetParam();
+  const RegionErrors e = Measure(scene, c.step_um, c.na, 11);
+  EXPECT_GT(e.count[kWall], 20000u);
+  EXPECT_GT(e.count[kBottom], 20000u);
+  EXPECT_GT(e.valid_share, c.step_um > 1.5 ? 0.95 : 0.999);
+  EXPECT_LT(e.all_rms_steps, c.max_all);
+  for (int r : {kFlat, kWall, kBottom}) EXPECT_LT(e.rms_steps[r], c.max_region) << "region " << r;
+  EXPECT_GE(e.coverage, c.min_coverage);
+  EXPECT_LE(e.coverage, c.max_coverage);
+}
+
+INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
+                         ::testing::Values(Case{1.0, 0.9, 0.09, 0.1, 0.93, 0.97},  // the scene
+                                           Case{1.0, 0.7, 0.1, 0.105, 0.7, 1.0},
+                                           Case{1.0, 0.5, 0.1, 0.115, 0.85, 1.0},
+                                           Case{0.5, 0.9, 0.155, 0.205, 0.75, 1.0},
+                                           Case{2.0, 0.9, 0.27, 0.29, 0.65, 1.0}),
+                         [](const auto& info) {
+                           return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
+                                  std::to_string(int(std::lround(info.param.na * 10)));
+                         });
+
+}  // namespace
+}  // namespace fvm
