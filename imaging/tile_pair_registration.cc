@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <opencv2/core.hpp>
 #include <stdexcept>
@@ -67,7 +68,7 @@ Eigen::Vector2d WholeFrameShift(const TileImage& a, const TileImage& b, const Ei
 
 void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
                       const RegistrationOptions& options, bool searched, std::optional<Overlap> reuse,
-                      PairRegistration& pair) {
+                      PairRegistration& pair, bool clear_peak = false) {
   const Eigen::Vector2d nominal_px = pair.nominal_px;
   const int crops = searched ? 3 : 1;
   // Crop again where the images really overlap, to the whole pixel: the shift left to refine is at most half a
@@ -146,7 +147,17 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
     // on the ridge, up to the window's width from the truth; the nominal says as much, and no tilt of the rank-one
     // information by noise can then carry a wild value into the solve.
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
-    if (directions.eigenvalues()(1) > 0.0 && directions.eigenvalues()(0) <= 1e-9 * directions.eigenvalues()(1)) {
+    if (clear_peak) {
+      // Unless the overlap's NCC over the whole plausible range had one clear peak (WideCandidates): then the
+      // images fix the offset along every direction, to the whole pixel the peak was climbed to, where the
+      // gradients of a noisy overlap stood out of their noise along one direction only (the real strip's pen
+      // strokes and grid lines): a direction they left out carries that pixel's variance (0.5 px), not the stage's.
+      for (int k = 0; k < 2; ++k) {
+        if (directions.eigenvalues()(k) > 1e-9 * directions.eigenvalues()(1)) continue;
+        const Eigen::Vector2d u = directions.eigenvectors().col(k);
+        pair.information += 4.0 * u * u.transpose();
+      }
+    } else if (directions.eigenvalues()(1) > 0.0 && directions.eigenvalues()(0) <= 1e-9 * directions.eigenvalues()(1)) {
       const Eigen::Vector2d u = directions.eigenvectors().col(1);
       const Eigen::Vector2d projected = nominal_px + u * u.dot(pair.offset_px - nominal_px);
       pair.offset_px = projected;
@@ -163,9 +174,11 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
 
 }  // namespace
 
-PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
-                              const RegistrationOptions& options) {
-  options.Check();
+namespace {
+
+// RegisterPair; `clear_peak` as for RefineAndMeasure.
+PairRegistration RegisterNominal(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                                 const RegistrationOptions& options, bool clear_peak) {
   PairRegistration pair;
   pair.nominal_px = nominal_px;
   const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
@@ -195,13 +208,68 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
   const bool thin = std::min(nominal->in_a.width, nominal->in_a.height) < kThinOverlapPx;
   std::optional<Overlap> reuse;
   if (!thin && offset.array().round().cast<int>().matrix() == nominal_whole) reuse = std::move(nominal);
-  RefineAndMeasure(a, b, offset, options, false, std::move(reuse), pair);
+  RefineAndMeasure(a, b, offset, options, false, std::move(reuse), pair, clear_peak);
   TranslationCandidate single;
   single.offset_px = pair.offset_px;
   single.peak = pair.response;
   single.ncc = pair.quality;
   single.overlap_px = nominal_area;
   pair.candidates.push_back(single);
+  return pair;
+}
+
+}  // namespace
+
+PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                              const RegistrationOptions& options) {
+  options.Check();
+  return RegisterNominal(a, b, nominal_px, options, false);
+}
+
+PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                                       const Eigen::Vector2d& range_px, const RegistrationOptions& options) {
+  options.Check();
+  if (!(range_px.minCoeff() >= 0.0)) throw std::invalid_argument("RegisterPairOverRange: the range must be >= 0");
+  const WideSearch wide = WideCandidates(a, b, nominal_px, range_px, options.candidate_peaks, Scale(options),
+                                         options.ambiguous_ncc);
+  const bool clear = !wide.candidates.empty() && !wide.ambiguous;
+  PairRegistration pair = RegisterNominal(a, b, nominal_px, options, clear);
+  if (wide.candidates.empty()) return pair;  // no overlap of a quarter of the nominal one anywhere in the range
+  const TranslationCandidate& best = wide.candidates.front();
+  // Tiles the stage moved apart that match one on the other as well as anywhere in the range show no motion: the
+  // same image twice (a frozen camera, a copied file), or a pattern the step repeats exactly.
+  if (nominal_px.cwiseAbs().maxCoeff() >= kMinOverlapPx && wide.unmoved_ncc >= best.ncc - options.ambiguous_ncc) {
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "the tiles match where the stage did not move them (offset 0, NCC %.3f) as well as anywhere in the "
+                  "plausible range (best NCC %.3f): the same image at two stage positions",
+                  wide.unmoved_ncc, best.ncc);
+    pair.accepted = false;
+    pair.unmoved = true;
+    pair.rejection = text;
+    pair.candidates = wide.candidates;
+    return pair;
+  }
+  // The nominal overlap's peak stands where it is the range's best match (to the landscape's resolution).
+  if (pair.accepted && (pair.offset_px - best.offset_px).cwiseAbs().maxCoeff() <= wide.scale + 1.0) {
+    pair.ambiguous = wide.ambiguous;
+    pair.candidates.insert(pair.candidates.end(), wide.candidates.begin(), wide.candidates.end());
+    return pair;
+  }
+  // Otherwise the range's best match, refined: the nominal overlap's peak of a repeating pattern matched its lines
+  // one period off, or the true step lay farther from the nominal one than its overlap reaches.
+  PairRegistration searched;
+  searched.nominal_px = nominal_px;
+  searched.search_px = range_px;
+  searched.searched = true;
+  searched.ambiguous = wide.ambiguous;
+  searched.candidates = wide.candidates;
+  searched.response = best.peak;
+  RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, clear);
+  if (searched.accepted || !pair.accepted) {
+    if (!searched.accepted) searched.rejection = pair.rejection + "; over the plausible range: " + searched.rejection;
+    return searched;
+  }
   return pair;
 }
 

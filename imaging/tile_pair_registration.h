@@ -104,6 +104,9 @@ struct PairRegistration {
   bool searched = false;  // its offset comes from the widened search (SearchPair), not the first pass
   // Another candidate matched within ambiguous_ncc of the chosen one: the choice rests on the stage's prediction.
   bool ambiguous = false;
+  // The tiles matched one on the other (no motion) as well as at any offset the stage allows: no search registers
+  // them (RegisterPairOverRange).
+  bool unmoved = false;
   Eigen::Vector2d search_px = Eigen::Vector2d::Zero();  // the window's half-width per axis
   // Why the pair was rejected, for people (empty when accepted): the overlap too small, the shift implausible,
   // the sub-pixel refinement not settling, the quality below the threshold, or no texture to fix the shift.
@@ -116,6 +119,13 @@ struct PairRegistration {
 // the texture's gradient energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
+// The first pass of a grid or a chain: RegisterPair, checked against the overlap NCC at every offset within
+// range_px (per axis) of nominal_px (the whole plausible range, RegistrationOptions::wide_search_fraction): where
+// the range's best match lies elsewhere, that one is refined instead (`searched`, with its `candidates`); where
+// the tiles match one on the other as well as anywhere in the range, rejected (`unmoved`). A pair whose range had
+// one clear peak is fixed by it along every direction (a direction its gradients leave out carries half a pixel).
+PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                                       const Eigen::Vector2d& range_px, const RegistrationOptions& options);
 // The same searched within search_px (per axis) of nominal_px: candidates from the phase correlation of the
 // widened overlap, tested by NCC, the best refined. Rejected also when no candidate lies in the window.
 PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,

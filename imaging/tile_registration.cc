@@ -151,9 +151,10 @@ void ForEach(int count, bool parallel, const std::function<void(int)>& one) {
 }
 
 // The first pass over pairs whose tiles (a, b) are set, each in its own slot, so the result does not depend on the
-// thread count: the nominal overlap (RegisterPair), or for a thin one the widened search within `window` at once.
+// thread count: the nominal overlap checked against the whole plausible range `wide` (RegisterPairOverRange; the
+// nominal overlap alone for whole frames), or for a thin one the widened search within `window` at once.
 void RegisterFirstPass(const std::vector<TileImage>& images, const std::vector<Eigen::Vector2d>& nominal,
-                       std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window,
+                       std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window, const Eigen::Vector2d& wide,
                        const RegistrationOptions& options, const std::function<void(int done, int total)>& on_pair_registered) {
   std::atomic<int> registered{0};
   const int total = static_cast<int>(pairs.size());
@@ -163,8 +164,13 @@ void RegisterFirstPass(const std::vector<TileImage>& images, const std::vector<E
     const Eigen::Vector2d nominal_px = nominal[b] - nominal[a];
     const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
                                   static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
-    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, window, options)
-                                               : RegisterPair(images[a], images[b], nominal_px, options);
+    if (overlap.minCoeff() < kThinOverlapPx) {
+      pair = SearchPair(images[a], images[b], nominal_px, window, options);
+    } else if (options.crop_to_overlap) {
+      pair = RegisterPairOverRange(images[a], images[b], nominal_px, wide, options);
+    } else {
+      pair = RegisterPair(images[a], images[b], nominal_px, options);
+    }
     pair.a = static_cast<int>(a);
     pair.b = static_cast<int>(b);
     if (on_pair_registered) on_pair_registered(++registered, total);
@@ -198,7 +204,7 @@ int SearchFailedAgain(const std::vector<TileImage>& images, std::vector<PairRegi
                       const Eigen::Vector2d& window, const RegistrationOptions& options) {
   std::vector<int> again;
   for (size_t k = 0; k < pairs.size(); ++k) {
-    if (!pairs[k].accepted) again.push_back(static_cast<int>(k));
+    if (!pairs[k].accepted && !pairs[k].unmoved) again.push_back(static_cast<int>(k));
   }
   SearchAgain(images, pairs, again, [](const PairRegistration& first) { return first.nominal_px; }, window, options,
               [](const PairRegistration& first, PairRegistration& pair) {
@@ -258,7 +264,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     result.pairs.push_back(pair);
   }
   const Eigen::Vector2d first_window = FirstWindow(images, options);
-  RegisterFirstPass(images, nominal, result.pairs, first_window, options, on_pair_registered);
+  RegisterFirstPass(images, nominal, result.pairs, first_window, WideWindow(images, options), options, on_pair_registered);
 
   // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
   // again, widened, within a few repeatabilities of the model's offset (the constrained second search of MIST [Chalfoun
@@ -295,6 +301,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     for (size_t k = 0; k < result.pairs.size(); ++k) {
       const PairRegistration& pair = result.pairs[k];
       // An ambiguous pair chose by the nominal offset; the model, learnt from the clear pairs, chooses again.
+      if (pair.unmoved) continue;  // no search registers tiles that show no motion
       if (!pair.accepted || disagreement(pair) > 0.0 || pair.ambiguous) again.push_back(static_cast<int>(k));
     }
     result.pairs_searched_again += static_cast<int>(again.size());
@@ -350,7 +357,8 @@ ChainRegistration RegisterTileChain(const std::vector<TileImage>& images, const 
     result.pairs.push_back(pair);
   }
   const Eigen::Vector2d first_window = FirstWindow(images, options);
-  RegisterFirstPass(images, nominal_px, result.pairs, first_window, options, on_pair_registered);
+  RegisterFirstPass(images, nominal_px, result.pairs, first_window, WideWindow(images, options), options,
+                    on_pair_registered);
   if (options.crop_to_overlap) {
     result.pairs_searched_again = SearchFailedAgain(images, result.pairs, first_window, options);
     SearchFailedOverWideRange(images, result.pairs, options);

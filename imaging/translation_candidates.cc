@@ -1,6 +1,10 @@
 #include "imaging/translation_candidates.h"
 
+#include "imaging/overlap_ncc_landscape.h"
+
 #include <algorithm>
+#include <functional>
+#include <limits>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -44,6 +48,67 @@ double MatchQuality(const TileImage& a, const TileImage& b, const Eigen::Vector2
   if (scale.lowpass_sigma_px <= 0.0) return OverlapNcc(overlap->a, overlap->b, Eigen::Vector2i::Zero(), pixels);
   return OverlapNcc(Blur(overlap->a, scale.lowpass_sigma_px), Blur(overlap->b, scale.lowpass_sigma_px),
                     Eigen::Vector2i::Zero(), pixels);
+}
+
+namespace {
+
+// A step of the climb must gain this much: along machining marks the correlation is a ridge whose noise would lead
+// the climb anywhere along it.
+constexpr double kNccTie = 0.01;
+
+}  // namespace
+
+void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at) {
+  Eigen::Vector2i offset = c.offset_px.cast<int>();
+  for (int step = 0; step < 16; ++step) {
+    TranslationCandidate best = c;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const Eigen::Vector2i next = offset + Eigen::Vector2i(dx, dy);
+        if ((dx == 0 && dy == 0) || ((next.cast<double>() - nominal).cwiseAbs() - search).maxCoeff() > 0.0) continue;
+        TranslationCandidate trial = c;
+        trial.offset_px = next.cast<double>();
+        trial.ncc = ncc_at(next, trial.overlap_px);
+        if (trial.overlap_px > 0 && trial.ncc > best.ncc + kNccTie) best = trial;
+      }
+    }
+    if (best.offset_px == c.offset_px) break;
+    c = best;
+    offset = c.offset_px.cast<int>();
+  }
+}
+
+bool ChooseAmongCandidates(std::vector<TranslationCandidate>& out, const Eigen::Vector2d& nominal,
+                           const Eigen::Vector2d& search, double ambiguous_ncc) {
+  std::stable_sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
+  // Climbs that met keep the first.
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const auto& l, const auto& r) { return l.offset_px == r.offset_px; }),
+            out.end());
+  if (out.empty()) return false;
+  // Candidates within 2 kNccTie of the best match equally well as far as the overlap can tell (a ridge along
+  // marks, a blank strip): the one nearest the nominal offset, in units of the window, goes first.
+  const double top = out.front().ncc;
+  const auto distance = [&](const TranslationCandidate& c) {
+    return (c.offset_px - nominal).cwiseQuotient(search.cwiseMax(1.0)).squaredNorm();
+  };
+  auto chosen = out.begin();
+  for (auto it = out.begin(); it != out.end() && it->ncc >= top - 2.0 * kNccTie; ++it) {
+    if (distance(*it) < distance(*chosen)) chosen = it;
+  }
+  std::rotate(out.begin(), chosen, chosen + 1);
+  // Another place (3 px or more away) that matches within ambiguous_ncc of the best: a repeating pattern. The one
+  // nearest the nominal offset (the stage's prediction) goes first, and the pair says it was a choice.
+  bool ambiguous = false;
+  auto nearest = out.begin();
+  for (auto it = out.begin(); it != out.end(); ++it) {
+    if (it->ncc < top - ambiguous_ncc) continue;
+    if ((it->offset_px - out.front().offset_px).norm() >= 3.0) ambiguous = true;
+    if (distance(*it) < distance(*nearest)) nearest = it;
+  }
+  if (ambiguous) std::rotate(out.begin(), nearest, nearest + 1);
+  return ambiguous;
 }
 
 // Candidate offsets of b in a's frame within `search` (per axis) of `nominal`: the nominal overlap widened by the
@@ -152,61 +217,48 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   }
   std::stable_sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
   // The correlation's peaks of broad blobs lie a pixel or two off the best overlap; the best one climbs the
-  // normalised cross-correlation, a whole pixel at a time, within the window, to its local maximum. A step must
-  // gain kNccTie: along machining marks the correlation is a ridge whose noise would lead the climb anywhere
-  // along it.
+  // normalised cross-correlation within the window to its local maximum.
   // (Climbing the best three instead moved no tile of sparse seeds 1-5 by more than 0.11 px, and none out of 0.5 px.)
-  constexpr size_t kClimbed = 1;
-  constexpr double kNccTie = 0.01;
-  for (size_t k = 0; k < std::min(kClimbed, out.size()); ++k) {
-    TranslationCandidate& c = out[k];
-    Eigen::Vector2i offset = c.offset_px.cast<int>();
-    for (int step = 0; step < 16; ++step) {
-      TranslationCandidate best = c;
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const Eigen::Vector2i next = offset + Eigen::Vector2i(dx, dy);
-          if ((dx == 0 && dy == 0) || ((next.cast<double>() - nominal).cwiseAbs() - search).maxCoeff() > 0.0) continue;
-          TranslationCandidate trial = c;
-          trial.offset_px = next.cast<double>();
-          trial.ncc = OverlapNcc(sa, sb, next - base, trial.overlap_px);
-          if (trial.overlap_px > 0 && trial.ncc > best.ncc + kNccTie) best = trial;
-        }
-      }
-      if (best.offset_px == c.offset_px) break;
-      c = best;
-      offset = c.offset_px.cast<int>();
-    }
-  }
-  std::stable_sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
-  // Climbs that met keep the first.
-  out.erase(std::unique(out.begin(), out.end(),
-                        [](const auto& l, const auto& r) { return l.offset_px == r.offset_px; }),
-            out.end());
-  // Candidates within 2 kNccTie of the best match equally well as far as the overlap can tell (a ridge along
-  // marks, a blank strip): the one nearest the nominal offset, in units of the window, goes first.
-  ambiguous = false;
   if (!out.empty()) {
-    const double floor = out.front().ncc - 2.0 * kNccTie;
-    const auto distance = [&](const TranslationCandidate& c) {
-      return (c.offset_px - nominal).cwiseQuotient(search.cwiseMax(1.0)).squaredNorm();
-    };
-    auto chosen = out.begin();
-    for (auto it = out.begin(); it != out.end() && it->ncc >= floor; ++it) {
-      if (distance(*it) < distance(*chosen)) chosen = it;
-    }
-    std::rotate(out.begin(), chosen, chosen + 1);
-    // Another place (3 px or more away) that matches within ambiguous_ncc of the best: a repeating pattern. The one
-    // nearest the nominal offset (the stage's prediction) goes first, and the pair says it was a choice.
-    const double top = floor + 2.0 * kNccTie;  // the best correlation
-    auto nearest = out.begin();
-    for (auto it = out.begin(); it != out.end(); ++it) {
-      if (it->ncc < top - ambiguous_ncc) continue;
-      if ((it->offset_px - out.front().offset_px).norm() >= 3.0) ambiguous = true;
-      if (distance(*it) < distance(*nearest)) nearest = it;
-    }
-    if (ambiguous) std::rotate(out.begin(), nearest, nearest + 1);
+    ClimbNcc(out.front(), nominal, search, [&](const Eigen::Vector2i& offset, int& pixels) {
+      return OverlapNcc(sa, sb, offset - base, pixels);
+    });
   }
+  ambiguous = ChooseAmongCandidates(out, nominal, search, ambiguous_ncc);
+  return out;
+}
+
+WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal,
+                          const Eigen::Vector2d& search, int peaks, const MatchScale& scale, double ambiguous_ncc) {
+  WideSearch out;
+  // Whole tiles in the matching band: each candidate is judged on all of the overlap it implies.
+  const bool logarithm = MatchingDomain(View(a), View(b));
+  const Prepared pa = MatchingCrop(View(a), scale, logarithm), pb = MatchingCrop(View(b), scale, logarithm);
+  const auto ncc_at = [&](const Eigen::Vector2i& offset, int& pixels) { return OverlapNcc(pa, pb, offset, pixels); };
+  int pixels = 0;
+  out.unmoved_ncc = ncc_at(Eigen::Vector2i::Zero(), pixels);
+  // Offsets whose overlap is below a quarter of the nominal one are left out: a sliver correlates well by chance.
+  const Eigen::Vector2i n = nominal.array().round().cast<int>();
+  const cv::Rect overlap = cv::Rect(0, 0, static_cast<int>(a.cols()), static_cast<int>(a.rows())) &
+                           cv::Rect(n.x(), n.y(), static_cast<int>(b.cols()), static_cast<int>(b.rows()));
+  out.scale = LandscapeScale(static_cast<int>(std::min(a.cols(), b.cols())), static_cast<int>(std::min(a.rows(), b.rows())));
+  const int min_pixels = std::max(kMinOverlapPx * kMinOverlapPx, overlap.area() / 4);
+  for (const LandscapePeak& p : OverlapNccPeaks(pa, pb, nominal, search, out.scale, min_pixels, peaks)) {
+    TranslationCandidate c;
+    c.offset_px = p.offset_px.cast<double>();
+    c.peak = p.ncc;
+    // At full resolution: the level's whole pixel is `scale` of them.
+    c.ncc = ncc_at(p.offset_px, c.overlap_px);
+    out.candidates.push_back(c);
+  }
+  // The few that may be chosen (within ambiguous_ncc of the best on the level) climb to their full-resolution
+  // maximum, up to half a level's pixel away.
+  constexpr size_t kClimbed = 3;
+  for (size_t k = 0; k < std::min(kClimbed, out.candidates.size()); ++k) {
+    if (out.candidates[k].peak < out.candidates.front().peak - ambiguous_ncc) break;
+    ClimbNcc(out.candidates[k], nominal, search, ncc_at);
+  }
+  out.ambiguous = ChooseAmongCandidates(out.candidates, nominal, search, ambiguous_ncc);
   return out;
 }
 

@@ -4,6 +4,7 @@
 // Inside imaging/ only (OpenCV types): the public interface is tile_pair_registration.h.
 
 #include <Eigen/Core>
+#include <functional>
 #include <utility>
 #include <vector>
 #include <opencv2/core.hpp>
@@ -34,6 +35,27 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
                                                    const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
                                                    int peaks, double sigma, const MatchScale& scale,
                                                    double ambiguous_ncc, bool& ambiguous);
+// Climbs the normalised cross-correlation (`ncc_at(offset, pixels)`) a whole pixel at a time, within `search` of
+// `nominal`, from c to its local maximum; a step must gain 0.01.
+void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at);
+// Sorts candidates best first and puts first the one to take: among those that tie with the best, the nearest to
+// `nominal`; when another place 3 px or more away matches within ambiguous_ncc (a repeating pattern), the nearest
+// of those, and returns true (ambiguous).
+bool ChooseAmongCandidates(std::vector<TranslationCandidate>& candidates, const Eigen::Vector2d& nominal,
+                           const Eigen::Vector2d& search, double ambiguous_ncc);
+
+// The whole plausible range of a pair searched at once: candidates from the overlap NCC landscape
+// (overlap_ncc_landscape.h) within `search` of `nominal`, judged on the whole tiles in the matching band.
+struct WideSearch {
+  std::vector<TranslationCandidate> candidates;  // the one to take first (ChooseAmongCandidates)
+  bool ambiguous = false;
+  double unmoved_ncc = 0.0;  // the tiles' NCC one on the other (offset 0): where the stage did not move
+  int scale = 1;             // full-resolution pixels per pixel of the landscape
+};
+WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal,
+                          const Eigen::Vector2d& search, int peaks, const MatchScale& scale, double ambiguous_ncc);
+
 // Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.
 std::pair<Eigen::Vector2d, double> PhaseShift(const cv::Mat& a, const cv::Mat& b);
 
