@@ -46,11 +46,6 @@ void RegistrationOptions::Check() const {
 
 namespace {
 
-// From a whole- or sub-pixel `offset` of b in a's frame: refines it on the overlap it implies, measures the
-// quality and the information there, and decides. `searched`: the offset is a candidate of the widened search,
-// which may lie a pixel or two off on broad blobs (the refinement may crop again, up to three times, and an
-// offset it could not refine claims a pixel's variance less); otherwise it is the nominal overlap's
-// phase-correlation peak, refined once on one crop (`reuse`, when given, is the crop at its whole pixel).
 // Whole frames (cropped to a common size): the correlation finds the offset modulo the frame size; the
 // representative nearest the nominal offset is taken. `response` gets the correlation peak.
 Eigen::Vector2d WholeFrameShift(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
@@ -66,9 +61,15 @@ Eigen::Vector2d WholeFrameShift(const TileImage& a, const TileImage& b, const Ei
   return offset;
 }
 
+// From a whole- or sub-pixel `offset` of b in a's frame: refines it on the overlap it implies, measures the
+// quality and the information there, and decides. `searched`: the offset is a candidate of the widened search,
+// which may lie a pixel or two off on broad blobs (the refinement may crop again, up to three times, and an
+// offset it could not refine claims a pixel's variance less); otherwise it is the nominal overlap's
+// phase-correlation peak, refined once on one crop (`reuse`, when given, is the crop at its whole pixel).
+// `clear_peak_px` > 0: the overlap NCC over the whole plausible range had one clear peak, located to this (px).
 void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
                       const RegistrationOptions& options, bool searched, std::optional<Overlap> reuse,
-                      PairRegistration& pair, bool clear_peak = false) {
+                      PairRegistration& pair, double clear_peak_px = 0.0) {
   const Eigen::Vector2d nominal_px = pair.nominal_px;
   const int crops = searched ? 3 : 1;
   // Crop again where the images really overlap, to the whole pixel: the shift left to refine is at most half a
@@ -147,15 +148,15 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
     // on the ridge, up to the window's width from the truth; the nominal says as much, and no tilt of the rank-one
     // information by noise can then carry a wild value into the solve.
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
-    if (clear_peak) {
+    if (clear_peak_px > 0.0) {
       // Unless the overlap's NCC over the whole plausible range had one clear peak (WideCandidates): then the
-      // images fix the offset along every direction, to the whole pixel the peak was climbed to, where the
-      // gradients of a noisy overlap stood out of their noise along one direction only (the real strip's pen
-      // strokes and grid lines): a direction they left out carries that pixel's variance (0.5 px), not the stage's.
+      // images fix the offset along every direction, to clear_peak_px (the standard uncertainty), where the gradients of a noisy overlap stood out of their noise along one direction
+      // only (the real strip's pen strokes and grid lines). (Half a pixel instead put a pair of one grey level of
+      // texture 8 of them from its truth.)
       for (int k = 0; k < 2; ++k) {
         if (directions.eigenvalues()(k) > 1e-9 * directions.eigenvalues()(1)) continue;
         const Eigen::Vector2d u = directions.eigenvectors().col(k);
-        pair.information += 4.0 * u * u.transpose();
+        pair.information += 1.0 / (clear_peak_px * clear_peak_px) * u * u.transpose();
       }
     } else if (directions.eigenvalues()(1) > 0.0 && directions.eigenvalues()(0) <= 1e-9 * directions.eigenvalues()(1)) {
       const Eigen::Vector2d u = directions.eigenvectors().col(1);
@@ -176,9 +177,9 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
 
 namespace {
 
-// RegisterPair; `clear_peak` as for RefineAndMeasure.
+// RegisterPair; `clear_peak_px` as for RefineAndMeasure.
 PairRegistration RegisterNominal(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
-                                 const RegistrationOptions& options, bool clear_peak) {
+                                 const RegistrationOptions& options, double clear_peak_px) {
   PairRegistration pair;
   pair.nominal_px = nominal_px;
   const Eigen::Vector2i nominal_whole = nominal_px.array().round().cast<int>();
@@ -208,7 +209,7 @@ PairRegistration RegisterNominal(const TileImage& a, const TileImage& b, const E
   const bool thin = std::min(nominal->in_a.width, nominal->in_a.height) < kThinOverlapPx;
   std::optional<Overlap> reuse;
   if (!thin && offset.array().round().cast<int>().matrix() == nominal_whole) reuse = std::move(nominal);
-  RefineAndMeasure(a, b, offset, options, false, std::move(reuse), pair, clear_peak);
+  RefineAndMeasure(a, b, offset, options, false, std::move(reuse), pair, clear_peak_px);
   TranslationCandidate single;
   single.offset_px = pair.offset_px;
   single.peak = pair.response;
@@ -223,7 +224,7 @@ PairRegistration RegisterNominal(const TileImage& a, const TileImage& b, const E
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options) {
   options.Check();
-  return RegisterNominal(a, b, nominal_px, options, false);
+  return RegisterNominal(a, b, nominal_px, options, 0.0);
 }
 
 PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
@@ -232,16 +233,24 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
   if (!(range_px.minCoeff() >= 0.0)) throw std::invalid_argument("RegisterPairOverRange: the range must be >= 0");
   const WideSearch wide = WideCandidates(a, b, nominal_px, range_px, options.candidate_peaks, Scale(options),
                                          options.ambiguous_ncc);
-  const bool clear = !wide.candidates.empty() && !wide.ambiguous;
-  PairRegistration pair = RegisterNominal(a, b, nominal_px, options, clear);
-  if (wide.candidates.empty()) return pair;  // no overlap of a quarter of the nominal one anywhere in the range
+  // The landscape judges where its best match passes as a pair would (the height maps' roughness, say, correlates
+  // in the first pass' high-passed band only): no overlap of a quarter of the nominal one anywhere, or none that
+  // matches, and the nominal overlap decides alone.
+  const bool judges = !wide.candidates.empty() && wide.candidates.front().ncc >= options.min_quality;
+  // Half the landscape's pixel: the climb at full resolution puts the peak within it (1 px, uniform, would be
+  // 0.29 of it); a pixel put a pair of the real strip 5 px off under the stage's prior.
+  const double clear_peak_px = judges && !wide.ambiguous && wide.sharp ? 0.5 * wide.scale : 0.0;
+  PairRegistration pair = RegisterNominal(a, b, nominal_px, options, clear_peak_px);
+  if (!judges) return pair;
   const TranslationCandidate& best = wide.candidates.front();
-  // Tiles the stage moved apart that match one on the other as well as anywhere in the range show no motion: the
-  // same image twice (a frozen camera, a copied file), or a pattern the step repeats exactly.
-  if (nominal_px.cwiseAbs().maxCoeff() >= kMinOverlapPx && wide.unmoved_ncc >= best.ncc - options.ambiguous_ncc) {
+  // Tiles the stage moved apart that match one on the other, better than anywhere in the range, show no motion:
+  // the same image twice (a frozen camera, a copied file). (Machining marks along the step match one on the other
+  // as well as at the step, and no better: their ridge leaves the axis along them to the stage.)
+  if (nominal_px.cwiseAbs().maxCoeff() >= kMinOverlapPx && wide.unmoved_ncc >= options.min_quality &&
+      wide.unmoved_ncc > best.ncc + options.ambiguous_ncc) {
     char text[240];
     std::snprintf(text, sizeof text,
-                  "the tiles match where the stage did not move them (offset 0, NCC %.3f) as well as anywhere in the "
+                  "the tiles match where the stage did not move them (offset 0, NCC %.3f) better than anywhere in the "
                   "plausible range (best NCC %.3f): the same image at two stage positions",
                   wide.unmoved_ncc, best.ncc);
     pair.accepted = false;
@@ -250,8 +259,9 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
     pair.candidates = wide.candidates;
     return pair;
   }
-  // The nominal overlap's peak stands where it is the range's best match (to the landscape's resolution).
-  if (pair.accepted && (pair.offset_px - best.offset_px).cwiseAbs().maxCoeff() <= wide.scale + 1.0) {
+  // The nominal overlap's peak stands where it is the range's best match (to the landscape's resolution), or
+  // where that best is a ridge, which places it along the ridge no better.
+  if (pair.accepted && (!wide.sharp || (pair.offset_px - best.offset_px).cwiseAbs().maxCoeff() <= wide.scale + 1.0)) {
     pair.ambiguous = wide.ambiguous;
     pair.candidates.insert(pair.candidates.end(), wide.candidates.begin(), wide.candidates.end());
     return pair;
@@ -265,7 +275,7 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
   searched.ambiguous = wide.ambiguous;
   searched.candidates = wide.candidates;
   searched.response = best.peak;
-  RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, clear);
+  RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, clear_peak_px);
   if (searched.accepted || !pair.accepted) {
     if (!searched.accepted) searched.rejection = pair.rejection + "; over the plausible range: " + searched.rejection;
     return searched;

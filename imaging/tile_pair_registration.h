@@ -104,7 +104,7 @@ struct PairRegistration {
   bool searched = false;  // its offset comes from the widened search (SearchPair), not the first pass
   // Another candidate matched within ambiguous_ncc of the chosen one: the choice rests on the stage's prediction.
   bool ambiguous = false;
-  // The tiles matched one on the other (no motion) as well as at any offset the stage allows: no search registers
+  // The tiles matched one on the other (no motion) better than at any offset the stage allows: no search registers
   // them (RegisterPairOverRange).
   bool unmoved = false;
   Eigen::Vector2d search_px = Eigen::Vector2d::Zero();  // the window's half-width per axis
@@ -122,7 +122,7 @@ PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eige
 // The first pass of a grid or a chain: RegisterPair, checked against the overlap NCC at every offset within
 // range_px (per axis) of nominal_px (the whole plausible range, RegistrationOptions::wide_search_fraction): where
 // the range's best match lies elsewhere, that one is refined instead (`searched`, with its `candidates`); where
-// the tiles match one on the other as well as anywhere in the range, rejected (`unmoved`). A pair whose range had
+// the tiles match one on the other better than anywhere in the range, rejected (`unmoved`). A pair whose range had
 // one clear peak is fixed by it along every direction (a direction its gradients leave out carries half a pixel).
 PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                                        const Eigen::Vector2d& range_px, const RegistrationOptions& options);

@@ -52,16 +52,16 @@ double MatchQuality(const TileImage& a, const TileImage& b, const Eigen::Vector2
 
 namespace {
 
-// A step of the climb must gain this much: along machining marks the correlation is a ridge whose noise would lead
-// the climb anywhere along it.
+// A step of the narrow search's climb must gain this much: along machining marks the correlation is a ridge whose
+// noise would lead the climb anywhere along it.
 constexpr double kNccTie = 0.01;
 
 }  // namespace
 
 void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at) {
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain) {
   Eigen::Vector2i offset = c.offset_px.cast<int>();
-  for (int step = 0; step < 16; ++step) {
+  for (int step = 0; step < 32; ++step) {
     TranslationCandidate best = c;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
@@ -70,7 +70,7 @@ void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eig
         TranslationCandidate trial = c;
         trial.offset_px = next.cast<double>();
         trial.ncc = ncc_at(next, trial.overlap_px);
-        if (trial.overlap_px > 0 && trial.ncc > best.ncc + kNccTie) best = trial;
+        if (trial.overlap_px > 0 && trial.ncc > best.ncc + min_gain) best = trial;
       }
     }
     if (best.offset_px == c.offset_px) break;
@@ -222,7 +222,7 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   if (!out.empty()) {
     ClimbNcc(out.front(), nominal, search, [&](const Eigen::Vector2i& offset, int& pixels) {
       return OverlapNcc(sa, sb, offset - base, pixels);
-    });
+    }, kNccTie);
   }
   ambiguous = ChooseAmongCandidates(out, nominal, search, ambiguous_ncc);
   return out;
@@ -252,13 +252,27 @@ WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::V
     out.candidates.push_back(c);
   }
   // The few that may be chosen (within ambiguous_ncc of the best on the level) climb to their full-resolution
-  // maximum, up to half a level's pixel away.
+  // maximum, a level's pixel or two away: by any gain, since the real strip's peaks are broad (0.002 a pixel near
+  // the top); a ridge along marks, which this lets wander, is told by its flanks below.
   constexpr size_t kClimbed = 3;
   for (size_t k = 0; k < std::min(kClimbed, out.candidates.size()); ++k) {
     if (out.candidates[k].peak < out.candidates.front().peak - ambiguous_ncc) break;
-    ClimbNcc(out.candidates[k], nominal, search, ncc_at);
+    ClimbNcc(out.candidates[k], nominal, search, ncc_at, 0.0);
   }
   out.ambiguous = ChooseAmongCandidates(out.candidates, nominal, search, ambiguous_ncc);
+  // Sharp: the chosen match falls by ambiguous_ncc four level pixels away along both axes (the real strip's peak is
+  // broad: 0.02-0.09 down 8 px away, 4 level pixels of 2 px). Along machining marks
+  // it does not (a ridge of one maximum, whose place along the marks is the noise's).
+  if (!out.candidates.empty()) {
+    const TranslationCandidate& best = out.candidates.front();
+    const int d = 4 * out.scale;
+    out.sharp = true;
+    for (const Eigen::Vector2i step : {Eigen::Vector2i(d, 0), Eigen::Vector2i(-d, 0), Eigen::Vector2i(0, d), Eigen::Vector2i(0, -d)}) {
+      int pixels = 0;
+      const double ncc = ncc_at(best.offset_px.cast<int>() + step, pixels);
+      if (pixels > 0 && ncc > best.ncc - ambiguous_ncc) out.sharp = false;
+    }
+  }
   return out;
 }
 

@@ -36,9 +36,9 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
                                                    int peaks, double sigma, const MatchScale& scale,
                                                    double ambiguous_ncc, bool& ambiguous);
 // Climbs the normalised cross-correlation (`ncc_at(offset, pixels)`) a whole pixel at a time, within `search` of
-// `nominal`, from c to its local maximum; a step must gain 0.01.
+// `nominal`, from c to its local maximum; a step must gain more than min_gain.
 void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at);
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain);
 // Sorts candidates best first and puts first the one to take: among those that tie with the best, the nearest to
 // `nominal`; when another place 3 px or more away matches within ambiguous_ncc (a repeating pattern), the nearest
 // of those, and returns true (ambiguous).
@@ -50,8 +50,9 @@ bool ChooseAmongCandidates(std::vector<TranslationCandidate>& candidates, const 
 struct WideSearch {
   std::vector<TranslationCandidate> candidates;  // the one to take first (ChooseAmongCandidates)
   bool ambiguous = false;
+  bool sharp = false;        // the first one's NCC falls off along both axes (not a ridge along marks)
   double unmoved_ncc = 0.0;  // the tiles' NCC one on the other (offset 0): where the stage did not move
-  int scale = 1;             // full-resolution pixels per pixel of the landscape
+  int scale = 1;             // full-resolution pixels per pixel of the landscape: the first one's uncertainty
 };
 WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal,
                           const Eigen::Vector2d& search, int peaks, const MatchScale& scale, double ambiguous_ncc);
