@@ -237,49 +237,47 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
   // in the first pass' high-passed band only): no overlap of a quarter of the nominal one anywhere, or none that
   // matches, and the nominal overlap decides alone.
   const bool judges = !wide.candidates.empty() && wide.candidates.front().ncc >= options.min_quality;
-  // Half the landscape's pixel: the climb at full resolution puts the peak within it (1 px, uniform, would be
-  // 0.29 of it); a pixel put a pair of the real strip 5 px off under the stage's prior.
-  const double clear_peak_px = judges && !wide.ambiguous && wide.sharp ? 0.5 * wide.scale : 0.0;
-  PairRegistration pair = RegisterNominal(a, b, nominal_px, options, clear_peak_px);
-  if (!judges) return pair;
+  if (!judges) return RegisterNominal(a, b, nominal_px, options, 0.0);
   const TranslationCandidate& best = wide.candidates.front();
   // Tiles the stage moved apart that match one on the other, better than anywhere in the range, show no motion:
   // the same image twice (a frozen camera, a copied file). (Machining marks along the step match one on the other
   // as well as at the step, and no better: their ridge leaves the axis along them to the stage.)
   if (nominal_px.cwiseAbs().maxCoeff() >= kMinOverlapPx && wide.unmoved_ncc >= options.min_quality &&
       wide.unmoved_ncc > best.ncc + options.ambiguous_ncc) {
+    PairRegistration pair;
+    pair.nominal_px = nominal_px;
+    pair.search_px = range_px;
     char text[240];
     std::snprintf(text, sizeof text,
                   "the tiles match where the stage did not move them (offset 0, NCC %.3f) better than anywhere in the "
                   "plausible range (best NCC %.3f): the same image at two stage positions",
                   wide.unmoved_ncc, best.ncc);
-    pair.accepted = false;
     pair.unmoved = true;
     pair.rejection = text;
     pair.candidates = wide.candidates;
     return pair;
   }
-  // The nominal overlap's peak stands where it is the range's best match (to the landscape's resolution), or
-  // where that best is a ridge, which places it along the ridge no better.
-  if (pair.accepted && (!wide.sharp || (pair.offset_px - best.offset_px).cwiseAbs().maxCoeff() <= wide.scale + 1.0)) {
-    pair.ambiguous = wide.ambiguous;
-    pair.candidates.insert(pair.candidates.end(), wide.candidates.begin(), wide.candidates.end());
-    return pair;
+  // The range's best match, refined, where it is one clear peak: the nominal overlap's own peak of a repeating
+  // pattern matched its lines one period off, or the true step lay farther from the nominal one than its overlap
+  // reaches. Half the landscape's pixel is its uncertainty along what the refinement leaves undetermined (the climb
+  // at full resolution puts the peak within it; a whole pixel put a pair of the real strip 5 px off under the
+  // stage's prior).
+  const bool clear = !wide.ambiguous && wide.sharp;
+  if (clear) {
+    PairRegistration searched;
+    searched.nominal_px = nominal_px;
+    searched.search_px = range_px;
+    searched.searched = true;
+    searched.candidates = wide.candidates;
+    searched.response = best.peak;
+    RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, 0.5 * wide.scale);
+    if (searched.accepted) return searched;
   }
-  // Otherwise the range's best match, refined: the nominal overlap's peak of a repeating pattern matched its lines
-  // one period off, or the true step lay farther from the nominal one than its overlap reaches.
-  PairRegistration searched;
-  searched.nominal_px = nominal_px;
-  searched.search_px = range_px;
-  searched.searched = true;
-  searched.ambiguous = wide.ambiguous;
-  searched.candidates = wide.candidates;
-  searched.response = best.peak;
-  RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, clear_peak_px);
-  if (searched.accepted || !pair.accepted) {
-    if (!searched.accepted) searched.rejection = pair.rejection + "; over the plausible range: " + searched.rejection;
-    return searched;
-  }
+  // Otherwise the nominal overlap, which stands where it is the range's best match (to the landscape's resolution),
+  // or where that best is a ridge or a repeat, which places it no better.
+  PairRegistration pair = RegisterNominal(a, b, nominal_px, options, 0.0);
+  pair.ambiguous = wide.ambiguous;
+  pair.candidates.insert(pair.candidates.end(), wide.candidates.begin(), wide.candidates.end());
   return pair;
 }
 
