@@ -16,23 +16,10 @@ struct Level {
   cv::Mat value, mask;
 };
 
-Level Downsample(const Prepared& in, int scale) {
-  const cv::Mat valid = in.valid.empty() ? cv::Mat::ones(in.value.size(), CV_32F) : in.valid;
-  const cv::Mat value = in.valid.empty() ? in.value : in.value.mul(valid);
+Level OnLevel(const Prepared& in) {
   Level out;
-  if (scale > 1) {
-    // Area averages over whole blocks: the level's pixel (i, j) is the full pixels [scale i, scale i + scale).
-    const cv::Size size(in.value.cols / scale, in.value.rows / scale);
-    const cv::Rect blocks(0, 0, size.width * scale, size.height * scale);
-    cv::Mat weight;
-    cv::resize(value(blocks), out.value, size, 0.0, 0.0, cv::INTER_AREA);
-    cv::resize(valid(blocks), weight, size, 0.0, 0.0, cv::INTER_AREA);
-    cv::threshold(weight, out.mask, 0.99, 1.0, cv::THRESH_BINARY);
-    out.value = (out.value / cv::max(weight, 1e-6)).mul(out.mask);
-  } else {
-    out.value = value.clone();
-    out.mask = valid.clone();
-  }
+  out.mask = in.valid.empty() ? cv::Mat::ones(in.value.size(), CV_32F) : in.valid.clone();
+  out.value = in.valid.empty() ? in.value.clone() : in.value.mul(in.valid);
   cv::Mat used;
   out.mask.convertTo(used, CV_8U);
   if (cv::countNonZero(used) > 0) {
@@ -60,15 +47,25 @@ cv::Mat Correlate(const cv::Mat& spectrum_f, const cv::Mat& spectrum_g) {
 
 }  // namespace
 
+cv::Mat AreaDownsample(const cv::Mat& tile, int scale) {
+  if (scale <= 1) return tile;
+  // Whole blocks: the level's pixel (i, j) averages the full pixels [scale i, scale i + scale) each way; a block
+  // with a NaN is NaN (invalid).
+  const cv::Size size(tile.cols / scale, tile.rows / scale);
+  cv::Mat out;
+  cv::resize(tile(cv::Rect(0, 0, size.width * scale, size.height * scale)), out, size, 0.0, 0.0, cv::INTER_AREA);
+  return out;
+}
+
 int LandscapeScale(int cols, int rows) {
   int scale = 1;
   while (scale < 4 && std::min(cols, rows) / (2 * scale) >= 128) scale *= 2;
   return scale;
 }
 
-std::vector<LandscapePeak> OverlapNccPeaks(const Prepared& a, const Prepared& b, const Eigen::Vector2d& nominal,
-                                           const Eigen::Vector2d& search, int scale, int min_pixels, int peaks) {
-  const Level la = Downsample(a, scale), lb = Downsample(b, scale);
+NccLandscape OverlapNccPeaks(const Prepared& a, const Prepared& b, const Eigen::Vector2d& nominal,
+                             const Eigen::Vector2d& search, int scale, int min_pixels, int peaks) {
+  const Level la = OnLevel(a), lb = OnLevel(b);
   if (la.value.empty() || lb.value.empty()) return {};
   const cv::Size padded(cv::getOptimalDFTSize(la.value.cols + lb.value.cols),
                         cv::getOptimalDFTSize(la.value.rows + lb.value.rows));
@@ -88,46 +85,54 @@ std::vector<LandscapePeak> OverlapNccPeaks(const Prepared& a, const Prepared& b,
   if (x1 < x0 || y1 < y0) return {};
   const double min_count = std::max(1.0, static_cast<double>(min_pixels) / (scale * scale));
   constexpr float kNone = -2.0f;
+  // The NCC at a level offset (x, y) from the six sums; kNone where the overlap is too small or blank.
+  const auto ncc_at = [&](int x, int y, double needed) {
+    const int iy = (y % padded.height + padded.height) % padded.height;
+    const int ix = (x % padded.width + padded.width) % padded.width;
+    const double count = std::round(n.at<float>(iy, ix));
+    if (count < needed) return kNone;
+    const double ma = sa.at<float>(iy, ix) / count, mb = sb.at<float>(iy, ix) / count;
+    const double va = saa.at<float>(iy, ix) / count - ma * ma, vb = sbb.at<float>(iy, ix) / count - mb * mb;
+    // Variances at the float sums' rounding (a blank overlap) carry no correlation.
+    const double floor = 1e-5 * std::max(saa.at<float>(iy, ix), sbb.at<float>(iy, ix)) / count;
+    if (!(va > floor && vb > floor)) return kNone;
+    return static_cast<float>(std::clamp((sab.at<float>(iy, ix) / count - ma * mb) / std::sqrt(va * vb), -1.0, 1.0));
+  };
+  NccLandscape out;
+  out.unmoved_ncc = ncc_at(0, 0, 64.0);
   cv::Mat ncc(y1 - y0 + 1, x1 - x0 + 1, CV_32F, cv::Scalar(kNone));
   for (int y = y0; y <= y1; ++y) {
-    const int iy = (y % padded.height + padded.height) % padded.height;
-    for (int x = x0; x <= x1; ++x) {
-      const int ix = (x % padded.width + padded.width) % padded.width;
-      const double count = std::round(n.at<float>(iy, ix));
-      if (count < min_count) continue;
-      const double ma = sa.at<float>(iy, ix) / count, mb = sb.at<float>(iy, ix) / count;
-      const double va = saa.at<float>(iy, ix) / count - ma * ma, vb = sbb.at<float>(iy, ix) / count - mb * mb;
-      // Variances at the float sums' rounding (a blank overlap) carry no correlation.
-      const double floor = 1e-5 * std::max(saa.at<float>(iy, ix), sbb.at<float>(iy, ix)) / count;
-      if (!(va > floor && vb > floor)) continue;
-      ncc.at<float>(y - y0, x - x0) =
-          static_cast<float>(std::clamp((sab.at<float>(iy, ix) / count - ma * mb) / std::sqrt(va * vb), -1.0, 1.0));
-    }
+    for (int x = x0; x <= x1; ++x) ncc.at<float>(y - y0, x - x0) = ncc_at(x, y, min_count);
   }
   cv::Mat dilated;
   cv::dilate(ncc, dilated, cv::Mat::ones(3, 3, CV_8U), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kNone));
-  std::vector<LandscapePeak> out;
+  std::vector<LandscapePeak> found;
   for (int r = 0; r < ncc.rows; ++r) {
     for (int c = 0; c < ncc.cols; ++c) {
       const float v = ncc.at<float>(r, c);
       if (v <= kNone || v < dilated.at<float>(r, c)) continue;
       const int ix = ((c + x0) % padded.width + padded.width) % padded.width;
       const int iy = ((r + y0) % padded.height + padded.height) % padded.height;
-      out.push_back({Eigen::Vector2i(c + x0, r + y0) * scale, v,
-                     static_cast<int>(std::round(n.at<float>(iy, ix))) * scale * scale});
+      LandscapePeak peak{Eigen::Vector2i(c + x0, r + y0) * scale, v,
+                         static_cast<int>(std::round(n.at<float>(iy, ix))) * scale * scale, 1.0};
+      // How far it falls 4 level pixels away along each axis, at least (a ridge along marks: not at all).
+      for (const auto& [dx, dy] : {std::pair{4, 0}, std::pair{-4, 0}, std::pair{0, 4}, std::pair{0, -4}}) {
+        const float flank = ncc_at(c + x0 + dx, r + y0 + dy, min_count);
+        if (flank > kNone) peak.fall = std::min(peak.fall, static_cast<double>(v - flank));
+      }
+      found.push_back(peak);
     }
   }
-  std::sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
+  std::sort(found.begin(), found.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
   // Plateaus give several equal maxima side by side: keep one per 3 x 3 neighbourhood.
-  std::vector<LandscapePeak> kept;
-  for (const auto& p : out) {
-    const bool near = std::any_of(kept.begin(), kept.end(), [&](const LandscapePeak& k) {
+  for (const auto& p : found) {
+    const bool near = std::any_of(out.peaks.begin(), out.peaks.end(), [&](const LandscapePeak& k) {
       return (k.offset_px - p.offset_px).cwiseAbs().maxCoeff() <= scale;
     });
-    if (!near) kept.push_back(p);
-    if (static_cast<int>(kept.size()) >= peaks) break;
+    if (!near) out.peaks.push_back(p);
+    if (static_cast<int>(out.peaks.size()) >= peaks) break;
   }
-  return kept;
+  return out;
 }
 
 }  // namespace fvm::imaging::detail

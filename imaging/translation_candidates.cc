@@ -59,9 +59,9 @@ constexpr double kNccTie = 0.01;
 }  // namespace
 
 void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain) {
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain, int max_steps) {
   Eigen::Vector2i offset = c.offset_px.cast<int>();
-  for (int step = 0; step < 32; ++step) {
+  for (int step = 0; step < max_steps; ++step) {
     TranslationCandidate best = c;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
@@ -222,7 +222,7 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   if (!out.empty()) {
     ClimbNcc(out.front(), nominal, search, [&](const Eigen::Vector2i& offset, int& pixels) {
       return OverlapNcc(sa, sb, offset - base, pixels);
-    }, kNccTie);
+    }, kNccTie, 16);
   }
   ambiguous = ChooseAmongCandidates(out, nominal, search, ambiguous_ncc);
   return out;
@@ -231,47 +231,38 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
 WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal,
                           const Eigen::Vector2d& search, int peaks, const MatchScale& scale, double ambiguous_ncc) {
   WideSearch out;
-  // Whole tiles in the matching band: each candidate is judged on all of the overlap it implies.
+  out.scale = LandscapeScale(static_cast<int>(std::min(a.cols(), b.cols())), static_cast<int>(std::min(a.rows(), b.rows())));
+  // Whole tiles on the level, in the matching band (its smoothing scaled to the level): each candidate is judged on
+  // all of the overlap it implies.
   const bool logarithm = MatchingDomain(View(a), View(b));
-  const Prepared pa = MatchingCrop(View(a), scale, logarithm), pb = MatchingCrop(View(b), scale, logarithm);
-  const auto ncc_at = [&](const Eigen::Vector2i& offset, int& pixels) { return OverlapNcc(pa, pb, offset, pixels); };
-  int pixels = 0;
-  out.unmoved_ncc = ncc_at(Eigen::Vector2i::Zero(), pixels);
+  const MatchScale level{scale.highpass_sigma_px / out.scale, scale.lowpass_sigma_px / out.scale};
+  const Prepared pa = MatchingCrop(AreaDownsample(View(a), out.scale), level, logarithm);
+  const Prepared pb = MatchingCrop(AreaDownsample(View(b), out.scale), level, logarithm);
   // Offsets whose overlap is below a quarter of the nominal one are left out: a sliver correlates well by chance.
   const Eigen::Vector2i n = nominal.array().round().cast<int>();
   const cv::Rect overlap = cv::Rect(0, 0, static_cast<int>(a.cols()), static_cast<int>(a.rows())) &
                            cv::Rect(n.x(), n.y(), static_cast<int>(b.cols()), static_cast<int>(b.rows()));
-  out.scale = LandscapeScale(static_cast<int>(std::min(a.cols(), b.cols())), static_cast<int>(std::min(a.rows(), b.rows())));
   const int min_pixels = std::max(kMinOverlapPx * kMinOverlapPx, overlap.area() / 4);
-  for (const LandscapePeak& p : OverlapNccPeaks(pa, pb, nominal, search, out.scale, min_pixels, peaks)) {
+  const NccLandscape landscape = OverlapNccPeaks(pa, pb, nominal, search, out.scale, min_pixels, peaks);
+  out.unmoved_ncc = landscape.unmoved_ncc;
+  for (const LandscapePeak& p : landscape.peaks) {
     TranslationCandidate c;
     c.offset_px = p.offset_px.cast<double>();
-    c.peak = p.ncc;
-    // At full resolution: the level's whole pixel is `scale` of them.
-    c.ncc = ncc_at(p.offset_px, c.overlap_px);
+    c.peak = c.ncc = p.ncc;
+    c.overlap_px = p.pixels;
     out.candidates.push_back(c);
   }
-  // The few that may be chosen (within ambiguous_ncc of the best on the level) climb to their full-resolution
-  // maximum, a level's pixel or two away: by any gain, since the real strip's peaks are broad (0.002 a pixel near
-  // the top); a ridge along marks, which this lets wander, is told by its flanks below.
-  constexpr size_t kClimbed = 3;
-  for (size_t k = 0; k < std::min(kClimbed, out.candidates.size()); ++k) {
-    if (out.candidates[k].peak < out.candidates.front().peak - ambiguous_ncc) break;
-    ClimbNcc(out.candidates[k], nominal, search, ncc_at, 0.0);
-  }
+  // The sub-pixel refinement starts from the level's pixel (within half of it of the peak): no climb at full
+  // resolution, which cost more than the landscape on the real strip.
   out.ambiguous = ChooseAmongCandidates(out.candidates, nominal, search, ambiguous_ncc);
-  // Sharp: the chosen match falls by ambiguous_ncc four level pixels away along both axes (the real strip's peak is
-  // broad: 0.02-0.09 down 8 px away, 4 level pixels of 2 px). Along machining marks
-  // it does not (a ridge of one maximum, whose place along the marks is the noise's).
+  // Sharp: the chosen match falls by ambiguous_ncc 4 level pixels away along both axes (the real strip's peaks
+  // are broad: 0.04-0.2 down 16 px away). Along machining marks it does not (a ridge of one maximum, whose place
+  // along the marks is the noise's).
   if (!out.candidates.empty()) {
-    const TranslationCandidate& best = out.candidates.front();
-    const int d = 4 * out.scale;
-    out.sharp = true;
-    for (const Eigen::Vector2i step : {Eigen::Vector2i(d, 0), Eigen::Vector2i(-d, 0), Eigen::Vector2i(0, d), Eigen::Vector2i(0, -d)}) {
-      int pixels = 0;
-      const double ncc = ncc_at(best.offset_px.cast<int>() + step, pixels);
-      if (pixels > 0 && ncc > best.ncc - ambiguous_ncc) out.sharp = false;
-    }
+    const auto chosen = std::find_if(landscape.peaks.begin(), landscape.peaks.end(), [&](const LandscapePeak& p) {
+      return p.offset_px.cast<double>() == out.candidates.front().offset_px;
+    });
+    out.sharp = chosen != landscape.peaks.end() && chosen->fall >= ambiguous_ncc;
   }
   return out;
 }

@@ -36,9 +36,9 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
                                                    int peaks, double sigma, const MatchScale& scale,
                                                    double ambiguous_ncc, bool& ambiguous);
 // Climbs the normalised cross-correlation (`ncc_at(offset, pixels)`) a whole pixel at a time, within `search` of
-// `nominal`, from c to its local maximum; a step must gain more than min_gain.
+// `nominal`, from c to its local maximum, at most max_steps; a step must gain more than min_gain.
 void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain);
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain, int max_steps);
 // Sorts candidates best first and puts first the one to take: among those that tie with the best, the nearest to
 // `nominal`; when another place 3 px or more away matches within ambiguous_ncc (a repeating pattern), the nearest
 // of those, and returns true (ambiguous).
