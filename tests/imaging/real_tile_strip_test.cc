@@ -59,18 +59,30 @@ TEST(RealTileStrip, RegistersEveryPairAsWellAsFiji) {
   }
   std::printf("mean overlap ncc: fvm %.4f, Fiji %.4f; %d of 9 pairs\n", ours_mean, fiji_mean, accepted);
   EXPECT_EQ(accepted, 9);
-  // Where fvm's step lies within 2 px of Fiji's, its overlap correlates at least as well (sub-pixel positions
-  // against Fiji's whole pixels). The goal is all 9 pairs there and a mean at least Fiji's; measured 4 of
-  // 9 (the steps of 242-245 px are taken for ~300-330 px: a wrong match near the nominal overlap that correlates
-  // well in the high-passed band), mean 0.598 against Fiji's 0.744. This floor keeps what stands.
-  int agreeing = 0;
+  // The goal: a mean at least Fiji's, and no pair below 0.3 where Fiji's is above 0.5. Measured 0.788
+  // against 0.744 (before the search over the whole plausible range: 0.598, the steps of 242-245 px taken for
+  // ~300-330 px); every pair at least Fiji's less 0.01 (the bilinear resampling of fvm's sub-pixel offsets reads a
+  // noisy overlap up to a few hundredths low).
+  EXPECT_GE(ours_mean, fiji_mean);
+  int within_2px = 0;
   for (size_t k = 0; k < 9; ++k) {
-    const Eigen::Vector2d step = result.positions.positions_px[k + 1] - result.positions.positions_px[k];
-    if ((step - (strip.fiji_px[k + 1] - strip.fiji_px[k])).cwiseAbs().maxCoeff() > 2.0) continue;
-    ++agreeing;
     EXPECT_GE(ours[k].correlation.ncc, fiji[k].correlation.ncc - 0.01) << k + 1 << "-" << k + 2;
+    if (fiji[k].correlation.ncc > 0.5) {
+      EXPECT_GT(ours[k].correlation.ncc, 0.3) << k + 1 << "-" << k + 2;
+    }
+    const Eigen::Vector2d step = result.positions.positions_px[k + 1] - result.positions.positions_px[k];
+    const double off = (step - (strip.fiji_px[k + 1] - strip.fiji_px[k])).cwiseAbs().maxCoeff();
+    within_2px += off <= 2.0;
+    // Where Fiji's overlap correlates well (above 0.7: all but 7-8), the steps agree within 4 px: the real tiles
+    // are no pure translation of each other (their best offsets move by pixels with the band they are judged
+    // in), and Fiji's positions are whole pixels. At 7-8 (Fiji 0.52) fvm steps 353.6 px where Fiji steps 334, and
+    // its overlap correlates 0.66.
+    if (fiji[k].correlation.ncc > 0.7) {
+      EXPECT_LE(off, 4.0) << k + 1 << "-" << k + 2;
+    }
   }
-  EXPECT_GE(agreeing, 4);
+  // Measured 5 of 9 (1-2 and 5-6 differ by 2.9 and 3.7 px in y, 9-10 by 2.2 px in x, 7-8 as above).
+  EXPECT_GE(within_2px, 5);
   // Fiji's own positions are the reference of the measure: every one of its overlaps correlates above 0.5.
   for (const auto& f : fiji) EXPECT_GT(f.correlation.ncc, 0.5) << f.a + 1 << "-" << f.b + 1;
 }

@@ -312,6 +312,28 @@ TEST(TileRegistration, PureNoiseRegistersNothing) {
   }
 }
 
+// The same image at every stage position (a frozen camera, one file listed for every tile): the tiles match one on
+// the other (offset 0) better than at any offset the stage allows, and no pair may register, however well some
+// offset in the plausible range correlates (issue 30: a search over the whole range found one).
+TEST(TileRegistration, IdenticalTilesAtEveryPositionRegisterNothing) {
+  artefacts::TileSynthesisOptions options;
+  options.rows = 2;
+  options.cols = 3;
+  options.seed = 3;
+  auto tiles = artefacts::SynthesizeTiles(options);
+  for (auto& image : tiles.images) image = tiles.images.front();
+  const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
+  for (const auto& pair : result.pairs) {
+    EXPECT_FALSE(pair.accepted) << pair.a << "-" << pair.b;
+    EXPECT_TRUE(pair.unmoved) << pair.a << "-" << pair.b << ": " << pair.rejection;
+  }
+  // The same tiles where they are (distinct images): every pair registers, none is taken for unmoved.
+  const auto distinct = artefacts::SynthesizeTiles(options);
+  for (const auto& pair : RegisterTileGrid(distinct.images, distinct.tiles, RegistrationOptions{}).pairs) {
+    EXPECT_TRUE(pair.accepted && !pair.unmoved) << pair.a << "-" << pair.b << ": " << pair.rejection;
+  }
+}
+
 TEST(TileRegistration, SolveSpreadsLoopMisclosureByInformation) {
   // Three tiles in a loop; pair 0-2 disagrees with 0-1 + 1-2 by 1 px. Generalised least squares splits it.
   std::vector<Eigen::Vector2d> nominal = {{0, 0}, {100, 0}, {200, 0}};
