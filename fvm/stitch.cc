@@ -207,6 +207,7 @@ void RunStitch(const StitchArgs& args) {
                               {"overlap_ncc", ncc_json(overlap_ncc[k].correlation.ncc)},
                               {"searched", pair.searched},
                               {"ambiguous", pair.ambiguous},
+                              {"unmoved", pair.unmoved},
                               {"search_px", {pair.search_px.x(), pair.search_px.y()}},
                               {"candidates", candidates},
                               {"rejection", pair.accepted ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(pair.rejection)}});
@@ -288,8 +289,11 @@ void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
   AddDetails(sub,
-      "Registers every tile with its right and lower neighbour: the phase correlation of the nominal overlap, "
-      "refined to sub-pixel with the pair's uncertainty. Thin overlaps (under 24 px), and the pairs that fail when "
+      "Registers every tile with its right and lower neighbour: the overlap's normalised cross-correlation at every "
+      "offset within a quarter of a tile of the nominal one (by Fourier transforms, on a pyramid level), its one "
+      "clear peak refined to sub-pixel with the pair's uncertainty; where it has none (a repeating pattern, a "
+      "ridge along marks), the phase correlation of the nominal overlap. Tiles that match one on the other better "
+      "than anywhere the stage allows (the same image twice) register nothing. Thin overlaps (under 24 px), and the pairs that fail when "
       "too few pass to estimate the stage, are searched instead: phase-correlation candidates within 10 % of a tile "
       "of the nominal offset, each tested by the normalised cross-correlation of the overlap it implies, the best "
       "refined. From the pairs that pass it estimates the stage (step and "
@@ -330,7 +334,7 @@ void RegisterStitch(CLI::App& app) {
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
-                "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"candidates\": [{\"dx_px\", "
+                "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "
                 "\"dy_px\", \"peak\", \"ncc\"}]}]}");
   sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
               "-o demo/positions.csv --mosaic demo/mosaic.tif");
