@@ -56,12 +56,12 @@ namespace {
 // noise would lead the climb anywhere along it.
 constexpr double kNccTie = 0.01;
 
-}  // namespace
-
+// Climbs the normalised cross-correlation (`ncc_at(offset, pixels)`) a whole pixel at a time, within `search` of
+// `nominal`, from c to its local maximum (16 steps at most); a step must gain kNccTie.
 void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain, int max_steps) {
+              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at) {
   Eigen::Vector2i offset = c.offset_px.cast<int>();
-  for (int step = 0; step < max_steps; ++step) {
+  for (int step = 0; step < 16; ++step) {
     TranslationCandidate best = c;
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
@@ -70,7 +70,7 @@ void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eig
         TranslationCandidate trial = c;
         trial.offset_px = next.cast<double>();
         trial.ncc = ncc_at(next, trial.overlap_px);
-        if (trial.overlap_px > 0 && trial.ncc > best.ncc + min_gain) best = trial;
+        if (trial.overlap_px > 0 && trial.ncc > best.ncc + kNccTie) best = trial;
       }
     }
     if (best.offset_px == c.offset_px) break;
@@ -79,6 +79,9 @@ void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eig
   }
 }
 
+// Sorts candidates best first and puts first the one to take: among those that tie with the best, the nearest to
+// `nominal`; when another place 3 px or more away matches within ambiguous_ncc (a repeating pattern), the nearest
+// of those, and returns true (ambiguous).
 bool ChooseAmongCandidates(std::vector<TranslationCandidate>& out, const Eigen::Vector2d& nominal,
                            const Eigen::Vector2d& search, double ambiguous_ncc) {
   std::stable_sort(out.begin(), out.end(), [](const auto& l, const auto& r) { return l.ncc > r.ncc; });
@@ -110,6 +113,8 @@ bool ChooseAmongCandidates(std::vector<TranslationCandidate>& out, const Eigen::
   if (ambiguous) std::rotate(out.begin(), nearest, nearest + 1);
   return ambiguous;
 }
+
+}  // namespace
 
 // Candidate offsets of b in a's frame within `search` (per axis) of `nominal`: the nominal overlap widened by the
 // window on every side is cut from each tile (a common size, clipped to the tiles), high-passed, and phase
@@ -222,7 +227,7 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
   if (!out.empty()) {
     ClimbNcc(out.front(), nominal, search, [&](const Eigen::Vector2i& offset, int& pixels) {
       return OverlapNcc(sa, sb, offset - base, pixels);
-    }, kNccTie, 16);
+    });
   }
   ambiguous = ChooseAmongCandidates(out, nominal, search, ambiguous_ncc);
   return out;

@@ -4,7 +4,6 @@
 // Inside imaging/ only (OpenCV types): the public interface is tile_pair_registration.h.
 
 #include <Eigen/Core>
-#include <functional>
 #include <utility>
 #include <vector>
 #include <opencv2/core.hpp>
@@ -35,20 +34,12 @@ std::vector<TranslationCandidate> SearchCandidates(const TileImage& a, const Til
                                                    const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
                                                    int peaks, double sigma, const MatchScale& scale,
                                                    double ambiguous_ncc, bool& ambiguous);
-// Climbs the normalised cross-correlation (`ncc_at(offset, pixels)`) a whole pixel at a time, within `search` of
-// `nominal`, from c to its local maximum, at most max_steps; a step must gain more than min_gain.
-void ClimbNcc(TranslationCandidate& c, const Eigen::Vector2d& nominal, const Eigen::Vector2d& search,
-              const std::function<double(const Eigen::Vector2i&, int&)>& ncc_at, double min_gain, int max_steps);
-// Sorts candidates best first and puts first the one to take: among those that tie with the best, the nearest to
-// `nominal`; when another place 3 px or more away matches within ambiguous_ncc (a repeating pattern), the nearest
-// of those, and returns true (ambiguous).
-bool ChooseAmongCandidates(std::vector<TranslationCandidate>& candidates, const Eigen::Vector2d& nominal,
-                           const Eigen::Vector2d& search, double ambiguous_ncc);
-
 // The whole plausible range of a pair searched at once: candidates from the overlap NCC landscape
-// (overlap_ncc_landscape.h) within `search` of `nominal`, judged on the whole tiles in the matching band.
+// (overlap_ncc_landscape.h) within `search` of `nominal`, judged on the whole tiles in the matching band, on the
+// pyramid level. Among those within 0.02 of the best the nearest `nominal` goes first; when another place 3 px or
+// more away matches within ambiguous_ncc (a repeating pattern), the nearest of those, and it is `ambiguous`.
 struct WideSearch {
-  std::vector<TranslationCandidate> candidates;  // the one to take first (ChooseAmongCandidates)
+  std::vector<TranslationCandidate> candidates;  // the one to take first, then the others best first
   bool ambiguous = false;
   bool sharp = false;        // the first one's NCC falls off along both axes (not a ridge along marks)
   double unmoved_ncc = 0.0;  // the tiles' NCC one on the other (offset 0): where the stage did not move
