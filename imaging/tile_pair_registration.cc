@@ -259,9 +259,9 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
   }
   // The range's best match, refined, where it is one clear peak: the nominal overlap's own peak of a repeating
   // pattern matched its lines one period off, or the true step lay farther from the nominal one than its overlap
-  // reaches. Half the landscape's pixel is its uncertainty along what the refinement leaves undetermined (the climb
-  // at full resolution puts the peak within it; a whole pixel put a pair of the real strip 5 px off under the
-  // stage's prior).
+  // reaches. Half the landscape's pixel is its uncertainty along what the refinement leaves undetermined (the
+  // level's pixel it starts from lies within half of one of the peak; a whole pixel put a pair of the real strip
+  // 5 px off under the stage's prior).
   const bool clear = !wide.ambiguous && wide.sharp;
   if (clear) {
     PairRegistration searched;
@@ -273,8 +273,8 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
     RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, 0.5 * wide.scale);
     if (searched.accepted) return searched;
   }
-  // Otherwise the nominal overlap, which stands where it is the range's best match (to the landscape's resolution),
-  // or where that best is a ridge or a repeat, which places it no better.
+  // Otherwise (a ridge or a repeat, which places the match no better than the nominal overlap does, or a clear
+  // peak the refinement rejected) the nominal overlap's phase correlation, as the first pass always did.
   PairRegistration pair = RegisterNominal(a, b, nominal_px, options, 0.0);
   pair.ambiguous = wide.ambiguous;
   pair.candidates.insert(pair.candidates.end(), wide.candidates.begin(), wide.candidates.end());
