@@ -20,6 +20,7 @@
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_mosaic.h"
 #include "imaging/io/x3p.h"
+#include "imaging/overlap_correlation.h"
 #include "imaging/tile_plan.h"
 #include "imaging/tile_registration.h"
 
@@ -130,13 +131,22 @@ void RunStitch(const StitchArgs& args) {
     }
   }
 
-  int accepted = 0;
+  int accepted = 0, ambiguous = 0;
   std::vector<std::string> fallback, stage_bound;
-  for (const auto& pair : result.pairs) accepted += pair.accepted;
+  for (const auto& pair : result.pairs) accepted += pair.accepted, ambiguous += pair.accepted && pair.ambiguous;
+  // The measure without a truth: each neighbour pair's overlap correlation at the positions written.
+  const std::vector<imaging::PairOverlapCorrelation> overlap_ncc =
+      imaging::NeighbourOverlapNcc(images, grid, result.positions.positions_px);
+  double ncc_sum = 0.0;
+  int ncc_count = 0;
+  for (const auto& o : overlap_ncc) {
+    if (std::isfinite(o.correlation.ncc)) ncc_sum += o.correlation.ncc, ++ncc_count;
+  }
+  const auto ncc_json = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
     if (!result.positions.registered[i]) {
       fallback.push_back(layout.tiles[i].file);
-    } else if (result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
+    } else if (result.positions.anchor[i] == 0 && result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
       // Linked by images, but along one axis only: a texture of parallel marks.
       stage_bound.push_back(layout.tiles[i].file);
     }
@@ -147,6 +157,8 @@ void RunStitch(const StitchArgs& args) {
     out["size_px"] = {images.front().cols(), images.front().rows()};
     out["nominal"] = from_stage ? "stage" : "grid";
     out["pairs_accepted"] = accepted;
+    out["pairs_ambiguous"] = ambiguous;
+    out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(ncc_sum / ncc_count) : nlohmann::ordered_json(nullptr);
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
     const imaging::StageModel& model = result.stage;
@@ -168,7 +180,8 @@ void RunStitch(const StitchArgs& args) {
         {"prior_sigma_px", result.stage_sigma_px},
         {"pairs_searched_again", result.pairs_searched_again}};
     out["pairs"] = nlohmann::ordered_json::array();
-    for (const auto& pair : result.pairs) {
+    for (size_t k = 0; k < result.pairs.size(); ++k) {
+      const imaging::PairRegistration& pair = result.pairs[k];
       const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
       // Standard uncertainty per axis where the pair determines both; null along an axis it leaves to the stage.
       nlohmann::ordered_json sigma = {nullptr, nullptr};
@@ -191,7 +204,10 @@ void RunStitch(const StitchArgs& args) {
                               {"sigma_px", sigma},
                               {"quality", pair.quality},
                               {"accepted", pair.accepted},
+                              {"overlap_ncc", ncc_json(overlap_ncc[k].correlation.ncc)},
                               {"searched", pair.searched},
+                              {"ambiguous", pair.ambiguous},
+                              {"unmoved", pair.unmoved},
                               {"search_px", {pair.search_px.x(), pair.search_px.y()}},
                               {"candidates", candidates},
                               {"rejection", pair.accepted ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(pair.rejection)}});
@@ -222,7 +238,16 @@ void RunStitch(const StitchArgs& args) {
                  repeat(model.repeatability_px.y()), result.pairs_searched_again);
     }
   }
+  if (ncc_count > 0) {
+    fmt::print("  mean overlap correlation of the {} neighbour pairs at these positions: {:.3f}\n", ncc_count,
+               ncc_sum / ncc_count);
+  }
   for (const auto& pair : result.pairs) {
+    if (pair.accepted && pair.ambiguous) {
+      fmt::print("  ambiguous {} - {}: another place matched almost as well (a repeating pattern); the stage's "
+                 "prediction chose\n",
+                 layout.tiles[static_cast<size_t>(pair.a)].file, layout.tiles[static_cast<size_t>(pair.b)].file);
+    }
     if (!pair.accepted) {
       fmt::print("  rejected {} - {}: {}\n", layout.tiles[static_cast<size_t>(pair.a)].file,
                  layout.tiles[static_cast<size_t>(pair.b)].file, pair.rejection);
@@ -243,11 +268,18 @@ void RunStitch(const StitchArgs& args) {
     fmt::print("  registered across but not along parallel marks, where the stage decides (u above {:g} px): {}\n",
                0.5 * options.stage_sigma_px, list(stage_bound));
   }
-  double worst = 0.0;
+  double worst = 0.0, worst_any = 0.0;
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (result.positions.registered[i]) worst = std::max(worst, result.positions.sigma_px[i].maxCoeff());
+    const double u = result.positions.sigma_px[i].maxCoeff();
+    if (result.positions.anchor[i] == 0) worst = std::max(worst, u);
+    worst_any = std::max(worst_any, u);
   }
   fmt::print("largest standard uncertainty of a registered tile against the first of its chain: {:.4f} px\n", worst);
+  if (worst_any > worst) {
+    fmt::print("largest standard uncertainty of a tile against the first tile: {:.2f} px (the stage's, where no pair "
+               "registered)\n",
+               worst_any);
+  }
   fmt::print("positions written to {}{}\n", args.output, args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic);
 }
 
@@ -257,8 +289,11 @@ void RegisterStitch(CLI::App& app) {
   auto args = std::make_shared<StitchArgs>();
   CLI::App* sub = app.add_subcommand("stitch", "register overlapping tiles");
   AddDetails(sub,
-      "Registers every tile with its right and lower neighbour: the phase correlation of the nominal overlap, "
-      "refined to sub-pixel with the pair's uncertainty. Thin overlaps (under 24 px), and the pairs that fail when "
+      "Registers every tile with its right and lower neighbour: the overlap's normalised cross-correlation at every "
+      "offset within a quarter of a tile of the nominal one (by Fourier transforms, on a pyramid level), its one "
+      "clear peak refined to sub-pixel with the pair's uncertainty; where it has none (a repeating pattern, a "
+      "ridge along marks), the phase correlation of the nominal overlap. Tiles that match one on the other better "
+      "than anywhere the stage allows (the same image twice) register nothing. Thin overlaps (under 24 px), and the pairs that fail when "
       "too few pass to estimate the stage, are searched instead: phase-correlation candidates within 10 % of a tile "
       "of the nominal offset, each tested by the normalised cross-correlation of the overlap it implies, the best "
       "refined. From the pairs that pass it estimates the stage (step and "
@@ -296,10 +331,10 @@ void RegisterStitch(CLI::App& app) {
       ->capture_default_str();
   AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
   sub->add_flag("--json", args->json,
-                "print one JSON document {\"tiles\", \"pairs_accepted\", \"stage_fallback\": [files], "
+                "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
-                "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"candidates\": [{\"dx_px\", "
+                "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "
                 "\"dy_px\", \"peak\", \"ncc\"}]}]}");
   sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
               "-o demo/positions.csv --mosaic demo/mosaic.tif");

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "imaging/io/tile_image.h"
+#include "imaging/overlap_height_step.h"  // the z step of a registered pair of height-map tiles
 
 namespace fvm::imaging {
 
@@ -41,6 +42,24 @@ struct RegistrationOptions {
   // sparse overlaps put the true peak below a few spurious ones (edges, noise) often enough that one is not
   // enough.
   int candidate_peaks = 8;
+  // The last search of a pair no window around the nominal offset registered (and the stage model's window, when
+  // its repeatability is that large): the whole plausible range, per axis this fraction of the tile (0.25: 148 px
+  // of a 594 px wide tile). A strip of real camera tiles stepped 242-358 px for a nominal 297; beyond a quarter of
+  // a tile a stage is broken, not imprecise.
+  double wide_search_fraction = 0.25;
+  // Candidates and the quality are judged on the high-passed crops smoothed by this Gaussian (px) as well: where
+  // the camera's pixel noise is as strong as the texture at the finest scale, the aligned overlap of a real strip
+  // correlated 0.06-0.29 in the raw high-pass and its wrong candidates nearly as well. 0: the high-pass alone.
+  double match_sigma_px = 2.0;
+  // ... and high-passed at this scale (px) only, 0: only the shading's quadratic taken out, so that they compare
+  // the scene's coarse structure as well (grid lines, pen strokes, dots). On the real strip a wrong offset near
+  // the nominal one correlated 0.91 in the 2-32 px band and 0.80 in the 2-8 px band, where the values as stored
+  // correlate 0.32 there and 0.79 at the true offset.
+  double match_highpass_sigma_px = 0.0;
+  // Two candidates at least 3 px apart whose correlations differ by less than this are ambiguous (a repeating
+  // pattern: a printed grid matches its lines one period off): the pair takes the one nearest the stage's
+  // prediction, says so (`ambiguous`), and the stage model is learnt from the pairs that are not.
+  double ambiguous_ncc = 0.05;
   // Correlate the (nominal or widened) overlap (true) or the whole frames, one peak, with no second search
   // (false: the baseline of the benchmark, slower and noisier, since most of each frame has nothing to match).
   bool crop_to_overlap = true;
@@ -83,6 +102,11 @@ struct PairRegistration {
   // A first-pass pair (RegisterPair) reports its single candidate, the refined nominal overlap's peak.
   std::vector<TranslationCandidate> candidates;
   bool searched = false;  // its offset comes from the widened search (SearchPair), not the first pass
+  // Another candidate matched within ambiguous_ncc of the chosen one: the choice rests on the stage's prediction.
+  bool ambiguous = false;
+  // The tiles matched one on the other (no motion) better than at any offset the stage allows: no search registers
+  // them (RegisterPairOverRange).
+  bool unmoved = false;
   Eigen::Vector2d search_px = Eigen::Vector2d::Zero();  // the window's half-width per axis
   // Why the pair was rejected, for people (empty when accepted): the overlap too small, the shift implausible,
   // the sub-pixel refinement not settling, the quality below the threshold, or no texture to fix the shift.
@@ -95,19 +119,16 @@ struct PairRegistration {
 // the texture's gradient energy stands out of the noise's in no direction.
 PairRegistration RegisterPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                               const RegistrationOptions& options);
+// The first pass of a grid or a chain: RegisterPair, checked against the overlap NCC at every offset within
+// range_px (per axis) of nominal_px (the whole plausible range, RegistrationOptions::wide_search_fraction): where
+// the range's best match lies elsewhere, that one is refined instead (`searched`, with its `candidates`); where
+// the tiles match one on the other better than anywhere in the range, rejected (`unmoved`). A pair whose range had
+// one clear peak is fixed by it along every direction (a direction its gradients leave out carries half a pixel).
+PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
+                                       const Eigen::Vector2d& range_px, const RegistrationOptions& options);
 // The same searched within search_px (per axis) of nominal_px: candidates from the phase correlation of the
 // widened overlap, tested by NCC, the best refined. Rejected also when no candidate lies in the window.
 PairRegistration SearchPair(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal_px,
                             const Eigen::Vector2d& search_px, const RegistrationOptions& options);
-
-// Height-map tiles: how much higher a shows the part than b where they overlap, mean(a(p) - b(p - offset)) over the
-// overlap's valid pixels at a registered offset (b sampled bilinearly), with the variance of that mean from the
-// differences' scatter. Between two tiles of a stitched scan it is the stage's z step between them, seen by the
-// part. pixels == 0 when no valid pixel overlaps.
-struct HeightStep {
-  double mean = 0.0, variance = 0.0;
-  int pixels = 0;
-};
-HeightStep OverlapHeightStep(const TileImage& a, const TileImage& b, const Eigen::Vector2d& offset_px);
 
 }  // namespace fvm::imaging

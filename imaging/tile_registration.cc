@@ -16,10 +16,13 @@
 #include <utility>
 #include <vector>
 
+#include "imaging/overlap_correlation.h"
+
 namespace fvm::imaging {
 
 TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
-                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px) {
+                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px,
+                                 const Eigen::Vector2d& unregistered_sigma_px) {
   if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("SolveTilePositions: the stage sigma must be positive");
   const int n = static_cast<int>(nominal_px.size());
   const auto at = [](int i) { return static_cast<size_t>(i); };
@@ -52,7 +55,20 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
     // first group (whose position is where the measurement's coordinates start, by definition).
     out.registered[at(i)] = unknown[at(i)] >= 0 || i == 0;
   }
-  if (m == 0) return out;
+  // A chain that starts at a tile no pair reached stands where the stage put that tile: known to the stage's
+  // uncertainty, never exactly (only the first tile is the origin by definition).
+  const Eigen::Vector2d fallback =
+      unregistered_sigma_px.minCoeff() >= 0.0 ? unregistered_sigma_px : Eigen::Vector2d::Constant(stage_sigma_px);
+  const auto add_anchor = [&] {
+    for (int i = 0; i < n; ++i) {
+      if (out.anchor[at(i)] == 0) continue;
+      out.sigma_px[at(i)] = (out.sigma_px[at(i)].array().square() + fallback.array().square()).sqrt();
+    }
+  };
+  if (m == 0) {
+    add_anchor();
+    return out;
+  }
   // Normal equations of sum (p_b - p_a - o)' W (p_b - p_a - o) + sum |p - nominal|^2 / stage_sigma^2: a graph
   // Laplacian of 2 x 2 blocks plus the stage's diagonal.
   const double prior = 1.0 / (stage_sigma_px * stage_sigma_px);
@@ -109,6 +125,7 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
       out.sigma_px[at(i)](k) = std::sqrt(variance);
     }
   }
+  add_anchor();
   return out;
 }
 
@@ -134,9 +151,10 @@ void ForEach(int count, bool parallel, const std::function<void(int)>& one) {
 }
 
 // The first pass over pairs whose tiles (a, b) are set, each in its own slot, so the result does not depend on the
-// thread count: the nominal overlap (RegisterPair), or for a thin one the widened search within `window` at once.
+// thread count: the nominal overlap checked against the whole plausible range `wide` (RegisterPairOverRange; the
+// nominal overlap alone for whole frames), or for a thin one the widened search within `window` at once.
 void RegisterFirstPass(const std::vector<TileImage>& images, const std::vector<Eigen::Vector2d>& nominal,
-                       std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window,
+                       std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window, const Eigen::Vector2d& wide,
                        const RegistrationOptions& options, const std::function<void(int done, int total)>& on_pair_registered) {
   std::atomic<int> registered{0};
   const int total = static_cast<int>(pairs.size());
@@ -146,8 +164,13 @@ void RegisterFirstPass(const std::vector<TileImage>& images, const std::vector<E
     const Eigen::Vector2d nominal_px = nominal[b] - nominal[a];
     const Eigen::Vector2d overlap(static_cast<double>(images[a].cols()) - std::abs(nominal_px.x()),
                                   static_cast<double>(images[a].rows()) - std::abs(nominal_px.y()));
-    pair = overlap.minCoeff() < kThinOverlapPx ? SearchPair(images[a], images[b], nominal_px, window, options)
-                                               : RegisterPair(images[a], images[b], nominal_px, options);
+    if (overlap.minCoeff() < kThinOverlapPx) {
+      pair = SearchPair(images[a], images[b], nominal_px, window, options);
+    } else if (options.crop_to_overlap) {
+      pair = RegisterPairOverRange(images[a], images[b], nominal_px, wide, options);
+    } else {
+      pair = RegisterPair(images[a], images[b], nominal_px, options);
+    }
     pair.a = static_cast<int>(a);
     pair.b = static_cast<int>(b);
     if (on_pair_registered) on_pair_registered(++registered, total);
@@ -181,7 +204,7 @@ int SearchFailedAgain(const std::vector<TileImage>& images, std::vector<PairRegi
                       const Eigen::Vector2d& window, const RegistrationOptions& options) {
   std::vector<int> again;
   for (size_t k = 0; k < pairs.size(); ++k) {
-    if (!pairs[k].accepted) again.push_back(static_cast<int>(k));
+    if (!pairs[k].accepted && !pairs[k].unmoved) again.push_back(static_cast<int>(k));
   }
   SearchAgain(images, pairs, again, [](const PairRegistration& first) { return first.nominal_px; }, window, options,
               [](const PairRegistration& first, PairRegistration& pair) {
@@ -193,6 +216,29 @@ int SearchFailedAgain(const std::vector<TileImage>& images, std::vector<PairRegi
 Eigen::Vector2d FirstWindow(const std::vector<TileImage>& images, const RegistrationOptions& options) {
   return options.search_fraction *
          Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
+}
+
+// The whole plausible range of a pair's offset about its nominal one (RegistrationOptions::wide_search_fraction).
+Eigen::Vector2d WideWindow(const std::vector<TileImage>& images, const RegistrationOptions& options) {
+  return options.wide_search_fraction *
+         Eigen::Vector2d(static_cast<double>(images.front().cols()), static_cast<double>(images.front().rows()));
+}
+
+// Pairs the first window left rejected, searched again over the whole plausible range (when it is wider).
+int SearchFailedOverWideRange(const std::vector<TileImage>& images, std::vector<PairRegistration>& pairs,
+                              const RegistrationOptions& options) {
+  if (!(options.wide_search_fraction > options.search_fraction)) return 0;
+  return SearchFailedAgain(images, pairs, WideWindow(images, options), options);
+}
+
+// The stage model from the accepted pairs that were no choice between repeats of a pattern; from all accepted
+// ones when every one was ambiguous.
+StageModel EstimateFromUnambiguous(const std::vector<GridTile>& tiles, std::vector<PairRegistration> pairs) {
+  const bool any_clear = std::any_of(pairs.begin(), pairs.end(), [](const auto& p) { return p.accepted && !p.ambiguous; });
+  if (any_clear) {
+    for (auto& pair : pairs) pair.accepted = pair.accepted && !pair.ambiguous;
+  }
+  return EstimateStageModel(tiles, pairs);
 }
 
 }  // namespace
@@ -208,39 +254,41 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
                                     const std::function<void(int done, int total)>& on_pair_registered) {
   if (images.size() != tiles.size()) throw std::invalid_argument("RegisterTileGrid: one image per tile");
   options.Check();
-  std::map<std::pair<int, int>, int> at;
-  for (size_t i = 0; i < tiles.size(); ++i) at[{tiles[i].row, tiles[i].col}] = static_cast<int>(i);
   RegistrationResult result;
   std::vector<Eigen::Vector2d> nominal;
-  for (size_t i = 0; i < tiles.size(); ++i) {
-    nominal.push_back(tiles[i].nominal_px);
-    for (const auto& [dr, dc] : {std::pair{0, 1}, std::pair{1, 0}}) {
-      const auto it = at.find({tiles[i].row + dr, tiles[i].col + dc});
-      if (it == at.end()) continue;
-      PairRegistration pair;
-      pair.a = static_cast<int>(i);
-      pair.b = it->second;
-      result.pairs.push_back(pair);
-    }
+  for (const auto& tile : tiles) nominal.push_back(tile.nominal_px);
+  for (const auto& [a, b] : GridNeighbourPairs(tiles)) {
+    PairRegistration pair;
+    pair.a = a;
+    pair.b = b;
+    result.pairs.push_back(pair);
   }
   const Eigen::Vector2d first_window = FirstWindow(images, options);
-  RegisterFirstPass(images, nominal, result.pairs, first_window, options, on_pair_registered);
+  RegisterFirstPass(images, nominal, result.pairs, first_window, WideWindow(images, options), options, on_pair_registered);
 
   // The stage from the pairs the first pass accepted; with it, the pairs that failed or disagree are searched
   // again, widened, within a few repeatabilities of the model's offset (the constrained second search of MIST [Chalfoun
   // 2017]). When too few pairs passed to estimate one, the failed ones are first searched within
   // options.search_fraction of the tile around their nominal offsets, and the model is estimated from what then stands.
-  result.stage = EstimateStageModel(tiles, result.pairs);
+  result.stage = EstimateFromUnambiguous(tiles, result.pairs);
   // Whole frames (crop_to_overlap false, the benchmark's baseline) have no overlap to widen: a second search
   // correlates the same frames again, and only the first pass stands.
   const bool search_again = options.crop_to_overlap;
+  const Eigen::Vector2d wide_window = WideWindow(images, options);
   if (search_again && !result.stage.Any()) {
     result.pairs_searched_again += SearchFailedAgain(images, result.pairs, first_window, options);
-    result.stage = EstimateStageModel(tiles, result.pairs);
+    result.stage = EstimateFromUnambiguous(tiles, result.pairs);
+  }
+  if (search_again && !result.stage.Any()) {
+    // Still too few to learn the stage from: the steps may be farther off than the first window reaches.
+    SearchFailedOverWideRange(images, result.pairs, options);
+    result.stage = EstimateFromUnambiguous(tiles, result.pairs);
   }
   if (search_again && result.stage.Any()) {
     const StageModel& model = result.stage;
-    const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(first_window);
+    // A stage that repeats worse than the first window (steps tens of pixels apart) is searched as widely as its
+    // repeatability says, up to the plausible range.
+    const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(wide_window);
     const auto predicted = [&](const PairRegistration& pair) {
       const GridTile& a = tiles[static_cast<size_t>(pair.a)];
       const GridTile& b = tiles[static_cast<size_t>(pair.b)];
@@ -252,7 +300,9 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     std::vector<int> again;
     for (size_t k = 0; k < result.pairs.size(); ++k) {
       const PairRegistration& pair = result.pairs[k];
-      if (!pair.accepted || disagreement(pair) > 0.0) again.push_back(static_cast<int>(k));
+      // An ambiguous pair chose by the nominal offset; the model, learnt from the clear pairs, chooses again.
+      if (pair.unmoved) continue;  // no search registers tiles that show no motion
+      if (!pair.accepted || disagreement(pair) > 0.0 || pair.ambiguous) again.push_back(static_cast<int>(k));
     }
     result.pairs_searched_again += static_cast<int>(again.size());
     SearchAgain(images, result.pairs, again, predicted, tolerance, options, [&](const PairRegistration& first, PairRegistration& pair) {
@@ -261,12 +311,16 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
         pair.rejection = "refined outside the stage model's tolerance";
       }
       if (pair.accepted) return;
+      if (first.accepted && disagreement(first) <= 0.0) {
+        pair = first;  // ambiguous, agreeing with the model, and no better found near it: it stands
+        return;
+      }
       const Eigen::Vector2d off = first.offset_px - predicted(first);
       pair.rejection = (first.accepted ? DisagreementText(off, tolerance) : first.rejection) +
                        "; searched again within the stage model's tolerance: " + pair.rejection;
     });
     // Estimated again from every pair that now stands.
-    if (!again.empty()) result.stage = EstimateStageModel(tiles, result.pairs);
+    if (!again.empty()) result.stage = EstimateFromUnambiguous(tiles, result.pairs);
   }
   const StageModel& model = result.stage;
   for (size_t i = 0; i < tiles.size(); ++i) {
@@ -275,7 +329,13 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   }
   const Eigen::Vector2d& repeatability = model.repeatability_px;
   result.stage_sigma_px = repeatability.minCoeff() > 0.0 ? repeatability.maxCoeff() : options.stage_sigma_px;
-  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px);
+  // A tile no pair registers: the model's repeatability where it has one; before there is one, the spread the
+  // search allowed (uniform over the plausible range; the stage's declared sigma at least).
+  Eigen::Vector2d unregistered = (wide_window / std::sqrt(3.0)).cwiseMax(options.stage_sigma_px);
+  for (int k = 0; k < 2; ++k) {
+    if (repeatability(k) > 0.0) unregistered(k) = repeatability(k);
+  }
+  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px, unregistered);
   return result;
 }
 
@@ -297,8 +357,12 @@ ChainRegistration RegisterTileChain(const std::vector<TileImage>& images, const 
     result.pairs.push_back(pair);
   }
   const Eigen::Vector2d first_window = FirstWindow(images, options);
-  RegisterFirstPass(images, nominal_px, result.pairs, first_window, options, on_pair_registered);
-  if (options.crop_to_overlap) result.pairs_searched_again = SearchFailedAgain(images, result.pairs, first_window, options);
+  RegisterFirstPass(images, nominal_px, result.pairs, first_window, WideWindow(images, options), options,
+                    on_pair_registered);
+  if (options.crop_to_overlap) {
+    result.pairs_searched_again = SearchFailedAgain(images, result.pairs, first_window, options);
+    SearchFailedOverWideRange(images, result.pairs, options);
+  }
   result.positions = SolveTilePositions(nominal_px, result.pairs, options.stage_sigma_px);
   return result;
 }

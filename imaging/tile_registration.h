@@ -20,8 +20,9 @@ struct TilePositions {
   std::vector<Eigen::Vector2d> positions_px;
   std::vector<bool> registered;  // false: no accepted pair links the tile to an earlier one: stage position
   std::vector<int> anchor;       // the tile whose stage position each tile's chain starts from
-  // Standard uncertainty of each position relative to its anchor, per axis (px); 0 for an anchor. Near the stage
-  // sigma along an axis that the images do not determine, where the tile stays near its stage position.
+  // Standard uncertainty of each position relative to the first tile, per axis (px): 0 for the first tile; a tile
+  // no pair links to it carries the stage's uncertainty (its chain's anchor's, added to its own relative to that
+  // anchor). Near the stage sigma along an axis that the images do not determine.
   std::vector<Eigen::Vector2d> sigma_px;
 };
 
@@ -29,8 +30,11 @@ struct TilePositions {
 // stage, p = nominal with standard deviation stage_sigma_px per axis. In every connected group of tiles the first
 // (lowest index, i.e. earliest in the scan) keeps its nominal position exactly; a group of one tile is a tile
 // without a good neighbour.
+// `unregistered_sigma_px`: the standard uncertainty of a chain's anchor other than the first tile, per axis
+// (negative: stage_sigma_px).
 TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
-                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px = 2.0);
+                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px = 2.0,
+                                 const Eigen::Vector2d& unregistered_sigma_px = Eigen::Vector2d::Constant(-1.0));
 
 struct GridTile {
   int row = 0, col = 0;

@@ -67,3 +67,41 @@ BENCHMARK_CAPTURE(BM_RegisterGrid, published_225_tiles_one_thread, 15, true, tru
     ->Iterations(1);
 
 }  // namespace
+
+// Issue 30: the real strip of ../shared/realdata/tiles/starrynight (10 camera tiles of 594 x 929 px, steps 242-358
+// px for a nominal 297, a printed grid that repeats): what fvm stitch does (pairs on the thread pool) against the
+// same on one thread, the baseline. Counters: pairs accepted and the mean overlap correlation at the positions.
+#include "imaging/overlap_correlation.h"
+#include "tests/imaging/starrynight_strip.h"
+
+namespace {
+
+void BM_RegisterRealStrip(benchmark::State& state, bool parallel) {
+  static const fvm::imaging::testing::RealStrip strip = fvm::imaging::testing::LoadStarrynight();
+  if (strip.images.empty()) {
+    state.SkipWithError("../shared/realdata absent");
+    return;
+  }
+  fvm::imaging::RegistrationOptions options;
+  options.parallel = parallel;
+  fvm::imaging::RegistrationResult result;
+  for (auto _ : state) {
+    result = fvm::imaging::RegisterTileGrid(strip.images, strip.tiles, options);
+    benchmark::DoNotOptimize(result);
+  }
+  int accepted = 0;
+  for (const auto& pair : result.pairs) accepted += pair.accepted;
+  double mean = 0.0;
+  const auto ncc = fvm::imaging::NeighbourOverlapNcc(strip.images, strip.tiles, result.positions.positions_px);
+  for (const auto& o : ncc) mean += o.correlation.ncc / static_cast<double>(ncc.size());
+  state.counters["accepted"] = accepted;
+  state.counters["overlap_ncc"] = mean;
+}
+
+BENCHMARK_CAPTURE(BM_RegisterRealStrip, pool, true)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK_CAPTURE(BM_RegisterRealStrip, one_thread_baseline, false)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
+
+}  // namespace

@@ -173,9 +173,8 @@ TEST(TileRegistration, PairUncertaintyMatchesObservedErrors) {
 
 // What real microscope tiles look like at their worst: 8-bit, a polished part with a texture of a few grey levels
 // under a grey level of sensor noise, 50 % vignetting, and overlaps of 5-10 %. Four grey levels of texture
-// register to a tenth of a pixel; with two, some pairs are rejected and those accepted stay within 4 of their
-// standard uncertainties; with one, every pair is rejected and every tile keeps its stage position. Never a
-// confident wrong answer.
+// register to a tenth of a pixel; with two and with one, the pairs accepted stay within 4 of their standard
+// uncertainties, and the tiles nearer the truth than the stage put them. Never a confident wrong answer.
 TEST(TileRegistration, LowTextureEightBitSmallOverlaps) {
   for (const double contrast : {4.0, 2.0, 1.0}) {
     for (const double overlap : {0.05, 0.1}) {
@@ -202,8 +201,10 @@ TEST(TileRegistration, LowTextureEightBitSmallOverlaps) {
         EXPECT_EQ(accepted, 12) << overlap;
         EXPECT_LT(RmsError(result, tiles), 0.1) << overlap;
       } else if (contrast == 1.0) {
-        EXPECT_EQ(accepted, 0) << overlap;
-        for (size_t i = 0; i < tiles.tiles.size(); ++i) EXPECT_EQ(result.positions.positions_px[i], tiles.tiles[i].nominal_px);
+        // Judged on the overlap smoothed by 2 px (match_sigma_px), one grey level of texture under one of noise
+        // registers (before: every pair rejected, 1.68 px rms at the stage positions): measured 0.78 and 0.18 px
+        // rms, each accepted pair within 4 of its standard uncertainties (above).
+        EXPECT_LT(RmsError(result, tiles), 1.2) << overlap;
       }
       std::printf("texture %.0f grey levels, overlap %.0f %%: %d of 12 pairs accepted, rms %.3f px\n", contrast,
                   overlap * 100, accepted, RmsError(result, tiles));
@@ -308,6 +309,28 @@ TEST(TileRegistration, PureNoiseRegistersNothing) {
   for (size_t i = 0; i < tiles.tiles.size(); ++i) {
     EXPECT_EQ(result.positions.positions_px[i], tiles.tiles[i].nominal_px);
     EXPECT_EQ(result.positions.registered[i], i == 0);
+  }
+}
+
+// The same image at every stage position (a frozen camera, one file listed for every tile): the tiles match one on
+// the other (offset 0) better than at any offset the stage allows, and no pair may register, however well some
+// offset in the plausible range correlates (issue 30: a search over the whole range found one).
+TEST(TileRegistration, IdenticalTilesAtEveryPositionRegisterNothing) {
+  artefacts::TileSynthesisOptions options;
+  options.rows = 2;
+  options.cols = 3;
+  options.seed = 3;
+  auto tiles = artefacts::SynthesizeTiles(options);
+  for (auto& image : tiles.images) image = tiles.images.front();
+  const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
+  for (const auto& pair : result.pairs) {
+    EXPECT_FALSE(pair.accepted) << pair.a << "-" << pair.b;
+    EXPECT_TRUE(pair.unmoved) << pair.a << "-" << pair.b << ": " << pair.rejection;
+  }
+  // The same tiles where they are (distinct images): every pair registers, none is taken for unmoved.
+  const auto distinct = artefacts::SynthesizeTiles(options);
+  for (const auto& pair : RegisterTileGrid(distinct.images, distinct.tiles, RegistrationOptions{}).pairs) {
+    EXPECT_TRUE(pair.accepted && !pair.unmoved) << pair.a << "-" << pair.b << ": " << pair.rejection;
   }
 }
 
