@@ -23,7 +23,7 @@
 #include "imaging/height_map.h"
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/x3p.h"
-#include "imaging/tile_registration.h"  // SetImagingThreads
+#include "workflows/focus.h"
 
 namespace fvm::cli {
 namespace {
@@ -63,13 +63,6 @@ void WriteMap(const std::filesystem::path& path, const imaging::HeightMap& map) 
   }
 }
 
-double Median(std::vector<float> values) {
-  if (values.empty()) return 0.0;
-  const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
 void RunFocus(const FocusArgs& args) {
   imaging::FocusVariationOptions options;
   const auto measure = imaging::ParseFocusMeasure(args.measure);
@@ -91,21 +84,17 @@ void RunFocus(const FocusArgs& args) {
   }
   if (!args.uncertainty_output.empty()) KindOf(args.uncertainty_output);
 
-  std::vector<std::filesystem::path> inputs(args.stack.begin(), args.stack.end());
-  const std::vector<imaging::FocusStackEntry> entries = imaging::ResolveFocusStack(inputs, args.z_step_mm);
-  const bool slice_units = entries.front().line == 0 && !args.z_step_mm;
-  imaging::SetImagingThreads(ThreadCount());
-  imaging::FocusStackFilesOptions files;
-  files.focus = options;
-  files.align = args.align;
-  files.colour = !args.texture_output.empty();
-  Progress progress("focus stack slices", static_cast<int>(entries.size()), ShowProgress());
-  const imaging::FocusStackFilesResult read =
-      imaging::ReconstructFocusStackFiles(entries, files, [&] { progress.Advance(); });
+  const workflows::FocusOptions job{options, args.z_step_mm, args.align, !args.texture_output.empty(), ThreadCount()};
+  std::vector<imaging::FocusStackEntry> stack =
+      imaging::ResolveFocusStack(std::vector<std::filesystem::path>(args.stack.begin(), args.stack.end()), args.z_step_mm);
+  Progress progress("focus stack slices", static_cast<int>(stack.size()), ShowProgress());
+  const workflows::FocusSummary summary = workflows::ReconstructFocus(std::move(stack), job, [&] { progress.Advance(); });
   progress.Finish();
+  const std::vector<imaging::FocusStackEntry>& entries = summary.entries;
+  const imaging::FocusStackFilesResult& read = summary.read;
   const imaging::FocusResult& result = read.focus;
-  imaging::HeightMap map = result.height;
-  if (slice_units) map.source += "; heights in slice units (no z step given)";
+  const imaging::HeightMap& map = summary.map;
+  const bool slice_units = summary.slice_units;
   WriteMap(args.output, map);
   if (!args.quality_output.empty()) {
     imaging::HeightMap quality = map;
@@ -123,18 +112,10 @@ void RunFocus(const FocusArgs& args) {
     imaging::WriteStackImage(args.texture_output, imaging::AllInFocusImage(result, read.eight_bit));
   }
 
-  const imaging::HeightMapStats stats = imaging::ComputeStats(map);
-  std::vector<float> valid_quality;
-  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
-    if (std::isfinite(map.z_mm[i])) valid_quality.push_back(result.quality[i]);
-  }
-  const double median_quality = Median(result.quality);
-  const double median_valid_quality = Median(valid_quality);
-  std::vector<float> valid_u;
-  for (float u : result.u_z_mm) {
-    if (std::isfinite(u)) valid_u.push_back(u);
-  }
-  const double median_u = Median(valid_u);
+  const imaging::HeightMapStats& stats = summary.stats;
+  const double median_quality = summary.median_quality;
+  const double median_valid_quality = summary.median_valid_quality;
+  const double median_u = summary.median_u;
   const char* unit = slice_units ? "slice" : "mm";
   const std::size_t points = map.z_mm.size();
   if (args.json) {

@@ -1,6 +1,7 @@
 // fvm stitch: register the tiles of a layout (imaging/tile_registration.h) and write their positions.
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <Eigen/LU>
@@ -23,6 +24,7 @@
 #include "imaging/overlap_correlation.h"
 #include "imaging/tile_plan.h"
 #include "imaging/tile_registration.h"
+#include "workflows/stitch.h"
 
 namespace fvm::cli {
 namespace {
@@ -37,15 +39,6 @@ struct StitchArgs {
   double stage_sigma_px = imaging::RegistrationOptions{}.stage_sigma_px;
   bool json = false;
 };
-
-// Right and lower neighbours, as RegisterTileGrid pairs them: the total of the progress line.
-int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
-  std::set<std::pair<int, int>> at;
-  for (const auto& t : grid) at.insert({t.row, t.col});
-  int pairs = 0;
-  for (const auto& t : grid) pairs += static_cast<int>(at.count({t.row, t.col + 1}) + at.count({t.row + 1, t.col}));
-  return pairs;
-}
 
 void RunStitch(const StitchArgs& args) {
   const double overlap = imaging::ParseOverlap(args.overlap, "--overlap");
@@ -78,30 +71,17 @@ void RunStitch(const StitchArgs& args) {
   }
   const double width = static_cast<double>(images.front().cols());
   const double height = static_cast<double>(images.front().rows());
-  // Nominal positions: from the stage when the layout has them and the pixel size converts them (image y runs
-  // down = -Y), else from the grid and the overlap. Either way the first tile of the file is the origin.
-  const bool from_stage = args.pixel_mm > 0.0 && layout.tiles.front().stage_mm.has_value();
-  const auto& first = layout.tiles.front();
-  // The stage frame (+Y up) of the first tile's centre when the layout has stage positions, else 0, 0: the origin
-  // of the x_mm, y_mm columns and of an X3P mosaic.
-  const Eigen::Vector2d origin = first.stage_mm.value_or(Eigen::Vector2d::Zero());
-  std::vector<imaging::GridTile> grid;
-  for (const auto& tile : layout.tiles) {
-    Eigen::Vector2d nominal;
-    if (from_stage) {
-      nominal = Eigen::Vector2d(tile.stage_mm->x() - first.stage_mm->x(), first.stage_mm->y() - tile.stage_mm->y()) /
-                args.pixel_mm;
-    } else {
-      nominal = Eigen::Vector2d((tile.col - first.col) * width * (1.0 - overlap),
-                                (tile.row - first.row) * height * (1.0 - overlap));
-    }
-    grid.push_back({tile.row, tile.col, nominal});
-  }
-  imaging::SetImagingThreads(ThreadCount());
-  Progress pair_progress("registering pairs", CountGridPairs(grid), ShowProgress());
-  const imaging::RegistrationResult result =
-      imaging::RegisterTileGrid(images, grid, options, [&](int, int) { pair_progress.Advance(); });
+  workflows::StitchOptions job{overlap, args.pixel_mm, options, ThreadCount()};
+  bool from_stage = false;
+  Progress pair_progress("registering pairs",
+                         workflows::CountGridPairs(workflows::NominalGrid(layout, static_cast<int>(width),
+                                                                          static_cast<int>(height), job, &from_stage)),
+                         ShowProgress());
+  const workflows::StitchResult stitched =
+      workflows::StitchTiles(layout, images, job, [&](int, int) { pair_progress.Advance(); });
   pair_progress.Finish();
+  const imaging::RegistrationResult& result = stitched.registration;
+  const Eigen::Vector2d& origin = stitched.origin_mm;
 
   std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered,u_x,u_y\n" : "file,x,y,registered,u_x,u_y\n";
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
@@ -131,26 +111,12 @@ void RunStitch(const StitchArgs& args) {
     }
   }
 
-  int accepted = 0, ambiguous = 0;
-  std::vector<std::string> fallback, stage_bound;
-  for (const auto& pair : result.pairs) accepted += pair.accepted, ambiguous += pair.accepted && pair.ambiguous;
-  // The measure without a truth: each neighbour pair's overlap correlation at the positions written.
-  const std::vector<imaging::PairOverlapCorrelation> overlap_ncc =
-      imaging::NeighbourOverlapNcc(images, grid, result.positions.positions_px);
-  double ncc_sum = 0.0;
-  int ncc_count = 0;
-  for (const auto& o : overlap_ncc) {
-    if (std::isfinite(o.correlation.ncc)) ncc_sum += o.correlation.ncc, ++ncc_count;
-  }
+  const int accepted = stitched.accepted, ambiguous = stitched.ambiguous;
+  const std::vector<std::string>& fallback = stitched.at_stage_position;
+  const std::vector<std::string>& stage_bound = stitched.stage_along_one_axis;
+  const std::vector<imaging::PairOverlapCorrelation>& overlap_ncc = stitched.overlap_ncc;
+  const int ncc_count = stitched.ncc_pairs;
   const auto ncc_json = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
-  for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (!result.positions.registered[i]) {
-      fallback.push_back(layout.tiles[i].file);
-    } else if (result.positions.anchor[i] == 0 && result.positions.sigma_px[i].maxCoeff() > 0.5 * options.stage_sigma_px) {
-      // Linked by images, but along one axis only: a texture of parallel marks.
-      stage_bound.push_back(layout.tiles[i].file);
-    }
-  }
   if (args.json) {
     nlohmann::ordered_json out;
     out["tiles"] = layout.tiles.size();
@@ -158,7 +124,7 @@ void RunStitch(const StitchArgs& args) {
     out["nominal"] = from_stage ? "stage" : "grid";
     out["pairs_accepted"] = accepted;
     out["pairs_ambiguous"] = ambiguous;
-    out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(ncc_sum / ncc_count) : nlohmann::ordered_json(nullptr);
+    out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(stitched.mean_overlap_ncc) : nlohmann::ordered_json(nullptr);
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
     const imaging::StageModel& model = result.stage;
@@ -240,7 +206,7 @@ void RunStitch(const StitchArgs& args) {
   }
   if (ncc_count > 0) {
     fmt::print("  mean overlap correlation of the {} neighbour pairs at these positions: {:.3f}\n", ncc_count,
-               ncc_sum / ncc_count);
+               stitched.mean_overlap_ncc);
   }
   for (const auto& pair : result.pairs) {
     if (pair.accepted && pair.ambiguous) {
@@ -253,20 +219,15 @@ void RunStitch(const StitchArgs& args) {
                  layout.tiles[static_cast<size_t>(pair.b)].file, pair.rejection);
     }
   }
-  const auto list = [](const std::vector<std::string>& files) {
-    std::string text;
-    for (const auto& f : files) text += (text.empty() ? "" : ", ") + f;
-    return text;
-  };
   if (accepted == 0) {
     fmt::print("  no pair registered: every tile stays at its nominal position\n");
   }
   if (!fallback.empty()) {
-    fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", list(fallback));
+    fmt::print("  at their stage positions (no good pair to an earlier tile): {}\n", fmt::join(fallback, ", "));
   }
   if (!stage_bound.empty()) {
     fmt::print("  registered across but not along parallel marks, where the stage decides (u above {:g} px): {}\n",
-               0.5 * options.stage_sigma_px, list(stage_bound));
+               0.5 * options.stage_sigma_px, fmt::join(stage_bound, ", "));
   }
   double worst = 0.0, worst_any = 0.0;
   for (size_t i = 0; i < layout.tiles.size(); ++i) {

@@ -1,0 +1,66 @@
+#include "workflows/stitch.h"
+
+#include <cmath>
+#include <set>
+#include <utility>
+
+namespace fvm::workflows {
+
+std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, int width_px, int height_px,
+                                           const StitchOptions& options, bool* from_stage) {
+  const double width = static_cast<double>(width_px), height = static_cast<double>(height_px);
+  const bool stage = options.pixel_mm > 0.0 && layout.tiles.front().stage_mm.has_value();
+  const auto& first = layout.tiles.front();
+  std::vector<imaging::GridTile> grid;
+  for (const auto& tile : layout.tiles) {
+    Eigen::Vector2d nominal;
+    if (stage) {
+      nominal = Eigen::Vector2d(tile.stage_mm->x() - first.stage_mm->x(), first.stage_mm->y() - tile.stage_mm->y()) /
+                options.pixel_mm;
+    } else {
+      nominal = Eigen::Vector2d((tile.col - first.col) * width * (1.0 - options.overlap),
+                                (tile.row - first.row) * height * (1.0 - options.overlap));
+    }
+    grid.push_back({tile.row, tile.col, nominal});
+  }
+  if (from_stage) *from_stage = stage;
+  return grid;
+}
+
+int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
+  std::set<std::pair<int, int>> at;
+  for (const auto& t : grid) at.insert({t.row, t.col});
+  int pairs = 0;
+  for (const auto& t : grid) pairs += static_cast<int>(at.count({t.row, t.col + 1}) + at.count({t.row + 1, t.col}));
+  return pairs;
+}
+
+StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
+                         const StitchOptions& options, const std::function<void(int, int)>& on_pair) {
+  StitchResult s;
+  s.grid = NominalGrid(layout, static_cast<int>(images.front().cols()), static_cast<int>(images.front().rows()), options,
+                       &s.from_stage);
+  s.origin_mm = layout.tiles.front().stage_mm.value_or(Eigen::Vector2d::Zero());
+  imaging::SetImagingThreads(options.threads);
+  s.registration = imaging::RegisterTileGrid(images, s.grid, options.registration, on_pair);
+  const imaging::RegistrationResult& r = s.registration;
+  for (const auto& pair : r.pairs) s.accepted += pair.accepted, s.ambiguous += pair.accepted && pair.ambiguous;
+  s.overlap_ncc = imaging::NeighbourOverlapNcc(images, s.grid, r.positions.positions_px);
+  double sum = 0.0;
+  for (const auto& o : s.overlap_ncc) {
+    if (std::isfinite(o.correlation.ncc)) sum += o.correlation.ncc, ++s.ncc_pairs;
+  }
+  if (s.ncc_pairs > 0) s.mean_overlap_ncc = sum / s.ncc_pairs;
+  for (size_t i = 0; i < layout.tiles.size(); ++i) {
+    if (!r.positions.registered[i]) {
+      s.at_stage_position.push_back(layout.tiles[i].file);
+    } else if (r.positions.anchor[i] == 0 &&
+               r.positions.sigma_px[i].maxCoeff() > 0.5 * options.registration.stage_sigma_px) {
+      // Linked by images, but along one axis only: a texture of parallel marks.
+      s.stage_along_one_axis.push_back(layout.tiles[i].file);
+    }
+  }
+  return s;
+}
+
+}  // namespace fvm::workflows

@@ -1,0 +1,51 @@
+#pragma once
+// Overlapping tiles registered into one frame (`fvm stitch`): nominal positions from the stage (when the layout
+// has them and the pixel size converts them) or from the grid and the overlap, every neighbour pair registered,
+// the positions solved, and each pair judged by its overlap correlation at the positions found.
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "imaging/io/tile_image.h"
+#include "imaging/io/tile_layout.h"
+#include "imaging/overlap_correlation.h"
+#include "imaging/tile_registration.h"
+
+namespace fvm::workflows {
+
+struct StitchOptions {
+  double overlap = 0.2;         // nominal overlap, fraction of a tile
+  double pixel_mm = 0.0;        // > 0: the layout's stage positions (mm) give the nominal positions
+  imaging::RegistrationOptions registration;
+  int threads = 0;              // OpenCV's pool; 0: all cores
+};
+
+// The nominal grid, the first tile of the layout at the origin (image y runs down = -Y). `from_stage`: whether the
+// stage positions gave it.
+std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, int width_px, int height_px,
+                                           const StitchOptions& options, bool* from_stage);
+// Right and lower neighbours, as imaging::RegisterTileGrid pairs them: the total of a progress count.
+int CountGridPairs(const std::vector<imaging::GridTile>& grid);
+
+struct StitchResult {
+  std::vector<imaging::GridTile> grid;
+  bool from_stage = false;
+  // The stage frame (+Y up) of the first tile's centre when the layout has stage positions, else 0, 0: the origin
+  // of positions in mm and of a height-map mosaic.
+  Eigen::Vector2d origin_mm = Eigen::Vector2d::Zero();
+  imaging::RegistrationResult registration;
+  // Each neighbour pair's overlap correlation at the positions found (the measure without a truth), their mean.
+  std::vector<imaging::PairOverlapCorrelation> overlap_ncc;
+  double mean_overlap_ncc = NAN;
+  int ncc_pairs = 0, accepted = 0, ambiguous = 0;
+  std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one
+  std::vector<std::string> stage_along_one_axis;  // linked across parallel marks only
+};
+
+// `images[i]` is the layout's tile i. `on_pair` is called as each pair is registered (progress).
+StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
+                         const StitchOptions& options, const std::function<void(int done, int total)>& on_pair = {});
+
+}  // namespace fvm::workflows
