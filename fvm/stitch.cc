@@ -127,7 +127,7 @@ void RunStitch(const StitchArgs& args) {
     out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(stitched.mean_overlap_ncc) : nlohmann::ordered_json(nullptr);
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
-    const imaging::StageModel& model = result.stage;
+    const imaging::TileGridSteps& model = result.stage;
     const auto component = [&](const Eigen::Vector2d& v, int k, int index) {
       return model.estimated[static_cast<size_t>(index)] ? nlohmann::ordered_json(v(k)) : nlohmann::ordered_json(nullptr);
     };
@@ -185,11 +185,11 @@ void RunStitch(const StitchArgs& args) {
              layout.tiles.size(), images.front().cols(), images.front().rows(), result.pairs.size(), accepted,
              options.min_quality, from_stage ? "stage" : "grid and overlap");
   {
-    const imaging::StageModel& model = result.stage;
+    const imaging::TileGridSteps& model = result.stage;
     if (!model.Any()) {
       fmt::print("  stage model: not estimated ({} registered pairs; it needs {} per direction): the nominal "
                  "positions stand\n",
-                 accepted, imaging::StageModel::kMinPairs);
+                 accepted, imaging::TileGridSteps::kMinPairs);
     } else {
       const auto value = [&](const Eigen::Vector2d& v, int k, int index) {
         return model.estimated[static_cast<size_t>(index)] ? fmt::format("{:+.2f}", v(k)) : std::string("nominal");

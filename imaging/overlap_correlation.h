@@ -14,11 +14,11 @@
 #include <utility>
 #include <vector>
 
+#include "imaging/grid_tile.h"
 #include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 
-struct GridTile;
 
 struct OverlapCorrelation {
   double ncc = 0.0;  // in [-1, 1]; NaN when fewer than 64 valid pixels overlap or a side is constant

@@ -233,12 +233,12 @@ int SearchFailedOverWideRange(const std::vector<TileImage>& images, std::vector<
 
 // The stage model from the accepted pairs that were no choice between repeats of a pattern; from all accepted
 // ones when every one was ambiguous.
-StageModel EstimateFromUnambiguous(const std::vector<GridTile>& tiles, std::vector<PairRegistration> pairs) {
+TileGridSteps EstimateFromUnambiguous(const std::vector<GridTile>& tiles, std::vector<PairRegistration> pairs) {
   const bool any_clear = std::any_of(pairs.begin(), pairs.end(), [](const auto& p) { return p.accepted && !p.ambiguous; });
   if (any_clear) {
     for (auto& pair : pairs) pair.accepted = pair.accepted && !pair.ambiguous;
   }
-  return EstimateStageModel(tiles, pairs);
+  return EstimateTileGridSteps(tiles, pairs);
 }
 
 }  // namespace
@@ -285,7 +285,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     result.stage = EstimateFromUnambiguous(tiles, result.pairs);
   }
   if (search_again && result.stage.Any()) {
-    const StageModel& model = result.stage;
+    const TileGridSteps& model = result.stage;
     // A stage that repeats worse than the first window (steps tens of pixels apart) is searched as widely as its
     // repeatability says, up to the plausible range.
     const Eigen::Vector2d tolerance = model.Tolerance(first_window).cwiseMin(wide_window);
@@ -322,7 +322,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     // Estimated again from every pair that now stands.
     if (!again.empty()) result.stage = EstimateFromUnambiguous(tiles, result.pairs);
   }
-  const StageModel& model = result.stage;
+  const TileGridSteps& model = result.stage;
   for (size_t i = 0; i < tiles.size(); ++i) {
     result.stage_positions_px.push_back(
         nominal[i] + model.Correction(tiles[i].row - tiles[0].row, tiles[i].col - tiles[0].col));

@@ -12,7 +12,8 @@
 #include <vector>
 
 #include "imaging/io/tile_image.h"
-#include "imaging/stage_model.h"
+#include "imaging/grid_tile.h"
+#include "imaging/tile_grid_steps.h"
 #include "imaging/tile_pair_registration.h"
 
 namespace fvm::imaging {
@@ -36,17 +37,12 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
                                  const std::vector<PairRegistration>& pairs, double stage_sigma_px = 2.0,
                                  const Eigen::Vector2d& unregistered_sigma_px = Eigen::Vector2d::Constant(-1.0));
 
-struct GridTile {
-  int row = 0, col = 0;
-  Eigen::Vector2d nominal_px = Eigen::Vector2d::Zero();
-};
-
 struct RegistrationResult {
   TilePositions positions;
   std::vector<PairRegistration> pairs;  // right and lower neighbours of every tile
   // The stage as the accepted pairs show it (none estimated when too few registered), and what the solve took
   // for each tile's stage position and its standard deviation: the nominal corrected by the model.
-  StageModel stage;
+  TileGridSteps stage;
   std::vector<Eigen::Vector2d> stage_positions_px;
   double stage_sigma_px = 0.0;
   int pairs_searched_again = 0;  // pairs the model's window searched a second time

@@ -278,7 +278,7 @@ TEST(TileRegistration, SparseThinOverlapsLearnTheStage) {
     EXPECT_GE(within, 23) << seed;  // 90 % of 25
     EXPECT_LT(worst, 3.0) << seed;
     EXPECT_GT(nominal_worst, 10.0);  // what the nominal positions alone leave
-    const StageModel& model = result.stage;
+    const TileGridSteps& model = result.stage;
     EXPECT_TRUE(model.estimated[0] && model.estimated[1] && model.estimated[2] && model.estimated[3]);
     const double east = options.width * (1.0 - options.overlap), south = options.height * (1.0 - options.overlap);
     EXPECT_NEAR(model.east_px.x(), east + options.east_step_error_px.x(), 1.5) << seed;

@@ -1,21 +1,14 @@
-#include "imaging/stage_model.h"
+#include "imaging/tile_grid_steps.h"
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
-#include "imaging/tile_registration.h"
+#include "core/statistics.h"
 
 namespace fvm::imaging {
 namespace {
-
-double Median(std::vector<double> values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  if (values.size() % 2 == 1) return *middle;
-  return 0.5 * (*middle + *std::max_element(values.begin(), middle));
-}
 
 // Whether a pair's information fixes axis k: the directions it determines to better than 0.5 px span the axis
 // (to within 18 degrees). Not the marginal variance: along machining marks the information is rank one and tilted
@@ -31,7 +24,7 @@ bool Fixes(const Eigen::Matrix2d& information, int k) {
 
 }  // namespace
 
-Eigen::Vector2d StageModel::Tolerance(const Eigen::Vector2d& fallback) const {
+Eigen::Vector2d TileGridSteps::Tolerance(const Eigen::Vector2d& fallback) const {
   Eigen::Vector2d out;
   for (int k = 0; k < 2; ++k) {
     out(k) = repeatability_px(k) > 0.0 ? std::max(5.0 * std::sqrt(2.0) * repeatability_px(k) + 1.0, 3.0) : fallback(k);
@@ -39,12 +32,12 @@ Eigen::Vector2d StageModel::Tolerance(const Eigen::Vector2d& fallback) const {
   return out;
 }
 
-Eigen::Vector2d StageModel::Correction(int drow, int dcol) const {
+Eigen::Vector2d TileGridSteps::Correction(int drow, int dcol) const {
   return dcol * (east_px - nominal_east_px) + drow * (south_px - nominal_south_px);
 }
 
-StageModel EstimateStageModel(const std::vector<GridTile>& tiles, const std::vector<PairRegistration>& pairs) {
-  StageModel model;
+TileGridSteps EstimateTileGridSteps(const std::vector<GridTile>& tiles, const std::vector<PairRegistration>& pairs) {
+  TileGridSteps model;
   // Per direction (0 east, 1 south): nominal offsets, and per axis the measured ones that the pair fixes.
   std::array<std::vector<double>, 2> nominal_x, nominal_y;
   std::array<std::array<std::vector<double>, 2>, 2> measured;
@@ -73,7 +66,7 @@ StageModel EstimateStageModel(const std::vector<GridTile>& tiles, const std::vec
     *step[d] = *nominal_step[d];
     for (size_t k = 0; k < 2; ++k) {
       const std::vector<double>& values = measured[d][k];
-      if (values.size() < static_cast<size_t>(StageModel::kMinPairs)) continue;
+      if (values.size() < static_cast<size_t>(TileGridSteps::kMinPairs)) continue;
       const double median = Median(values);
       (*step[d])(static_cast<Eigen::Index>(k)) = median;
       model.estimated[2 * d + k] = true;
@@ -81,7 +74,7 @@ StageModel EstimateStageModel(const std::vector<GridTile>& tiles, const std::vec
     }
   }
   for (size_t k = 0; k < 2; ++k) {
-    if (deviations[k].size() < static_cast<size_t>(StageModel::kMinPairs)) continue;
+    if (deviations[k].size() < static_cast<size_t>(TileGridSteps::kMinPairs)) continue;
     // 1.4826 MAD: the standard deviation of a normal distribution; a pair differs two positions: / sqrt(2). A
     // floor of 0.05 px: a stage that repeats better than registration measures is still no perfect one.
     model.repeatability_px(static_cast<Eigen::Index>(k)) =

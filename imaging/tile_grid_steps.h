@@ -1,5 +1,5 @@
 #pragma once
-// The stage as the registered pairs of a grid show it (issue 13, after the stage model of NIST MIST [Chalfoun 2017]): a
+// The steps of a tile grid as its registered pairs show them (after the stage model of NIST MIST [Chalfoun 2017]): a
 // real stage steps a little longer or shorter than nominal and drifts sideways by the same amount at every step, and
 // repeats each position only to within its repeatability. Estimated from the pairs that register, it predicts the pairs
 // that do not, rejects registrations that disagree with it, and is the prior of the global solve.
@@ -10,13 +10,12 @@
 #include <array>
 #include <vector>
 
+#include "imaging/grid_tile.h"
 #include "imaging/tile_pair_registration.h"
 
 namespace fvm::imaging {
 
-struct GridTile;
-
-struct StageModel {
+struct TileGridSteps {
   // The mean offset of a tile's right neighbour (east: x the step, y the sideways drift per column) and of its
   // lower one (south: y the step, x the drift per row), px: the 2 x 2 map from grid index to pixels.
   Eigen::Vector2d east_px = Eigen::Vector2d::Zero(), south_px = Eigen::Vector2d::Zero();
@@ -46,6 +45,6 @@ struct StageModel {
 // From the accepted pairs between right (east) and lower (south) neighbours of `tiles`: the median offset per
 // direction and axis (robust against a wrong registration), over the pairs whose information fixes that axis to
 // better than 0.5 px; the spread from the median absolute deviation.
-StageModel EstimateStageModel(const std::vector<GridTile>& tiles, const std::vector<PairRegistration>& pairs);
+TileGridSteps EstimateTileGridSteps(const std::vector<GridTile>& tiles, const std::vector<PairRegistration>& pairs);
 
 }  // namespace fvm::imaging
