@@ -67,6 +67,9 @@ void RegisterFit(CLI::App& app);
 void RegisterFocus(CLI::App& app);
 // fvm tiles plan|synthesize|simulate ... (fvm/tiles.cc).
 void RegisterTiles(CLI::App& app);
+// fvm tiles synthesize (fvm/tiles_synthesize.cc) and simulate (fvm/tiles_simulate.cc), under `tiles`.
+void AddTilesSynthesize(CLI::App* tiles);
+void AddTilesSimulate(CLI::App* tiles);
 // fvm stitch --layout L.csv --overlap PCT -o P.csv [--pixel-mm S] (fvm/stitch.cc).
 void RegisterStitch(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
