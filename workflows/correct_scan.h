@@ -27,7 +27,9 @@ std::vector<std::size_t> CheckTravel(const ScanCorrectionJob& job, const stage::
                                      const std::vector<std::string>& tile_names = {});
 
 struct CorrectedCloud {
-  stage::ScanCorrector corrector;        // as the points were corrected: uncertainties elsewhere (a grid) from it
+  // As the points were corrected: uncertainties elsewhere (a grid) come from it. It refers to the calibration,
+  // which must outlive it.
+  stage::ScanCorrector corrector;
   stage::ScanCorrectionSummary summary;
   std::vector<Eigen::Vector3d> u;        // standard uncertainties per point (mm) when asked
   std::vector<std::size_t> outside;      // points extrapolated
