@@ -55,10 +55,12 @@ ReportData MakeReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis&
   for (const std::string& f : d.findings) data.summary.emplace_back("residual analysis", f);
   for (double e : diagnosis.distance_errors_before_mm) data.distance_errors_before_um.push_back(e * 1e3);
   for (double e : diagnosis.distance_errors_after_mm) data.distance_errors_after_um.push_back(e * 1e3);
-  for (size_t i = 0; i < identify.observations.size() && i < d.residuals_after.size(); ++i) {
+  // Residuals after taking outliers out belong to fewer centres: then the map shows the centres before only.
+  const bool after_in_step = d.residuals_after.size() == identify.observations.size();
+  for (size_t i = 0; i < identify.observations.size() && i < d.residuals_before.size(); ++i) {
     const Eigen::Vector3d& q = identify.observations[i].command;
     data.errors_before.push_back({q.x(), q.y(), -d.residuals_before[i].x() * 1e3, -d.residuals_before[i].y() * 1e3});
-    data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
+    if (after_in_step) data.errors_after.push_back({q.x(), q.y(), -d.residuals_after[i].x() * 1e3, -d.residuals_after[i].y() * 1e3});
   }
   const auto held_out_um = [](const stage::ResidualSummary& s) { return s.count > 0 ? s.mean_mm * 1e3 : std::nan(""); };
   data.steps.push_back({"base model", d.before.mean_mm * 1e3, held_out_um(d.validation_before)});

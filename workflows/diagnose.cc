@@ -7,8 +7,10 @@
 namespace fvm::workflows {
 namespace {
 
+// Empty when the residuals are not the set's own (outliers taken out leave fewer, and no longer in step with it).
 std::vector<double> DistanceErrors(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
   std::vector<double> errors;
+  if (residuals.size() != set.observations.size()) return errors;
   std::map<int, size_t> first;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const auto [it, inserted] = first.emplace(set.observations[i].group, i);

@@ -21,7 +21,8 @@ struct BatchDiagnosis {
   stage::Diagnosis diagnosis;
   stage::MeasurementSet identification, validation;
   // The first-order change of each distance from a placement's first centre to the others (mm), from the
-  // identification residuals before and after the effects accepted.
+  // identification residuals before and after the effects accepted; `after` is empty when outliers were taken out
+  // (the residuals then belong to fewer centres).
   std::vector<double> distance_errors_before_mm, distance_errors_after_mm;
 };
 

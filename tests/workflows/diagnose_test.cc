@@ -33,5 +33,20 @@ TEST(DiagnoseBatch, NamesAHiddenScaleAndTheHeldOutPlacementsConfirmIt) {
   EXPECT_LT(after * 1e3, 5.0);
 }
 
+// Three failed sphere fits (80 um) among the identification centres: flagged and taken out, so the residuals after
+// belong to fewer centres and their distance errors are not paired with the wrong ones (left empty instead).
+TEST(DiagnoseBatch, OutliersTakenOutLeaveNoMispairedDistanceErrors) {
+  artefacts::FvmBatchOptions sim;
+  sim.seed = 3;
+  sim.hidden_effect = "outliers";
+  const artefacts::SimulatedFvmBatch batch = artefacts::SimulateFvmBatch(sim);
+  const BatchDiagnosis d = DiagnoseBatch(batch.batch, {});
+  ASSERT_TRUE(d.diagnosis.effect.has_value());
+  EXPECT_EQ(*d.diagnosis.effect, "outliers");
+  EXPECT_LT(d.diagnosis.residuals_after.size(), d.identification.observations.size());
+  EXPECT_EQ(d.distance_errors_before_mm.size(), 16u * batch.batch.identify.size());
+  EXPECT_TRUE(d.distance_errors_after_mm.empty());
+}
+
 }  // namespace
 }  // namespace fvm::workflows
