@@ -12,7 +12,6 @@
 #include "stage/io/calibration_file.h"
 #include "core/exit_codes.h"
 #include "fvm/identify_options.h"
-#include "artefacts/batch_observations.h"
 #include "workflows/calibrate.h"
 #include "workflows/calibration_scans.h"
 #include "artefacts/scan_observations.h"

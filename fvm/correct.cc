@@ -5,14 +5,12 @@
 
 #include <cmath>
 #include <optional>
-#include <set>
 
 #include "core/csv.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
-#include "stage/identification.h"
 #include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
