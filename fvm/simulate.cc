@@ -28,7 +28,7 @@
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "stage/fvm_stage_models.h"
-#include "stage/multilateration.h"
+#include "stage/multilateration_start.h"
 #include "stage/pose.h"
 #include "stage/tracker.h"
 

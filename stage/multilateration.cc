@@ -1,34 +1,30 @@
 #include "stage/multilateration.h"
 
+#include <ceres/ceres.h>
 #include <fmt/core.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <limits>
+#include <memory>
+#include <numbers>
 #include <stdexcept>
-#include <Eigen/LU>
+#include <tuple>
 
 #include "stage/linear_dependence.h"
+#include "stage/multilateration_start.h"
 #include "stage/network_plausibility.h"
-#include "stage/pose.h"
+#include "stage/station_reading_cost.h"
 
 namespace fvm::stage {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-}  // namespace
-// The closed-form start; `mirror` (when not null) receives the mirror image across the stations' plane when the
-// ranges cannot tell the two apart (three stations, or all in one plane), else the same point.
-Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges,
-                            Eigen::Vector3d* mirror);
-namespace {
 
 // Which station parameters are estimated: global index per coordinate, -1 when held.
 struct Layout {
@@ -45,10 +41,9 @@ struct State {
 };
 
 struct Sigmas {
-  double range_floor = 1e-3;  // a noise-free preset weighs ranges by 1 um
-  double azimuth = 1e-6, elevation = 1e-6;
   const TrackerNoise* noise = nullptr;
-  double Range(double range_mm) const { return noise == nullptr ? range_floor : RangeSigmaMm(*noise, range_mm); }
+  double azimuth = 1e-6, elevation = 1e-6;  // a noise-free preset weighs angles by 1 urad
+  ReadingSigmas Of(const StationReading& m) const { return {RangeSigmaMm(*noise, m.range_mm), azimuth, elevation}; }
 };
 
 Sigmas SigmasOf(const TrackerNoise& noise) {
@@ -61,42 +56,16 @@ Sigmas SigmasOf(const TrackerNoise& noise) {
   return s;
 }
 
-// Whitened residuals of one reading and their derivatives by the point (jp) and the station's rotation
-// increment (jr); by the station's position they are -jp.
-struct Linearised {
-  int rows = 1;
-  Eigen::Vector3d r = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d jp = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d jr = Eigen::Matrix3d::Zero();
+struct Problem {
+  const MultilaterationProblem* problem = nullptr;
+  const MultilaterationOptions* options = nullptr;
+  Sigmas sigmas;
+  std::vector<std::vector<int>> readings_of_point;
 };
 
-Linearised Linearise(const StationReading& m, const Eigen::Vector3d& p, const Eigen::Vector3d& s,
-                     const Eigen::Matrix3d& rotation, bool angles, const Sigmas& sigmas) {
-  Linearised out;
-  const Eigen::Vector3d q = rotation.transpose() * (p - s);
-  const double r = std::max(q.norm(), 1e-12);
-  Eigen::Matrix3d dq;  // rows: d(range, azimuth, elevation) / dq
-  dq.setZero();
-  const double sr = sigmas.Range(m.range_mm);
-  out.r[0] = (r - m.range_mm) / sr;
-  dq.row(0) = q.transpose() / r / sr;
-  if (angles) {
-    out.rows = 3;
-    const double h2 = q.x() * q.x() + q.y() * q.y();
-    const double h = std::sqrt(h2);
-    if (h > 1e-9) {
-      out.r[1] = std::remainder(std::atan2(q.y(), q.x()) - m.azimuth_rad, 2.0 * kPi) / sigmas.azimuth;
-      dq.row(1) = Eigen::RowVector3d(-q.y() / h2, q.x() / h2, 0.0) / sigmas.azimuth;
-      dq.row(2) = Eigen::RowVector3d(-q.x() * q.z() / (h * r * r), -q.y() * q.z() / (h * r * r), h / (r * r)) /
-                  sigmas.elevation;
-    }
-    out.r[2] = (std::atan2(q.z(), h) - m.elevation_rad) / sigmas.elevation;
-  }
-  out.jp = dq * rotation.transpose();
-  out.jr = dq * Skew(q);
-  return out;
-}
-
+// The Gauss-Newton normal equations of the whitened residuals at a state, points and station parameters apart:
+// A (station parameters, dense), D_j (3 x 3 per point), B_j (station parameters x 3 per point), the gradients bg
+// and bp. What the rank analysis and the covariance need; the solve itself is Ceres'.
 struct Normal {
   Eigen::MatrixXd a;
   Eigen::VectorXd bg;
@@ -107,113 +76,124 @@ struct Normal {
   int residuals = 0;
 };
 
-struct Problem {
-  const MultilaterationProblem* problem = nullptr;
-  const MultilaterationOptions* options = nullptr;
-  Sigmas sigmas;
-  std::vector<std::vector<int>> readings_of_point;
-};
-
-double Cost(const Problem& pr, const State& st) {
-  double cost = 0;
-  for (const StationReading& m : pr.problem->readings) {
-    const Linearised l = Linearise(m, st.points[static_cast<size_t>(m.point)], st.stations[static_cast<size_t>(m.station)],
-                                   st.rotations[static_cast<size_t>(m.station)], pr.options->use_angles, pr.sigmas);
-    cost += l.r.head(l.rows).squaredNorm();
-  }
-  return cost;
-}
-
 Normal Build(const Problem& pr, const State& st, const Layout& layout) {
   const int ng = layout.size();
   const size_t np = st.points.size();
+  const bool angles = pr.options->use_angles;
   Normal n;
   n.a = Eigen::MatrixXd::Zero(ng, ng);
   n.bg = Eigen::VectorXd::Zero(ng);
   n.d.assign(np, Eigen::Matrix3d::Zero());
   n.bp.assign(np, Eigen::Vector3d::Zero());
   n.b.assign(np, Eigen::MatrixXd::Zero(ng, 3));
+  const Eigen::Vector3d no_turn = Eigen::Vector3d::Zero();
   for (const StationReading& m : pr.problem->readings) {
     const size_t j = static_cast<size_t>(m.point), i = static_cast<size_t>(m.station);
-    const Linearised l = Linearise(m, st.points[j], st.stations[i], st.rotations[i], pr.options->use_angles, pr.sigmas);
-    const int rows = l.rows;
-    const Eigen::MatrixXd jp = l.jp.topRows(rows);
-    const Eigen::VectorXd r = l.r.head(rows);
+    const auto cost = StationReadingCost(m, pr.sigmas.Of(m), st.rotations[i], angles);
+    // Row-major Jacobians of the residuals by the point, the station's position and its rotation increment; rows
+    // past the cost's residuals stay zero and add nothing.
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> jp = Eigen::Matrix3d::Zero(), js = jp, jr = jp;
+    Eigen::Vector3d r = Eigen::Vector3d::Zero();
+    const double* parameters[] = {st.points[j].data(), st.stations[i].data(), no_turn.data()};
+    double* jacobians[] = {jp.data(), js.data(), jr.data()};
+    if (!cost->Evaluate(parameters, r.data(), jacobians)) throw std::logic_error("a station reading's cost failed");
     n.cost += r.squaredNorm();
-    n.residuals += rows;
+    n.residuals += cost->num_residuals();
     n.d[j] += jp.transpose() * jp;
     n.bp[j] += jp.transpose() * r;
+    // This reading's station-parameter columns: (global index, column of the Jacobian).
     std::array<std::pair<int, Eigen::Vector3d>, 6> cols;
     int count = 0;
-    for (int c = 0; c < 3; ++c) {
-      if (layout.position[i][static_cast<size_t>(c)] >= 0) {
-        Eigen::Vector3d col = Eigen::Vector3d::Zero();
-        col.head(rows) = -l.jp.topRows(rows).col(c);
-        cols[static_cast<size_t>(count++)] = {layout.position[i][static_cast<size_t>(c)], col};
-      }
-      if (layout.rotation[i][static_cast<size_t>(c)] >= 0) {
-        Eigen::Vector3d col = Eigen::Vector3d::Zero();
-        col.head(rows) = l.jr.topRows(rows).col(c);
-        cols[static_cast<size_t>(count++)] = {layout.rotation[i][static_cast<size_t>(c)], col};
-      }
+    for (size_t c = 0; c < 3; ++c) {
+      const Eigen::Index ci = static_cast<Eigen::Index>(c);
+      if (layout.position[i][c] >= 0) cols[static_cast<size_t>(count++)] = {layout.position[i][c], js.col(ci)};
+      if (angles && layout.rotation[i][c] >= 0) cols[static_cast<size_t>(count++)] = {layout.rotation[i][c], jr.col(ci)};
     }
-    Eigen::Vector3d rr = Eigen::Vector3d::Zero();
-    rr.head(rows) = r;
-    Eigen::Matrix3d jp3 = Eigen::Matrix3d::Zero();
-    jp3.topRows(rows) = jp;
-    for (int a = 0; a < count; ++a) {
-      const auto& [ia, ca] = cols[static_cast<size_t>(a)];
-      n.bg[ia] += ca.dot(rr);
-      n.b[j].row(ia) += ca.transpose() * jp3;
-      for (int b = 0; b < count; ++b) n.a(ia, cols[static_cast<size_t>(b)].first) += ca.dot(cols[static_cast<size_t>(b)].second);
+    for (int x = 0; x < count; ++x) {
+      const auto& [ix, cx] = cols[static_cast<size_t>(x)];
+      n.bg[ix] += cx.dot(r);
+      n.b[j].row(ix) += cx.transpose() * jp;
+      for (int y = 0; y < count; ++y) n.a(ix, cols[static_cast<size_t>(y)].first) += cx.dot(cols[static_cast<size_t>(y)].second);
     }
   }
   return n;
 }
 
-// The Schur complement of the points in the (damped) normal equations: S = A - sum B D^-1 B^T.
-Eigen::MatrixXd Schur(const Normal& n, double lambda, std::vector<Eigen::Matrix3d>* d_inverse) {
+// The Schur complement of the points in the normal equations, S = A - sum B D^-1 B^T, and each D^-1.
+Eigen::MatrixXd Schur(const Normal& n, std::vector<Eigen::Matrix3d>* d_inverse) {
   const Eigen::Index ng = n.a.rows();
   Eigen::MatrixXd s = n.a;
-  s.diagonal() += lambda * n.a.diagonal();
   d_inverse->resize(n.d.size());
   for (size_t j = 0; j < n.d.size(); ++j) {
-    Eigen::Matrix3d d = n.d[j];
-    d.diagonal() += lambda * n.d[j].diagonal();
-    (*d_inverse)[j] = d.inverse();
+    (*d_inverse)[j] = n.d[j].inverse();
     if (ng > 0) s -= n.b[j] * (*d_inverse)[j] * n.b[j].transpose();
   }
   return s;
 }
 
-bool Step(const Normal& n, double lambda, State* st, const Layout& layout) {
-  std::vector<Eigen::Matrix3d> dinv;
-  const Eigen::MatrixXd s = Schur(n, lambda, &dinv);
-  Eigen::VectorXd dg = Eigen::VectorXd::Zero(layout.size());
-  if (layout.size() > 0) {
-    Eigen::VectorXd rhs = -n.bg;
-    for (size_t j = 0; j < n.d.size(); ++j) rhs += n.b[j] * (dinv[j] * n.bp[j]);
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
-    if (ldlt.info() != Eigen::Success) return false;
-    dg = ldlt.solve(rhs);
+// A parameter block whose coordinates the layout holds (index -1) kept there: constant when all are.
+void HoldCoordinates(ceres::Problem* problem, double* block, const std::array<int, 3>& index) {
+  std::vector<int> held;
+  for (int c = 0; c < 3; ++c) {
+    if (index[static_cast<size_t>(c)] < 0) held.push_back(c);
   }
-  if (!dg.allFinite()) return false;
-  for (size_t j = 0; j < n.d.size(); ++j) {
-    Eigen::Vector3d rhs = -n.bp[j];
-    if (layout.size() > 0) rhs -= n.b[j].transpose() * dg;
-    const Eigen::Vector3d dp = dinv[j] * rhs;
-    if (!dp.allFinite()) return false;
-    st->points[j] += dp;
+  if (held.size() == 3) {
+    problem->SetParameterBlockConstant(block);
+  } else if (!held.empty()) {
+    problem->SetManifold(block, new ceres::SubsetManifold(3, held));
   }
+}
+
+// Levenberg-Marquardt (Ceres) on the whitened residuals of every reading, the points eliminated first (Schur
+// complement: each point is a 3 x 3 block, the station parameters a small dense system). With known stations and
+// ranges only, every point is its own 3-unknown solve. Each station's rotation moves by an increment that is
+// folded into it afterwards. Returns the number of iterations and whether Ceres converged.
+std::pair<int, bool> Solve(const Problem& pr, const Layout& layout, int max_iterations, State* st) {
+  const bool angles = pr.options->use_angles;
+  ceres::Problem problem;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (Eigen::Vector3d& p : st->points) {
+    problem.AddParameterBlock(p.data(), 3);
+    ordering->AddElementToGroup(p.data(), 0);
+  }
+  std::vector<Eigen::Vector3d> turns(st->stations.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < st->stations.size(); ++i) {
-    Eigen::Vector3d rot = Eigen::Vector3d::Zero();
-    for (size_t c = 0; c < 3; ++c) {
-      if (layout.position[i][c] >= 0) st->stations[i][static_cast<Eigen::Index>(c)] += dg[layout.position[i][c]];
-      if (layout.rotation[i][c] >= 0) rot[static_cast<Eigen::Index>(c)] = dg[layout.rotation[i][c]];
+    problem.AddParameterBlock(st->stations[i].data(), 3);
+    HoldCoordinates(&problem, st->stations[i].data(), layout.position[i]);
+    ordering->AddElementToGroup(st->stations[i].data(), 1);
+    if (angles) {
+      problem.AddParameterBlock(turns[i].data(), 3);
+      HoldCoordinates(&problem, turns[i].data(), layout.rotation[i]);
+      ordering->AddElementToGroup(turns[i].data(), 1);
     }
-    if (rot.norm() > 0) st->rotations[i] = st->rotations[i] * Eigen::AngleAxisd(rot.norm(), rot.normalized()).toRotationMatrix();
   }
-  return true;
+  for (const StationReading& m : pr.problem->readings) {
+    const size_t j = static_cast<size_t>(m.point), i = static_cast<size_t>(m.station);
+    ceres::CostFunction* cost = StationReadingCost(m, pr.sigmas.Of(m), st->rotations[i], angles).release();
+    if (angles) {
+      problem.AddResidualBlock(cost, nullptr, st->points[j].data(), st->stations[i].data(), turns[i].data());
+    } else {
+      problem.AddResidualBlock(cost, nullptr, st->points[j].data(), st->stations[i].data());
+    }
+  }
+  ceres::Solver::Options options;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_SCHUR;
+  options.linear_solver_ordering = ordering;
+  options.max_num_iterations = max_iterations;
+  // Metrology wants the minimum to rounding: steps below a nanometre on metre coordinates, or no cost left to drop.
+  options.function_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-12;
+  options.gradient_tolerance = 1e-20;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  for (size_t i = 0; i < turns.size(); ++i) {
+    const double angle = turns[i].norm();
+    if (angle > 0) st->rotations[i] = st->rotations[i] * Eigen::AngleAxisd(angle, turns[i] / angle).toRotationMatrix();
+  }
+  return {summary.num_successful_steps + summary.num_unsuccessful_steps,
+          summary.termination_type == ceres::CONVERGENCE};
 }
 
 std::string StationParameterName(const std::string& station, int c, bool rotation) {
@@ -254,33 +234,6 @@ std::string StationList(const MultilaterationProblem& p, const std::vector<int>&
     out += p.station_names[static_cast<size_t>(p.readings[static_cast<size_t>(k)].station)];
   }
   return out;
-}
-
-// The best rotation of each station taking its Cartesian readings onto the directions to `points`, and what is
-// left: the sum of squared misfits (mm^2) over all stations.
-double RotationMisfit(const MultilaterationProblem& p, const std::vector<Eigen::Vector3d>& stations,
-                      const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Matrix3d>* rotations = nullptr) {
-  double misfit = 0;
-  if (rotations != nullptr) rotations->assign(stations.size(), Eigen::Matrix3d::Identity());
-  for (size_t i = 0; i < stations.size(); ++i) {
-    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-    for (const StationReading& r : p.readings) {
-      if (static_cast<size_t>(r.station) != i) continue;
-      const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
-      h += local * (points[static_cast<size_t>(r.point)] - stations[i]).transpose();
-    }
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d fix = Eigen::Matrix3d::Identity();
-    fix(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-    const Eigen::Matrix3d rotation = svd.matrixV() * fix * svd.matrixU().transpose();
-    if (rotations != nullptr) (*rotations)[i] = rotation;
-    for (const StationReading& r : p.readings) {
-      if (static_cast<size_t>(r.station) != i) continue;
-      const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
-      misfit += (rotation * local - (points[static_cast<size_t>(r.point)] - stations[i])).squaredNorm();
-    }
-  }
-  return misfit;
 }
 
 struct Prepared {
@@ -396,9 +349,9 @@ Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& 
         any = true;
       }
     }
-    if (any && RotationMisfit(p, st.stations, other) < RotationMisfit(p, st.stations, st.points)) st.points = other;
+    if (any && StationRotationMisfit(p, st.stations, other, nullptr) < StationRotationMisfit(p, st.stations, st.points, nullptr)) st.points = other;
   }
-  if (o.use_angles) RotationMisfit(p, st.stations, st.points, &st.rotations);
+  if (o.use_angles) StationRotationMisfit(p, st.stations, st.points, &st.rotations);
   return out;
 }
 
@@ -423,7 +376,7 @@ std::vector<std::string> Unobservable(const Problem& pr, const State& st, const 
   const Normal n = Build(pr, st, layout);
   CheckPointBlocks(pr, n);
   std::vector<Eigen::Matrix3d> dinv;
-  const Eigen::MatrixXd s = Schur(n, 0.0, &dinv);
+  const Eigen::MatrixXd s = Schur(n, &dinv);
   const Eigen::Index ng = s.rows();
   // Scale each parameter to a unit column of the whole Jacobian: S_ii / A_ii is the share of the parameter's
   // effect the points leave unexplained (squared).
@@ -504,118 +457,6 @@ double RangeSigmaMm(const TrackerNoise& noise, double range_mm) {
 
 int MinStationsPerPoint(const MultilaterationOptions& options) { return options.self_calibrate ? 4 : 3; }
 
-void ThreeTwoOneFrame(const std::vector<Eigen::Vector3d>& stations, Eigen::Matrix3d* rotation, Eigen::Vector3d* translation) {
-  if (stations.size() < 3) throw std::invalid_argument("the 3-2-1 frame needs three stations");
-  const Eigen::Vector3d d1 = stations[1] - stations[0], d2 = stations[2] - stations[0];
-  const Eigen::Vector3d e1 = d1.normalized();
-  const Eigen::Vector3d v = d2 - d2.dot(e1) * e1;
-  if (!(d1.norm() > 0) || !(v.norm() > 1e-9 * std::max(d1.norm(), d2.norm()))) {
-    throw std::invalid_argument("stations 1, 2 and 3 lie on one line (or coincide): they cannot define the frame "
-                                "(station 1 at the origin, 2 on x, 3 in the xy plane); reorder the stations");
-  }
-  const Eigen::Vector3d e2 = v.normalized();
-  const Eigen::Vector3d e3 = e1.cross(e2);
-  rotation->row(0) = e1.transpose();
-  rotation->row(1) = e2.transpose();
-  rotation->row(2) = e3.transpose();
-  *translation = -(*rotation) * stations[0];
-}
-
-Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges) {
-  return Trilaterate(stations, ranges, nullptr);
-}
-
-Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges,
-                            Eigen::Vector3d* mirror) {
-  const size_t n = stations.size();
-  if (n < 3 || ranges.size() != n) throw std::invalid_argument("trilateration needs three or more stations with a range each");
-  const Eigen::Index rows = static_cast<Eigen::Index>(n - 1);
-  Eigen::MatrixXd a(rows, 3);
-  Eigen::VectorXd b(rows);
-  for (size_t i = 1; i < n; ++i) {
-    const Eigen::Vector3d d = stations[i] - stations[0];
-    a.row(static_cast<Eigen::Index>(i - 1)) = 2.0 * d.transpose();
-    b[static_cast<Eigen::Index>(i - 1)] = ranges[0] * ranges[0] - ranges[i] * ranges[i] + d.squaredNorm();
-  }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV | Eigen::ComputeThinU);
-  const Eigen::VectorXd sv = svd.singularValues();
-  if (n >= 4 && sv.size() == 3 && sv[2] > 1e-6 * sv[0]) {
-    const Eigen::Vector3d p = stations[0] + svd.solve(b);
-    if (mirror != nullptr) *mirror = p;
-    return p;
-  }
-  // In the stations' plane, then the height above it.
-  const Eigen::Matrix<double, 3, 2> plane = svd.matrixV().leftCols(2);
-  Eigen::Vector3d normal = svd.matrixV().col(2);
-  const Eigen::Vector2d in_plane = (a * plane).colPivHouseholderQr().solve(b);
-  const Eigen::Vector3d x = plane * in_plane;
-  double h2 = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = stations[i] - stations[0];
-    h2 += ranges[i] * ranges[i] - (x - d).squaredNorm();
-  }
-  h2 /= static_cast<double>(n);
-  // The side: where (s2 - s1) x (s3 - s1) of the first three stations points (they appear counter-clockwise from
-  // the point); with those on one line, towards +z, +y or +x.
-  const Eigen::Vector3d n0 = (stations[1] - stations[0]).cross(stations[2] - stations[0]);
-  const double eps = 1e-9;
-  const bool flip = n0.norm() > 1e-9 * (stations[1] - stations[0]).squaredNorm() ? normal.dot(n0) < 0
-                    : std::abs(normal.z()) > eps                                 ? normal.z() < 0
-                    : std::abs(normal.y()) > eps                                 ? normal.y() < 0
-                                                                                 : normal.x() < 0;
-  if (flip) normal = -normal;
-  const double h = std::sqrt(std::max(0.0, h2));
-  if (mirror != nullptr) *mirror = stations[0] + x - h * normal;
-  return stations[0] + x + h * normal;
-}
-
-std::vector<Eigen::Vector3d> StartStationsFromAngles(const MultilaterationProblem& p) {
-  const size_t m = p.station_names.size(), np = p.point_ids.size();
-  // Cartesian reading of each point by each station (NaN when not read).
-  std::vector<std::vector<Eigen::Vector3d>> local(m, std::vector<Eigen::Vector3d>(np, Eigen::Vector3d::Constant(NAN)));
-  for (const StationReading& r : p.readings) {
-    if (!r.has_angles) {
-      throw std::invalid_argument("starting stations from the angles needs azimuth and elevation in every reading");
-    }
-    local[static_cast<size_t>(r.station)][static_cast<size_t>(r.point)] = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
-  }
-  std::vector<Eigen::Vector3d> out(m, Eigen::Vector3d::Zero());
-  for (size_t i = 1; i < m; ++i) {
-    std::vector<Eigen::Vector3d> from, to;
-    for (size_t j = 0; j < np; ++j) {
-      if (local[i][j].allFinite() && local[0][j].allFinite()) {
-        from.push_back(local[i][j]);
-        to.push_back(local[0][j]);
-      }
-    }
-    Eigen::Vector3d cf = Eigen::Vector3d::Zero(), ct = Eigen::Vector3d::Zero();
-    for (size_t k = 0; k < from.size(); ++k) {
-      cf += from[k];
-      ct += to[k];
-    }
-    if (from.size() < 3) {
-      throw std::invalid_argument(fmt::format("station {} shares {} points with station {}: a start from the angles "
-                                              "needs 3; give starting positions (--stations)",
-                                              p.station_names[i], from.size(), p.station_names[0]));
-    }
-    cf /= static_cast<double>(from.size());
-    ct /= static_cast<double>(from.size());
-    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-    for (size_t k = 0; k < from.size(); ++k) h += (from[k] - cf) * (to[k] - ct).transpose();
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    if (!(svd.singularValues()[1] > 1e-9 * svd.singularValues()[0])) {
-      throw std::invalid_argument(fmt::format("the points station {} shares with station {} lie on one line: a start "
-                                              "from the angles needs them spread; give starting positions (--stations)",
-                                              p.station_names[i], p.station_names[0]));
-    }
-    Eigen::Matrix3d fix = Eigen::Matrix3d::Identity();
-    fix(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-    const Eigen::Matrix3d r = svd.matrixV() * fix * svd.matrixU().transpose();
-    out[i] = ct - r * cf;  // where station i's origin lands in station 1's frame
-  }
-  return out;
-}
-
 std::vector<std::string> UnobservableStationParameters(const MultilaterationProblem& problem,
                                                        const MultilaterationOptions& options) {
   const Prepared prep = Prepare(problem, options, false);
@@ -636,50 +477,13 @@ MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const
   }
   const Layout layout = MakeLayout(problem, options, held);
 
-  double lambda = 1e-4;
-  double cost = Cost(pr, st);
-  for (int it = 0; it < options.max_iterations; ++it) {
-    result.iterations = it + 1;
-    const Normal n = Build(pr, st, layout);
-    bool accepted = false;
-    State trial;
-    double trial_cost = cost;
-    for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
-      trial = st;
-      if (Step(n, lambda, &trial, layout)) {
-        trial_cost = Cost(pr, trial);
-        if (std::isfinite(trial_cost) && trial_cost <= cost) {
-          accepted = true;
-          break;
-        }
-      }
-      lambda *= 10.0;
-    }
-    if (!accepted) {  // no step lowers the cost: a minimum to rounding
-      result.converged = true;
-      break;
-    }
-    double largest = 0;
-    for (size_t j = 0; j < st.points.size(); ++j) largest = std::max(largest, (trial.points[j] - st.points[j]).norm());
-    for (size_t i = 0; i < st.stations.size(); ++i) {
-      largest = std::max(largest, (trial.stations[i] - st.stations[i]).norm());
-      largest = std::max(largest, 1e3 * (trial.rotations[i] - st.rotations[i]).norm());
-    }
-    const double drop = cost - trial_cost;
-    st = std::move(trial);
-    cost = trial_cost;
-    lambda = std::max(lambda / 10.0, 1e-12);
-    if (largest < 1e-9 || drop <= 1e-14 * cost) {
-      result.converged = true;
-      break;
-    }
-  }
+  std::tie(result.iterations, result.converged) = Solve(pr, layout, options.max_iterations, &st);
 
   // Covariance (a priori) and summaries at the solution.
   const Normal n = Build(pr, st, layout);
   CheckPointBlocks(pr, n);
   std::vector<Eigen::Matrix3d> dinv;
-  const Eigen::MatrixXd s = Schur(n, 0.0, &dinv);
+  const Eigen::MatrixXd s = Schur(n, &dinv);
   Eigen::MatrixXd cov_g = Eigen::MatrixXd::Zero(layout.size(), layout.size());
   if (layout.size() > 0) cov_g = s.ldlt().solve(Eigen::MatrixXd::Identity(layout.size(), layout.size()));
   result.points = st.points;

@@ -8,10 +8,10 @@
 // and elevation. Each residual is divided by its sigma from the tracker's noise model (range a + b * range,
 // angles constant), so the solve minimises the weighted sum of squares of [Aguado 2016] eqs. 10-16.
 //
-// Solver. Gauss-Newton with Levenberg-Marquardt damping on the normal equations, analytic derivatives, points
-// eliminated block by block (each point is a 3x3 block; the station parameters form a small dense system, their
-// Schur complement). With known stations and ranges only there are no station parameters and every point is its
-// own 3-unknown Gauss-Newton solve, as the issue asks.
+// Solver. Levenberg-Marquardt by Ceres, one residual block per reading (stage/station_reading_cost.h, automatic
+// derivatives), the points eliminated block by block (each point is a 3x3 block; the station parameters form a small
+// dense system, their Schur complement). With known stations and ranges only there are no station parameters and
+// every point is its own 3-unknown solve. It starts in closed form (stage/multilateration_start.h).
 //
 // Frame of a self-calibration ([Aguado 2016] Figure 4): station 1 at the origin, station 2 on +x, station 3 in the xy
 // plane (+y side); z follows by the right-hand rule. Ranges fix the scale. The starting stations (any frame) are moved
@@ -107,22 +107,5 @@ MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const
 // (so it can say why three stations are not enough).
 std::vector<std::string> UnobservableStationParameters(const MultilaterationProblem& problem,
                                                        const MultilaterationOptions& options);
-
-// The rigid transform that takes stations into the 3-2-1 frame (station 1 at the origin, 2 on +x, 3 in the xy
-// plane on the +y side): x_frame = R x + t. Throws std::invalid_argument when the first three are on one line.
-void ThreeTwoOneFrame(const std::vector<Eigen::Vector3d>& stations, Eigen::Matrix3d* rotation, Eigen::Vector3d* translation);
-
-// Starting station positions from the angles: station 1 at the origin, its frame the common one; every other
-// station by a rigid fit of its Cartesian readings to station 1's of the same points (at least 3 shared points).
-// Throws std::invalid_argument naming the station otherwise.
-std::vector<Eigen::Vector3d> StartStationsFromAngles(const MultilaterationProblem& problem);
-
-// A point from its ranges in closed form: linear least squares on the differences of squared ranges with four
-// or more stations that span 3D; otherwise in the stations' plane plus the height above it. The ranges cannot
-// tell that point from its mirror image across the plane: it is taken on the side (s2 - s1) x (s3 - s1) of the
-// first three stations points to, i.e. where they appear counter-clockwise (in a self-calibration: +z of the
-// 3-2-1 frame). Multilaterate settles the side from the angles instead when every reading has them. Starts the
-// Gauss-Newton solves.
-Eigen::Vector3d TrilaterateClosedForm(const std::vector<Eigen::Vector3d>& stations, const std::vector<double>& ranges_mm);
 
 }  // namespace fvm::stage

@@ -2,6 +2,7 @@
 // Gauss-Newton with central-difference derivatives, its own frame and weights), the self-calibration's frame,
 // the unobservable directions of too few stations, and the errors.
 #include "stage/multilateration.h"
+#include "stage/multilateration_start.h"
 
 #include <gtest/gtest.h>
 
