@@ -77,6 +77,7 @@ ReportData MakeReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis&
     data.parameters.push_back({s.effect + (s.component.empty() ? "" : " " + s.component), s.size, s.size_u, s.size_unit});
   }
   for (const std::string& note : d.notes) data.summary.emplace_back("note", note);
+  if (!d.unexplained.empty()) data.summary.emplace_back("unexplained", d.unexplained);
   return data;
 }
 
@@ -110,6 +111,7 @@ void Run(const DiagnoseArgs& args) {
                               {"validation", {{"before", SummaryJson(s.validation_before)}, {"after", SummaryJson(s.validation_after)}}}});
   }
   doc["notes"] = d.notes;
+  doc["unexplained"] = d.unexplained.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.unexplained);
   doc["stitched_frame"] = args.settings.stitched_frame;
   for (const stage::PlacementTurnFinding& t : d.turns) {
     doc["turns"].push_back({{"placement", t.placement},
@@ -145,6 +147,7 @@ void Run(const DiagnoseArgs& args) {
     if (!s.alternatives.empty()) fmt::print("  {}\n", AlternativesSentence(s));
   }
   for (const std::string& note : d.notes) fmt::print("  note: {}\n", note);
+  if (!d.unexplained.empty()) fmt::print("\n  {}\n", d.unexplained);
   fmt::print("\n");
   if (!d.turns.empty()) {
     fmt::print("  {:<16} {:>22}\n", "placement", "yaw about first tile");

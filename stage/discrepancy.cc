@@ -350,6 +350,26 @@ double ResidualSquares(const std::vector<Eigen::Vector3d>& residuals) {
 
 }  // namespace
 
+// A candidate's name as the notes and the steps give it: the effect and its component.
+std::string Named(const Candidate& c) {
+  return c.score.component.empty() ? c.score.effect : c.score.effect + " " + c.score.component;
+}
+
+// The refused candidate whose pattern takes most of what `c` explains in the identification data (the share of c's
+// explained sum of squares along it), when that share is more than half; else none.
+std::pair<const Candidate*, double> MostlyThePatternOf(const Candidate& c, const std::vector<const Candidate*>& refused) {
+  const Eigen::VectorXd& mine = c.linear.explained;
+  const Candidate* most = nullptr;
+  double most_share = 0.5;
+  for (const Candidate* r : refused) {
+    const Eigen::VectorXd& theirs = r->linear.explained;
+    if (theirs.size() != mine.size() || mine.squaredNorm() <= 0 || theirs.squaredNorm() <= 0) continue;
+    const double share = std::pow(mine.dot(theirs), 2) / (mine.squaredNorm() * theirs.squaredNorm());
+    if (share > most_share) most = r, most_share = share;
+  }
+  return {most, most_share};
+}
+
 Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
                    const DiagnosisOptions& options) {
   Diagnosis d;
@@ -400,12 +420,15 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.findings = Findings(fit.residuals, identify, RobustSigma(fit.residuals, base_options.noise_floor_mm));
   ResidualSummary validation = d.validation_before;
   const bool turns_testable = !validate.observations.empty() && !validate.anchors.empty();
+  std::vector<Candidate> candidates;        // the last step's, scored on the residuals left
+  std::vector<const Candidate*> refused;    // the last step's significant candidates that were not accepted
+  std::vector<std::string> ever_refused;    // every candidate refused at any step, by name, in order
   constexpr int kMostSteps = 6;
   int step = 1;
   for (; step <= kMostSteps; ++step) {
     // Alpha spending: step k may raise a false alarm with probability alpha / 2^k at most.
     const double alpha_step = options.alpha / std::pow(2.0, step);
-    std::vector<Candidate> candidates = ScoreCandidates(problem, fit, layout, applied, base_options, alpha_step);
+    candidates = ScoreCandidates(problem, fit, layout, applied, base_options, alpha_step);
     const double alpha_each = alpha_step / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
     for (Candidate& c : candidates) Test(c, alpha_each);
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
@@ -416,6 +439,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     for (const Candidate& c : candidates) scores.push_back(c.score);
     if (step == 1) d.candidates = scores;
     bool accepted = false;
+    refused.clear();
     for (const Candidate& c : candidates) {
       if (!c.score.significant) break;
       Applied a = MakeApplied(c, problem, fit);
@@ -430,15 +454,30 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
         // Why it may fail: an effect whose pattern the model's terms nearly take is estimated from what little is
         // its own. A drift along bars measured in order is the usual case, and the design is the cure.
         const bool drift = c.score.effect == "thermal_drift";
-        d.notes.push_back(fmt::format("step {}: {}{} fits the identification data better but makes the held-out placements "
+        d.notes.push_back(fmt::format("step {}: {} fits the identification data better but makes the held-out placements "
                                       "worse ({:.2f} -> {:.2f} um; {:.0f} % of its pattern is its own, the rest the model "
                                       "can take){}; the next candidate was tried",
-                                      step, c.score.effect, c.score.component.empty() ? "" : " " + c.score.component,
+                                      step, Named(c),
                                       validation.mean_mm * 1e3, next_validation.mean_mm * 1e3, 100 * c.linear.own,
                                       drift ? ". A drift grows along each bar as its calottes are measured in order, like "
                                               "anything else that grows along it; measuring every other placement "
                                               "backwards shows the drift at the shared start"
                                             : ""));
+        refused.push_back(&c);
+        if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
+        continue;
+      }
+      // An effect that is mostly the pattern of one the held-out placements refused would take what that one left
+      // behind; it is named only where it predicts the held-out placements clearly better (by a fifth) on its own.
+      if (const auto [other, share] = MostlyThePatternOf(c, refused);
+          other != nullptr && validation.count > 0 && next_validation.mean_mm > 0.8 * validation.mean_mm) {
+        d.notes.push_back(fmt::format("step {}: {} fits the identification data better, but {:.0f} % of what it explains "
+                                      "there is the pattern of the refused {}, and the held-out placements barely change "
+                                      "({:.2f} -> {:.2f} um): it would take what that one leaves; not named",
+                                      step, Named(c), 100 * share, Named(*other), validation.mean_mm * 1e3,
+                                      next_validation.mean_mm * 1e3));
+        refused.push_back(&c);
+        if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
         continue;
       }
       if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem.layout, refit.calibration);
@@ -464,6 +503,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       break;
     }
     if (!accepted) break;
+    refused.clear();  // refused before the accepted one: the next step scores them again on what is left
     // Backward check: an earlier effect the later ones made redundant no longer earns its parameters.
     bool refreshed = false;
     for (size_t j = 0; j + 1 < applied.size(); ++j) {
@@ -498,7 +538,43 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   }
   for (const Applied& a : applied) d.steps.push_back(a.step);
 
-  if (turns_testable && step <= kMostSteps) {
+  // Do the identification data fit to noise now? Not while a candidate the held-out placements refused still
+  // explains part of them significantly, nor while they stay far above the noise between neighbouring calottes
+  // (which no smooth pattern reaches: twice that per coordinate is far beyond chance for a batch's 100+ equations).
+  // Then nothing else is named for what is left: the turn of the held-out frames, above all, would take the pattern
+  // a drift leaves on placements measured in order (perpendicular to each bar, growing along it).
+  const double noise_mm = NeighbourNoise(fit.residuals, problem.identify);
+  const double dof = std::max(1.0, 3.0 * static_cast<double>(fit.residuals.size()) - fit.calibration.layout.NumFree());
+  const double left_mm = std::sqrt(ResidualSquares(fit.residuals) / dof);
+  const bool above_noise = noise_mm > 0 && left_mm > 2.0 * noise_mm;
+  const auto likeliest = [&](const std::vector<std::string>& names) {
+    std::string also;
+    for (size_t k = 1; k < names.size(); ++k) also += (also.empty() ? "" : ", ") + names[k];
+    return fmt::format("the likeliest cause is the refused {}{}, which these data cannot show on its own (see the notes)",
+                       names.front(), also.empty() ? "" : " (also refused: " + also + ")");
+  };
+  std::vector<std::string> refused_now;
+  for (const Candidate* c : refused) refused_now.push_back(Named(*c));
+  const ResidualSummary fit_summary = Summarize(fit.residuals);
+  if (!refused.empty() || above_noise) {
+    d.unexplained = fmt::format(
+        "unexplained: {:.2f} um rms per coordinate remains in the identification residuals ({:.1f} times the noise "
+        "between neighbouring calottes, {:.2f} um){}; {}. No other effect is named for it",
+        left_mm * 1e3, noise_mm > 0 ? left_mm / noise_mm : 0.0, noise_mm * 1e3,
+        refused.empty() ? "" : ", and a candidate the held-out placements refused still explains part of it significantly",
+        refused.empty() ? "it is a shape neither the model nor the listed effects take: try a higher model order"
+                        : likeliest(refused_now));
+  } else if (!ever_refused.empty()) {
+    // A candidate refused earlier left its pattern where the identification data cannot see it any more (later
+    // effects took it there) but the held-out placements still do: the turn test would name it frame_rotation.
+    if (validation.count > 0 && validation.mean_mm > 2.0 * fit_summary.mean_mm) {
+      d.unexplained = fmt::format(
+          "unexplained: the held-out placements keep {:.2f} um mean residual against {:.2f} um for the identification "
+          "placements; {}. The turn of the held-out frames is not tested: it would take the pattern a refused candidate "
+          "leaves on placements measured in order",
+          validation.mean_mm * 1e3, fit_summary.mean_mm * 1e3, likeliest(ever_refused));
+    }
+  } else if (turns_testable && step <= kMostSteps) {
     // The identification data fit to noise now: do the held-out placements turn about their first tiles?
     const double alpha_step = options.alpha / std::pow(2.0, step);
     std::optional<DriftCorrection> drift;
@@ -557,6 +633,10 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.after = Summarize(fit.residuals);
   d.validation_after = d.steps.empty() ? d.validation_before : validation;
   if (d.steps.empty()) {
+    if (!d.unexplained.empty()) {
+      d.explanation = "No effect is named; " + d.unexplained + ".";
+      return d;
+    }
     d.explanation = "No listed effect explains the residuals better than noise: the model fits these data to " +
                     fmt::format("{:.2f} um rms, and no candidate passes the F-test at the {:.0f} % level with a lower BIC.",
                                 d.before.rms_mm * 1e3, options.alpha * 100);

@@ -80,6 +80,9 @@ struct Diagnosis {
   std::string explanation;
   std::vector<DiagnosisStep> steps;   // every accepted effect, in the order it was added
   std::vector<std::string> notes;     // candidates tried and refused, effects dropped by the backward check
+  // When the last step refused candidates that still explain part of the identification residuals significantly:
+  // what remains unexplained and its likeliest cause, one sentence (empty when the residuals are noise to the tests).
+  std::string unexplained;
   ResidualSummary before, after;                  // identification residuals, base model and with every effect
   ResidualSummary validation_before, validation_after;
   double size = 0.0, size_u = 0.0;                // the first effect's size and its standard uncertainty

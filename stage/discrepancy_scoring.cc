@@ -77,7 +77,8 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   s.extra = static_cast<int>(extra_qr.rank());
   s.rank = base_rank + s.extra;
   const Eigen::MatrixXd q_extra = Eigen::MatrixXd(extra_qr.householderQ()).leftCols(s.extra);
-  s.rss = std::max(0.0, s.rss_base - (q_extra.transpose() * r_base).squaredNorm());
+  s.explained = q_extra * (q_extra.transpose() * r_base);
+  s.rss = std::max(0.0, s.rss_base - s.explained.squaredNorm());
   // Effect estimates: minimum-norm least squares on the whole system, then undo the column scaling.
   const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(all);
   const Eigen::VectorXd solution = cod.solve(-r0);

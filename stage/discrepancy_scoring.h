@@ -31,6 +31,7 @@ struct LinearScore {
   int rank = 0;        // rank of base + candidate
   Eigen::VectorXd effect;      // least-squares values of the candidate's columns (in the columns' units)
   Eigen::VectorXd effect_u;    // their standard uncertainties
+  Eigen::VectorXd explained;   // the part of the residuals it takes beyond the base model (one entry per equation)
 };
 
 // Extra sum of squares of the candidate columns over the base model, on the linearised problem (only the part of

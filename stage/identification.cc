@@ -180,11 +180,16 @@ Eigen::VectorXd PlausibleSizes(const ParameterLayout& layout) {
   return tau;
 }
 
+Eigen::Vector3d Predict(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& command,
+                        const Eigen::Vector3d* anchor) {
+  Eigen::Vector3d seen = Forward(layout, free, command);
+  if (anchor) seen -= Forward(layout, free, Eigen::Vector3d(*anchor)) - *anchor;
+  return seen;
+}
+
 Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
                               const Eigen::Vector3d* anchor) {
-  Eigen::Vector3d r = Forward(layout, free, Eigen::Vector3d(observation.command)) - observation.measured;
-  if (anchor) r -= Forward(layout, free, Eigen::Vector3d(*anchor)) - *anchor;
-  return r;
+  return Predict(layout, free, Eigen::Vector3d(observation.command), anchor) - observation.measured;
 }
 
 const std::vector<std::string>& PoseParameterNames() {

@@ -129,7 +129,13 @@ IdentificationResult Identify(const ParameterLayout& layout, const std::vector<O
 // Names of the six instrument-pose parameters, as the rank treatment and reports name them.
 const std::vector<std::string>& PoseParameterNames();
 
-// The residual of one observation under a model (model - measured), with the anchor when given.
+// What the instrument measures for a commanded position under a model: Forward(command), less, for a stitched
+// measurement anchored at `anchor` (its first tile), what the model moves the anchor by (the stitched frame starts
+// there). The one prediction the identification, validation and the Monte Carlo share.
+Eigen::Vector3d Predict(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& command,
+                        const Eigen::Vector3d* anchor = nullptr);
+
+// The residual of one observation under a model: Predict - measured.
 Eigen::Vector3d ModelResidual(const ParameterLayout& layout, const double* free, const Observation& observation,
                               const Eigen::Vector3d* anchor = nullptr);
 

@@ -24,9 +24,9 @@ VolumetricError SummarizeVolumetric(const std::vector<Eigen::Vector3d>& residual
   return {s.count, s.mean_mm * 1e3, s.max_mm * 1e3, s.min_mm * 1e3};
 }
 
-std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, const std::vector<double>* values,
-                                                 const Pose& pose, const std::vector<Observation>& readings,
-                                                 const std::vector<Eigen::Vector3d>& tool_offsets) {
+std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
+                                               const Pose& pose, const std::vector<Observation>& points,
+                                               const std::vector<Eigen::Vector3d>& tool_offsets) {
   std::vector<double> all(layout.coefficients().size(), 0.0);
   if (values != nullptr) layout.Expand(values->data(), all.data());
   const double pose6[6] = {pose.translation[0], pose.translation[1], pose.translation[2],
@@ -35,13 +35,21 @@ std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, 
   for (size_t t = 0; t < std::max<size_t>(1, tool_offsets.size()); ++t) {
     chains.push_back(ChainWithTool(layout.chain(), tool_offsets, static_cast<int>(t)));
   }
-  std::vector<Eigen::Vector3d> residuals;
-  residuals.reserve(readings.size());
-  for (const Observation& o : readings) {
+  std::vector<Eigen::Vector3d> predicted;
+  predicted.reserve(points.size());
+  for (const Observation& o : points) {
     double e[kNumErrorTerms];
     layout.TermValues(all.data(), o.command, e);
-    residuals.push_back(ChainForward(chains.at(static_cast<size_t>(o.tool)), e, o.command, pose6) - o.measured);
+    predicted.push_back(ChainForward(chains.at(static_cast<size_t>(o.tool)), e, o.command, pose6));
   }
+  return predicted;
+}
+
+std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, const std::vector<double>* values,
+                                                 const Pose& pose, const std::vector<Observation>& readings,
+                                                 const std::vector<Eigen::Vector3d>& tool_offsets) {
+  std::vector<Eigen::Vector3d> residuals = PredictedReadings(layout, values, pose, readings, tool_offsets);
+  for (size_t i = 0; i < residuals.size(); ++i) residuals[i] -= readings[i].measured;
   return residuals;
 }
 

@@ -47,7 +47,13 @@ Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& read
 VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vector<Observation>& readings,
                                  IdentificationOptions options);
 
-// Model - reading in the tracker frame for each reading: the ideal machine when `calibration` is null.
+// The tracker-frame tool points that `layout` with free coefficients `values` (null: the ideal machine) at `pose`
+// predicts for the commands (and tools) of `points`.
+std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
+                                               const Pose& pose, const std::vector<Observation>& points,
+                                               const std::vector<Eigen::Vector3d>& tool_offsets = {});
+
+// PredictedReadings - reading in the tracker frame for each reading: the ideal machine when `values` is null.
 std::vector<Eigen::Vector3d> VolumetricResiduals(const ParameterLayout& layout, const std::vector<double>* values,
                                                  const Pose& pose, const std::vector<Observation>& readings,
                                                  const std::vector<Eigen::Vector3d>& tool_offsets = {});

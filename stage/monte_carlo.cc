@@ -24,14 +24,6 @@ void ForEachRun(int runs, int threads, const std::function<void(int)>& run) {
   });
 }
 
-std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
-                                               const Pose& pose, const std::vector<Observation>& points,
-                                               const std::vector<Eigen::Vector3d>& tool_offsets) {
-  std::vector<Observation> at = points;
-  for (Observation& o : at) o.measured.setZero();  // model - 0 = the model
-  return VolumetricResiduals(layout, values, pose, at, tool_offsets);
-}
-
 std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const VerificationResult& verification,
                                                     const std::vector<Observation>& readings,
                                                     const std::vector<Observation>& validation, const TrackerNoise& noise,
@@ -90,10 +82,8 @@ namespace {
 std::vector<Eigen::Vector3d> PredictedCentres(const Calibration& c, const MeasurementSet& set, bool anchored) {
   std::vector<Eigen::Vector3d> out;
   for (const Observation& o : set.observations) {
-    Observation at = o;
-    at.measured.setZero();
     const Eigen::Vector3d* anchor = anchored ? &set.anchors.at(static_cast<size_t>(o.group)) : nullptr;
-    out.push_back(ModelResidual(c.layout, c.values.data(), at, anchor));
+    out.push_back(Predict(c.layout, c.values.data(), Eigen::Vector3d(o.command), anchor));
   }
   return out;
 }

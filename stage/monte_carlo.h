@@ -53,12 +53,6 @@ struct MachineMonteCarloRun : MonteCarloRun {
   std::vector<double> initial_um, final_um;  // per reading: |ideal machine - drawn reading|, |run's model - drawn reading|
 };
 
-// The tracker-frame tool points that `layout` with free coefficients `values` (null: the ideal machine) at `pose`
-// predicts for the commands (and tools) of `points`.
-std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
-                                               const Pose& pose, const std::vector<Observation>& points,
-                                               const std::vector<Eigen::Vector3d>& tool_offsets);
-
 // `layout` is what each run identifies (MachineLayout, before any rank treatment); `reference` is the verification
 // of the real readings (its identified calibration and pose are the simulated truth, its initial pose states the
 // ideal machine's error); `readings` gives the commands and tools

@@ -1,5 +1,7 @@
 #include "stage/residual_findings.h"
 
+#include "core/statistics.h"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -71,6 +73,20 @@ std::vector<std::string> Findings(const std::vector<Eigen::Vector3d>& residuals,
   for (size_t i = 0; i < found.size() && i < 5; ++i) out.push_back(found[i].second);
   if (out.empty()) out.push_back("no structure: residuals look like noise against position, height, time and index");
   return out;
+}
+
+double NeighbourNoise(const std::vector<Eigen::Vector3d>& residuals, const MeasurementSet& set) {
+  std::map<int, std::vector<size_t>> placements;  // observations of each group, in measurement order
+  for (size_t i = 0; i < set.observations.size() && i < residuals.size(); ++i) placements[set.observations[i].group].push_back(i);
+  std::vector<double> second;
+  for (const auto& [group, index] : placements) {
+    for (size_t k = 1; k + 1 < index.size(); ++k) {
+      const Eigen::Vector3d d = residuals[index[k + 1]] - 2.0 * residuals[index[k]] + residuals[index[k - 1]];
+      second.insert(second.end(), {std::abs(d.x()), std::abs(d.y()), std::abs(d.z())});
+    }
+  }
+  if (second.empty()) return 0.0;
+  return 1.4826 * Median(std::move(second)) / std::sqrt(6.0);
 }
 
 }  // namespace fvm::stage

@@ -191,9 +191,7 @@ TEST(StageMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   // The true stage's stitched centres of the identification placements (the batch is not anchored: same start).
   std::vector<Eigen::Vector3d> truth;
   for (const Observation& o : identify.observations) {
-    Observation at = o;
-    at.measured.setZero();
-    truth.push_back(ModelResidual(sim.truth.layout, sim.truth.values.data(), at));
+    truth.push_back(Predict(sim.truth.layout, sim.truth.values.data(), Eigen::Vector3d(o.command)));
   }
   constexpr int kReal = 20;
   std::vector<double> real_rms;
@@ -211,10 +209,8 @@ TEST(StageMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
     real_rms.push_back(Validate(&r.calibration, validate.observations, validate.anchors).rms_mm * 1e3);
     std::vector<Eigen::Vector3d> p;
     for (const Observation& o : validate.observations) {
-      Observation at = o;
-      at.measured.setZero();
-      p.push_back(ModelResidual(r.calibration.layout, r.calibration.values.data(), at,
-                                &validate.anchors.at(static_cast<size_t>(o.group))));
+      p.push_back(Predict(r.calibration.layout, r.calibration.values.data(), Eigen::Vector3d(o.command),
+                          &validate.anchors.at(static_cast<size_t>(o.group))));
     }
     real_predictions.push_back(p);
     if (k == 0) first.emplace(std::move(r)), first_set = set;

@@ -137,6 +137,9 @@ struct PublishedEffects {
   Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();
   int blunders = 0;
   double blunder_mm = 0.08;
+  // The identification bars lie on wedges rising by -rise, 0, +rise over their length (mm): measured in order,
+  // their height grows with time along each, so a drift and pitch and roll look alike.
+  double rise_mm = 0.0;
 };
 
 // The three identification placements of [Pérez 2019] (along x, along y, oblique, from the corner at lowest x and
@@ -189,7 +192,8 @@ inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage
   const Eigen::Vector2d corner(-185.0, -15.0);
   for (const double a : {0.0, -std::numbers::pi / 2, -std::numbers::pi / 4}) {
     const Eigen::Vector2d start = apart ? Eigen::Vector2d(corner + Eigen::Vector2d(shift(rng), -shift(rng))) : corner;
-    measure(out.identify, BarPlacement(start, a, tilt(rng)));
+    const double wedge = effects.rise_mm * (static_cast<double>(out.identify.anchors.size()) - 1.0) / 160.0;
+    measure(out.identify, BarPlacement(start, a, tilt(rng) + wedge));
   }
   while (static_cast<int>(out.validate.anchors.size()) < validation) {
     const Eigen::Vector2d start(coordinate(rng), coordinate(rng));
