@@ -36,9 +36,13 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
   y_min -= pad, y_max += pad;
   const double x0 = x.empty() ? 0.0 : x.front(), x1 = x.empty() ? 1.0 : x.back();
 
+  // One character size for everything in the panel, so PLplot's fixed offsets (in character heights) keep the tick
+  // numbers, the axis labels and the curve names apart.
+  plschr(0, 0.85);
   plvpor(vx0, vx1, vy0, vy1);
   plwind(x0, x1 > x0 ? x1 : x0 + 1, y_min, y_max);
-  Frame("", 0, 0, "", 0, 0);
+  const double x_tick = NiceCeil((x1 - x0) / 5), y_tick = NiceCeil((y_max - y_min) / 6);
+  Frame("", x_tick, 0, "", y_tick, 0);
   plcol0(kMuted);
   pljoin(x0, 0, x1, 0);
   for (std::size_t s = 0; s < curves.size() && s < kSeriesCount; ++s) {
@@ -58,26 +62,32 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
     plmtex("t", 0.6, 0.02 + 0.16 * static_cast<double>(s), 0, PlText(c.name).c_str());
   }
   plcol0(kInk);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
-  plschr(0, 0.85);
-  pllab(fmt::format("{} (mm)", axis.axis).c_str(), UnitLabel(unit).c_str(), "");
-  plmtex("t", 0.6, 1.0, 1.0, fmt::format("{} {}", axis.axis, std::string(unit) == "um" ? "translations" : "rotations").c_str());
+  // About five numbered ticks on x: positions of four or more digits run into each other at PLplot's own choice.
+  Frame("bcnst", x_tick, 0, "bcnstv", y_tick, 0, false);
+  const bool translations = std::string(unit) == "um";
+  pllab(fmt::format("{} position (mm)", axis.axis).c_str(), "", "");
+  YLabel(fmt::format("error ({})", UnitLabel(unit)), TickChars(y_min, y_max, y_tick));
+  plmtex("t", 0.6, 1.0, 1.0, fmt::format("{} {}", axis.axis, translations ? "translations" : "rotations").c_str());
   plschr(0, 1.0);
 }
 
 std::string RenderErrorFunctions(const MachineReportData& data) {
-  constexpr int kWidth = 1100, kRowPx = 330, kTopPx = 50;
+  // A row per axis: above each pair of panels the curve names and panel titles (kAbovePx), below them the tick
+  // numbers and the position label (kBelowPx), so a row's position label never meets the next row's names.
+  constexpr int kWidth = 1200, kRowPx = 380, kTopPx = 60, kAbovePx = 45, kBelowPx = 85;
   const int height = kTopPx + 3 * kRowPx;
   SvgPlot plot(kWidth, height);
   plvpor(0, 1, 0, 1);
   plwind(0, 1, 0, 1);
-  plmtex("t", -1.5, 0.5, 0.5, "Error functions relative to the axis origin, with 95 % bands (k = 2)");
+  plschr(0, 0.85);
+  plmtex("t", -1.5, 0.5, 0.5, "Error functions relative to the axis origin, 95 % bands (k = 2)");
+  plschr(0, 1.0);
   for (int row = 0; row < 3; ++row) {
-    const double top = 1.0 - static_cast<double>(kTopPx + row * kRowPx + 35) / height;
-    const double bottom = 1.0 - static_cast<double>(kTopPx + (row + 1) * kRowPx - 45) / height;
+    const double top = 1.0 - static_cast<double>(kTopPx + row * kRowPx + kAbovePx) / height;
+    const double bottom = 1.0 - static_cast<double>(kTopPx + (row + 1) * kRowPx - kBelowPx) / height;
     const auto& axis = data.functions[static_cast<std::size_t>(row)];
-    DrawFunctionPanel(axis, axis.translations, "um", 0.08, 0.47, bottom, top);
-    DrawFunctionPanel(axis, axis.rotations, "urad", 0.58, 0.97, bottom, top);
+    DrawFunctionPanel(axis, axis.translations, "um", 0.1, 0.45, bottom, top);
+    DrawFunctionPanel(axis, axis.rotations, "urad", 0.6, 0.95, bottom, top);
   }
   return plot.Finish();
 }
@@ -184,7 +194,7 @@ void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int 
   }
   plcol0(kInk);
   pllab("machine x (mm)", fmt::format("machine {} (mm)", "xyz"[vertical]).c_str(),
-        fmt::format("{} view", vertical == 1 ? "XY" : "XZ").c_str());
+        vertical == 1 ? "XY view, from above" : "XZ view, from the front");
 }
 
 std::string RenderErrorMap(const MachineReportData& data) {
@@ -201,21 +211,21 @@ std::string RenderErrorMap(const MachineReportData& data) {
   const double span = std::max(x1 - x0, 1.0);
   const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
 
-  SvgPlot plot(1000, 1000);
-  DrawMapPanel(points, 1, mm_per_um, 0.1, 0.95, 0.56, 0.93);
-  DrawMapPanel(points, 2, mm_per_um, 0.1, 0.95, 0.1, 0.47);
+  // From the top: the figure's title and scale (two lines), the XY panel, its x label, the XZ panel's title, the XZ
+  // panel, its x label, the key; each panel's box leaves a title line above it and two lines below.
+  SvgPlot plot(1000, 1050);
+  DrawMapPanel(points, 1, mm_per_um, 0.12, 0.95, 0.575, 0.84);
+  DrawMapPanel(points, 2, mm_per_um, 0.12, 0.95, 0.12, 0.395);
   plvpor(0, 1, 0, 1);
   plwind(0, 1, 0, 1);
   plcol0(kInk);
-  plmtex("t", -1.5, 0.5, 0.5,
-         fmt::format("Volumetric error at the {} points: disc radius {:g} mm per µm", held_out ? "validation" : "fitted",
-                     mm_per_um)
-             .c_str());
+  plmtex("t", -1.5, 0.5, 0.5, fmt::format("Volumetric error at the {} points", held_out ? "validation" : "fitted").c_str());
   plschr(0, 0.8);
+  plmtex("t", -3.9, 0.5, 0.5, fmt::format("disc radius {:g} mm per µm of error", mm_per_um).c_str());
   plcol0(kBefore);
-  plptex(0.1, 0.02, 1, 0, 0, "before: translucent vermilion");
+  plptex(0.12, 0.025, 1, 0, 0, "before: translucent vermilion");
   plcol0(kAfter);
-  plptex(0.5, 0.02, 1, 0, 0, "after: blue");
+  plptex(0.55, 0.025, 1, 0, 0, "after: blue");
   plschr(0, 1.0);
   return plot.Finish();
 }

@@ -249,6 +249,19 @@ void Disc(PLFLT x, PLFLT y, PLFLT radius) {
   plfill(kSides, px.data(), py.data());
 }
 
+int TickChars(double lo, double hi, double tick) {
+  const double largest = std::max(std::abs(lo), std::abs(hi));
+  const int integer_digits = largest >= 1 ? static_cast<int>(std::floor(std::log10(largest))) + 1 : 1;
+  const int decimals = tick > 0 && tick < 1 ? static_cast<int>(std::ceil(-std::log10(tick) - 1e-9)) : 0;
+  return (lo < 0 ? 1 : 0) + integer_digits + (decimals > 0 ? 1 + decimals : 0);
+}
+
+// Measured on PLplot's svg output: a font size is 4/3 of the character height that plmtex displacements count in,
+// the tick numbers end half a character height from the frame, and a digit is about 0.6 of the font size wide.
+void YLabel(const std::string& text, int tick_chars) {
+  plmtex("l", 1.9 + 0.8 * tick_chars, 0.5, 0.5, text.c_str());
+}
+
 std::string HtmlEscape(std::string_view text) {
   std::string out;
   for (const char c : text) {

@@ -74,6 +74,13 @@ void Arrow(PLFLT x, PLFLT y, PLFLT dx, PLFLT dy, PLFLT max_head);
 // A filled disc (a 16-gon) in world coordinates with equal scales on both axes.
 void Disc(PLFLT x, PLFLT y, PLFLT radius);
 
+// The characters of the longest number PLplot writes at the ticks (step `tick`, a NiceCeil value) of an axis from lo
+// to hi: sign, integer digits, the point and decimals.
+int TickChars(double lo, double hi, double tick);
+// The y-axis label, parallel to the axis and centred on it, far enough out to clear horizontal tick numbers ("v") of
+// up to `tick_chars` characters at the current character size (pllab's fixed place clears four).
+void YLabel(const std::string& text, int tick_chars);
+
 // ---- the page ----
 std::string HtmlEscape(std::string_view text);
 // <!DOCTYPE html> ... <body><h1>title</h1>: the page up to its content, with the reports' style sheet.
