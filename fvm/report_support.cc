@@ -136,8 +136,9 @@ std::string PlText(std::string_view text) {
 }
 
 std::string UnitLabel(std::string_view unit) {
-  if (unit == "um") return "µm";
-  if (unit == "urad") return "µrad";
+  for (const std::string_view micro : {"urad", "um"}) {
+    if (unit.starts_with(micro)) return "µ" + PlText(unit.substr(1));  // also "um/min", "urad/K"
+  }
   return PlText(unit);
 }
 
@@ -260,6 +261,21 @@ int TickChars(double lo, double hi, double tick) {
 // the tick numbers end half a character height from the frame, and a digit is about 0.6 of the font size wide.
 void YLabel(const std::string& text, int tick_chars) {
   plmtex("l", 1.9 + 0.8 * tick_chars, 0.5, 0.5, text.c_str());
+}
+
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction) {
+  PLFLT default_mm, height_mm, x0, x1, y0, y1;
+  plgchr(&default_mm, &height_mm);
+  plgspa(&x0, &x1, &y0, &y1);
+  std::size_t chars = 0;
+  for (const char c : text) chars += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  // A character is about 0.6 of the font size wide, the font size 4/3 of the character height (see YLabel).
+  const double needed_mm = 0.8 * height_mm * static_cast<double>(chars), available_mm = width_fraction * (x1 - x0);
+  const double scale = height_mm / default_mm;
+  const double shrink = needed_mm > available_mm ? available_mm / needed_mm : 1.0;
+  plschr(0, scale * shrink);
+  plmtex(side, disp / shrink, pos, just, text.c_str());  // the displacement counts in the smaller heights
+  plschr(0, scale);
 }
 
 std::string HtmlEscape(std::string_view text) {

@@ -81,6 +81,10 @@ int TickChars(double lo, double hi, double tick);
 // up to `tick_chars` characters at the current character size (pllab's fixed place clears four).
 void YLabel(const std::string& text, int tick_chars);
 
+// plmtex at the current character size, shrunk (never grown) so the text fits `width_fraction` of the page's width:
+// long titles (diagnose's list of added effects) stay on the page.
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction);
+
 // ---- the page ----
 std::string HtmlEscape(std::string_view text);
 // <!DOCTYPE html> ... <body><h1>title</h1>: the page up to its content, with the reports' style sheet.

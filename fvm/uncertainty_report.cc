@@ -100,8 +100,9 @@ std::string RenderU95Map(const UncertaintyReportData& data) {
     plline(kSides + 1, x.data(), y.data());
   }
   plcol0(kInk);
-  pllab("machine x (mm)", "machine y (mm)",
-        fmt::format("95 % ellipsoids seen from above (largest semi-axis {:.3g} µm; all z levels)", largest).c_str());
+  pllab("machine x (mm)", "machine y (mm)", "");
+  FittedMtex("t", 2.0, 0.5, 0.5,
+             fmt::format("95 % ellipsoids seen from above (largest semi-axis {:.3g} µm; all z levels)", largest), 0.95);
   return plot.Finish();
 }
 

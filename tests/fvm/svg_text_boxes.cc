@@ -117,6 +117,8 @@ void CollectTexts(pugi::xml_node node, const Affine& above, SvgTextLayout& layou
       text += chars;
     }
     if (text.find_first_not_of(" \t\n") == std::string::npos) continue;
+    // PLplot draws point markers (plpoin, plstring) as one-glyph texts: they are data, which may overlap.
+    if (text == "•" || text == "●") continue;
     const double x = child.attribute("x").as_double(0), y = child.attribute("y").as_double(0);
     const std::string anchor = Inherited(child, "text-anchor", "start");
     const double left = anchor == "middle" ? x - width / 2 : anchor == "end" ? x - width : x;

@@ -4,6 +4,7 @@
 // What the estimate can see: text on text (a title over a panel title, an axis label on a legend) and text past the
 // canvas (a unit cut off at the left). What it cannot: text over lines, discs or arrows (the data), and glyph shapes;
 // widths are a conservative per-character figure for DejaVu Sans (what `sans-serif` is on Debian), not measured.
+// One-glyph texts "•" and "●" are PLplot's point markers, data rather than text, and are left out.
 
 #include <filesystem>
 #include <string>
