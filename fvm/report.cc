@@ -249,7 +249,7 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
   const double pad = 0.08 * (y_max - y_min);
   y_min -= pad, y_max += pad;
 
-  plvpor(0.11, 0.98, vp_y0, vp_y1);
+  plvpor(0.13, 0.98, vp_y0, vp_y1);
   plwind(0.5, n + 0.5, y_min, y_max);
   plcol0(kGrid);
   plwidth(0.8);
@@ -271,7 +271,7 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
     plmtex("bv", 0.8, (i + 0.5) / n, 1.0, PlText(group.parameters[static_cast<std::size_t>(i)]->name).c_str());
   }
   const std::string unit = UnitLabel(group.unit);
-  pllab("", "", fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit).c_str());
+  FittedMtex("t", 2.0, 0.5, 0.5, fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit), 0.8);
   YLabel(fmt::format("value ± 2u ({})", unit), TickChars(y_min, y_max, y_tick));
   plsyax(0, 0);
 }
@@ -287,7 +287,7 @@ std::string RenderParameters(const ReportData& data) {
   const int height = panels * kPanelPx;
   SvgPlot plot(1000, height);
   if (groups.empty()) {
-    plvpor(0.11, 0.98, static_cast<double>(kNamesPx) / height, 1.0 - static_cast<double>(kTitlePx) / height);
+    plvpor(0.13, 0.98, static_cast<double>(kNamesPx) / height, 1.0 - static_cast<double>(kTitlePx) / height);
     plwind(0, 1, 0, 1);
     Frame("bc", 0, 0, "bc", 0, 0, false);
     pllab("", "", "Parameters: value with ± 2u error bars (k = 2)");
