@@ -83,7 +83,7 @@ void DrawDistancePanel(const std::vector<double>& values, const std::string& wha
   Frame("bcnst", 0, 0, "bcnstv", y_tick, y_sub, false);
   pllab("distance error (µm)", "", "");
   YLabel("count", TickChars(0, y_max, y_tick));
-  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), 0.86);
+  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), 0.86, 1.5);
   plschr(0, 0.85);
   const std::string numbers =
       values.empty() ? std::string("no distance errors")
@@ -97,9 +97,9 @@ void DrawDistancePanel(const std::vector<double>& values, const std::string& wha
 std::string RenderDistanceErrors(const ReportData& data) {
   SvgPlot plot(900, 900);
   DrawDistancePanel(Finite(data.distance_errors_before_um), "Distance errors before " + data.change, kBeforeFill,
-                    kBefore, 0.585, 0.9);
+                    kBefore, 0.6, 0.9);
   DrawDistancePanel(Finite(data.distance_errors_after_um), "Distance errors after " + data.change, kAfterFill, kAfter,
-                    0.08, 0.395);
+                    0.11, 0.41);
   return plot.Finish();
 }
 
@@ -139,13 +139,13 @@ StageWindow StageWindowOf(const ReportData& data) {
 void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::ErrorVector>& errors, const StageWindow& w,
                      const std::string& what, PLINT colour, double vx0, double vx1, int width_px, int height_px) {
   const ReportData::StageArea& area = data.stage_area;
-  plvpas(vx0, vx1, 0.2, 0.9, (w.y1 - w.y0) / (w.x1 - w.x0));
+  plvpas(vx0, vx1, 0.22, 0.85, (w.y1 - w.y0) / (w.x1 - w.x0));
   plwind(w.x0, w.x1, w.y0, w.y1);
   const double tick = NiceCeil(w.span / 5);
   Frame("bcnst", tick, 0, "bcnstv", tick, 0);
   pllab("stage x (mm)", "", "");
   YLabel("stage y (mm)", TickChars(w.y0, w.y1, tick));
-  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), vx1 - vx0);
+  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), vx1 - vx0, 1.5);
 
   plcol0(kMuted);
   pllsty(2);
@@ -153,11 +153,6 @@ void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::Error
   const std::array<PLFLT, 5> ry = {area.y_min_mm, area.y_min_mm, area.y_max_mm, area.y_max_mm, area.y_min_mm};
   plline(5, rx.data(), ry.data());
   pllsty(1);
-  plschr(0, 0.8);
-  const std::string travel =
-      fmt::format("stage travel {:g} × {:g} mm", area.x_max_mm - area.x_min_mm, area.y_max_mm - area.y_min_mm);
-  plptex(area.x_min_mm, area.y_max_mm + 0.02 * w.span, 1, 0, 0, travel.c_str());
-  plschr(0, 1.0);
 
   for (const auto& e : errors) {
     if (IsFinite(e)) Disc(e.x_mm, e.y_mm, 0.004 * w.span);
@@ -180,11 +175,15 @@ void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::Error
   // The scale strip below the frame, in the panel's mm: the scale arrow, the magnification.
   PLFLT px0, px1, py0, py1;
   plgvpd(&px0, &px1, &py0, &py1);
-  const double strip_y0 = 0.03, strip_y1 = 0.09;
+  const double strip_y0 = 0.015, strip_y1 = 0.105;
   const double mm_per_px = (w.x1 - w.x0) / ((px1 - px0) * width_px);
   plvpor(px0, px1, strip_y0, strip_y1);
   plwind(w.x0, w.x1, 0, (strip_y1 - strip_y0) * height_px * mm_per_px);
-  const double row = 0.5 * (strip_y1 - strip_y0) * height_px * mm_per_px, gap = 8 * mm_per_px;
+  const double strip_mm = (strip_y1 - strip_y0) * height_px * mm_per_px, gap = 8 * mm_per_px;
+  const double row = 0.72 * strip_mm;
+  plptex(w.x0, 0.25 * strip_mm, 1, 0, 0,
+         fmt::format("dashed: stage travel {:g} × {:g} mm", area.x_max_mm - area.x_min_mm, area.y_max_mm - area.y_min_mm)
+             .c_str());
   if (longest > 0) {
     const double scale_um = NiceFloor(longest);
     plcol0(colour);
@@ -202,11 +201,11 @@ void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::Error
 // a user wants to see next, and at the scale of the errors before it would be invisible.
 std::string RenderErrorVectors(const ReportData& data) {
   const StageWindow w = StageWindowOf(data);
-  constexpr int kWidth = 1400, kHeight = 820;
+  constexpr int kWidth = 1500, kHeight = 900;
   SvgPlot plot(kWidth, kHeight);
-  DrawVectorPanel(data, data.errors_before, w, "Lateral errors before " + data.change, kBefore, 0.09, 0.48, kWidth,
+  DrawVectorPanel(data, data.errors_before, w, "Lateral errors before " + data.change, kBefore, 0.1, 0.48, kWidth,
                   kHeight);
-  DrawVectorPanel(data, data.errors_after, w, "Lateral errors after " + data.change, kAfter, 0.59, 0.98, kWidth,
+  DrawVectorPanel(data, data.errors_after, w, "Lateral errors after " + data.change, kAfter, 0.6, 0.98, kWidth,
                   kHeight);
   return plot.Finish();
 }
@@ -272,7 +271,7 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
   }
   const std::string unit = UnitLabel(group.unit);
   FittedMtex("t", 2.0, 0.5, 0.5, fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit), 0.8);
-  YLabel(fmt::format("value ± 2u ({})", unit), TickChars(y_min, y_max, y_tick));
+  YLabel(fmt::format("value ({})", unit), TickChars(y_min, y_max, y_tick));
   plsyax(0, 0);
 }
 
@@ -282,7 +281,7 @@ std::string RenderParameters(const ReportData& data) {
   // page this tall).
   std::size_t longest = 0;
   for (const ReportData::Parameter& p : data.parameters) longest = std::max(longest, p.name.size());
-  const int kNamesPx = std::max(85, 40 + 17 * static_cast<int>(longest)), kPanelPx = 255 + kNamesPx, kTitlePx = 55;
+  const int kNamesPx = std::max(85, 40 + 17 * static_cast<int>(longest)), kPanelPx = 330 + kNamesPx, kTitlePx = 65;
   const int panels = std::max(1, static_cast<int>(groups.size()));
   const int height = panels * kPanelPx;
   SvgPlot plot(1000, height);
@@ -327,7 +326,8 @@ std::string RenderSteps(const ReportData& data) {
     plcol0(kInk);
     plmtex("b", 1.2 + 1.1 * (i % 2), (i + 0.5) / n, 0.5, PlText(steps[static_cast<std::size_t>(i)].label).c_str());
   }
-  pllab("", "mean 3-D residual (µm)", "The gap after each step of the selection");
+  pllab("", "mean 3-D residual (µm)", "Mean 3-D residual after each step of the forward selection");
+  plmtex("b", 4.2, 0.5, 0.5, "model: the base, then each effect in the order added");
   // Held-out values are written above their points, identification values below, so close ones stay apart.
   struct Series {
     double ReportData::Step::*member;

@@ -263,18 +263,40 @@ void YLabel(const std::string& text, int tick_chars) {
   plmtex("l", 1.9 + 0.8 * tick_chars, 0.5, 0.5, text.c_str());
 }
 
-void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction) {
+namespace {
+std::size_t CodePoints(std::string_view text) {
+  return static_cast<std::size_t>(
+      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+}  // namespace
+
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction,
+                double line_step) {
   PLFLT default_mm, height_mm, x0, x1, y0, y1;
   plgchr(&default_mm, &height_mm);
   plgspa(&x0, &x1, &y0, &y1);
-  std::size_t chars = 0;
-  for (const char c : text) chars += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
   // A character is about 0.6 of the font size wide, the font size 4/3 of the character height (see YLabel).
-  const double needed_mm = 0.8 * height_mm * static_cast<double>(chars), available_mm = width_fraction * (x1 - x0);
+  const double available_mm = width_fraction * (x1 - x0);
+  const auto needed_mm = [&](std::string_view line) { return 0.8 * height_mm * static_cast<double>(CodePoints(line)); };
+  std::vector<std::string> lines = {text};
+  if (line_step > 0 && needed_mm(text) > available_mm) {
+    std::size_t best = std::string::npos;
+    for (std::size_t i = text.find(' '); i != std::string::npos; i = text.find(' ', i + 1)) {
+      const auto off_centre = [&](std::size_t k) { return std::abs(static_cast<double>(k) - text.size() / 2.0); };
+      if (best == std::string::npos || off_centre(i) < off_centre(best)) best = i;
+    }
+    if (best != std::string::npos) lines = {text.substr(0, best), text.substr(best + 1)};
+  }
+  double widest = 0;
+  for (const std::string& line : lines) widest = std::max(widest, needed_mm(line));
   const double scale = height_mm / default_mm;
-  const double shrink = needed_mm > available_mm ? available_mm / needed_mm : 1.0;
+  const double shrink = widest > available_mm ? available_mm / widest : 1.0;
   plschr(0, scale * shrink);
-  plmtex(side, disp / shrink, pos, just, text.c_str());  // the displacement counts in the smaller heights
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    // The displacement counts in the (smaller) character heights; the first of two lines goes further out.
+    const double out = disp + (lines.size() == 2 && i == 0 ? line_step : 0.0);
+    plmtex(side, out / shrink, pos, just, lines[i].c_str());
+  }
   plschr(0, scale);
 }
 

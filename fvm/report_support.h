@@ -81,9 +81,11 @@ int TickChars(double lo, double hi, double tick);
 // up to `tick_chars` characters at the current character size (pllab's fixed place clears four).
 void YLabel(const std::string& text, int tick_chars);
 
-// plmtex at the current character size, shrunk (never grown) so the text fits `width_fraction` of the page's width:
-// long titles (diagnose's list of added effects) stay on the page.
-void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction);
+// plmtex at the current character size, so that the text fits `width_fraction` of the page's width: first broken
+// at the space nearest its middle into two lines (the first `line_step` character heights further out), when
+// line_step > 0; then shrunk (never grown). Long titles (diagnose's list of added effects) stay on the page.
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction,
+                double line_step = 0);
 
 // ---- the page ----
 std::string HtmlEscape(std::string_view text);
