@@ -164,7 +164,11 @@ std::string RenderVolumetricErrors(const MachineReportData& data) {
 
 // ---- error map: XY and XZ views, discs sized by the error -------------------------------------------------------
 
-void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int vertical, double mm_per_um,
+double Error(const MachineReportData::PointError& p, bool after) { return after ? p.after_um : p.before_um; }
+
+// One view (vertical 1: XY from above, 2: XZ from the front) of one state (before or after): a disc at each point,
+// radius proportional to its error, the largest drawn first so small ones on top stay visible.
+void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int vertical, bool after, double mm_per_um,
                   double vx0, double vx1, double vy0, double vy1) {
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
   bool first = true;
@@ -178,54 +182,62 @@ void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int 
   const double margin = 0.08 * span;
   plvpas(vx0, vx1, vy0, vy1, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
-  // Before, translucent and under; after, solid on top; the largest errors drawn first so small ones stay visible.
-  for (const bool after : {false, true}) {
-    std::vector<const MachineReportData::PointError*> order;
-    for (const auto& p : points) order.push_back(&p);
-    std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) {
-      return (after ? a->after_um : a->before_um) > (after ? b->after_um : b->before_um);
-    });
-    plcol0(after ? kAfter : kBeforeFill);
-    for (const auto* p : order) {
-      const double e = after ? p->after_um : p->before_um;
-      if (std::isfinite(e) && e > 0) Disc(p->x_mm, coordinate(*p, vertical), e * mm_per_um);
-    }
+  const double tick = NiceCeil(span / 5);
+  Frame("bcnst", tick, 0, "bcnstv", tick, 0);
+  std::vector<const MachineReportData::PointError*> order;
+  for (const auto& p : points) order.push_back(&p);
+  std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) { return Error(*a, after) > Error(*b, after); });
+  for (const auto* p : order) {
+    const double e = Error(*p, after);
+    if (!(std::isfinite(e) && e > 0)) continue;
+    plcol0(after ? kAfterFill : kBeforeFill);
+    Disc(p->x_mm, coordinate(*p, vertical), e * mm_per_um);
   }
   plcol0(kInk);
-  pllab("machine x (mm)", fmt::format("machine {} (mm)", "xyz"[vertical]).c_str(),
-        vertical == 1 ? "XY view, from above" : "XZ view, from the front");
+  pllab("machine x (mm)", "", vertical == 1 ? "XY view, from above" : "XZ view, from the front");
+  YLabel(fmt::format("machine {} (mm)", "xyz"[vertical]), TickChars(y0 - margin, y1 + margin, tick));
 }
 
+// Before (the ideal machine) on the left, after (the identified model) on the right, each on its own disc scale:
+// after an identification the errors left are what a user wants to see next, invisible at the scale of before.
 std::string RenderErrorMap(const MachineReportData& data) {
   const bool held_out = !data.validation.empty();
   const std::vector<MachineReportData::PointError>& points = held_out ? data.validation : data.readings;
-  double largest = 0, x0 = 0, x1 = 0;
-  for (const auto& p : points) {
-    for (const double e : {p.before_um, p.after_um}) {
-      if (std::isfinite(e)) largest = std::max(largest, e);
-    }
-    x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm);
-  }
-  // The largest disc has a radius of 6 % of the x span, on a round scale.
+  double x0 = 0, x1 = 0;
+  for (const auto& p : points) x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm);
   const double span = std::max(x1 - x0, 1.0);
-  const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
 
-  // From the top: the figure's title and scale (two lines), the XY panel, its x label, the XZ panel's title, the XZ
-  // panel, its x label, the key; each panel's box leaves a title line above it and two lines below.
-  SvgPlot plot(1000, 1050);
-  DrawMapPanel(points, 1, mm_per_um, 0.12, 0.95, 0.575, 0.84);
-  DrawMapPanel(points, 2, mm_per_um, 0.12, 0.95, 0.12, 0.395);
-  plvpor(0, 1, 0, 1);
-  plwind(0, 1, 0, 1);
-  plcol0(kInk);
-  plmtex("t", -1.5, 0.5, 0.5, fmt::format("Volumetric error at the {} points", held_out ? "validation" : "fitted").c_str());
+  constexpr int kHeight = 1150;
+  SvgPlot plot(1400, kHeight);
   plschr(0, 0.8);
-  plmtex("t", -3.9, 0.5, 0.5, fmt::format("disc radius {:g} mm per µm of error", mm_per_um).c_str());
-  plcol0(kBefore);
-  plptex(0.12, 0.025, 1, 0, 0, "before: translucent vermilion");
-  plcol0(kAfter);
-  plptex(0.55, 0.025, 1, 0, 0, "after: blue");
+  const auto from_top = [&](int px) { return 1.0 - static_cast<double>(px) / kHeight; };
+  for (const bool after : {false, true}) {
+    double largest = 0, sum = 0;
+    std::size_t n = 0;
+    for (const auto& p : points) {
+      const double e = Error(p, after);
+      if (!std::isfinite(e)) continue;
+      largest = std::max(largest, e), sum += e, ++n;
+    }
+    // The largest disc has a radius of 3 to 6 % of the x span, on a round scale.
+    const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
+    const double vx0 = after ? 0.61 : 0.11, vx1 = after ? 0.97 : 0.47;
+    DrawMapPanel(points, 1, after, mm_per_um, vx0, vx1, 0.55, from_top(270));
+    DrawMapPanel(points, 2, after, mm_per_um, vx0, vx1, 0.1, 0.36);
+    // The column's heading, its numbers and its scale, between the figure's title and the XY view's title.
+    plvpor(0, 1, 0, 1);
+    plwind(0, 1, 0, 1);
+    const double centre = 0.5 * (vx0 + vx1);
+    plcol0(after ? kAfter : kBefore);
+    plptex(centre, from_top(100), 1, 0, 0.5, after ? "After: the identified model" : "Before: the ideal machine");
+    plcol0(kInk);
+    plschr(0, 0.7);
+    const double mean = n ? sum / static_cast<double>(n) : 0.0;
+    plptex(centre, from_top(135), 1, 0, 0.5, fmt::format("mean {:.3g} µm, max {:.3g} µm", mean, largest).c_str());
+    plptex(centre, from_top(163), 1, 0, 0.5, fmt::format("disc radius {:g} mm per µm", mm_per_um).c_str());
+    plschr(0, 0.8);
+  }
+  plmtex("t", -1.5, 0.5, 0.5, fmt::format("Volumetric error at the {} points", held_out ? "validation" : "fitted").c_str());
   plschr(0, 1.0);
   return plot.Finish();
 }
@@ -251,8 +263,9 @@ std::string RenderPage(const MachineReportData& data) {
                      "sorted: the ideal machine (before, vermilion) and the identified one (after, blue); readings "
                      "solid, validation points dashed.");
   html += HtmlFigure("error_map.svg", "Error map", "Volumetric errors over the workspace, seen from above and from the front",
-                     "Discs at the points, radius proportional to the volumetric error, before (translucent vermilion) "
-                     "and after (blue) the identification, in an XY and an XZ view of the workspace.");
+                     "Discs at the points, radius proportional to the volumetric error, before (vermilion, left) and "
+                     "after (blue, right) the identification, in an XY and an XZ view of the workspace; each side has "
+                     "its own disc scale, given under its heading.");
   return html + HtmlTail();
 }
 

@@ -38,7 +38,7 @@ std::string RenderDistribution(const UncertaintyReportData& data) {
 
   SvgPlot plot(900, 560);
   plvpor(0.1, 0.96, 0.12, 0.85);
-  const double y_max = 1.1 * top, y_tick = NiceCeil(y_max / 6);
+  const double y_max = 1.1 * top, y_tick = std::max(1.0, NiceCeil(y_max / 6));  // counts: whole ticks
   plwind(lo, hi, 0, y_max);
   Frame("", 0, 0, "", y_tick, 0);
   plwidth(1.8);
