@@ -41,7 +41,7 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
   plschr(0, 0.85);
   plvpor(vx0, vx1, vy0, vy1);
   plwind(x0, x1 > x0 ? x1 : x0 + 1, y_min, y_max);
-  const double x_tick = NiceCeil((x1 - x0) / 5), y_tick = NiceCeil((y_max - y_min) / 6);
+  const double x_tick = XTick(x0, x1), y_tick = NiceCeil((y_max - y_min) / 6);
   Frame("", x_tick, 0, "", y_tick, 0);
   plcol0(kMuted);
   pljoin(x0, 0, x1, 0);
@@ -59,10 +59,10 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
     plwidth(1.8);
     plline(static_cast<PLINT>(n), x.data(), c.value.data());
     plwidth(1.0);
-    plmtex("t", 0.6, 0.02 + 0.16 * static_cast<double>(s), 0, PlText(c.name).c_str());
+    plmtex("t", 0.6, 0.02 + 0.13 * static_cast<double>(s), 0, PlText(c.name).c_str());
   }
   plcol0(kInk);
-  // About five numbered ticks on x: positions of four or more digits run into each other at PLplot's own choice.
+  // Numbered ticks on x that stand apart: positions of four digits run into each other at PLplot's own choice.
   Frame("bcnst", x_tick, 0, "bcnstv", y_tick, 0, false);
   const bool translations = std::string(unit) == "um";
   pllab(fmt::format("{} position (mm)", axis.axis).c_str(), "", "");
@@ -182,8 +182,8 @@ void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int 
   const double margin = 0.08 * span;
   plvpas(vx0, vx1, vy0, vy1, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
-  const double tick = NiceCeil(span / 5);
-  Frame("bcnst", tick, 0, "bcnstv", tick, 0);
+  const double tick = NiceCeil(span / 5), x_tick = std::max(tick, XTick(x0 - margin, x1 + margin));
+  Frame("bcnst", x_tick, 0, "bcnstv", tick, 0);
   std::vector<const MachineReportData::PointError*> order;
   for (const auto& p : points) order.push_back(&p);
   std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) { return Error(*a, after) > Error(*b, after); });

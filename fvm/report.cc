@@ -74,13 +74,14 @@ void DrawDistancePanel(const std::vector<double>& values, const std::string& wha
 
   plvpor(0.1, 0.96, vp_y0, vp_y1);
   plwind(first_edge, -first_edge, 0, y_max);
-  Frame("", 0, 0, "", y_tick, y_sub);
+  const double x_tick = XTick(first_edge, -first_edge);
+  Frame("", x_tick, 0, "", y_tick, y_sub);
   plcol0(kMuted);
   pllsty(2);
   pljoin(0, 0, 0, y_max);
   pllsty(1);
   if (!values.empty()) DrawHistogram(h, first_edge, width, fill, line);
-  Frame("bcnst", 0, 0, "bcnstv", y_tick, y_sub, false);
+  Frame("bcnst", x_tick, 0, "bcnstv", y_tick, y_sub, false);
   pllab("distance error (µm)", "", "");
   YLabel("count", TickChars(0, y_max, y_tick));
   FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), 0.86, 1.5);
@@ -141,8 +142,8 @@ void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::Error
   const ReportData::StageArea& area = data.stage_area;
   plvpas(vx0, vx1, 0.22, 0.85, (w.y1 - w.y0) / (w.x1 - w.x0));
   plwind(w.x0, w.x1, w.y0, w.y1);
-  const double tick = NiceCeil(w.span / 5);
-  Frame("bcnst", tick, 0, "bcnstv", tick, 0);
+  const double tick = NiceCeil(w.span / 5), x_tick = std::max(tick, XTick(w.x0, w.x1));
+  Frame("bcnst", x_tick, 0, "bcnstv", tick, 0);
   pllab("stage x (mm)", "", "");
   YLabel("stage y (mm)", TickChars(w.y0, w.y1, tick));
   FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), vx1 - vx0, 1.5);

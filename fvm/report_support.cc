@@ -257,6 +257,24 @@ int TickChars(double lo, double hi, double tick) {
   return (lo < 0 ? 1 : 0) + integer_digits + (decimals > 0 ? 1 + decimals : 0);
 }
 
+double XTick(double lo, double hi) {
+  const double span = hi - lo;
+  if (!(span > 0)) return 1.0;
+  PLFLT vx0, vx1, vy0, vy1, sx0, sx1, sy0, sy1, default_mm, height_mm;
+  plgvpd(&vx0, &vx1, &vy0, &vy1);
+  plgspa(&sx0, &sx1, &sy0, &sy1);
+  plgchr(&default_mm, &height_mm);
+  const double width_mm = (vx1 - vx0) * (sx1 - sx0);
+  double tick = NiceCeil(span / 12);
+  for (int i = 0; i < 12; ++i) {
+    // A digit is about 0.64 of the font size, 0.85 of the character height (see YLabel).
+    const double needed_mm = 0.85 * height_mm * TickChars(lo, hi, tick) + height_mm;
+    if (tick / span * width_mm >= needed_mm) break;
+    tick = NiceCeil(tick * 1.01);
+  }
+  return tick;
+}
+
 // Measured on PLplot's svg output: a font size is 4/3 of the character height that plmtex displacements count in,
 // the tick numbers end half a character height from the frame, and a digit is about 0.6 of the font size wide.
 void YLabel(const std::string& text, int tick_chars) {

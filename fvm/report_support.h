@@ -77,6 +77,9 @@ void Disc(PLFLT x, PLFLT y, PLFLT radius);
 // The characters of the longest number PLplot writes at the ticks (step `tick`, a NiceCeil value) of an axis from lo
 // to hi: sign, integer digits, the point and decimals.
 int TickChars(double lo, double hi, double tick);
+// The step of the numbered ticks on the x axis of the current viewport, from lo to hi: the finest NiceCeil step whose
+// numbers, at the current character size, stand at least a character height apart.
+double XTick(double lo, double hi);
 // The y-axis label, parallel to the axis and centred on it, far enough out to clear horizontal tick numbers ("v") of
 // up to `tick_chars` characters at the current character size (pllab's fixed place clears four).
 void YLabel(const std::string& text, int tick_chars);

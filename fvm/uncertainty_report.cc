@@ -83,7 +83,8 @@ std::string RenderU95Map(const UncertaintyReportData& data) {
   SvgPlot plot(800, 800);
   plvpas(0.12, 0.95, 0.1, 0.87, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
+  const double x_tick = XTick(x0 - margin, x1 + margin);
+  Frame("bcnst", x_tick, 0, "bcnstv", 0, 0);
   for (const auto& p : data.points) {
     // The XY block's principal axes: a x a^T + ... by the closed form of a symmetric 2 x 2 eigen decomposition.
     const double a = p.covariance_xy_um2[0], b = p.covariance_xy_um2[1], c = p.covariance_xy_um2[2];

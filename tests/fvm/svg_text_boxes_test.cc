@@ -15,7 +15,7 @@ std::string Svg(const std::string& body) {
          "</svg>";
 }
 
-// 5 characters at font-size 10: 30 wide (0.6 em), from 7.6 above the baseline to 2.4 below.
+// 5 lower-case characters at font-size 10: 30 wide (0.6 em each), from 7.6 above the baseline to 2.4 below.
 TEST(SvgTextBoxes, AnchorsPlaceTheBoxAroundX) {
   const SvgTextLayout layout = ParseSvgTextLayout(Svg(
       "<text x=\"50\" y=\"20\" font-size=\"10\">hello</text>"
@@ -36,7 +36,7 @@ TEST(SvgTextBoxes, AnchorsPlaceTheBoxAroundX) {
 }
 
 // PLplot's svg driver: a page flipped upside down, each text flipped back and moved by its own matrix; "µ" is one
-// character.
+// character (0.6 em), "m" a wide one (1.0 em).
 TEST(SvgTextBoxes, FollowsPlplotsFlippedFramesAndRotation) {
   const SvgTextLayout layout = ParseSvgTextLayout(Svg(
       "<g transform=\"matrix(1 0 0 -1 0 100)\">"
@@ -46,7 +46,7 @@ TEST(SvgTextBoxes, FollowsPlplotsFlippedFramesAndRotation) {
   ASSERT_EQ(layout.boxes.size(), 2u);
   const TextBox& flat = layout.boxes[0];  // baseline at y = 100 - 70 = 30 on the canvas
   EXPECT_DOUBLE_EQ(flat.x0, 100);
-  EXPECT_DOUBLE_EQ(flat.x1, 112);
+  EXPECT_DOUBLE_EQ(flat.x1, 116);
   EXPECT_NEAR(flat.y0, 22.4, 1e-12);
   EXPECT_NEAR(flat.y1, 32.4, 1e-12);
   // Rotated a quarter turn (reading upwards on the canvas): 24 tall, 10 wide, centred on y = 50.
@@ -75,6 +75,20 @@ TEST(SvgTextBoxes, FindsOverlapsAndTextPastTheCanvas) {
       Svg("<text transform=\"rotate(-90)\" x=\"-50\" y=\"3\" font-size=\"10\" text-anchor=\"middle\">µm</text>")));
   ASSERT_EQ(cut.size(), 1u);
   EXPECT_NE(cut[0].find("runs past the canvas"), std::string::npos) << cut[0];
+}
+
+// Tick numbers written edge to edge ("10001500" on an axis): 4 digits at font-size 10 are 25.4 wide in DejaVu Sans,
+// so centres 25 apart touch; the estimate (0.64 em a digit) must see them, and not numbers 30 apart.
+TEST(SvgTextBoxes, SeesNumbersWrittenEdgeToEdge) {
+  const auto ticks = [](int apart) {
+    return TextLayoutProblems(ParseSvgTextLayout(Svg(
+        "<text x=\"50\" y=\"20\" font-size=\"10\" text-anchor=\"middle\">1000</text><text x=\"" +
+        std::to_string(50 + apart) + "\" y=\"20\" font-size=\"10\" text-anchor=\"middle\">1500</text>")));
+  };
+  EXPECT_EQ(ticks(25).size(), 1u);
+  EXPECT_TRUE(ticks(30).empty());
+  EXPECT_DOUBLE_EQ(CharWidthEm(U'7'), 0.64);
+  EXPECT_DOUBLE_EQ(CharWidthEm(U'W'), 1.0);
 }
 
 TEST(SvgTextBoxes, RefusesWhatIsNotAnSvg) {
