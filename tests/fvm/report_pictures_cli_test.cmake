@@ -1,3 +1,4 @@
+cmake_policy(SET CMP0057 NEW)  # if(IN_LIST)
 # The report pictures as a reader sees them (issue 33): every command that writes a report writes it on small
 # simulated inputs, then every SVG it holds must (1) render with rsvg-convert to a non-empty PNG and (2) have no text
 # over another text and none past the canvas (svg_text_check; tests/fvm/svg_text_boxes.h says what that can see).
