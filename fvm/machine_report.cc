@@ -116,44 +116,59 @@ std::string RenderVolumetricErrors(const MachineReportData& data) {
   };
   add(data.readings, "readings", 1);
   add(data.validation, "validation", 2);
-  double y_max = 0;
-  for (const auto& s : series) {
-    if (!s.values.empty()) y_max = std::max(y_max, s.values.back());
-  }
-  // The key sits top left, over the first 70 % of the sorted points and above 72 % of the axis: the axis goes high
-  // enough that no curve reaches it there (sorted, they are low on the left unless the errors are all alike).
-  double under_key = 0;
+  double y_max = 0, smallest = HUGE_VAL, under_key = 0;
   for (const auto& s : series) {
     if (s.values.empty()) continue;
+    y_max = std::max(y_max, s.values.back());
+    for (const double v : s.values) {
+      if (v > 0) smallest = std::min(smallest, v);
+    }
+    // The key sits top left, over the first 70 % of the sorted points and above 72 % of the axis: the axis goes high
+    // enough that no curve reaches it there (sorted, they are low on the left unless the errors are all alike).
     under_key = std::max(under_key, s.values[static_cast<std::size_t>(0.7 * static_cast<double>(s.values.size() - 1))]);
   }
-  y_max = y_max > 0 ? NiceCeil(std::max(1.1 * y_max, under_key / 0.7)) : 1.0;
+  // Errors after an identification twenty times smaller than before lie flat on zero on a linear axis: then the
+  // axis is logarithmic, whole decades from the decade of the smallest error.
+  const bool log_axis = y_max > 0 && smallest < y_max / 20;
+  double y_min = 0;
+  const auto y_of = [&](double v) { return log_axis ? std::log10(std::max(v, std::pow(10.0, y_min))) : v; };
+  if (log_axis) {
+    y_min = std::floor(std::log10(smallest));
+    y_max = std::ceil(std::log10(1.1 * y_max));
+    y_max = std::max(y_max, std::ceil(y_min + (std::log10(std::max(under_key, smallest)) - y_min) / 0.7));
+  } else {
+    y_max = y_max > 0 ? NiceCeil(std::max(1.1 * y_max, under_key / 0.7)) : 1.0;
+  }
+  const char* y_options = log_axis ? "bcnstvl" : "bcnstv";
 
   SvgPlot plot(900, 560);
   plvpor(0.1, 0.96, 0.12, 0.9);
-  plwind(0, 100, 0, y_max);
+  plwind(0, 100, y_min, y_max);
   Frame("", 0, 0, "", 0, 0);
   for (const auto& s : series) {
     const std::size_t n = s.values.size();
     if (n == 0) continue;
     // Each point at the share of points with a smaller error: sets of different sizes share the axis.
-    std::vector<PLFLT> x;
-    for (std::size_t i = 0; i < n; ++i) x.push_back(n == 1 ? 50.0 : 100.0 * static_cast<double>(i) / static_cast<double>(n - 1));
+    std::vector<PLFLT> x, y;
+    for (std::size_t i = 0; i < n; ++i) {
+      x.push_back(n == 1 ? 50.0 : 100.0 * static_cast<double>(i) / static_cast<double>(n - 1));
+      y.push_back(y_of(s.values[i]));
+    }
     plcol0(s.colour);
     pllsty(s.style);
     plwidth(1.8);
-    plline(static_cast<PLINT>(n), x.data(), s.values.data());
+    plline(static_cast<PLINT>(n), x.data(), y.data());
     plwidth(1.0);
     pllsty(1);
   }
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
-  pllab("share of points (%), sorted by error", "volumetric error (µm)",
+  Frame("bcnst", 0, 0, y_options, 0, 0, false);
+  pllab("share of points (%), sorted by error", log_axis ? "volumetric error (µm), log scale" : "volumetric error (µm)",
         "Volumetric error of every point before and after the identification");
   plschr(0, 0.8);
   for (std::size_t i = 0; i < series.size(); ++i) {
     const Series& s = series[i];
     plcol0(s.colour);
-    const double y = y_max * (0.94 - 0.065 * static_cast<double>(i));
+    const double y = y_min + (y_max - y_min) * (0.94 - 0.065 * static_cast<double>(i));
     pllsty(s.style);
     plwidth(1.8);
     pljoin(3, y, 9, y);
