@@ -98,9 +98,9 @@ void DrawDistancePanel(const std::vector<double>& values, const std::string& wha
 std::string RenderDistanceErrors(const ReportData& data) {
   SvgPlot plot(900, 900);
   DrawDistancePanel(Finite(data.distance_errors_before_um), "Distance errors before " + data.change, kBeforeFill,
-                    kBefore, 0.6, 0.9);
+                    kBefore, 0.61, 0.87);
   DrawDistancePanel(Finite(data.distance_errors_after_um), "Distance errors after " + data.change, kAfterFill, kAfter,
-                    0.11, 0.41);
+                    0.1, 0.36);
   return plot.Finish();
 }
 
