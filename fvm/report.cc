@@ -256,7 +256,7 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
   for (PLINT i = 1; i <= n; ++i) pljoin(i, y_min, i, y_max);  // guides from each name up to its value
   const double y_tick = NiceCeil((y_max - y_min) / 6);
   plsyax(7, 0);  // plain numbers up to 7 digits: PLplot's "(x10³)" would sit on the axis label
-  Frame("", 0, 0, "", y_tick, 0);
+  Frame("", 1.0, 0, "", y_tick, 0);  // vertical grid lines at the parameters only
   plcol0(kMuted);
   pljoin(0.5, 0, n + 0.5, 0);
   plcol0(kAfter);
@@ -321,7 +321,7 @@ std::string RenderSteps(const ReportData& data) {
   SvgPlot plot(800, 560);
   plvpor(0.1, 0.96, 0.2, 0.9);
   plwind(-0.5, n - 0.5, 0, y_max);
-  Frame("", 0, 0, "", y_tick, 0);
+  Frame("", 1.0, 0, "", y_tick, 0);  // vertical grid lines at the steps only
   Frame("bc", 0, 0, "bcnstv", y_tick, 0, false);
   for (PLINT i = 0; i < n; ++i) {
     plcol0(kInk);
