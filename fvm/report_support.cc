@@ -111,6 +111,11 @@ void RequireSvgDriver() {
   }
 }
 
+std::size_t CodePoints(std::string_view text) {
+  return static_cast<std::size_t>(
+      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
 fs::path MakeTempFile() {
   std::string name = (fs::temp_directory_path() / "fvm-plot-XXXXXX.svg").string();
   const int fd = mkstemps(name.data(), 4);
@@ -267,7 +272,7 @@ double XTick(double lo, double hi) {
   const double width_mm = (vx1 - vx0) * (sx1 - sx0);
   double tick = NiceCeil(span / 12);
   for (int i = 0; i < 12; ++i) {
-    // A digit is about 0.64 of the font size, 0.85 of the character height (see YLabel).
+    // A digit is 0.85 character heights wide (see YLabel), and a character height apart from the next number.
     const double needed_mm = 0.85 * height_mm * TickChars(lo, hi, tick) + height_mm;
     if (tick / span * width_mm >= needed_mm) break;
     tick = NiceCeil(tick * 1.01);
@@ -276,24 +281,18 @@ double XTick(double lo, double hi) {
 }
 
 // Measured on PLplot's svg output: a font size is 4/3 of the character height that plmtex displacements count in,
-// the tick numbers end half a character height from the frame, and a digit is about 0.6 of the font size wide.
+// the tick numbers end half a character height from the frame, and a digit of DejaVu Sans is 0.64 of the font size
+// wide (0.85 character heights); the label's own half height and a gap make the rest.
 void YLabel(const std::string& text, int tick_chars) {
-  plmtex("l", 1.9 + 0.8 * tick_chars, 0.5, 0.5, text.c_str());
+  plmtex("l", 1.9 + 0.85 * tick_chars, 0.5, 0.5, text.c_str());
 }
-
-namespace {
-std::size_t CodePoints(std::string_view text) {
-  return static_cast<std::size_t>(
-      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
-}
-}  // namespace
 
 void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction,
                 double line_step) {
   PLFLT default_mm, height_mm, x0, x1, y0, y1;
   plgchr(&default_mm, &height_mm);
   plgspa(&x0, &x1, &y0, &y1);
-  // A character is about 0.6 of the font size wide, the font size 4/3 of the character height (see YLabel).
+  // A character is about 0.6 of the font size wide (0.8 character heights; see YLabel).
   const double available_mm = width_fraction * (x1 - x0);
   const auto needed_mm = [&](std::string_view line) { return 0.8 * height_mm * static_cast<double>(CodePoints(line)); };
   std::vector<std::string> lines = {text};
