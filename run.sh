@@ -14,7 +14,7 @@ what="${1:-sample}"
 packages=(cmake ninja-build ccache g++ pkg-config clang libclang-rt-14-dev
   libeigen3-dev libceres-dev libopencv-dev libpcl-dev libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libfmt-dev libboost-dev libplplot-dev
-  libzip-dev libpugixml-dev libssl-dev libtbb-dev)
+  libzip-dev libpugixml-dev libssl-dev libtbb-dev librsvg2-bin)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -36,9 +36,13 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
   y_min -= pad, y_max += pad;
   const double x0 = x.empty() ? 0.0 : x.front(), x1 = x.empty() ? 1.0 : x.back();
 
+  // One character size for everything in the panel, so PLplot's fixed offsets (in character heights) keep the tick
+  // numbers, the axis labels and the curve names apart.
+  plschr(0, 0.85);
   plvpor(vx0, vx1, vy0, vy1);
   plwind(x0, x1 > x0 ? x1 : x0 + 1, y_min, y_max);
-  Frame("", 0, 0, "", 0, 0);
+  const double x_tick = XTick(x0, x1), y_tick = NiceCeil((y_max - y_min) / 6);
+  Frame("", x_tick, 0, "", y_tick, 0);
   plcol0(kMuted);
   pljoin(x0, 0, x1, 0);
   for (std::size_t s = 0; s < curves.size() && s < kSeriesCount; ++s) {
@@ -55,29 +59,35 @@ void DrawFunctionPanel(const MachineReportData::AxisFunctions& axis, const std::
     plwidth(1.8);
     plline(static_cast<PLINT>(n), x.data(), c.value.data());
     plwidth(1.0);
-    plmtex("t", 0.6, 0.02 + 0.16 * static_cast<double>(s), 0, PlText(c.name).c_str());
+    plmtex("t", 0.6, 0.02 + 0.13 * static_cast<double>(s), 0, PlText(c.name).c_str());
   }
   plcol0(kInk);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
-  plschr(0, 0.85);
-  pllab(fmt::format("{} (mm)", axis.axis).c_str(), UnitLabel(unit).c_str(), "");
-  plmtex("t", 0.6, 1.0, 1.0, fmt::format("{} {}", axis.axis, std::string(unit) == "um" ? "translations" : "rotations").c_str());
+  // Numbered ticks on x that stand apart: positions of four digits run into each other at PLplot's own choice.
+  Frame("bcnst", x_tick, 0, "bcnstv", y_tick, 0, false);
+  const bool translations = std::string(unit) == "um";
+  pllab(fmt::format("{} position (mm)", axis.axis).c_str(), "", "");
+  YLabel(fmt::format("error ({})", UnitLabel(unit)), TickChars(y_min, y_max, y_tick));
+  plmtex("t", 0.6, 1.0, 1.0, fmt::format("{} {}", axis.axis, translations ? "translations" : "rotations").c_str());
   plschr(0, 1.0);
 }
 
 std::string RenderErrorFunctions(const MachineReportData& data) {
-  constexpr int kWidth = 1100, kRowPx = 330, kTopPx = 50;
+  // A row per axis: above each pair of panels the curve names and panel titles (kAbovePx), below them the tick
+  // numbers and the position label (kBelowPx), so a row's position label never meets the next row's names.
+  constexpr int kWidth = 1200, kRowPx = 380, kTopPx = 60, kAbovePx = 45, kBelowPx = 85;
   const int height = kTopPx + 3 * kRowPx;
   SvgPlot plot(kWidth, height);
   plvpor(0, 1, 0, 1);
   plwind(0, 1, 0, 1);
-  plmtex("t", -1.5, 0.5, 0.5, "Error functions relative to the axis origin, with 95 % bands (k = 2)");
+  plschr(0, 0.85);
+  plmtex("t", -1.5, 0.5, 0.5, "Error functions relative to the axis origin, 95 % bands (k = 2)");
+  plschr(0, 1.0);
   for (int row = 0; row < 3; ++row) {
-    const double top = 1.0 - static_cast<double>(kTopPx + row * kRowPx + 35) / height;
-    const double bottom = 1.0 - static_cast<double>(kTopPx + (row + 1) * kRowPx - 45) / height;
+    const double top = 1.0 - static_cast<double>(kTopPx + row * kRowPx + kAbovePx) / height;
+    const double bottom = 1.0 - static_cast<double>(kTopPx + (row + 1) * kRowPx - kBelowPx) / height;
     const auto& axis = data.functions[static_cast<std::size_t>(row)];
-    DrawFunctionPanel(axis, axis.translations, "um", 0.08, 0.47, bottom, top);
-    DrawFunctionPanel(axis, axis.rotations, "urad", 0.58, 0.97, bottom, top);
+    DrawFunctionPanel(axis, axis.translations, "um", 0.1, 0.45, bottom, top);
+    DrawFunctionPanel(axis, axis.rotations, "urad", 0.6, 0.95, bottom, top);
   }
   return plot.Finish();
 }
@@ -106,37 +116,59 @@ std::string RenderVolumetricErrors(const MachineReportData& data) {
   };
   add(data.readings, "readings", 1);
   add(data.validation, "validation", 2);
-  double y_max = 0;
+  double y_max = 0, smallest = HUGE_VAL, under_key = 0;
   for (const auto& s : series) {
-    if (!s.values.empty()) y_max = std::max(y_max, s.values.back());
+    if (s.values.empty()) continue;
+    y_max = std::max(y_max, s.values.back());
+    for (const double v : s.values) {
+      if (v > 0) smallest = std::min(smallest, v);
+    }
+    // The key sits top left, over the first 70 % of the sorted points and above 72 % of the axis: the axis goes high
+    // enough that no curve reaches it there (sorted, they are low on the left unless the errors are all alike).
+    under_key = std::max(under_key, s.values[static_cast<std::size_t>(0.7 * static_cast<double>(s.values.size() - 1))]);
   }
-  y_max = y_max > 0 ? NiceCeil(1.1 * y_max) : 1.0;
+  // Errors after an identification twenty times smaller than before lie flat on zero on a linear axis: then the
+  // axis is logarithmic, whole decades from the decade of the smallest error.
+  const bool log_axis = y_max > 0 && smallest < y_max / 20;
+  double y_min = 0;
+  const auto y_of = [&](double v) { return log_axis ? std::log10(std::max(v, std::pow(10.0, y_min))) : v; };
+  if (log_axis) {
+    y_min = std::floor(std::log10(smallest));
+    y_max = std::ceil(std::log10(1.1 * y_max));
+    y_max = std::max(y_max, std::ceil(y_min + (std::log10(std::max(under_key, smallest)) - y_min) / 0.7));
+  } else {
+    y_max = y_max > 0 ? NiceCeil(std::max(1.1 * y_max, under_key / 0.7)) : 1.0;
+  }
+  const char* y_options = log_axis ? "bcnstvl" : "bcnstv";
 
   SvgPlot plot(900, 560);
   plvpor(0.1, 0.96, 0.12, 0.9);
-  plwind(0, 100, 0, y_max);
+  plwind(0, 100, y_min, y_max);
   Frame("", 0, 0, "", 0, 0);
   for (const auto& s : series) {
     const std::size_t n = s.values.size();
     if (n == 0) continue;
     // Each point at the share of points with a smaller error: sets of different sizes share the axis.
-    std::vector<PLFLT> x;
-    for (std::size_t i = 0; i < n; ++i) x.push_back(n == 1 ? 50.0 : 100.0 * static_cast<double>(i) / static_cast<double>(n - 1));
+    std::vector<PLFLT> x, y;
+    for (std::size_t i = 0; i < n; ++i) {
+      x.push_back(n == 1 ? 50.0 : 100.0 * static_cast<double>(i) / static_cast<double>(n - 1));
+      y.push_back(y_of(s.values[i]));
+    }
     plcol0(s.colour);
     pllsty(s.style);
     plwidth(1.8);
-    plline(static_cast<PLINT>(n), x.data(), s.values.data());
+    plline(static_cast<PLINT>(n), x.data(), y.data());
     plwidth(1.0);
     pllsty(1);
   }
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
-  pllab("share of points (%), sorted by error", "volumetric error (µm)",
+  Frame("bcnst", 0, 0, y_options, 0, 0, false);
+  pllab("share of points (%), sorted by error", log_axis ? "volumetric error (µm), log scale" : "volumetric error (µm)",
         "Volumetric error of every point before and after the identification");
   plschr(0, 0.8);
   for (std::size_t i = 0; i < series.size(); ++i) {
     const Series& s = series[i];
     plcol0(s.colour);
-    const double y = y_max * (0.94 - 0.065 * static_cast<double>(i));
+    const double y = y_min + (y_max - y_min) * (0.94 - 0.065 * static_cast<double>(i));
     pllsty(s.style);
     plwidth(1.8);
     pljoin(3, y, 9, y);
@@ -154,7 +186,11 @@ std::string RenderVolumetricErrors(const MachineReportData& data) {
 
 // ---- error map: XY and XZ views, discs sized by the error -------------------------------------------------------
 
-void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int vertical, double mm_per_um,
+double Error(const MachineReportData::PointError& p, bool after) { return after ? p.after_um : p.before_um; }
+
+// One view (vertical 1: XY from above, 2: XZ from the front) of one state (before or after): a disc at each point,
+// radius proportional to its error, the largest drawn first so small ones on top stay visible.
+void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int vertical, bool after, double mm_per_um,
                   double vx0, double vx1, double vy0, double vy1) {
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
   bool first = true;
@@ -168,54 +204,62 @@ void DrawMapPanel(const std::vector<MachineReportData::PointError>& points, int 
   const double margin = 0.08 * span;
   plvpas(vx0, vx1, vy0, vy1, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
-  // Before, translucent and under; after, solid on top; the largest errors drawn first so small ones stay visible.
-  for (const bool after : {false, true}) {
-    std::vector<const MachineReportData::PointError*> order;
-    for (const auto& p : points) order.push_back(&p);
-    std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) {
-      return (after ? a->after_um : a->before_um) > (after ? b->after_um : b->before_um);
-    });
-    plcol0(after ? kAfter : kBeforeFill);
-    for (const auto* p : order) {
-      const double e = after ? p->after_um : p->before_um;
-      if (std::isfinite(e) && e > 0) Disc(p->x_mm, coordinate(*p, vertical), e * mm_per_um);
-    }
+  const double tick = NiceCeil(span / 5), x_tick = std::max(tick, XTick(x0 - margin, x1 + margin));
+  Frame("bcnst", x_tick, 0, "bcnstv", tick, 0);
+  std::vector<const MachineReportData::PointError*> order;
+  for (const auto& p : points) order.push_back(&p);
+  std::sort(order.begin(), order.end(), [after](const auto* a, const auto* b) { return Error(*a, after) > Error(*b, after); });
+  for (const auto* p : order) {
+    const double e = Error(*p, after);
+    if (!(std::isfinite(e) && e > 0)) continue;
+    plcol0(after ? kAfterFill : kBeforeFill);
+    Disc(p->x_mm, coordinate(*p, vertical), e * mm_per_um);
   }
   plcol0(kInk);
-  pllab("machine x (mm)", fmt::format("machine {} (mm)", "xyz"[vertical]).c_str(),
-        fmt::format("{} view", vertical == 1 ? "XY" : "XZ").c_str());
+  pllab("machine x (mm)", "", vertical == 1 ? "XY view, from above" : "XZ view, from the front");
+  YLabel(fmt::format("machine {} (mm)", "xyz"[vertical]), TickChars(y0 - margin, y1 + margin, tick));
 }
 
+// Before (the ideal machine) on the left, after (the identified model) on the right, each on its own disc scale:
+// after an identification the errors left are what a user wants to see next, invisible at the scale of before.
 std::string RenderErrorMap(const MachineReportData& data) {
   const bool held_out = !data.validation.empty();
   const std::vector<MachineReportData::PointError>& points = held_out ? data.validation : data.readings;
-  double largest = 0, x0 = 0, x1 = 0;
-  for (const auto& p : points) {
-    for (const double e : {p.before_um, p.after_um}) {
-      if (std::isfinite(e)) largest = std::max(largest, e);
-    }
-    x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm);
-  }
-  // The largest disc has a radius of 6 % of the x span, on a round scale.
+  double x0 = 0, x1 = 0;
+  for (const auto& p : points) x0 = std::min(x0, p.x_mm), x1 = std::max(x1, p.x_mm);
   const double span = std::max(x1 - x0, 1.0);
-  const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
 
-  SvgPlot plot(1000, 1000);
-  DrawMapPanel(points, 1, mm_per_um, 0.1, 0.95, 0.56, 0.93);
-  DrawMapPanel(points, 2, mm_per_um, 0.1, 0.95, 0.1, 0.47);
-  plvpor(0, 1, 0, 1);
-  plwind(0, 1, 0, 1);
-  plcol0(kInk);
-  plmtex("t", -1.5, 0.5, 0.5,
-         fmt::format("Volumetric error at the {} points: disc radius {:g} mm per µm", held_out ? "validation" : "fitted",
-                     mm_per_um)
-             .c_str());
+  constexpr int kHeight = 1150;
+  SvgPlot plot(1400, kHeight);
   plschr(0, 0.8);
-  plcol0(kBefore);
-  plptex(0.1, 0.02, 1, 0, 0, "before: translucent vermilion");
-  plcol0(kAfter);
-  plptex(0.5, 0.02, 1, 0, 0, "after: blue");
+  const auto from_top = [&](int px) { return 1.0 - static_cast<double>(px) / kHeight; };
+  for (const bool after : {false, true}) {
+    double largest = 0, sum = 0;
+    std::size_t n = 0;
+    for (const auto& p : points) {
+      const double e = Error(p, after);
+      if (!std::isfinite(e)) continue;
+      largest = std::max(largest, e), sum += e, ++n;
+    }
+    // The largest disc has a radius of 3 to 6 % of the x span, on a round scale.
+    const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 0.0;
+    const double vx0 = after ? 0.61 : 0.11, vx1 = after ? 0.97 : 0.47;
+    DrawMapPanel(points, 1, after, mm_per_um, vx0, vx1, 0.55, from_top(270));
+    DrawMapPanel(points, 2, after, mm_per_um, vx0, vx1, 0.1, 0.36);
+    // The column's heading, its numbers and its scale, between the figure's title and the XY view's title.
+    plvpor(0, 1, 0, 1);
+    plwind(0, 1, 0, 1);
+    const double centre = 0.5 * (vx0 + vx1);
+    plcol0(after ? kAfter : kBefore);
+    plptex(centre, from_top(100), 1, 0, 0.5, after ? "After: the identified model" : "Before: the ideal machine");
+    plcol0(kInk);
+    plschr(0, 0.7);
+    const double mean = n ? sum / static_cast<double>(n) : 0.0;
+    plptex(centre, from_top(135), 1, 0, 0.5, fmt::format("mean {:.3g} µm, max {:.3g} µm", mean, largest).c_str());
+    plptex(centre, from_top(163), 1, 0, 0.5, fmt::format("disc radius {:g} mm per µm", mm_per_um).c_str());
+    plschr(0, 0.8);
+  }
+  plmtex("t", -1.5, 0.5, 0.5, fmt::format("Volumetric error at the {} points", held_out ? "validation" : "fitted").c_str());
   plschr(0, 1.0);
   return plot.Finish();
 }
@@ -241,8 +285,9 @@ std::string RenderPage(const MachineReportData& data) {
                      "sorted: the ideal machine (before, vermilion) and the identified one (after, blue); readings "
                      "solid, validation points dashed.");
   html += HtmlFigure("error_map.svg", "Error map", "Volumetric errors over the workspace, seen from above and from the front",
-                     "Discs at the points, radius proportional to the volumetric error, before (translucent vermilion) "
-                     "and after (blue) the identification, in an XY and an XZ view of the workspace.");
+                     "Discs at the points, radius proportional to the volumetric error, before (vermilion, left) and "
+                     "after (blue, right) the identification, in an XY and an XZ view of the workspace; each side has "
+                     "its own disc scale, given under its heading.");
   return html + HtmlTail();
 }
 

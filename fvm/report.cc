@@ -57,60 +57,50 @@ void DrawHistogram(const Histogram& h, double first_edge, double width, PLINT fi
   plwidth(1.0);
 }
 
-std::string DistanceLegendText(const char* what, const std::vector<double>& values) {
-  return fmt::format("{}: n = {}, RMS {:.3g} µm", what, values.size(), Rms(values));
-}
-
-std::string RenderDistanceErrors(const ReportData& data) {
-  const std::vector<double> before = Finite(data.distance_errors_before_um);
-  const std::vector<double> after = Finite(data.distance_errors_after_um);
+// One panel: the errors binned about zero on their own bins (about 30 across the largest error), so a bias shows as
+// an offset from the centre line and errors a hundred times smaller than the others still fill their panel.
+void DrawDistancePanel(const std::vector<double>& values, const std::string& what, PLINT fill, PLINT line,
+                       double vp_y0, double vp_y1) {
   double extent = 0;
-  for (const auto* values : {&before, &after}) {
-    for (const double v : *values) extent = std::max(extent, std::abs(v));
-  }
+  for (const double v : values) extent = std::max(extent, std::abs(v));
   if (!(extent > 0)) extent = 1.0;  // no data, or all exact: still a readable +-1 um axis
-  // Symmetric about zero, so a bias shows as an offset from the centre line; about 30 bins across.
   const double width = NiceCeil(2 * extent / 30);
   const int half_bins = std::max(1, static_cast<int>(std::ceil(extent / width - 1e-9)));
   const double first_edge = -half_bins * width;
-  const Histogram hb = Bin(before, first_edge, width, 2 * half_bins);
-  const Histogram ha = Bin(after, first_edge, width, 2 * half_bins);
-  const int max_count = std::max({1, hb.max_count, ha.max_count});
-  const double y_max = max_count * 1.3;  // headroom for the legend
-  const double y_tick = std::max(1.0, NiceCeil(y_max / 6));
-
-  SvgPlot plot(800, 560);
-  plvpor(0.1, 0.96, 0.12, 0.9);
-  plwind(first_edge, -first_edge, 0, y_max);
+  const Histogram h = Bin(values, first_edge, width, 2 * half_bins);
+  const double y_max = std::max(1, h.max_count) * 1.1;
+  const double y_tick = std::max(1.0, NiceCeil(y_max / 5));
   const PLINT y_sub = y_tick <= 5 ? static_cast<PLINT>(y_tick) : 0;  // minor ticks on whole counts only
-  Frame("", 0, 0, "", y_tick, y_sub);
+
+  plvpor(0.1, 0.96, vp_y0, vp_y1);
+  plwind(first_edge, -first_edge, 0, y_max);
+  const double x_tick = XTick(first_edge, -first_edge);
+  Frame("", x_tick, 0, "", y_tick, y_sub);
   plcol0(kMuted);
   pllsty(2);
   pljoin(0, 0, 0, y_max);
   pllsty(1);
-  if (!before.empty()) DrawHistogram(hb, first_edge, width, kBeforeFill, kBefore);
-  if (!after.empty()) DrawHistogram(ha, first_edge, width, kAfterFill, kAfter);
-  Frame("bcnst", 0, 0, "bcnstv", y_tick, y_sub, false);
-  pllab("Distance error (µm)", "Count", PlText(fmt::format("Distance errors before and after {}", data.change)).c_str());
+  if (!values.empty()) DrawHistogram(h, first_edge, width, fill, line);
+  Frame("bcnst", x_tick, 0, "bcnstv", y_tick, y_sub, false);
+  pllab("distance error (µm)", "", "");
+  YLabel("count", TickChars(0, y_max, y_tick));
+  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), 0.86, 1.5);
+  plschr(0, 0.85);
+  const std::string numbers =
+      values.empty() ? std::string("no distance errors")
+                     : fmt::format("n = {}, RMS {:.3g} µm, max |e| {:.3g} µm; bins {:g} µm wide", values.size(),
+                                   Rms(values), extent, width);
+  plmtex("t", 0.9, 0.5, 0.5, numbers.c_str());
+  plschr(0, 1.0);
+}
 
-  if (before.empty() && after.empty()) {
-    plcol0(kMuted);
-    plptex(0, y_max / 2, 1, 0, 0.5, "no distance errors in this report");
-    return plot.Finish();
-  }
-  const std::string before_text = "before " + data.change, after_text = "after " + data.change;
-  const std::array<std::string, 2> texts = {DistanceLegendText(before_text.c_str(), before),
-                                            DistanceLegendText(after_text.c_str(), after)};
-  const std::array<const char*, 2> text_ptrs = {texts[0].c_str(), texts[1].c_str()};
-  const std::array<PLINT, 2> options = {PL_LEGEND_COLOR_BOX, PL_LEGEND_COLOR_BOX};
-  const std::array<PLINT, 2> text_colours = {kInk, kInk}, box_colours = {kBefore, kAfter}, patterns = {0, 0};
-  const std::array<PLFLT, 2> box_scales = {0.8, 0.8}, box_widths = {1, 1};
-  PLFLT legend_width, legend_height;
-  pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-           PL_POSITION_TOP | PL_POSITION_RIGHT | PL_POSITION_INSIDE, 0.02, 0.03, 0.05, kBackground, kGrid, 1, 0, 0, 2,
-           options.data(), 1.0, 0.85, 2.0, 0.0, text_colours.data(), text_ptrs.data(), box_colours.data(),
-           patterns.data(), box_scales.data(), box_widths.data(), nullptr, nullptr, nullptr, nullptr, nullptr, nullptr,
-           nullptr);
+// Before above after, each on its own axes: after a compensation the errors are far smaller than before.
+std::string RenderDistanceErrors(const ReportData& data) {
+  SvgPlot plot(900, 900);
+  DrawDistancePanel(Finite(data.distance_errors_before_um), "Distance errors before " + data.change, kBeforeFill,
+                    kBefore, 0.61, 0.87);
+  DrawDistancePanel(Finite(data.distance_errors_after_um), "Distance errors after " + data.change, kAfterFill, kAfter,
+                    0.1, 0.36);
   return plot.Finish();
 }
 
@@ -124,7 +114,12 @@ double MaxLength(const std::vector<ReportData::ErrorVector>& errors) {
   return longest;
 }
 
-std::string RenderErrorVectors(const ReportData& data) {
+struct StageWindow {
+  double x0, x1, y0, y1;  // world coordinates of the frame, mm
+  double span;            // of the positions and the travel, mm
+};
+
+StageWindow StageWindowOf(const ReportData& data) {
   const ReportData::StageArea& area = data.stage_area;
   double x0 = area.x_min_mm, x1 = area.x_max_mm, y0 = area.y_min_mm, y1 = area.y_max_mm;
   for (const auto* errors : {&data.errors_before, &data.errors_after}) {
@@ -137,81 +132,82 @@ std::string RenderErrorVectors(const ReportData& data) {
   if (!(span > 0)) span = 1.0;
   // A margin so arrows at the edge of the travel stay inside the frame.
   const double margin = 0.06 * span;
-  const double wx0 = x0 - margin, wx1 = x1 + margin, wy0 = y0 - margin, wy1 = y1 + margin;
+  return {x0 - margin, x1 + margin, y0 - margin, y1 + margin, span};
+}
 
-  SvgPlot plot(800, 880);
-  plvpas(0.11, 0.95, 0.18, 0.93, (wy1 - wy0) / (wx1 - wx0));
-  plwind(wx0, wx1, wy0, wy1);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
-  pllab("Stage x (mm)", "Stage y (mm)", PlText(fmt::format("Lateral error vectors before and after {}", data.change)).c_str());
+// One panel: the stage travel to scale, the positions, the arrows on this panel's own magnification (the longest
+// arrow 4 to 10 % of the span, a round factor), and below the frame the scale arrow and the magnification.
+void DrawVectorPanel(const ReportData& data, const std::vector<ReportData::ErrorVector>& errors, const StageWindow& w,
+                     const std::string& what, PLINT colour, double vx0, double vx1, int width_px, int height_px) {
+  const ReportData::StageArea& area = data.stage_area;
+  plvpas(vx0, vx1, 0.22, 0.85, (w.y1 - w.y0) / (w.x1 - w.x0));
+  plwind(w.x0, w.x1, w.y0, w.y1);
+  const double tick = NiceCeil(w.span / 5), x_tick = std::max(tick, XTick(w.x0, w.x1));
+  Frame("bcnst", x_tick, 0, "bcnstv", tick, 0);
+  pllab("stage x (mm)", "", "");
+  YLabel("stage y (mm)", TickChars(w.y0, w.y1, tick));
+  FittedMtex("t", 2.4, 0.5, 0.5, PlText(what), vx1 - vx0, 1.5);
 
-  // The stage travel, to scale.
   plcol0(kMuted);
   pllsty(2);
   const std::array<PLFLT, 5> rx = {area.x_min_mm, area.x_max_mm, area.x_max_mm, area.x_min_mm, area.x_min_mm};
   const std::array<PLFLT, 5> ry = {area.y_min_mm, area.y_min_mm, area.y_max_mm, area.y_max_mm, area.y_min_mm};
   plline(5, rx.data(), ry.data());
   pllsty(1);
-  plschr(0, 0.8);
-  const std::string travel =
-      fmt::format("stage travel {:g} × {:g} mm", area.x_max_mm - area.x_min_mm, area.y_max_mm - area.y_min_mm);
-  plptex(area.x_min_mm, area.y_max_mm + 0.02 * span, 1, 0, 0, travel.c_str());
-  plschr(0, 1.0);
 
-  for (const auto* errors : {&data.errors_before, &data.errors_after}) {
-    for (const auto& e : *errors) {
-      if (IsFinite(e)) Disc(e.x_mm, e.y_mm, 0.004 * span);
-    }
+  for (const auto& e : errors) {
+    if (IsFinite(e)) Disc(e.x_mm, e.y_mm, 0.004 * w.span);
   }
-  const double longest = std::max(MaxLength(data.errors_before), MaxLength(data.errors_after));
-  // One scale for both sets, so the shrinking of the arrows is the effect of the compensation; the longest arrow
-  // is 4 to 10 % of the span, the magnification a round number.
-  const double mm_per_um = longest > 0 ? NiceFloor(0.1 * span / longest) : 0.0;
-  const double max_head = 0.018 * span;
-  for (const auto& [errors, colour] :
-       {std::pair{&data.errors_before, kBefore}, std::pair{&data.errors_after, kAfter}}) {
-    plcol0(colour);
-    plwidth(1.4);
-    for (const auto& e : *errors) {
-      if (IsFinite(e)) Arrow(e.x_mm, e.y_mm, e.dx_um * mm_per_um, e.dy_um * mm_per_um, max_head);
-    }
+  const double longest = MaxLength(errors);
+  const double mm_per_um = longest > 0 ? NiceFloor(0.1 * w.span / longest) : 0.0;
+  const double max_head = 0.018 * w.span;
+  plcol0(colour);
+  plwidth(1.4);
+  for (const auto& e : errors) {
+    if (IsFinite(e)) Arrow(e.x_mm, e.y_mm, e.dx_um * mm_per_um, e.dy_um * mm_per_um, max_head);
   }
   plwidth(1.0);
-
-  // The key below the frame, in a strip with the plot's mm scale: the colours, the scale arrow, the magnification.
-  PLFLT vx0, vx1, vy0, vy1;
-  plgvpd(&vx0, &vx1, &vy0, &vy1);
-  const double strip_y0 = 0.01, strip_y1 = 0.085;
-  const double mm_per_px = (wx1 - wx0) / ((vx1 - vx0) * plot.width_px());
-  const double strip_height = (strip_y1 - strip_y0) * plot.height_px() * mm_per_px;
-  plvpor(vx0, vx1, strip_y0, strip_y1);
-  plwind(wx0, wx1, 0, strip_height);
-  const double row1 = 0.75 * strip_height, row2 = 0.25 * strip_height;
-  const double swatch = 12 * mm_per_px, gap = 8 * mm_per_px;
-  plschr(0, 0.8);
-  const auto key = [&](double x, PLINT colour, const std::string& text, double y) {
-    plcol0(colour);
-    const std::array<PLFLT, 4> sx = {x, x + swatch, x + swatch, x};
-    const std::array<PLFLT, 4> sy = {y - swatch / 2, y - swatch / 2, y + swatch / 2, y + swatch / 2};
-    plfill(4, sx.data(), sy.data());
-    plcol0(kInk);
-    plptex(x + swatch + gap, y, 1, 0, 0, text.c_str());
-  };
-  key(wx0, kBefore, fmt::format("before {} (max {:.3g} µm)", data.change, MaxLength(data.errors_before)), row1);
-  key(wx0, kAfter, fmt::format("after {} (max {:.3g} µm)", data.change, MaxLength(data.errors_after)), row2);
   plcol0(kInk);
-  const double column2 = wx0 + 0.62 * (wx1 - wx0);
+  plschr(0, 0.85);
+  plmtex("t", 0.9, 0.5, 0.5,
+         errors.empty() ? "no lateral errors"
+                        : fmt::format("{} positions, longest error {:.3g} µm", errors.size(), longest).c_str());
+
+  // The scale strip below the frame, in the panel's mm: the scale arrow, the magnification.
+  PLFLT px0, px1, py0, py1;
+  plgvpd(&px0, &px1, &py0, &py1);
+  const double strip_y0 = 0.015, strip_y1 = 0.105;
+  const double mm_per_px = (w.x1 - w.x0) / ((px1 - px0) * width_px);
+  plvpor(px0, px1, strip_y0, strip_y1);
+  plwind(w.x0, w.x1, 0, (strip_y1 - strip_y0) * height_px * mm_per_px);
+  const double strip_mm = (strip_y1 - strip_y0) * height_px * mm_per_px, gap = 8 * mm_per_px;
+  const double row = 0.72 * strip_mm;
+  plptex(w.x0, 0.25 * strip_mm, 1, 0, 0,
+         fmt::format("dashed: stage travel {:g} × {:g} mm", area.x_max_mm - area.x_min_mm, area.y_max_mm - area.y_min_mm)
+             .c_str());
   if (longest > 0) {
     const double scale_um = NiceFloor(longest);
+    plcol0(colour);
     plwidth(1.4);
-    Arrow(column2, row1, scale_um * mm_per_um, 0, max_head);
+    Arrow(w.x0, row, scale_um * mm_per_um, 0, max_head);
     plwidth(1.0);
-    plptex(column2 + scale_um * mm_per_um + gap, row1, 1, 0, 0, fmt::format("{:g} µm", scale_um).c_str());
-    plptex(column2, row2, 1, 0, 0, fmt::format("arrows magnified × {:g}", 1000 * mm_per_um).c_str());
-  } else {
-    plptex(column2, row1, 1, 0, 0, "no lateral errors");
+    plcol0(kInk);
+    plptex(w.x0 + scale_um * mm_per_um + gap, row, 1, 0, 0,
+           fmt::format("{:g} µm; arrows magnified × {:g}", scale_um, 1000 * mm_per_um).c_str());
   }
   plschr(0, 1.0);
+}
+
+// Before and after side by side, each with its own arrow scale: after a compensation the residual pattern is what
+// a user wants to see next, and at the scale of the errors before it would be invisible.
+std::string RenderErrorVectors(const ReportData& data) {
+  const StageWindow w = StageWindowOf(data);
+  constexpr int kWidth = 1500, kHeight = 900;
+  SvgPlot plot(kWidth, kHeight);
+  DrawVectorPanel(data, data.errors_before, w, "Lateral errors before " + data.change, kBefore, 0.1, 0.48, kWidth,
+                  kHeight);
+  DrawVectorPanel(data, data.errors_after, w, "Lateral errors after " + data.change, kAfter, 0.6, 0.98, kWidth,
+                  kHeight);
   return plot.Finish();
 }
 
@@ -253,12 +249,14 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
   const double pad = 0.08 * (y_max - y_min);
   y_min -= pad, y_max += pad;
 
-  plvpor(0.11, 0.98, vp_y0, vp_y1);
+  plvpor(0.13, 0.98, vp_y0, vp_y1);
   plwind(0.5, n + 0.5, y_min, y_max);
   plcol0(kGrid);
   plwidth(0.8);
   for (PLINT i = 1; i <= n; ++i) pljoin(i, y_min, i, y_max);  // guides from each name up to its value
-  Frame("", 0, 0, "", 0, 0);
+  const double y_tick = NiceCeil((y_max - y_min) / 6);
+  plsyax(7, 0);  // plain numbers up to 7 digits: PLplot's "(x10³)" would sit on the axis label
+  Frame("", 1.0, 0, "", y_tick, 0);  // vertical grid lines at the parameters only
   plcol0(kMuted);
   pljoin(0.5, 0, n + 0.5, 0);
   plcol0(kAfter);
@@ -268,23 +266,28 @@ void DrawParameterPanel(const UnitGroup& group, double vp_y0, double vp_y1) {
   plschr(0, 0.7);
   plstring(n, x.data(), value.data(), "●");
   plschr(0, 1.0);
-  Frame("bct", 1.0, 1, "bcnstv", 0, 0, false);
+  Frame("bct", 1.0, 1, "bcnstv", y_tick, 0, false);
   for (PLINT i = 0; i < n; ++i) {
     plmtex("bv", 0.8, (i + 0.5) / n, 1.0, PlText(group.parameters[static_cast<std::size_t>(i)]->name).c_str());
   }
   const std::string unit = UnitLabel(group.unit);
-  pllab("", fmt::format("value ± 2u ({})", unit).c_str(),
-        fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit).c_str());
+  FittedMtex("t", 2.0, 0.5, 0.5, fmt::format("Parameters in {}: value with ± 2u error bars (k = 2)", unit), 0.8);
+  YLabel(fmt::format("value ({})", unit), TickChars(y_min, y_max, y_tick));
+  plsyax(0, 0);
 }
 
 std::string RenderParameters(const ReportData& data) {
   const std::vector<UnitGroup> groups = GroupByUnit(data.parameters);
-  constexpr int kPanelPx = 340, kNamesPx = 85, kTitlePx = 55;
+  // Below each panel its parameter names, written downwards: room for the longest (about 16 px a character on a
+  // page this tall).
+  std::size_t longest = 0;
+  for (const ReportData::Parameter& p : data.parameters) longest = std::max(longest, p.name.size());
+  const int kNamesPx = std::max(85, 40 + 17 * static_cast<int>(longest)), kPanelPx = 330 + kNamesPx, kTitlePx = 65;
   const int panels = std::max(1, static_cast<int>(groups.size()));
   const int height = panels * kPanelPx;
   SvgPlot plot(1000, height);
   if (groups.empty()) {
-    plvpor(0.11, 0.98, static_cast<double>(kNamesPx) / height, 1.0 - static_cast<double>(kTitlePx) / height);
+    plvpor(0.13, 0.98, static_cast<double>(kNamesPx) / height, 1.0 - static_cast<double>(kTitlePx) / height);
     plwind(0, 1, 0, 1);
     Frame("bc", 0, 0, "bc", 0, 0, false);
     pllab("", "", "Parameters: value with ± 2u error bars (k = 2)");
@@ -318,13 +321,14 @@ std::string RenderSteps(const ReportData& data) {
   SvgPlot plot(800, 560);
   plvpor(0.1, 0.96, 0.2, 0.9);
   plwind(-0.5, n - 0.5, 0, y_max);
-  Frame("", 0, 0, "", y_tick, 0);
+  Frame("", 1.0, 0, "", y_tick, 0);  // vertical grid lines at the steps only
   Frame("bc", 0, 0, "bcnstv", y_tick, 0, false);
   for (PLINT i = 0; i < n; ++i) {
     plcol0(kInk);
     plmtex("b", 1.2 + 1.1 * (i % 2), (i + 0.5) / n, 0.5, PlText(steps[static_cast<std::size_t>(i)].label).c_str());
   }
-  pllab("", "mean 3-D residual (µm)", "The gap after each step of the selection");
+  pllab("", "mean 3-D residual (µm)", "Mean 3-D residual after each step of the forward selection");
+  plmtex("b", 4.2, 0.5, 0.5, "model: the base, then each effect in the order added");
   // Held-out values are written above their points, identification values below, so close ones stay apart.
   struct Series {
     double ReportData::Step::*member;
@@ -372,13 +376,13 @@ struct Figure {
 
 constexpr std::array<Figure, 3> kFigures = {{
     {"distance_errors.svg", "Distance errors", "Histogram of distance errors before and after {0}",
-     "Errors of the distances between calotte pairs before (vermilion) and after (blue) {0}, in "
-     "micrometres, binned on the same axes."},
+     "Errors of the distances between calotte pairs before (vermilion, above) and after (blue, below) {0}, in "
+     "micrometres; each panel has its own bins and axes, so read the numbers on the axes."},
     {"error_vectors.svg", "Lateral error vectors",
      "Lateral error vectors at their stage positions before and after {0}",
-     "Lateral errors (dx, dy) drawn as arrows at their stage positions before (vermilion) and after (blue) "
-     "{0}, magnified by one common factor given by the scale arrow, over the stage travel drawn to "
-     "scale."},
+     "Lateral errors (dx, dy) drawn as arrows at their stage positions before (vermilion, left) and after "
+     "(blue, right) {0}, over the stage travel drawn to scale; each panel magnifies its arrows by its own "
+     "factor, given under it with a scale arrow."},
     {"parameters.svg", "Parameters", "Identified parameters with error bars of two standard uncertainties",
      "Identified parameter values with error bars of plus and minus two standard uncertainties (k = 2), one "
      "panel per unit."},

@@ -111,6 +111,11 @@ void RequireSvgDriver() {
   }
 }
 
+std::size_t CodePoints(std::string_view text) {
+  return static_cast<std::size_t>(
+      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
 fs::path MakeTempFile() {
   std::string name = (fs::temp_directory_path() / "fvm-plot-XXXXXX.svg").string();
   const int fd = mkstemps(name.data(), 4);
@@ -136,8 +141,9 @@ std::string PlText(std::string_view text) {
 }
 
 std::string UnitLabel(std::string_view unit) {
-  if (unit == "um") return "µm";
-  if (unit == "urad") return "µrad";
+  for (const std::string_view micro : {"urad", "um"}) {
+    if (unit.starts_with(micro)) return "µ" + PlText(unit.substr(1));  // also "um/min", "urad/K"
+  }
   return PlText(unit);
 }
 
@@ -247,6 +253,68 @@ void Disc(PLFLT x, PLFLT y, PLFLT radius) {
     py[i] = y + radius * std::sin(angle);
   }
   plfill(kSides, px.data(), py.data());
+}
+
+int TickChars(double lo, double hi, double tick) {
+  const double largest = std::max(std::abs(lo), std::abs(hi));
+  const int integer_digits = largest >= 1 ? static_cast<int>(std::floor(std::log10(largest))) + 1 : 1;
+  const int decimals = tick > 0 && tick < 1 ? static_cast<int>(std::ceil(-std::log10(tick) - 1e-9)) : 0;
+  return (lo < 0 ? 1 : 0) + integer_digits + (decimals > 0 ? 1 + decimals : 0);
+}
+
+double XTick(double lo, double hi) {
+  const double span = hi - lo;
+  if (!(span > 0)) return 1.0;
+  PLFLT vx0, vx1, vy0, vy1, sx0, sx1, sy0, sy1, default_mm, height_mm;
+  plgvpd(&vx0, &vx1, &vy0, &vy1);
+  plgspa(&sx0, &sx1, &sy0, &sy1);
+  plgchr(&default_mm, &height_mm);
+  const double width_mm = (vx1 - vx0) * (sx1 - sx0);
+  double tick = NiceCeil(span / 12);
+  for (int i = 0; i < 12; ++i) {
+    // A digit is 0.85 character heights wide (see YLabel), and a character height apart from the next number.
+    const double needed_mm = 0.85 * height_mm * TickChars(lo, hi, tick) + height_mm;
+    if (tick / span * width_mm >= needed_mm) break;
+    tick = NiceCeil(tick * 1.01);
+  }
+  return tick;
+}
+
+// Measured on PLplot's svg output: a font size is 4/3 of the character height that plmtex displacements count in,
+// the tick numbers end half a character height from the frame, and a digit of DejaVu Sans is 0.64 of the font size
+// wide (0.85 character heights); the label's own half height and a gap make the rest.
+void YLabel(const std::string& text, int tick_chars) {
+  plmtex("l", 1.9 + 0.85 * tick_chars, 0.5, 0.5, text.c_str());
+}
+
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction,
+                double line_step) {
+  PLFLT default_mm, height_mm, x0, x1, y0, y1;
+  plgchr(&default_mm, &height_mm);
+  plgspa(&x0, &x1, &y0, &y1);
+  // A character is about 0.6 of the font size wide (0.8 character heights; see YLabel).
+  const double available_mm = width_fraction * (x1 - x0);
+  const auto needed_mm = [&](std::string_view line) { return 0.8 * height_mm * static_cast<double>(CodePoints(line)); };
+  std::vector<std::string> lines = {text};
+  if (line_step > 0 && needed_mm(text) > available_mm) {
+    std::size_t best = std::string::npos;
+    for (std::size_t i = text.find(' '); i != std::string::npos; i = text.find(' ', i + 1)) {
+      const auto off_centre = [&](std::size_t k) { return std::abs(static_cast<double>(k) - text.size() / 2.0); };
+      if (best == std::string::npos || off_centre(i) < off_centre(best)) best = i;
+    }
+    if (best != std::string::npos) lines = {text.substr(0, best), text.substr(best + 1)};
+  }
+  double widest = 0;
+  for (const std::string& line : lines) widest = std::max(widest, needed_mm(line));
+  const double scale = height_mm / default_mm;
+  const double shrink = widest > available_mm ? available_mm / widest : 1.0;
+  plschr(0, scale * shrink);
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    // The displacement counts in the (smaller) character heights; the first of two lines goes further out.
+    const double out = disp + (lines.size() == 2 && i == 0 ? line_step : 0.0);
+    plmtex(side, out / shrink, pos, just, lines[i].c_str());
+  }
+  plschr(0, scale);
 }
 
 std::string HtmlEscape(std::string_view text) {

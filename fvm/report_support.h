@@ -74,6 +74,22 @@ void Arrow(PLFLT x, PLFLT y, PLFLT dx, PLFLT dy, PLFLT max_head);
 // A filled disc (a 16-gon) in world coordinates with equal scales on both axes.
 void Disc(PLFLT x, PLFLT y, PLFLT radius);
 
+// The characters of the longest number PLplot writes at the ticks (step `tick`, a NiceCeil value) of an axis from lo
+// to hi: sign, integer digits, the point and decimals.
+int TickChars(double lo, double hi, double tick);
+// The step of the numbered ticks on the x axis of the current viewport, from lo to hi: the finest NiceCeil step whose
+// numbers, at the current character size, stand at least a character height apart.
+double XTick(double lo, double hi);
+// The y-axis label, parallel to the axis and centred on it, far enough out to clear horizontal tick numbers ("v") of
+// up to `tick_chars` characters at the current character size (pllab's fixed place clears four).
+void YLabel(const std::string& text, int tick_chars);
+
+// plmtex at the current character size, so that the text fits `width_fraction` of the page's width: first broken
+// at the space nearest its middle into two lines (the first `line_step` character heights further out), when
+// line_step > 0; then shrunk (never grown). Long titles (diagnose's list of added effects) stay on the page.
+void FittedMtex(const char* side, PLFLT disp, PLFLT pos, PLFLT just, const std::string& text, double width_fraction,
+                double line_step = 0);
+
 // ---- the page ----
 std::string HtmlEscape(std::string_view text);
 // <!DOCTYPE html> ... <body><h1>title</h1>: the page up to its content, with the reports' style sheet.

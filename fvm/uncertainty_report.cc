@@ -36,10 +36,11 @@ std::string RenderDistribution(const UncertaintyReportData& data) {
   for (double c : final_counts) top = std::max(top, c);
   for (double c : validation_counts) top = std::max(top, c);
 
-  SvgPlot plot(900, 520);
-  plvpor(0.1, 0.96, 0.12, 0.9);
-  plwind(lo, hi, 0, 1.15 * top);
-  Frame("", 0, 0, "", 0, 0);
+  SvgPlot plot(900, 560);
+  plvpor(0.1, 0.96, 0.12, 0.85);
+  const double y_max = 1.1 * top, y_tick = std::max(1.0, NiceCeil(y_max / 6));  // counts: whole ticks
+  plwind(lo, hi, 0, y_max);
+  Frame("", 0, 0, "", y_tick, 0);
   plwidth(1.8);
   plcol0(kAfter);
   plbin(kBins, centres.data(), final_counts.data(), PL_BIN_CENTRED | PL_BIN_NOEXPAND);
@@ -48,14 +49,18 @@ std::string RenderDistribution(const UncertaintyReportData& data) {
     plbin(kBins, centres.data(), validation_counts.data(), PL_BIN_CENTRED | PL_BIN_NOEXPAND);
   }
   plwidth(1.0);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0, false);
-  pllab("mean volumetric error of a run (µm)", "runs", "Distribution over the Monte Carlo runs");
+  Frame("bcnst", 0, 0, "bcnstv", y_tick, 0, false);
+  pllab("mean volumetric error of a run (µm)", "", "");
+  YLabel("number of runs", TickChars(0, y_max, y_tick));
+  plmtex("t", 2.6, 0.5, 0.5, fmt::format("Distribution over the {} Monte Carlo runs", data.final_mean_um.size()).c_str());
+  // The key between the title and the frame, where it hides no bar.
   plschr(0, 0.8);
+  const bool validation = !data.validation_mean_um.empty();
   plcol0(kAfter);
-  plptex(lo + 0.02 * (hi - lo), 1.1 * top, 1, 0, 0, "final (the run's own readings)");
-  if (!data.validation_mean_um.empty()) {
+  plmtex("t", 0.8, validation ? 0.25 : 0.5, 0.5, "final: the run's own readings");
+  if (validation) {
     plcol0(kSeries0);
-    plptex(lo + 0.02 * (hi - lo), 1.03 * top, 1, 0, 0, "validation points");
+    plmtex("t", 0.8, 0.75, 0.5, "validation points");
   }
   plschr(0, 1.0);
   return plot.Finish();
@@ -73,11 +78,13 @@ std::string RenderU95Map(const UncertaintyReportData& data) {
     largest = std::max(largest, p.semi_axis_um[2]);
   }
   const double span = std::max({x1 - x0, y1 - y0, 1.0}), margin = 0.1 * span;
-  const double mm_per_um = largest > 0 ? 0.06 * span / largest : 1.0;
+  // The largest semi-axis 3 to 6 % of the span, on a round scale that the subtitle states.
+  const double mm_per_um = largest > 0 ? NiceFloor(0.06 * span / largest) : 1.0;
   SvgPlot plot(800, 800);
-  plvpas(0.12, 0.95, 0.1, 0.9, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
+  plvpas(0.12, 0.95, 0.1, 0.87, (y1 - y0 + 2 * margin) / (x1 - x0 + 2 * margin));
   plwind(x0 - margin, x1 + margin, y0 - margin, y1 + margin);
-  Frame("bcnst", 0, 0, "bcnstv", 0, 0);
+  const double x_tick = XTick(x0 - margin, x1 + margin);
+  Frame("bcnst", x_tick, 0, "bcnstv", 0, 0);
   for (const auto& p : data.points) {
     // The XY block's principal axes: a x a^T + ... by the closed form of a symmetric 2 x 2 eigen decomposition.
     const double a = p.covariance_xy_um2[0], b = p.covariance_xy_um2[1], c = p.covariance_xy_um2[2];
@@ -100,8 +107,12 @@ std::string RenderU95Map(const UncertaintyReportData& data) {
     plline(kSides + 1, x.data(), y.data());
   }
   plcol0(kInk);
-  pllab("machine x (mm)", "machine y (mm)",
-        fmt::format("95 % ellipsoids seen from above (largest semi-axis {:.3g} µm; all z levels)", largest).c_str());
+  pllab("machine x (mm)", "machine y (mm)", "");
+  FittedMtex("t", 2.6, 0.5, 0.5, "95 % ellipsoids seen from above (all z levels)", 0.95);
+  plschr(0, 0.8);
+  plmtex("t", 1.0, 0.5, 0.5,
+         fmt::format("largest semi-axis {:.3g} µm; 1 µm drawn as {:g} mm", largest, mm_per_um).c_str());
+  plschr(0, 1.0);
   return plot.Finish();
 }
 
@@ -132,7 +143,7 @@ std::string RenderPage(const UncertaintyReportData& data) {
   html += HtmlFigure("u95_map.svg", "95 % ellipsoid per point", "Each point's 95 % ellipsoid seen from above",
                      "The ellipsoid around the identified prediction of each point that holds 95 % of the runs' "
                      "predictions (normal approximation, chi-square with 3 degrees of freedom), seen from above and "
-                     "magnified to a common scale; points.csv lists its semi-axes and the radius that holds 95 % of "
+                     "magnified to the common scale given under the title; points.csv lists its semi-axes and the radius that holds 95 % of "
                      "the runs.");
   html += "<p>Numbers: <a href=\"points.csv\">points.csv</a>, <a href=\"runs.csv\">runs.csv</a>.</p>\n";
   return html + HtmlTail();

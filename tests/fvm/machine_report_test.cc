@@ -69,7 +69,18 @@ TEST_F(WriteMachineReportTest, WritesThePageAndThreePlots) {
     EXPECT_NE(functions.find(label), std::string::npos) << label;
   }
   EXPECT_NE(Read(root_ / "r" / "volumetric_errors.svg").find("validation, after: n = 1"), std::string::npos);
-  EXPECT_NE(Read(root_ / "r" / "error_map.svg").find("XZ view"), std::string::npos);
+  for (const char* label : {"X position (mm)", ">error (µm)<", ">error (µrad)<"}) {
+    EXPECT_NE(functions.find(label), std::string::npos) << label;
+  }
+  // Before and after side by side, each with its own disc scale under its heading.
+  const std::string map = Read(root_ / "r" / "error_map.svg");
+  for (const char* label : {"XZ view, from the front", "XY view, from above", "Before: the ideal machine",
+                            "After: the identified model"}) {
+    EXPECT_NE(map.find(label), std::string::npos) << label;
+  }
+  const std::size_t first_scale = map.find("mm per µm");
+  ASSERT_NE(first_scale, std::string::npos);
+  EXPECT_NE(map.find("mm per µm", first_scale + 1), std::string::npos) << "each side states its disc scale";
 }
 
 TEST_F(WriteMachineReportTest, RefusesADirectoryItCannotWriteAndLeavesNothing) {

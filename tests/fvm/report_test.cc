@@ -97,30 +97,39 @@ TEST_F(WriteReportTest, PageEscapesMarkupInTitleAndSummary) {
   EXPECT_EQ(html.find("<17>"), std::string::npos);
 }
 
-TEST_F(WriteReportTest, HistogramOfKnownDataCarriesAxisLabelsWithUnitsAndLegend) {
+// Before and after on their own panels and bins: before spans 12 um (30 bins across 24 um round up to 1 um wide),
+// after 0.5 um (0.05 um bins); RMS 5.86 and 0.303 um by hand.
+TEST_F(WriteReportTest, HistogramsOfKnownDataEachOnTheirOwnBinsWithUnits) {
   WriteReport(root_, Sample());
   const std::string svg = Read(root_ / "distance_errors.svg");
-  EXPECT_NE(svg.find("Distance error (µm)"), std::string::npos);
-  EXPECT_NE(svg.find("Count"), std::string::npos);
-  EXPECT_NE(svg.find("before compensation: n = 8"), std::string::npos);
-  EXPECT_NE(svg.find("after compensation: n = 6"), std::string::npos);
+  EXPECT_NE(svg.find("distance error (µm)"), std::string::npos);
+  EXPECT_NE(svg.find(">count<"), std::string::npos);
+  EXPECT_NE(svg.find("Distance errors before compensation"), std::string::npos);
+  EXPECT_NE(svg.find("Distance errors after compensation"), std::string::npos);
+  EXPECT_NE(svg.find("n = 8, RMS 5.86 µm, max |e| 12 µm; bins 1 µm wide"), std::string::npos);
+  EXPECT_NE(svg.find("n = 6, RMS 0.303 µm, max |e| 0.5 µm; bins 0.05 µm wide"), std::string::npos);
 }
 
-TEST_F(WriteReportTest, ErrorVectorPlotShowsStageAxesTravelAndScaleArrow) {
+// Each panel its own magnification: before, 12 um longest over a 200 mm span (x 1000, a 10 um scale arrow); after,
+// 0.316 um longest (x 50000, a 0.2 um scale arrow), which at x 1000 would be a third of a millimetre.
+TEST_F(WriteReportTest, ErrorVectorPanelsShowStageAxesTravelAndTheirOwnScales) {
   WriteReport(root_, Sample());
   const std::string svg = Read(root_ / "error_vectors.svg");
-  EXPECT_NE(svg.find("Stage x (mm)"), std::string::npos);
-  EXPECT_NE(svg.find("Stage y (mm)"), std::string::npos);
-  EXPECT_NE(svg.find("stage travel 200 × 200 mm"), std::string::npos);
-  EXPECT_NE(svg.find(">10 µm<"), std::string::npos) << "the scale arrow is labelled with a round length";
-  EXPECT_NE(svg.find("before compensation (max 12 µm)"), std::string::npos);
+  EXPECT_NE(svg.find("stage x (mm)"), std::string::npos);
+  EXPECT_NE(svg.find("stage y (mm)"), std::string::npos);
+  EXPECT_NE(svg.find("dashed: stage travel 200 × 200 mm"), std::string::npos);
+  EXPECT_NE(svg.find(">10 µm; arrows magnified × 1000<"), std::string::npos) << "before: a round scale arrow";
+  EXPECT_NE(svg.find(">0.2 µm; arrows magnified × 50000<"), std::string::npos) << "after: its own scale";
+  EXPECT_NE(svg.find("3 positions, longest error 12 µm"), std::string::npos);
+  EXPECT_NE(svg.find("3 positions, longest error 0.316 µm"), std::string::npos);
 }
 
 TEST_F(WriteReportTest, ParameterPlotHasOnePanelPerUnitAndEveryName) {
   WriteReport(root_, Sample());
   const std::string svg = Read(root_ / "parameters.svg");
-  EXPECT_NE(svg.find("value ± 2u (µm)"), std::string::npos);
-  EXPECT_NE(svg.find("value ± 2u (µrad)"), std::string::npos);
+  EXPECT_NE(svg.find("value (µm)"), std::string::npos);
+  EXPECT_NE(svg.find("value (µrad)"), std::string::npos);
+  EXPECT_NE(svg.find("Parameters in µrad: value with ± 2u error bars (k = 2)"), std::string::npos);
   for (const auto& p : Sample().parameters) EXPECT_NE(svg.find(">" + p.name + "<"), std::string::npos) << p.name;
 }
 
