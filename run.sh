@@ -41,9 +41,10 @@ build_release() {
 }
 
 # The Python module's tests (python/tests) against the module and the executable just built: `import fvm` from
-# build/python. Their closing line reads like ctest's ("N passed").
+# build/python, with Debian's interpreter (the one python/CMakeLists.txt builds for, where python3-numpy and
+# python3-pytest are). Their closing line reads like ctest's ("N passed").
 python_tests() {
-  PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$PWD/build/python" python3 -m pytest -q -p no:cacheprovider python/tests
+  PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q -p no:cacheprovider python/tests
 }
 
 # The whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer: any report fails the test that

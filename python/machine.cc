@@ -66,7 +66,7 @@ artefacts::TrackerReadings ReadingsFrom(const py::object& arg, const std::string
 
 // One tool offset (x, y, z) or a list of them.
 std::vector<Eigen::Vector3d> ToolsFrom(const py::object& tool) {
-  const DoubleArray a = tool.cast<DoubleArray>();
+  DoubleArray a = tool.cast<DoubleArray>();
   if (a.ndim() == 1) return PointsFrom(a.reshape({py::ssize_t{1}, a.shape(0)}), "tool");
   return PointsFrom(a, "tool");
 }

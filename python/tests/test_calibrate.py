@@ -82,7 +82,7 @@ def test_bad_batches_raise_the_command_lines_messages(tmp_path):
     with pytest.raises(fvm.InputError) as raised:
         fvm.calibrate(str(tmp_path / "none"))
     assert err.strip() == f"fvm: error: {raised.value}"
-    with pytest.raises(fvm.InputError, match="model 8"):
+    with pytest.raises(fvm.InputError, match="unknown model '8'"):
         fvm.calibrate(str(SAMPLE), model=8)
     with pytest.raises(fvm.InputError, match="both identified and validated"):
         fvm.calibrate({"a": {"ids": [1, 2, 3], "stitched": np.eye(3), "free": np.eye(3)}}, identify=["a"], validate=["a"])

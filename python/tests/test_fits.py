@@ -50,7 +50,11 @@ def test_plane_fit_recovers_the_known_normal():
     angle = np.arccos(min(1.0, abs(float(fit.normal @ normal))))
     # The tilt error is within 4 of the fit's own standard uncertainties (u_normal_rad is the larger principal one).
     assert angle < 4 * fit.u_normal_rad
-    assert fit.u_normal_rad < 1e-5  # 2 um noise over a 20 mm flat: ~2 urad, not more
+    # Computed independently: a line fit's slope has u = sigma / sqrt(N var(s)), var of a uniform 20 mm span
+    # 400 / 12 mm^2, so 2 um over 500 points gives 15.5 urad; the fit's own figure (from its residuals, ~3 %
+    # off with 500 points, and the larger of two tilts) lies within 30 % of it.
+    predicted = 0.002 / np.sqrt(500 * 400 / 12)
+    assert 0.7 * predicted < fit.u_normal_rad < 1.3 * predicted
     assert abs(float((fit.point - [1.0, 2.0, 3.0]) @ normal)) < 4 * 0.002 / np.sqrt(500)
 
 
