@@ -50,4 +50,6 @@ namespace fvm::python {
 // Every coefficient of an identified model as the calibration file lists it: names, values (mm, rad), u, state,
 // unit (calibration.cc).
 py::dict ParameterDict(const stage::IdentificationResult& result);
+// (name, reason) of each coefficient the data could not determine, fixed at 0.
+std::vector<std::pair<std::string, std::string>> FixedCoefficients(const stage::IdentificationResult& result);
 }  // namespace fvm::python

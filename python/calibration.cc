@@ -196,6 +196,12 @@ py::dict ParameterDict(const stage::IdentificationResult& result) {
                   py::arg("u") = py::array_t<double>(py::cast(u)), py::arg("state") = states, py::arg("unit") = units);
 }
 
+std::vector<std::pair<std::string, std::string>> FixedCoefficients(const stage::IdentificationResult& result) {
+  std::vector<std::pair<std::string, std::string>> fixed;
+  for (const stage::FixedCoefficient& f : result.fixed) fixed.emplace_back(f.name, f.reason);
+  return fixed;
+}
+
 void BindCalibration(py::module_& m) {
   py::class_<PyCalibration>(m, "Calibration",
                             "An identified stage model: parameters (names, values, u in mm and rad), correct(points), "
@@ -218,11 +224,8 @@ void BindCalibration(py::module_& m) {
       .def_property_readonly("converged", [](const PyCalibration& c) { return c.result.converged || c.from_file; })
       .def_property_readonly("iterations", [](const PyCalibration& c) { return c.result.iterations; })
       .def_property_readonly("condition_number", [](const PyCalibration& c) { return c.result.condition_number; })
-      .def_property_readonly("fixed", [](const PyCalibration& c) {
-        std::vector<std::pair<std::string, std::string>> fixed;
-        for (const auto& f : c.result.fixed) fixed.emplace_back(f.name, f.reason);
-        return fixed;
-      }, "(name, reason) of the coefficients the data could not determine, fixed at 0")
+      .def_property_readonly("fixed", [](const PyCalibration& c) { return FixedCoefficients(c.result); },
+                             "(name, reason) of the coefficients the data could not determine, fixed at 0")
       .def_readonly("summary", &PyCalibration::summary,
                     "what judged the calibration, as `fvm calibrate --json` names it: identification (rms_um, ...) "
                     "and judged (the validation placements, or the identification ones without them: rigid, "

@@ -22,8 +22,9 @@ struct StackPixels {
 
 template <typename T>
 StackPixels ViewsOf(const py::array& stack) {
-  StackPixels s{py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(stack), {}};
-  const auto typed = py::array_t<T, py::array::c_style>(s.array);
+  const auto typed = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(stack);
+  if (!typed) throw InputError("stack: the images must hold numbers (uint8, uint16 or float)");
+  StackPixels s{typed, {}};  // holds the converted pixels the views point into
   const int n = static_cast<int>(typed.shape(0)), h = static_cast<int>(typed.shape(1)), w = static_cast<int>(typed.shape(2));
   const std::size_t per_image = static_cast<std::size_t>(h) * static_cast<std::size_t>(w);
   for (int i = 0; i < n; ++i) {

@@ -137,9 +137,7 @@ py::dict Verify(const py::object& readings, const py::object& tool, const std::s
   p["initial"] = PoseDict(v.initial_pose);
   out["pose"] = p;
   out["parameters"] = ParameterDict(r);
-  std::vector<std::pair<std::string, std::string>> fixed;
-  for (const auto& f : r.fixed) fixed.emplace_back(f.name, f.reason);
-  out["fixed"] = fixed;
+  out["fixed"] = FixedCoefficients(r);
   out["residuals"] = PointsArray(r.residuals);
   out["converged"] = r.converged;
   if (verified->fits.size() > 1) {
