@@ -24,10 +24,14 @@ Surface SurfaceFromHeights(const DoubleArray& heights, const py::object& spacing
   imaging::HeightMap map;
   map.size_y = static_cast<int>(heights.shape(0));
   map.size_x = static_cast<int>(heights.shape(1));
-  if (py::isinstance<py::float_>(spacing) || py::isinstance<py::int_>(spacing)) {
-    map.dx_mm = map.dy_mm = spacing.cast<double>();
-  } else {
-    std::tie(map.dx_mm, map.dy_mm) = spacing.cast<std::pair<double, double>>();
+  try {
+    if (py::isinstance<py::sequence>(spacing)) {
+      std::tie(map.dx_mm, map.dy_mm) = spacing.cast<std::pair<double, double>>();
+    } else {
+      map.dx_mm = map.dy_mm = spacing.cast<double>();
+    }
+  } catch (const py::cast_error&) {
+    throw InputError("spacing: give the pixel size in mm, one number or (dx, dy)");
   }
   if (!(map.dx_mm > 0 && map.dy_mm > 0 && std::isfinite(map.dx_mm) && std::isfinite(map.dy_mm))) {
     throw InputError(fmt::format("spacing: the pixel size must be positive and finite (mm), got {}, {}", map.dx_mm, map.dy_mm));

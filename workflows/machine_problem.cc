@@ -80,6 +80,9 @@ MachineProblem MakeMachineProblem(const MachineProblemOptions& o, artefacts::Tra
   MachineProblem p;
   p.readings = std::move(readings);
   p.validation = std::move(validation);
+  // What a reader refuses in a file, refused in readings made in memory too (a file's pass again, cheaply).
+  artefacts::CheckTrackerReadings(p.readings, p.readings.source);
+  if (p.validation) artefacts::CheckTrackerReadings(*p.validation, p.validation->source);
   try {
     p.chain = stage::AxisChain::Parse(o.chain);
   } catch (const std::invalid_argument& e) {
