@@ -39,7 +39,9 @@ constexpr const char* kFitOptionsDoc =
 void BindFits(py::module_& m) {
   py::class_<imaging::ShapeFit>(m, "ShapeFit",
                                 "A fitted sphere (centre, radius, u_centre, u_radius) or plane (point, normal, "
-                                "u_normal_rad), with rms (the orthogonal residuals' RMS, mm) and the inliers.")
+                                "u_normal_rad), with rms (the orthogonal residuals' RMS, mm) and the inliers.\n\n"
+                                "Example:\n    >>> f = fvm.fit_sphere(points)\n"
+                                "    >>> f.centre, f.u_centre, f.radius, f.u_radius, f.rms")
       .def_property_readonly("shape", [](const imaging::ShapeFit& f) { return imaging::ShapeName(f.shape); })
       .def_property_readonly("centre", [](const imaging::ShapeFit& f) { return VectorArray(f.centre_mm); }, "mm")
       .def_readonly("radius", &imaging::ShapeFit::radius_mm, "mm")

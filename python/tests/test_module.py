@@ -6,7 +6,7 @@ FUNCTIONS = ["read_surface", "write_surface", "find_calottes", "fit_sphere", "fi
 
 
 def test_every_function_and_class_documents_an_example():
-    for name in FUNCTIONS + ["Surface", "Calibration", "InputError", "NotConvergedError"]:
+    for name in FUNCTIONS + ["Surface", "ShapeFit", "Calibration", "InputError", "NotConvergedError"]:
         doc = getattr(fvm, name).__doc__ or ""
         assert "Example" in doc and ">>> " in doc, name
     for method in ("correct", "save", "to_json"):
