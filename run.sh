@@ -3,7 +3,8 @@
 #   bash run.sh sample     calibrates the bundled sample batch and prints the result
 #   bash run.sh test       what CI runs: the Release suite, then the sanitizer suite, then 2000 fuzzing executions
 #                          per reader (about an hour from scratch on 2 cores)
-#   bash run.sh quick      the Release suite only (build/), with the fuzzers' regression inputs through the CLI
+#   bash run.sh quick      the Release suite only (build/), with the fuzzers' regression inputs through the CLI, then
+#                          the Python module's tests (pytest)
 #   bash run.sh sanitize   the same tests built with AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)
 #   bash run.sh fuzz [N]   every reader's libFuzzer target, N executions each (build-fuzz/, clang)
 #   bash run.sh build      only builds
@@ -14,7 +15,8 @@ what="${1:-sample}"
 packages=(cmake ninja-build ccache g++ pkg-config clang libclang-rt-14-dev
   libeigen3-dev libceres-dev libopencv-dev libpcl-dev libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libfmt-dev libboost-dev libplplot-dev
-  libzip-dev libpugixml-dev libssl-dev libtbb-dev librsvg2-bin)
+  libzip-dev libpugixml-dev libssl-dev libtbb-dev librsvg2-bin
+  python3-dev python3-numpy python3-pytest python3-pybind11 pybind11-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -38,12 +40,19 @@ build_release() {
   cmake --build build
 }
 
+# The Python module's tests (python/tests) against the module and the executable just built: `import fvm` from
+# build/python, with Debian's interpreter (the one python/CMakeLists.txt builds for, where python3-numpy and
+# python3-pytest are). Their closing line reads like ctest's ("N passed").
+python_tests() {
+  PYTHONDONTWRITEBYTECODE=1 PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q -p no:cacheprovider python/tests
+}
+
 # The whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer: any report fails the test that
 # made it (UBSan aborts instead of printing and going on). Benchmarks are not built here.
 sanitize() {
   # -O1: the sanitizers need no more, and Ceres' templates compile in about half the time of -O3.
   local flags="-O1 -DNDEBUG -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=None -DFVM_BENCH=OFF \
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=None -DFVM_BENCH=OFF -DFVM_PYTHON=OFF \
     -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_C_FLAGS="$flags" \
     -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
     -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
@@ -74,6 +83,7 @@ case "$what" in
   quick)
     build_release
     ctest --test-dir build --output-on-failure -j2
+    python_tests
     ;;
   test)
     start=$SECONDS
@@ -81,6 +91,8 @@ case "$what" in
     step "Release build and tests"
     build_release
     ctest --test-dir build --output-on-failure -j2
+    step "Python module tests"
+    python_tests
     step "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
     sanitize
     step "fuzzing every reader, 2000 executions each"

@@ -69,9 +69,20 @@ stage::ParameterLayout MachineProblem::Layout(int order) const {
 }
 
 MachineProblem LoadMachineProblem(const MachineProblemOptions& o) {
+  std::optional<artefacts::TrackerReadings> validation;
+  artefacts::TrackerReadings readings = artefacts::ReadTrackerReadings(o.data);
+  if (!o.validate.empty()) validation = artefacts::ReadTrackerReadings(o.validate);
+  return MakeMachineProblem(o, std::move(readings), std::move(validation));
+}
+
+MachineProblem MakeMachineProblem(const MachineProblemOptions& o, artefacts::TrackerReadings readings,
+                                  std::optional<artefacts::TrackerReadings> validation) {
   MachineProblem p;
-  p.readings = artefacts::ReadTrackerReadings(o.data);
-  if (!o.validate.empty()) p.validation = artefacts::ReadTrackerReadings(o.validate);
+  p.readings = std::move(readings);
+  p.validation = std::move(validation);
+  // What a reader refuses in a file, refused in readings made in memory too (a file's pass again, cheaply).
+  artefacts::CheckTrackerReadings(p.readings, p.readings.source);
+  if (p.validation) artefacts::CheckTrackerReadings(*p.validation, p.validation->source);
   try {
     p.chain = stage::AxisChain::Parse(o.chain);
   } catch (const std::invalid_argument& e) {

@@ -51,6 +51,10 @@ struct MachineProblem {
 
 // Reads and checks everything; bad input is an InputError naming the file, line and point.
 MachineProblem LoadMachineProblem(const MachineProblemOptions& options);
+// The same from readings already in memory (a script's arrays; refused as artefacts::CheckTrackerReadings says);
+// options.data and options.validate are not read.
+MachineProblem MakeMachineProblem(const MachineProblemOptions& options, artefacts::TrackerReadings readings,
+                                  std::optional<artefacts::TrackerReadings> validation);
 
 // Identifies `layout` (stage::VerifyMachine); a refusal is an InputError naming the data file (an implausible
 // result says how to raise the bound).

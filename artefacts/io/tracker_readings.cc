@@ -163,15 +163,12 @@ TrackerReadings ReadTrackerReadings(const std::filesystem::path& path) {
   return data;
 }
 
-void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadings& data) {
-  bool with_approach = false;
-  bool with_tool = false;
+void CheckTrackerReadings(const TrackerReadings& data, const std::string& name) {
   std::map<std::string, size_t, std::less<>> seen;
   for (size_t i = 0; i < data.points.size(); ++i) {
     const TrackerReading& p = data.points[i];
     const auto refuse = [&](const std::string& problem) {
-      throw InputError(fmt::format("{}: point {} (row {}): {}; nothing was written", path.string(),
-                                   p.id.empty() ? "<no id>" : p.id, i + 1, problem));
+      throw InputError(fmt::format("{}: point {} (row {}): {}", name, p.id.empty() ? "<no id>" : p.id, i + 1, problem));
     };
     if (TrimBlanks(p.id).empty()) refuse("the id is empty");
     if (TrimBlanks(p.id).size() != p.id.size()) refuse("the id has blanks at its ends, which a reader trims");
@@ -182,6 +179,18 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
     }
     if (!seen.emplace(p.id, i).second) refuse("the id appears twice");
     if (p.tool < 0 || p.tool >= kMaxTools) refuse(fmt::format("tool {} is not 1 .. {}", p.tool + 1, kMaxTools));
+  }
+}
+
+void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadings& data) {
+  try {
+    CheckTrackerReadings(data, path.string());
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + "; nothing was written");
+  }
+  bool with_approach = false;
+  bool with_tool = false;
+  for (const TrackerReading& p : data.points) {
     with_approach = with_approach || !p.approach.empty();
     with_tool = with_tool || p.tool != 0;
   }

@@ -48,6 +48,11 @@ struct TrackerReadings {
 // metres-times-something). The CSV layer bounds the file size and row count before anything grows.
 TrackerReadings ReadTrackerReadings(const std::filesystem::path& path);
 
+// Refuses (InputError "NAME: point ID (row N): problem") what ReadTrackerReadings would refuse in readings made in
+// memory (a script's arrays): an empty or blank-padded id, a coordinate not finite or beyond 100 m, an id given
+// twice, a tool outside 1 .. kMaxTools.
+void CheckTrackerReadings(const TrackerReadings& data, const std::string& name);
+
 // Writes id,x,y,z,xt,yt,zt (or range,azimuth,elevation when `spherical`) [,approach], comments first,
 // atomically. Numbers are written as the shortest text that reads back to the same double (at least 1 nm and
 // 1e-10 rad; Cartesian values round-trip bit for bit, spherical ones to ~1e-13 relative through the conversion).

@@ -24,6 +24,14 @@ std::vector<std::filesystem::path> SearchDirectories() {
   std::error_code error;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
   if (!error) dirs.push_back(exe.parent_path().parent_path() / "lib" / "fvm");
+  // The shared object this code is linked into, when it is not the executable (the Python module: the process is
+  // python3, whose directory says nothing about fvm's).
+  Dl_info self{};
+  if (dladdr(reinterpret_cast<const void*>(&SearchDirectories), &self) != 0 && self.dli_fname != nullptr &&
+      *self.dli_fname != '\0') {
+    const std::filesystem::path object = std::filesystem::weakly_canonical(self.dli_fname, error);
+    if (!error && object != exe) dirs.push_back(object.parent_path().parent_path() / "lib" / "fvm");
+  }
   return dirs;
 }
 

@@ -25,7 +25,7 @@ build=${FVM_FUZZ_BUILD:-$root/build-fuzz}
 fuzz_dir=$root/tests/fuzz
 
 # -O1: the usual trade for fuzzing, fast enough to run and far quicker to build under the sanitizers.
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFVM_PYTHON=OFF -DCMAKE_C_COMPILER=clang-14 \
   -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" \
   -DFVM_FUZZ=ON >/dev/null
 cmake --build "$build" --target fuzz_targets

@@ -1,0 +1,295 @@
+// The main job: a stage model identified from a batch of stitched / stitching-free centre pairs (`fvm calibrate`),
+// judged on the validation placements, and used to compensate points (`fvm correct`); read from and saved to the
+// calibration file the command line writes and reads.
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <algorithm>
+#include <fmt/core.h>
+#include <set>
+
+#include "artefacts/io/batch.h"
+#include "core/exit_codes.h"
+#include "core/file_io.h"
+#include "core/input_error.h"
+#include "python/bindings.h"
+#include "stage/calibration.h"
+#include "stage/io/calibration_file.h"
+#include "workflows/calibrate.h"
+
+namespace fvm::python {
+namespace {
+
+// What Python holds: the identification (the calibration and what the file records of the fit) and the figures
+// that judged it, as the command line's JSON names them.
+struct PyCalibration {
+  stage::IdentificationResult result;
+  bool from_file = false;
+  py::dict summary;
+};
+
+py::dict StatsDict(const stage::ValidationStats& s) {
+  return py::dict(py::arg("centres") = s.count, py::arg("mean_um") = s.mean_mm * 1e3, py::arg("rms_um") = s.rms_mm * 1e3,
+                  py::arg("max_um") = s.max_mm * 1e3, py::arg("predicted_rms_um") = s.predicted_rms_mm * 1e3);
+}
+
+py::dict FrameFreeDict(const stage::FrameFreeStats& s) {
+  return py::dict(py::arg("count") = s.count, py::arg("rms_um") = s.rms_mm * 1e3, py::arg("max_um") = s.max_mm * 1e3,
+                  py::arg("predicted_rms_um") = s.predicted_rms_mm * 1e3);
+}
+
+py::dict JudgementDict(const workflows::Judgement& j) {
+  py::dict d = StatsDict(j.first_tile);
+  d["rigid"] = FrameFreeDict(j.rigid);
+  d["distances"] = FrameFreeDict(j.distances);
+  return d;
+}
+
+// The placements of a batch given as arrays: {name: {"ids": [...], "stitched": N x 3, "free": N x 3}}, paired and
+// checked as the batch reader pairs two exports (same calottes in both).
+artefacts::Batch BatchFromArrays(const py::dict& placements, const std::optional<std::vector<std::string>>& identify,
+                                 const std::optional<std::vector<std::string>>& validate) {
+  artefacts::Batch batch;
+  batch.dir = "<arrays>";
+  for (const auto& [key, value] : placements) {
+    const std::string name = py::str(key);
+    const py::dict p = value.cast<py::dict>();
+    for (const char* k : {"ids", "stitched", "free"}) {
+      if (!p.contains(k)) throw InputError(fmt::format("placement {}: no '{}' (give ids, stitched and free)", name, k));
+    }
+    const std::vector<int> ids = p["ids"].cast<std::vector<int>>();
+    const auto exported = [&](const char* which) {
+      const std::string source = name + "." + which;
+      const std::vector<Eigen::Vector3d> points = PointsFrom(p[which].cast<DoubleArray>(), source);
+      if (points.size() != ids.size()) {
+        throw InputError(fmt::format("{}: {} centres for {} ids", source, points.size(), ids.size()));
+      }
+      artefacts::CentreExport e;
+      e.source = source;
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        if (e.Find(ids[i]) != nullptr) throw InputError(fmt::format("{}: calotte {} appears twice", source, ids[i]));
+        artefacts::CentreRecord r;
+        r.id = ids[i];
+        r.position = points[i];
+        r.line = static_cast<int>(i) + 1;
+        e.centres.push_back(r);
+      }
+      return e;
+    };
+    batch.placements.push_back(artefacts::PairCentreExports(name, exported("stitched"), exported("free")));
+  }
+  if (batch.placements.empty()) throw InputError("no placements: give {name: {ids, stitched, free}, ...}");
+  std::sort(batch.placements.begin(), batch.placements.end(),
+            [](const artefacts::Placement& a, const artefacts::Placement& b) { return a.name < b.name; });
+  batch.has_roles = identify || validate;
+  batch.validate = validate.value_or(std::vector<std::string>{});
+  const std::set<std::string> validating(batch.validate.begin(), batch.validate.end());
+  if (identify) {
+    batch.identify = *identify;
+  } else {
+    for (const auto& p : batch.placements) {
+      if (!validating.count(p.name)) batch.identify.push_back(p.name);
+    }
+  }
+  for (const std::vector<std::string>* role : {&batch.identify, &batch.validate}) {
+    for (const std::string& name : *role) batch.Get(name);  // names an unknown placement
+  }
+  for (const std::string& name : batch.identify) {
+    if (validating.count(name)) {
+      throw InputError("placement " + name + " is both identified and validated on: validation data never enters the fit");
+    }
+  }
+  if (batch.identify.empty()) throw InputError("no placement left to identify from");
+  return batch;
+}
+
+PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, const std::string& terms,
+                        const std::string& anchor, const std::string& loss, double loss_scale_um,
+                        const std::string& stitched_frame, int threads,
+                        const std::optional<std::vector<std::string>>& identify,
+                        const std::optional<std::vector<std::string>>& validate, bool allow_unconverged) {
+  artefacts::Batch batch;
+  std::string source;
+  if (py::isinstance<py::dict>(batch_arg)) {
+    batch = BatchFromArrays(batch_arg.cast<py::dict>(), identify, validate);
+    source = "arrays";
+  } else {
+    if (identify || validate) throw InputError("identify / validate go with a batch of arrays: a directory has batch.json");
+    source = py::str(batch_arg);
+    py::gil_scoped_release release;
+    batch = artefacts::ReadBatch(source);
+  }
+  workflows::CalibrateOptions options;
+  options.model.model = py::str(model);
+  options.model.terms = terms;
+  options.settings.anchor = anchor;
+  options.settings.loss = loss;
+  options.settings.loss_scale_um = loss_scale_um;
+  options.settings.stitched_frame = stitched_frame;
+  options.settings.threads = threads;
+  options.judge_identification = true;
+  std::optional<workflows::BatchCalibration> c;
+  {
+    py::gil_scoped_release release;
+    c.emplace(workflows::CalibrateBatch(batch, options));
+  }
+  const stage::IdentificationResult& r = c->result;
+  if (!r.converged && !allow_unconverged) {
+    throw NotConvergedError(fmt::format("model {}: the solver stopped after {} iterations without converging; do not "
+                                        "use it: check the batch for outliers or try loss='huber' "
+                                        "(allow_unconverged=True returns it anyway)",
+                                        r.calibration.model, r.iterations));
+  }
+  PyCalibration out{r, false, {}};
+  py::dict identification = py::dict(py::arg("placements") = batch.identify, py::arg("centres") = r.residuals.size(),
+                                     py::arg("mean_um") = r.mean_mm * 1e3, py::arg("rms_um") = r.rms_mm * 1e3,
+                                     py::arg("max_um") = r.max_mm * 1e3,
+                                     py::arg("before_mean_um") = c->identification_before.mean_mm * 1e3);
+  out.summary["batch"] = source;
+  out.summary["identification"] = identification;
+  // Judged on the validation placements when the batch names them, else on the identification ones.
+  const workflows::BeforeAfter& judged = *c->judged;
+  py::dict v = JudgementDict(judged.after);
+  v["placements"] = c->validation ? batch.validate : batch.identify;
+  v["held_out"] = c->validation.has_value();
+  v["before"] = JudgementDict(judged.before);
+  const auto max_abs = [](const std::vector<double>& e) {
+    double m = 0;
+    for (double x : e) m = std::max(m, std::abs(x));
+    return m * 1e3;
+  };
+  v["distance_error_max_um"] = py::dict(py::arg("before") = max_abs(judged.distance_errors_before_mm),
+                                        py::arg("after") = max_abs(judged.distance_errors_after_mm));
+  // The figures a plot of the correction needs: where each shown centre was commanded and its error before and
+  // after (stitched - compensated, the residual's opposite), in the first tile's frame.
+  const stage::MeasurementSet& shown = c->Shown();
+  std::vector<Eigen::Vector3d> commands, before, after;
+  for (std::size_t i = 0; i < shown.observations.size(); ++i) {
+    commands.push_back(shown.observations[i].command);
+    before.push_back(-judged.before.first_tile.residuals[i]);
+    after.push_back(-judged.after.first_tile.residuals[i]);
+  }
+  v["commands"] = PointsArray(commands);
+  v["errors_before"] = PointsArray(before);
+  v["errors_after"] = PointsArray(after);
+  out.summary["judged"] = v;
+  return out;
+}
+
+nlohmann::json Document(const PyCalibration& c) { return stage::CalibrationToJson(c.result); }
+
+}  // namespace
+
+py::dict ParameterDict(const stage::IdentificationResult& result) {
+  const nlohmann::json doc = stage::CalibrationToJson(result);
+  std::vector<std::string> names, states, units;
+  std::vector<double> values, u;
+  for (const nlohmann::json& p : doc["parameters"]) {
+    names.push_back(p["name"]);
+    states.push_back(p["state"]);
+    units.push_back(p["unit"]);
+    values.push_back(p["value"]);
+    u.push_back(p["u"]);
+  }
+  return py::dict(py::arg("names") = names, py::arg("values") = py::array_t<double>(py::cast(values)),
+                  py::arg("u") = py::array_t<double>(py::cast(u)), py::arg("state") = states, py::arg("unit") = units);
+}
+
+std::vector<std::pair<std::string, std::string>> FixedCoefficients(const stage::IdentificationResult& result) {
+  std::vector<std::pair<std::string, std::string>> fixed;
+  for (const stage::FixedCoefficient& f : result.fixed) fixed.emplace_back(f.name, f.reason);
+  return fixed;
+}
+
+void BindCalibration(py::module_& m) {
+  py::class_<PyCalibration>(m, "Calibration",
+                            "An identified stage model: parameters (names, values, u in mm and rad), correct(points), "
+                            "save(path), and the figures that judged it (summary).\n\nExample:\n"
+                            "    >>> cal = fvm.calibrate('samples/bar17', model=27)\n"
+                            "    >>> p = cal.parameters\n    >>> dict(zip(p['names'], p['values']))['xTx1']")
+      .def_property_readonly("model", [](const PyCalibration& c) { return c.result.calibration.model; })
+      .def_property_readonly("chain", [](const PyCalibration& c) { return c.result.calibration.layout.chain().code; })
+      .def_property_readonly("parameters", [](const PyCalibration& c) { return ParameterDict(c.result); },
+                             "dict of names, values (numpy, mm and rad), u (standard uncertainties, k = 1), state "
+                             "(free, fixed, tied) and unit, every coefficient in the order of the calibration file")
+      .def_property_readonly("covariance", [](const PyCalibration& c) {
+        const Eigen::MatrixXd& cov = c.result.calibration.covariance;
+        py::array_t<double> out({cov.rows(), cov.cols()});
+        for (Eigen::Index i = 0; i < cov.rows(); ++i) {
+          for (Eigen::Index j = 0; j < cov.cols(); ++j) out.mutable_at(i, j) = cov(i, j);
+        }
+        return out;
+      }, "covariance of the free coefficients (in the order of the free names of parameters)")
+      .def_property_readonly("converged", [](const PyCalibration& c) { return c.result.converged || c.from_file; })
+      .def_property_readonly("iterations", [](const PyCalibration& c) { return c.result.iterations; })
+      .def_property_readonly("condition_number", [](const PyCalibration& c) { return c.result.condition_number; })
+      .def_property_readonly("fixed", [](const PyCalibration& c) { return FixedCoefficients(c.result); },
+                             "(name, reason) of the coefficients the data could not determine, fixed at 0")
+      .def_readonly("summary", &PyCalibration::summary,
+                    "what judged the calibration, as `fvm calibrate --json` names it: identification (rms_um, ...) "
+                    "and judged (the validation placements, or the identification ones without them: rigid, "
+                    "distances, first tile before and after; commands and errors_before / errors_after, N x 3 mm, "
+                    "for plots)")
+      .def(
+          "correct",
+          [](const PyCalibration& c, const DoubleArray& points) {
+            const std::vector<Eigen::Vector3d> p = PointsFrom(points, "points");
+            std::vector<Eigen::Vector3d> corrected(p.size()), u(p.size());
+            {
+              py::gil_scoped_release release;
+              for (std::size_t i = 0; i < p.size(); ++i) {
+                const stage::CorrectedPoint q = stage::Correct(c.result.calibration, p[i]);
+                corrected[i] = q.position;
+                u[i] = q.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+              }
+            }
+            return py::make_tuple(PointsArray(corrected), PointsArray(u));
+          },
+          py::arg("points"),
+          "Compensates stitching-free points (N x 3, mm) in the stage frame, as `fvm correct` does a centre "
+          "export: returns (points, u), both N x 3 mm, u the standard uncertainties from the model's "
+          "covariance.\n\nExample:\n    >>> corrected, u = cal.correct(np.array([[10.0, 5.0, 0.0]]))")
+      .def(
+          "save",
+          [](const PyCalibration& c, const std::filesystem::path& path) {
+            if (c.from_file) {
+              throw InputError(path.string() + ": a calibration read from a file holds no fit to write again; copy the "
+                               "file instead; nothing was written");
+            }
+            WriteFileAtomically(path, Document(c).dump(2) + "\n");
+          },
+          py::arg("path"),
+          "Writes the calibration file `fvm correct --calibration` reads (JSON, mm and rad), atomically.\n\n"
+          "Example:\n    >>> cal.save('cal.json')")
+      .def("to_json", [](const PyCalibration& c) { return Document(c).dump(2); },
+           "The calibration file's JSON text (parameters, covariance, residual statistics).\n\nExample:\n"
+           "    >>> import json; json.loads(cal.to_json())['parameters'][0]")
+      .def("__repr__", [](const PyCalibration& c) {
+        return fmt::format("<fvm.Calibration model {} ({} free parameters{})>", c.result.calibration.model,
+                           c.result.calibration.layout.NumFree(), c.from_file ? ", from a file" : "");
+      });
+
+  m.def("calibrate", &Calibrate, py::arg("batch"), py::arg("model") = "27", py::arg("terms") = "",
+        py::arg("anchor") = "none", py::arg("loss") = "none", py::arg("loss_scale_um") = 5.0,
+        py::arg("stitched_frame") = "rotated", py::arg("threads") = 0, py::arg("identify") = std::nullopt,
+        py::arg("validate") = std::nullopt, py::arg("allow_unconverged") = false,
+        "Identifies the stage model (9, 15, 27 or 42 parameters, or `terms`) from a batch, as `fvm calibrate BATCH "
+        "--model N` does: a batch directory (pairs <placement>.stitched.csv / .free.csv, optional batch.json), or "
+        "a dict {name: {'ids': [...], 'stitched': N x 3, 'free': N x 3}} with optional identify / validate lists "
+        "of names. Raises fvm.InputError for a bad batch or a model it cannot carry, fvm.NotConvergedError when the "
+        "solver did not converge (unless allow_unconverged).\n\nExample:\n"
+        "    >>> cal = fvm.calibrate('samples/bar17', model=27)\n"
+        "    >>> cal.summary['judged']['distances']['rms_um']");
+
+  m.def(
+      "read_calibration",
+      [](const std::filesystem::path& path) {
+        return PyCalibration{stage::IdentificationResult(stage::ReadCalibration(path)), true, {}};
+      },
+      py::arg("path"),
+      "Reads a calibration file written by `fvm calibrate -o` (or Calibration.save) for correct().\n\nExample:\n"
+      "    >>> cal = fvm.read_calibration('cal.json')\n    >>> cal.correct(points)");
+}
+
+}  // namespace fvm::python
