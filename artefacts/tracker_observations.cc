@@ -8,7 +8,7 @@ std::vector<stage::Observation> TrackerObservations(const TrackerReadings& readi
     stage::Observation o;
     o.command = r.nominal;
     o.measured = r.measured;
-    if (noise != nullptr) o.covariance = noise->Covariance(r.measured);
+    if (noise != nullptr) o.covariance = r.covariance ? *r.covariance : noise->Covariance(r.measured);
     o.tool = r.tool;
     out.push_back(o);
   }

@@ -9,8 +9,9 @@
 
 namespace fvm::artefacts {
 
-// One observation per reading: commanded point, tracker reading, its covariance under the tracker's noise model
-// (zero when `noise` is null: equal weights), and which tool.
+// One observation per reading: commanded point, tracker reading, its covariance (zero when `noise` is null: equal
+// weights; else the reading's own when the file gave one, as multilaterated points carry, otherwise the tracker's
+// noise model's), and which tool.
 std::vector<stage::Observation> TrackerObservations(const TrackerReadings& readings, const stage::TrackerNoise* noise);
 
 }  // namespace fvm::artefacts

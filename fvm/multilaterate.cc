@@ -154,11 +154,12 @@ void RegisterMultilaterate(CLI::App& app) {
   AddDetails(sub,
              "Locates every point of READINGS (id,station,range [,azimuth,elevation] [,x,y,z]; mm, rad) from the "
              "ranges of three or more stations, each weighted by the tracker's range noise (a + b * range): with "
-             "known --stations each point by its own Gauss-Newton solve; with --self-calibrate the stations too "
+             "known --stations each point by its own least-squares solve; with --self-calibrate the stations too "
              "(at least 4; frame: station 1 at the origin, station 2 on +x, station 3 in the xy plane; --stations then "
              "gives starting values, or the angles do); --angles adds azimuth and elevation (bundle adjustment, each "
              "station's rotation estimated). Reports the network's geometry (angles between lines of sight, PDOP) "
-             "and each point's uncertainty. --verify-readings writes id,x,y,z,xt,yt,zt for fvm verify.");
+             "and each point's uncertainty. --verify-readings writes id,x,y,z,xt,yt,zt and each point's covariance "
+             "cxx..czz (mm^2) for fvm verify, which weighs each point by it.");
   sub->add_option("READINGS", args->readings, "multilateration readings CSV: id,station,range (mm) [,azimuth,elevation (rad)] [,x,y,z]")
       ->required();
   sub->add_option("--stations", args->stations, "stations JSON {\"stations\": [{\"name\", \"x\", \"y\", \"z\"}]} (mm)");
@@ -171,7 +172,8 @@ void RegisterMultilaterate(CLI::App& app) {
   sub->add_option("--nominal", args->nominal, "nominal machine coordinates id,x,y,z (e.g. points.csv of fvm simulate tracker)")
       ->check(CLI::ExistingFile);
   sub->add_option("--verify-readings", args->verify_readings,
-                  "write the points as tracker readings id,x,y,z,xt,yt,zt for fvm verify (needs nominal coordinates)");
+                  "write the points as tracker readings id,x,y,z,xt,yt,zt with their covariances cxx..czz (mm^2) for fvm verify "
+                  "(needs nominal coordinates)");
   sub->add_option("--truth", args->truth, "true positions id,x,y,z in the same frame (simulations: true_points.csv): report each point's error")
       ->check(CLI::ExistingFile);
   sub->add_flag("--json", args->json, "print the result as JSON (points, stations, range_rms_um, geometry, ...)");
@@ -179,7 +181,7 @@ void RegisterMultilaterate(CLI::App& app) {
       "Example:\n  fvm simulate tracker --seed 1 --stations stations.json -o net\n"
       "  fvm multilaterate net/readings.csv --stations net/stations.json -o points.csv --verify-readings ml.csv\n"
       "  fvm multilaterate net/readings.csv --self-calibrate -o points.csv\n"
-      "  fvm verify ml.csv --tool 0,0,100 --unweighted");
+      "  fvm verify ml.csv --tool 0,0,100");
   sub->callback([args] { Run(*args); });
 }
 

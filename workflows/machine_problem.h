@@ -29,7 +29,7 @@ struct MachineProblemOptions {
   std::optional<artefacts::Workspace> travel;  // the axes' travel; none: the span of the commanded points
   std::string travel_name;            // how the travel was given, first in its refusal ("--machine '400x400x200'")
   std::string tracker = "published";  // noise preset (stage::TrackerNoise::PresetNames) for the weights
-  bool unweighted = false;            // equal weights instead of the tracker's covariances
+  bool unweighted = false;            // equal weights instead of the readings' covariances (their own or the tracker's)
   double max_error_mm = 0;            // plausibility bound; 0: 1 mm per metre of the longest travel
   int threads = 0;                    // 0: all cores
 };
@@ -41,11 +41,11 @@ struct MachineProblem {
   stage::IdentificationOptions options;  // tool offsets, instrument held or estimated, pose, threads
   stage::TrackerNoise noise;
   bool weighted = true;
-  std::vector<stage::Observation> observations;             // the readings, weighted by the noise when `weighted`
+  std::vector<stage::Observation> observations;             // the readings, weighted by their covariances when `weighted`
   std::vector<stage::Observation> validation_observations;  // unweighted; empty without validation readings
   artefacts::Workspace workspace;        // the travel given, or the span of the commanded points
   stage::Basis basis = stage::Basis::kLegendre;
-  std::string WeightsName() const;       // "tracker published" or "equal"
+  std::string WeightsName() const;       // "tracker published", "the readings' covariances" or "equal"
   stage::ParameterLayout Layout(int order) const;
 };
 

@@ -144,6 +144,7 @@ artefacts::TrackerReadings VerifyReadings(const Multilateration& m, const Multil
     t.id = m.problem.point_ids[j];
     t.nominal = it->second.position;
     t.measured = m.result.points[j];
+    t.covariance = m.result.point_covariance[j];  // fvm verify weighs each point by it
     t.approach = it->second.approach;
     out.points.push_back(std::move(t));
   }

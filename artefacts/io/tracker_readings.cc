@@ -1,11 +1,15 @@
 #include "artefacts/io/tracker_readings.h"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/Cholesky>
 
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <optional>
+#include <vector>
 
 #include "core/csv.h"
 #include "core/file_io.h"
@@ -25,6 +29,9 @@ const char* const kCartesian[3] = {"xt", "yt", "zt"};
 const char* const kSpherical[3] = {"range", "azimuth", "elevation"};
 // A CMM-measured test piece (fvm testpiece): the piece's points in the CMM frame, Cartesian like a tracker's.
 const char* const kCmm[3] = {"xm", "ym", "zm"};
+// A point's covariance (mm^2), upper triangle: what a multilateration knows of each point it located.
+const char* const kCovariance[6] = {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"};
+constexpr int kCovarianceRow[6] = {0, 0, 0, 1, 1, 2}, kCovarianceCol[6] = {0, 1, 2, 1, 2, 2};
 
 struct Columns {
   int id = -1;
@@ -34,6 +41,8 @@ struct Columns {
   bool cmm = false;
   int approach = -1;
   int tool = -1;
+  int covariance[6] = {-1, -1, -1, -1, -1, -1};
+  bool with_covariance = false;
 };
 
 // Which of three columns the header names, as "xt, yt" for messages.
@@ -83,7 +92,22 @@ Columns FindColumns(const CsvTable& table) {
   }
   c.approach = table.Optional("approach");
   c.tool = table.Optional("tool");
+  std::vector<std::string> given, missing;
+  for (int k = 0; k < 6; ++k) {
+    c.covariance[k] = table.Optional(kCovariance[k]);
+    (c.covariance[k] >= 0 ? given : missing).emplace_back(kCovariance[k]);
+  }
+  if (!given.empty() && !missing.empty()) {
+    throw InputError(fmt::format("{}: the header names the covariance columns {} but not {}; a point's covariance needs "
+                                 "all six of cxx,cxy,cxz,cyy,cyz,czz (mm^2), or none",
+                                 where, fmt::join(given, ","), fmt::join(missing, ",")));
+  }
+  c.with_covariance = !given.empty();
   return c;
+}
+
+bool IsCovariance(const Eigen::Matrix3d& v) {
+  return v.allFinite() && Eigen::LLT<Eigen::Matrix3d>(v).info() == Eigen::Success;
 }
 
 std::string PointName(std::string_view id) { return "point " + std::string(id); }
@@ -129,6 +153,18 @@ TrackerReading ReadRow(const CsvTable& table, const CsvRow& row, const Columns& 
   }
   if (c.approach >= 0) reading.approach = std::string(TrimBlanks(table.Text(row, c.approach)));
   if (c.tool >= 0) reading.tool = static_cast<int>(table.Int(row, c.tool, 1, kMaxTools, point)) - 1;
+  if (c.with_covariance) {
+    Eigen::Matrix3d v;
+    for (int k = 0; k < 6; ++k) {
+      v(kCovarianceRow[k], kCovarianceCol[k]) = v(kCovarianceCol[k], kCovarianceRow[k]) = table.Double(row, c.covariance[k], point);
+    }
+    if (!IsCovariance(v)) {
+      table.Fail(row, fmt::format("{}: the covariance cxx..czz is not positive definite; variances are positive (mm^2) "
+                                  "and each correlation below 1",
+                                  point));
+    }
+    reading.covariance = v;
+  }
   return reading;
 }
 
@@ -179,6 +215,10 @@ void CheckTrackerReadings(const TrackerReadings& data, const std::string& name) 
     }
     if (!seen.emplace(p.id, i).second) refuse("the id appears twice");
     if (p.tool < 0 || p.tool >= kMaxTools) refuse(fmt::format("tool {} is not 1 .. {}", p.tool + 1, kMaxTools));
+    if (p.covariance && !IsCovariance(*p.covariance)) refuse("the covariance is not positive definite");
+    if (p.covariance.has_value() != data.points.front().covariance.has_value()) {
+      refuse("a covariance is given for some points only; give one for every point or for none");
+    }
   }
 }
 
@@ -203,6 +243,8 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
   for (const char* name : data.spherical ? kSpherical : data.cmm ? kCmm : kCartesian) header.emplace_back(name);
   if (with_approach) header.emplace_back("approach");
   if (with_tool) header.emplace_back("tool");
+  const bool with_covariance = data.points.front().covariance.has_value();  // all or none (checked above)
+  if (with_covariance) header.insert(header.end(), std::begin(kCovariance), std::end(kCovariance));
   out += CsvLine(header);
   for (const TrackerReading& p : data.points) {
     std::vector<std::string> fields = {p.id, FormatShortest(p.nominal.x()), FormatShortest(p.nominal.y()),
@@ -215,6 +257,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
     }
     if (with_approach) fields.push_back(p.approach);
     if (with_tool) fields.push_back(std::to_string(p.tool + 1));
+    for (int k = 0; with_covariance && k < 6; ++k) fields.push_back(FormatShortest((*p.covariance)(kCovarianceRow[k], kCovarianceCol[k])));
     out += CsvLine(fields);
   }
   WriteFileAtomically(path, out);

@@ -11,12 +11,15 @@
 //                              CMM frame, mm: to the kinematics a CMM-measured piece is a tracker whose pose is
 //                              the piece's datum
 // and optionally `approach` (text: the direction the fastest axis last moved in, e.g. +x) and `tool` (1, 2, ...:
-// which of the tool offsets given to `fvm verify --tool` the point was measured with; 1 when absent). Other columns are
-// ignored. Ids are text (P0001); each appears once. Column names match without regard to case; the CSV dialect
+// which of the tool offsets given to `fvm verify --tool` the point was measured with; 1 when absent) and
+// `cxx,cxy,cxz,cyy,cyz,czz` (all six or none, mm^2): the covariance of the measured point in the tracker frame, as
+// `fvm multilaterate --verify-readings` writes it; `fvm verify` then weighs each point by its own covariance
+// instead of one tracker's noise model. Other columns are ignored. Ids are text (P0001); each appears once. Column names match without regard to case; the CSV dialect
 // is core/csv.h's.
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +33,7 @@ struct TrackerReading {
   Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // tracker frame, Cartesian, mm (spherical input converted)
   std::string approach;                                // "" when not given
   int tool = 0;                                        // 0-based index of the tool offset (the file says 1, 2, ...)
+  std::optional<Eigen::Matrix3d> covariance;           // of `measured`, mm^2, when the file gives one
   int line = 0;                                        // line of the source file; 0 when not read from a file
 };
 
@@ -44,16 +48,17 @@ struct TrackerReadings {
 // Throws InputError "FILE:LINE: point ID: problem; what to do" on a missing file, a header with both the
 // Cartesian and the spherical column set, with neither or with half of one, an empty id, a non-numeric, empty,
 // NaN or infinite value, a duplicated id, no rows at all, a negative range, |elevation| > pi/2, |azimuth| > 2 pi,
-// or a coordinate or range beyond 100 m (a machine tool is not that large: the file is in micrometres or
+// a covariance that is not positive definite (or given in some of its six columns only), or a coordinate or range
+// beyond 100 m (a machine tool is not that large: the file is in micrometres or
 // metres-times-something). The CSV layer bounds the file size and row count before anything grows.
 TrackerReadings ReadTrackerReadings(const std::filesystem::path& path);
 
 // Refuses (InputError "NAME: point ID (row N): problem") what ReadTrackerReadings would refuse in readings made in
 // memory (a script's arrays): an empty or blank-padded id, a coordinate not finite or beyond 100 m, an id given
-// twice, a tool outside 1 .. kMaxTools.
+// twice, a tool outside 1 .. kMaxTools, a covariance not positive definite or given for some points only.
 void CheckTrackerReadings(const TrackerReadings& data, const std::string& name);
 
-// Writes id,x,y,z,xt,yt,zt (or range,azimuth,elevation when `spherical`) [,approach], comments first,
+// Writes id,x,y,z,xt,yt,zt (or range,azimuth,elevation when `spherical`) [,approach][,tool][,cxx..czz], comments first,
 // atomically. Numbers are written as the shortest text that reads back to the same double (at least 1 nm and
 // 1e-10 rad; Cartesian values round-trip bit for bit, spherical ones to ~1e-13 relative through the conversion).
 // Refuses (InputError naming the file and point, nothing written) what ReadTrackerReadings would refuse.

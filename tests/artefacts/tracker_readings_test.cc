@@ -157,8 +157,40 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"azimuth_degrees", "id,x,y,z,range,azimuth,elevation\nP4,0,0,0,1000,45,0.1\n", 2, "P4", "2 pi"},
         BadCase{"range_um", "id,x,y,z,range,azimuth,elevation\nP5,0,0,0,1.5e8,0,0\n", 2, "P5", "100 m"},
         BadCase{"nominal_um", "id,x,y,z,xt,yt,zt\nP6,2500000,0,0,1,2,3\n", 2, "P6", "100 m"},
-        BadCase{"measured_um", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP6,0,0,0,1,-100001,3\n", 3, "P6", "100 m"}),
+        BadCase{"measured_um", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP6,0,0,0,1,-100001,3\n", 3, "P6", "100 m"},
+        BadCase{"half_a_covariance", "id,x,y,z,xt,yt,zt,cxx,cyy,czz\nP1,0,0,0,1,2,3,1,1,1\n", 1, "",
+                "but not cxy,cxz,cyz"},
+        BadCase{"correlation_above_one", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP1,0,0,0,1,2,3,1e-4,2e-4,0,1e-4,0,1e-4\n",
+                2, "P1", "not positive definite"},
+        BadCase{"negative_variance", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP2,0,0,0,1,2,3,-1e-4,0,0,1e-4,0,1e-4\n",
+                2, "P2", "not positive definite"}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// A multilaterated point's covariance (mm^2) goes out as cxx..czz and comes back bit for bit, symmetric; a set in
+// which some points have one and others not is refused, nothing written.
+TEST(TrackerReadings, CovarianceColumnsRoundTripBitExact) {
+  testing::TempDir dir;
+  TrackerReadings data;
+  data.points = {Reading("P1", {0, 0, 0}, {1, 2, 3}), Reading("P2", {10, 0, 0}, {11, 2, 3})};
+  Eigen::Matrix3d a;
+  a << 1.0 / 3.0, 1e-5, -2e-6, 1e-5, 2.5e-4, 3e-7, -2e-6, 3e-7, 1.0 / 7.0 * 1e-3;
+  data.points[0].covariance = a * 1e-3;
+  data.points[1].covariance = a;
+  const auto path = dir / "ml.csv";
+  WriteTrackerReadings(path, data);
+  const TrackerReadings back = ReadTrackerReadings(path);
+  ASSERT_EQ(back.points.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    ASSERT_TRUE(back.points[i].covariance.has_value());
+    EXPECT_EQ(*back.points[i].covariance, *data.points[i].covariance) << "point " << i + 1;
+  }
+  TrackerReadings some;
+  some.points = {Reading("P1", {0, 0, 0}, {1, 2, 3}), Reading("P2", {10, 0, 0}, {11, 2, 3})};
+  some.points[1].covariance = a;
+  const auto other = dir / "some.csv";
+  EXPECT_THAT(InputErrorOf([&] { WriteTrackerReadings(other, some); }), HasSubstr("some points only"));
+  EXPECT_FALSE(std::filesystem::exists(other));
+}
 
 TEST(TrackerReadings, MissingFileNamesIt) {
   testing::TempDir dir;

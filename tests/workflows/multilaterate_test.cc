@@ -10,6 +10,7 @@
 #include "core/file_io.h"
 #include "core/number_text.h"
 #include "tests/workflows/simulated_machine.h"
+#include "workflows/machine_problem.h"
 
 namespace fvm::workflows {
 namespace {
@@ -83,6 +84,18 @@ TEST(Multilaterate, WritesThePointsAsReadingsForVerificationWithTheirNominalCoor
   EXPECT_EQ(r.points[7].id, net.targets[7].first);
   EXPECT_EQ(r.points[7].nominal, net.targets[7].second);
   EXPECT_EQ(r.points[7].measured, m.result.points[7]);
+  // Each point carries its covariance, and a verification weighs it by that, not by one tracker's noise model.
+  ASSERT_TRUE(r.points[7].covariance.has_value());
+  EXPECT_EQ(*r.points[7].covariance, m.result.point_covariance[7]);
+  MachineProblemOptions verify;
+  verify.tools = {Eigen::Vector3d(0, 0, 100)};
+  verify.tracker = "none";
+  const MachineProblem problem = MakeMachineProblem(verify, r, std::nullopt);
+  EXPECT_TRUE(problem.weighted);
+  EXPECT_EQ(problem.WeightsName(), "the readings' covariances");
+  EXPECT_EQ(problem.observations[7].covariance, m.result.point_covariance[7]);
+  verify.unweighted = true;
+  EXPECT_EQ(MakeMachineProblem(verify, r, std::nullopt).observations[7].covariance, Eigen::Matrix3d::Zero());
   try {
     VerifyReadings(m, net.options, {}, "", "ml.csv");
     FAIL() << "readings for verification without nominal coordinates were made";
