@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -33,5 +34,20 @@ struct StackImage {
             channels};
   }
 };
+
+// An owned copy of a view's pixels.
+inline StackImage CopyOf(const StackImageView& view) {
+  StackImage image;
+  image.width = view.width;
+  image.height = view.height;
+  image.channels = view.channels;
+  std::visit(
+      [&](auto span) {
+        using T = std::remove_const_t<typename decltype(span)::element_type>;
+        image.pixels = std::vector<T>(span.begin(), span.end());
+      },
+      view.pixels);
+  return image;
+}
 
 }  // namespace fvm::imaging

@@ -12,28 +12,15 @@
 
 #include "core/input_error.h"
 #include "imaging/focus_peak.h"
+#include "imaging/focus_stack_curves.h"
 
 namespace fvm::imaging {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-// Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run
-// filter exactly the same bands and give the same bits.
-constexpr int kStripeRows = 32;
 
 std::string Describe(std::string_view name, int index) {
   return name.empty() ? "image " + std::to_string(index + 1) + " of the stack" : std::string(name);
-}
-
-cv::Mat WrapPixels(const StackImageView& image) {
-  return std::visit(
-      [&](auto span) {
-        using T = typename decltype(span)::element_type;
-        const int type = std::is_same_v<T, const std::uint8_t> ? CV_8U : std::is_same_v<T, const std::uint16_t> ? CV_16U : CV_32F;
-        // OpenCV never writes through this header; it only lacks a const Mat type.
-        return cv::Mat(image.height, image.width, CV_MAKETYPE(type, image.channels), const_cast<void*>(static_cast<const void*>(span.data())));
-      },
-      image.pixels);
 }
 
 std::size_t PixelCount(const StackImageView& image) {
@@ -44,10 +31,9 @@ std::size_t PixelCount(const StackImageView& image) {
 constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // The large window is taken where the surface's height changes by at most this many steps over its half-width.
 constexpr double kSpreadLimitSteps = 0.5;
-constexpr double kSlopeSmoothingPx = 2.0;
-constexpr double kGaussianWindowSigma = 0.3;
+constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
 // Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeaks).
-constexpr double kNarrowShare = 0.05;  // per px of window: 0.9 px for 3, 1.5 px for 5  // sigma of the smoothing of the heights before their slope
+constexpr double kNarrowShare = 0.05;
 // The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
 // of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
 // the step the interpolation leaves, the share of the height spread in the window.
@@ -56,69 +42,6 @@ constexpr double kFloorShare = 1.0;
 constexpr double kStepFraction = 0.03;
 constexpr double kScatterScale = 1.35;
 constexpr int kScatterWindowPx = 9;
-
-// The measure per pixel before it is averaged over a window: the modified Laplacian or the gradient energy; for
-// the variance the grey levels themselves (shifted by the band's mean: E[I^2] - E[I]^2 in float loses
-// everything to cancellation when the grey level is large against the contrast, as in 16-bit images).
-// Scratch images of one thread, kept from band to band and image to image: OpenCV reuses a Mat's memory when
-// the size and type repeat, and allocating (and faulting in) fresh pages for every band cost a tenth of the time.
-struct Scratch {
-  cv::Mat grey, dx, dy, per_pixel, window, mean_sq, values;
-};
-
-Scratch& ThreadScratch() {
-  thread_local Scratch scratch;
-  return scratch;
-}
-
-const cv::Mat& PixelMeasure(const cv::Mat& band, FocusMeasure measure, Scratch& b) {
-  band.convertTo(b.grey, CV_32F);
-  switch (measure) {
-    case FocusMeasure::kModifiedLaplacian:
-      cv::Sobel(b.grey, b.dx, CV_32F, 2, 0, 1, 1.0, 0.0, cv::BORDER_REFLECT);  // ksize 1: the bare [1 -2 1]
-      cv::Sobel(b.grey, b.dy, CV_32F, 0, 2, 1, 1.0, 0.0, cv::BORDER_REFLECT);
-      b.dx = cv::abs(b.dx);
-      b.dy = cv::abs(b.dy);
-      cv::add(b.dx, b.dy, b.per_pixel);
-      return b.per_pixel;
-    case FocusMeasure::kTenengrad:
-      cv::Sobel(b.grey, b.dx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::Sobel(b.grey, b.dy, CV_32F, 0, 1, 3, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::multiply(b.dx, b.dx, b.dx);
-      cv::multiply(b.dy, b.dy, b.dy);
-      cv::add(b.dx, b.dy, b.per_pixel);
-      return b.per_pixel;
-    case FocusMeasure::kVariance:
-      cv::subtract(b.grey, cv::mean(b.grey)[0], b.per_pixel);
-      return b.per_pixel;
-  }
-  return b.per_pixel;
-}
-
-// The focus measure over window x window pixels (float, same size as the band). The band carries a margin of
-// rows beyond the rows that are kept (WindowReach), so that the filters see real neighbours there; at the
-// image's own edges they reflect.
-// `gaussian`: weighted by a Gaussian of sigma 0.3 window instead of evenly (the adaptive mode's wall windows:
-// the centre's own height weighs most, where a box mixes in the heights at its edge as much).
-const cv::Mat& WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure, int window, bool gaussian,
-                             Scratch& b) {
-  const cv::Size box(window, window);
-  if (gaussian) {
-    const int side = 2 * window + 1;  // +-3.3 sigma
-    cv::GaussianBlur(pixel_measure, b.window, cv::Size(side, side), kGaussianWindowSigma * window, 0.0,
-                     cv::BORDER_REFLECT);
-  } else {
-    cv::boxFilter(pixel_measure, b.window, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-  }
-  if (measure == FocusMeasure::kVariance) {
-    cv::multiply(pixel_measure, pixel_measure, b.dx);
-    cv::boxFilter(b.dx, b.mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-    cv::multiply(b.window, b.window, b.window);
-    cv::subtract(b.mean_sq, b.window, b.window);
-    cv::max(b.window, 0.0, b.window);
-  }
-  return b.window;
-}
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -133,19 +56,6 @@ double BlurExponent(FocusMeasure measure) {
       return 2.0;
   }
   return 2.0;
-}
-
-template <typename Body>
-void ForStripes(int rows, bool parallel, const Body& body) {
-  const int stripes = (rows + kStripeRows - 1) / kStripeRows;
-  const auto run = [&](const cv::Range& range) {
-    for (int s = range.start; s < range.end; ++s) body(s * kStripeRows, std::min(rows, (s + 1) * kStripeRows));
-  };
-  if (parallel) {
-    cv::parallel_for_(cv::Range(0, stripes), run);
-  } else {
-    run(cv::Range(0, stripes));
-  }
 }
 
 }  // namespace
@@ -182,37 +92,20 @@ void FocusVariationOptions::Check() const {
   }
 }
 
-// One window's focus curves, reduced as the images come: per pixel the largest measure so far, its image, the
-// measure in the images before and after it (NaN until seen), the sum and the smallest over all images (mean and
-// floor), and the previous image's measure.
-struct WindowCurves {
-  int window = 5;
-  bool gaussian = false;  // Gaussian-weighted window (the adaptive mode's small ones)
-  std::vector<float> best, left2, left, right, right2, sum, floor, previous2, previous;
-  std::vector<std::int32_t> index;
-
-  void Reset(int w, std::size_t n) {
-    window = w;
-    best.assign(n, 0.0f);
-    left2.assign(n, kNaN);
-    left.assign(n, kNaN);
-    right.assign(n, kNaN);
-    right2.assign(n, kNaN);
-    previous2.assign(n, kNaN);
-    sum.assign(n, 0.0f);
-    floor.assign(n, std::numeric_limits<float>::max());
-    previous.assign(n, kNaN);
-    index.assign(n, 0);
-  }
-};
-
 struct FocusAccumulator::State {
   FocusVariationOptions options;
   int width = 0, height = 0;
   std::vector<double> z;
-  std::vector<WindowCurves> windows;
-  std::vector<float> texture;  // the all-in-focus pixels: their values in the first window's best image
-  int texture_channels = 1;
+  FocusCurves curves;
+  // Images taken but not yet folded into the curves (a batch, see focus_stack_curves.h); the texture's only
+  // when it is not the grey image.
+  std::vector<StackImage> pending, pending_texture;
+
+  void Flush() {
+    curves.Take(pending, pending_texture);
+    pending.clear();
+    pending_texture.clear();
+  }
 };
 
 FocusAccumulator::FocusAccumulator(const FocusVariationOptions& options) : state_(std::make_unique<State>()) {
@@ -239,9 +132,9 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
       PixelCount(texture) != std::size_t(image.width) * std::size_t(image.height) * std::size_t(texture.channels)) {
     throw InputError(what + ": the colour image differs in size from the grey one or has not 1 or 3 channels");
   }
-  if (k > 0 && texture.channels != s.texture_channels) {
+  if (k > 0 && texture.channels != s.curves.texture_channels) {
     throw InputError(what + ": " + std::to_string(texture.channels) + " colour channel(s), unlike the first image's " +
-                     std::to_string(s.texture_channels));
+                     std::to_string(s.curves.texture_channels));
   }
   if (!std::isfinite(z_mm)) throw InputError(what + ": the z position is not a finite number");
   if (k == 0) {
@@ -253,18 +146,21 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     s.width = image.width;
     s.height = image.height;
     const std::size_t n = std::size_t(s.width) * std::size_t(s.height);
-    s.windows.clear();
+    FocusCurves& curves = s.curves;
+    curves = FocusCurves{};
+    curves.width = s.width;
+    curves.height = s.height;
+    curves.measure = s.options.measure;
+    curves.parallel = s.options.parallel;
     if (s.options.adaptive_window) {
       for (int w : kAdaptiveWindows) {
-        WindowCurves& c = s.windows.emplace_back();
-        c.Reset(w, n);
-        c.gaussian = w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1];
+        curves.windows.emplace_back().Reset(w, w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1], n);
       }
     } else {
-      s.windows.emplace_back().Reset(s.options.window, n);
+      curves.windows.emplace_back().Reset(s.options.window, false, n);
     }
-    s.texture_channels = texture.channels;
-    s.texture.assign(n * std::size_t(texture.channels), 0.0f);
+    curves.texture_channels = texture.channels;
+    curves.texture.assign(n * std::size_t(texture.channels), 0.0f);
   } else {
     if (image.width != s.width || image.height != s.height) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -284,51 +180,9 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   }
   s.z.push_back(z_mm);
 
-  const cv::Mat pixels = WrapPixels(image), texture_pixels = WrapPixels(texture);
-  // Derivative (1 px) plus the window's half-width (a Gaussian window's kernel reaches one window out):
-  // beyond that, a band's edge does not reach the rows it keeps.
-  int margin = 0;
-  for (const WindowCurves& c : s.windows) margin = std::max(margin, (c.gaussian ? c.window : c.window / 2) + 1);
-  const FocusMeasure measure = s.options.measure;
-  ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
-    const int b0 = std::max(0, r0 - margin), b1 = std::min(s.height, r1 + margin);
-    const cv::Mat band = pixels.rowRange(b0, b1);
-    Scratch& scratch = ThreadScratch();
-    const cv::Mat& per_pixel = PixelMeasure(band, measure, scratch);
-    for (std::size_t w = 0; w < s.windows.size(); ++w) {
-      WindowCurves& c = s.windows[w];
-      const cv::Mat& m = WindowMeasure(per_pixel, measure, c.window, c.gaussian, scratch);
-      cv::Mat& values = scratch.values;
-      if (w == 0) texture_pixels.rowRange(b0, b1).convertTo(values, CV_MAKETYPE(CV_32F, texture.channels));
-      const std::size_t channels = std::size_t(texture.channels);
-      for (int r = r0; r < r1; ++r) {
-        const float* row_m = m.ptr<float>(r - b0);
-        const float* row_g = w == 0 ? values.ptr<float>(r - b0) : nullptr;
-        const std::size_t row = std::size_t(r) * std::size_t(s.width);
-        for (int col = 0; col < s.width; ++col) {
-          const std::size_t i = row + std::size_t(col);
-          const float v = row_m[col];
-          if (c.index[i] == k - 1) c.right[i] = v;
-          if (c.index[i] == k - 2) c.right2[i] = v;
-          if (k == 0 || v > c.best[i]) {
-            c.best[i] = v;
-            c.index[i] = k;
-            c.left2[i] = c.previous2[i];
-            c.left[i] = c.previous[i];
-            c.right[i] = kNaN;
-            c.right2[i] = kNaN;
-            if (row_g) {
-              std::copy_n(row_g + std::size_t(col) * channels, channels, s.texture.begin() + std::ptrdiff_t(i * channels));
-            }
-          }
-          c.sum[i] += v;
-          c.floor[i] = std::min(c.floor[i], v);
-          c.previous2[i] = c.previous[i];
-          c.previous[i] = v;
-        }
-      }
-    }
-  });
+  s.pending.push_back(CopyOf(image));
+  if (colour) s.pending_texture.push_back(CopyOf(*colour));
+  if (int(s.pending.size()) == kFocusBatch) s.Flush();
 }
 
 namespace {
@@ -342,8 +196,9 @@ struct WindowHeights {
   std::vector<float> quality;
 };
 
+// Heights only where `need` (when given) is non-zero: the small windows serve only on walls.
 WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
-                       int width, int height) {
+                       int width, int height, const std::vector<std::uint8_t>* need = nullptr) {
   const int n = static_cast<int>(z.size());
   const std::size_t size = c.best.size();
   WindowHeights out;
@@ -359,7 +214,7 @@ WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, cons
       const float quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
       out.quality[i] = quality;
       const int k = c.index[i];
-      if (!(quality >= min_quality)) continue;
+      if (!(quality >= min_quality) || (need && !(*need)[i])) continue;
       // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user
       // asks for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step
       // of uncertainty.
@@ -464,6 +319,8 @@ FocusResult FocusAccumulator::Finish() const {
     throw InputError("focus variation: the stack has " + std::to_string(n) +
                      " image(s); at least 3 are needed (a focus peak needs an image on either side of it)");
   }
+  State& folding = *state_;  // the images still pending are folded in, which changes no result
+  folding.Flush();
   FocusResult result;
   HeightMap& map = result.height;
   map.size_x = s.width;
@@ -478,42 +335,61 @@ FocusResult FocusAccumulator::Finish() const {
   map.z_mm.assign(size, std::numeric_limits<double>::quiet_NaN());
   result.u_z_mm.assign(size, kNaN);
   result.window_px.assign(size, kNaN);
-  result.texture = s.texture;
-  result.texture_channels = s.texture_channels;
+  result.texture = s.curves.texture;
+  result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
 
-  std::vector<WindowHeights> heights;
-  for (const WindowCurves& c : s.windows) heights.push_back(FitPeaks(c, s.z, s.options, s.width, s.height));
-  const WindowCurves& last = s.windows.back();
+  // The largest window's heights everywhere; their slope says where the smaller windows are needed (the
+  // choice below), and only there are their peaks fitted.
+  const std::vector<WindowCurves>& curves = s.curves.windows;
+  std::vector<WindowHeights> heights(curves.size());
+  heights.back() = FitPeaks(curves.back(), s.z, s.options, s.width, s.height);
   result.quality = heights.back().quality;
-  result.peak_index = s.windows.size() > 1 ? s.windows[1].index : last.index;
+  result.peak_index = curves.size() > 1 ? curves[1].index : curves.back().index;
   const cv::Mat slope = SlopePerPixel(heights.back().z, s.width, s.height);
+  const double spread_limit = kSpreadLimitSteps * step;
+  const auto fits = [&](std::size_t w, std::size_t i) {
+    return slope.at<double>(int(i / std::size_t(s.width)), int(i % std::size_t(s.width))) * (curves[w].window / 2) <=
+           spread_limit;
+  };
+  if (curves.size() > 1) {
+    const std::size_t large = curves.size() - 1;
+    std::vector<std::uint8_t> need_middle(size, 0), need_small(size, 0);
+    for (std::size_t i = 0; i < size; ++i) {
+      if (!(result.quality[i] >= s.options.min_quality) || (fits(large, i) && std::isfinite(heights[large].z[i]))) {
+        continue;
+      }
+      need_middle[i] = 1;
+      need_small[i] = !fits(1, i);
+    }
+    heights[1] = FitPeaks(curves[1], s.z, s.options, s.width, s.height, &need_middle);
+    heights[0] = FitPeaks(curves[0], s.z, s.options, s.width, s.height, &need_small);
+  }
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
-        const double g = slope.at<double>(r, col);  // mm per px
         double z = kNaN, u_noise = 0.0, window = 0.0;
         // The largest window's quality decides validity: its peak over mean is the least noisy, and a small
         // window's noise peak on a texture-free spot must not pass for a height.
         if (!(result.quality[i] >= s.options.min_quality)) continue;
-        if (s.windows.size() == 1) {
-          z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
+        if (s.curves.windows.size() == 1) {
+          z = heights[0].z[i], u_noise = heights[0].u[i], window = s.curves.windows[0].window;
         } else {
           // The largest window whose half-width spans at most half a step of height; else the mean of the
           // smaller two (their errors on a wall are partly independent textures' weights).
           const std::size_t large = heights.size() - 1;
-          if (g * (s.windows[large].window / 2) <= kSpreadLimitSteps * step && std::isfinite(heights[large].z[i])) {
-            z = heights[large].z[i], u_noise = heights[large].u[i], window = s.windows[large].window;
-          } else if (g * (s.windows[1].window / 2) <= kSpreadLimitSteps * step || !std::isfinite(heights[0].z[i])) {
-            z = heights[1].z[i], u_noise = heights[1].u[i], window = s.windows[1].window;
+          if (fits(large, i) && std::isfinite(heights[large].z[i])) {
+            z = heights[large].z[i], u_noise = heights[large].u[i], window = s.curves.windows[large].window;
+          } else if (fits(1, i) || !std::isfinite(heights[0].z[i])) {
+            z = heights[1].z[i], u_noise = heights[1].u[i], window = s.curves.windows[1].window;
           } else if (!std::isfinite(heights[1].z[i])) {
-            z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
+            z = heights[0].z[i], u_noise = heights[0].u[i], window = s.curves.windows[0].window;
           } else {
             z = 0.5 * (heights[0].z[i] + heights[1].z[i]);
             u_noise = 0.5 * std::hypot(heights[0].u[i], heights[1].u[i]);
-            window = 0.5 * (s.windows[0].window + s.windows[1].window);
+            window = 0.5 * (s.curves.windows[0].window + s.curves.windows[1].window);
           }
         }
         if (!std::isfinite(z)) continue;
