@@ -185,13 +185,13 @@ void WindowCurves::Reset(int w, bool gaussian_window, std::size_t n) {
   index.assign(n, 0);
 }
 
-void FocusCurves::Take(const std::vector<StackImage>& grey, const std::vector<StackImage>& texture_images) {
-  const int count = static_cast<int>(grey.size());
+void FocusCurves::Take(const StackImage* grey, const StackImage* texture_images, int count) {
   if (count == 0) return;
   std::vector<cv::Mat> images, textures;
-  for (const StackImage& g : grey) images.push_back(WrapPixels(g));
-  for (const StackImage& t : texture_images) textures.push_back(WrapPixels(t));
-  if (textures.empty()) textures = images;
+  for (int j = 0; j < count; ++j) {
+    images.push_back(WrapPixels(grey[j]));
+    textures.push_back(WrapPixels(texture_images ? texture_images[j] : grey[j]));
+  }
   // Derivative (1 px) plus the window's half-width (a Gaussian window's kernel reaches one window out): beyond
   // that, a band's edge does not reach the rows it keeps.
   int margin = 0;

@@ -42,10 +42,9 @@ struct FocusCurves {
   int texture_channels = 1;
   int taken = 0;  // images folded into the curves
 
-  // Folds a batch of images (grey, and what the texture is made of: the grey image or its colour) into the
-  // curves; the batch's first image is image number `taken`.
-  // `texture_images` may be empty: the grey images are the texture.
-  void Take(const std::vector<StackImage>& grey, const std::vector<StackImage>& texture_images);
+  // Folds `count` images (grey, and what the texture is made of: their colour, or null for the grey images
+  // themselves) into the curves; the first is image number `taken`.
+  void Take(const StackImage* grey, const StackImage* texture_images, int count);
 };
 
 // Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run

@@ -97,14 +97,15 @@ struct FocusAccumulator::State {
   int width = 0, height = 0;
   std::vector<double> z;
   FocusCurves curves;
-  // Images taken but not yet folded into the curves (a batch, see focus_stack_curves.h); the texture's only
-  // when it is not the grey image.
-  std::vector<StackImage> pending, pending_texture;
+  // Images taken but not yet folded into the curves (a batch, see focus_stack_curves.h), copied into buffers
+  // that serve batch after batch; the colour images only when they are not the grey ones.
+  std::vector<StackImage> pending = std::vector<StackImage>(kFocusBatch), pending_colour = pending;
+  int pending_count = 0;
+  bool colour = false;
 
   void Flush() {
-    curves.Take(pending, pending_texture);
-    pending.clear();
-    pending_texture.clear();
+    curves.Take(pending.data(), colour ? pending_colour.data() : nullptr, pending_count);
+    pending_count = 0;
   }
 };
 
@@ -180,134 +181,135 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   }
   s.z.push_back(z_mm);
 
-  s.pending.push_back(CopyOf(image));
-  if (colour) s.pending_texture.push_back(CopyOf(*colour));
-  if (int(s.pending.size()) == kFocusBatch) s.Flush();
+  if (k == 0) s.colour = colour != nullptr;
+  CopyInto(image, s.pending[std::size_t(s.pending_count)]);
+  if (s.colour) CopyInto(texture, s.pending_colour[std::size_t(s.pending_count)]);
+  if (++s.pending_count == kFocusBatch) s.Flush();
 }
 
 namespace {
 
-// One window's heights and their noise: the peak fit per pixel, and the change of its vertex when each of the
-// three measures moves by its noise (the floor of the curve, the measure far out of focus, over the window's
-// side: the sum of window^2 pixels of independent noise).
-struct WindowHeights {
-  std::vector<double> z;      // mm, NaN where invalid
-  std::vector<double> u;      // mm, the noise part of the uncertainty
-  std::vector<float> quality;
+// One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
+// change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
+// focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.
+struct Peak {
+  double z = std::numeric_limits<double>::quiet_NaN();
+  double u = std::numeric_limits<double>::quiet_NaN();
+  float quality = 0.0f;
 };
 
-// Heights only where `need` (when given) is non-zero: the small windows serve only on walls.
-WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
-                       int width, int height, const std::vector<std::uint8_t>* need = nullptr) {
+Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
+             const FocusVariationOptions& options) {
   const int n = static_cast<int>(z.size());
-  const std::size_t size = c.best.size();
-  WindowHeights out;
-  out.z.assign(size, std::numeric_limits<double>::quiet_NaN());
-  out.u.assign(size, std::numeric_limits<double>::quiet_NaN());
-  out.quality.assign(size, 0.0f);
-  const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
-  const float min_quality = static_cast<float>(options.min_quality);
-  const double noise_scale = kNoiseScale / double(c.window);
-  ForStripes(height, options.parallel, [&](int r0, int r1) {
-    for (std::size_t i = std::size_t(r0) * std::size_t(width); i < std::size_t(r1) * std::size_t(width); ++i) {
-      const float mean = c.sum[i] / static_cast<float>(n);
-      const float quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
-      out.quality[i] = quality;
-      const int k = c.index[i];
-      if (!(quality >= min_quality) || (need && !(*need)[i])) continue;
-      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user
-      // asks for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step
-      // of uncertainty.
-      if (k == 0 || k == n - 1) {
-        if (options.keep_end_peaks) out.z[i] = z[std::size_t(k)], out.u[i] = std::abs(z[1] - z[0]);
-        continue;
-      }
-      const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
-      const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
-      const double floor_i = kFloorShare * c.floor[i];
-      // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
-      // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
-      // through the raw measures does better.
-      const bool narrow = std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
-      if (options.peak_fit == PeakFit::kPower && !narrow) {
-        double u_noise = 0.0;
-        out.z[i] = PowerVertex(z, k, f, kFloorShare * c.floor[i], power, sigma, &u_noise);
-        out.u[i] = u_noise;
-        continue;
-      }
-      // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
-      const auto vertex = [&](const std::array<double, 5>& g) {
-        std::array<double, 3> h = {g[1], g[2], g[3]};
-        if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
-          for (double& v : h) v = std::log(v);
-        }
-        return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
-      };
-      const double z0 = vertex(f);
-      out.z[i] = z0;
-      double variance = 0.0;
-      for (std::size_t j = 1; j < 4; ++j) {
-        if (!std::isfinite(f[j])) continue;
-        std::array<double, 5> g = f;
-        g[j] += sigma;
-        const double d = vertex(g) - z0;
-        variance += d * d;
-      }
-      out.u[i] = std::sqrt(variance);
+  Peak out;
+  const float mean = c.sum[i] / static_cast<float>(n);
+  out.quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
+  const int k = c.index[i];
+  if (!(out.quality >= static_cast<float>(options.min_quality))) return out;
+  // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user asks
+  // for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step of
+  // uncertainty.
+  if (k == 0 || k == n - 1) {
+    if (options.keep_end_peaks) out.z = z[std::size_t(k)], out.u = std::abs(z[1] - z[0]);
+    return out;
+  }
+  const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
+  const double sigma = kNoiseScale / double(c.window) * std::max(double(c.floor[i]), 0.0);
+  const double floor_i = kFloorShare * c.floor[i];
+  // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
+  // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
+  // through the raw measures does better.
+  const bool narrow = std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
+  if (options.peak_fit == PeakFit::kPower && !narrow) {
+    const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
+    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u);
+    return out;
+  }
+  // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
+  const auto vertex = [&](const std::array<double, 5>& g) {
+    std::array<double, 3> h = {g[1], g[2], g[3]};
+    if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
+      for (double& v : h) v = std::log(v);
     }
-  });
+    return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
+  };
+  out.z = vertex(f);
+  double variance = 0.0;
+  for (std::size_t j = 1; j < 4; ++j) {
+    if (!std::isfinite(f[j])) continue;
+    std::array<double, 5> g = f;
+    g[j] += sigma;
+    const double d = vertex(g) - out.z;
+    variance += d * d;
+  }
+  out.u = std::sqrt(variance);
   return out;
 }
 
-// The local slope (height change per pixel, mm) of a map with holes: a Gaussian average over the valid points
-// only (the blur of the heights over the blur of the valid mask), then Sobel.
-// A map with holes as heights (0 in the holes) and a mask of its valid points.
-void SplitValid(const std::vector<double>& z, int width, int height, cv::Mat& heights, cv::Mat& valid) {
-  heights.create(height, width, CV_64F);
-  valid.create(height, width, CV_64F);
-  for (int r = 0; r < height; ++r) {
-    for (int col = 0; col < width; ++col) {
-      const double v = z[std::size_t(r) * std::size_t(width) + std::size_t(col)];
-      heights.at<double>(r, col) = std::isfinite(v) ? v : 0.0;
-      valid.at<double>(r, col) = std::isfinite(v) ? 1.0 : 0.0;
+// Heights (mm) with holes as float maps for the filters: relative to `origin` (so that float keeps the nm of
+// a stage tens of mm out), 0 in the holes, and the mask of the valid points. The maps are filtered in place;
+// float halves the memory (and the fresh pages) of double.
+struct HoleyMap {
+  cv::Mat heights, valid, work;
+
+  HoleyMap(const std::vector<double>& z, int width, int height, double origin)
+      : heights(height, width, CV_32F), valid(height, width, CV_32F) {
+    for (int r = 0; r < height; ++r) {
+      float* h = heights.ptr<float>(r);
+      float* v = valid.ptr<float>(r);
+      const double* row = z.data() + std::size_t(r) * std::size_t(width);
+      for (int col = 0; col < width; ++col) {
+        const bool ok = std::isfinite(row[col]);
+        h[col] = ok ? float(row[col] - origin) : 0.0f;
+        v[col] = ok ? 1.0f : 0.0f;
+      }
     }
   }
-}
 
-// The local mean of a map with holes: a Gaussian average over the valid points only (the blur of the heights
-// over the blur of the valid mask).
-cv::Mat SmoothValid(const cv::Mat& heights, const cv::Mat& valid, double sigma_px) {
-  cv::Mat sum, weight;
-  cv::GaussianBlur(heights, sum, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  cv::GaussianBlur(valid, weight, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  return sum / cv::max(weight, 1e-6);
+  // The local mean of the valid points into `out`: a Gaussian average over them only (the blur of the heights
+  // over the blur of the mask).
+  void Smooth(double sigma_px, cv::Mat& out) {
+    cv::GaussianBlur(heights, out, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(valid, work, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    for (int r = 0; r < out.rows; ++r) {
+      float* o = out.ptr<float>(r);
+      const float* w = work.ptr<float>(r);
+      for (int col = 0; col < out.cols; ++col) o[col] /= std::max(w[col], 1e-6f);
+    }
+  }
+};
+
+// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean.
+cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height, double origin) {
+  HoleyMap map(z, width, height, origin);
+  cv::Mat smooth, gx, gy;
+  map.Smooth(kSlopeSmoothingPx, smooth);
+  cv::Sobel(smooth, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::Sobel(smooth, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::magnitude(gx, gy, gx);
+  return gx;
 }
 
 // The rms of the heights about their smooth local mean, over a window around each valid point.
-cv::Mat LocalScatter(const std::vector<double>& z, int width, int height) {
-  cv::Mat heights, valid;
-  SplitValid(z, width, height, heights, valid);
-  cv::Mat residual = heights - SmoothValid(heights, valid, kSlopeSmoothingPx);
-  residual = residual.mul(residual).mul(valid);
-  cv::Mat sum, count;
+cv::Mat LocalScatter(const std::vector<double>& z, int width, int height, double origin) {
+  HoleyMap map(z, width, height, origin);
+  cv::Mat residual;
+  map.Smooth(kSlopeSmoothingPx, residual);
+  for (int r = 0; r < height; ++r) {
+    float* o = residual.ptr<float>(r);
+    const float* h = map.heights.ptr<float>(r);
+    const float* v = map.valid.ptr<float>(r);
+    for (int col = 0; col < width; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+  }
   const cv::Size box(kScatterWindowPx, kScatterWindowPx);
-  cv::boxFilter(residual, sum, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  cv::boxFilter(valid, count, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  cv::Mat scatter;
-  cv::sqrt(sum / cv::max(count, 1.0), scatter);
-  return scatter;
-}
-
-// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean.
-cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
-  cv::Mat heights, valid;
-  SplitValid(z, width, height, heights, valid);
-  heights = SmoothValid(heights, valid, kSlopeSmoothingPx);
-  cv::Mat gx, gy, slope;
-  cv::Sobel(heights, gx, CV_64F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::Sobel(heights, gy, CV_64F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::magnitude(gx, gy, slope);
-  return slope;
+  cv::boxFilter(residual, residual, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  cv::boxFilter(map.valid, map.work, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  for (int r = 0; r < height; ++r) {
+    float* o = residual.ptr<float>(r);
+    const float* count = map.work.ptr<float>(r);
+    for (int col = 0; col < width; ++col) o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+  }
+  return residual;
 }
 
 }  // namespace
@@ -332,86 +334,79 @@ FocusResult FocusAccumulator::Finish() const {
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
-  map.z_mm.assign(size, std::numeric_limits<double>::quiet_NaN());
-  result.u_z_mm.assign(size, kNaN);
+  map.z_mm.resize(size);
+  result.u_z_mm.resize(size);
+  result.quality.resize(size);
   result.window_px.assign(size, kNaN);
   result.texture = s.curves.texture;
   result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
+  const double origin = s.z.front();
 
-  // The largest window's heights everywhere; their slope says where the smaller windows are needed (the
-  // choice below), and only there are their peaks fitted.
+  // The largest window's heights everywhere; their slope says where the smaller windows serve instead (walls),
+  // and only there are their peaks fitted.
   const std::vector<WindowCurves>& curves = s.curves.windows;
-  std::vector<WindowHeights> heights(curves.size());
-  heights.back() = FitPeaks(curves.back(), s.z, s.options, s.width, s.height);
-  result.quality = heights.back().quality;
-  result.peak_index = curves.size() > 1 ? curves[1].index : curves.back().index;
-  const cv::Mat slope = SlopePerPixel(heights.back().z, s.width, s.height);
-  const double spread_limit = kSpreadLimitSteps * step;
-  const auto fits = [&](std::size_t w, std::size_t i) {
-    return slope.at<double>(int(i / std::size_t(s.width)), int(i % std::size_t(s.width))) * (curves[w].window / 2) <=
-           spread_limit;
-  };
-  if (curves.size() > 1) {
-    const std::size_t large = curves.size() - 1;
-    std::vector<std::uint8_t> need_middle(size, 0), need_small(size, 0);
-    for (std::size_t i = 0; i < size; ++i) {
-      if (!(result.quality[i] >= s.options.min_quality) || (fits(large, i) && std::isfinite(heights[large].z[i]))) {
-        continue;
-      }
-      need_middle[i] = 1;
-      need_small[i] = !fits(1, i);
+  const WindowCurves& large = curves.back();
+  result.peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
+    for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
+      const Peak p = FitPeak(large, i, s.z, s.options);
+      map.z_mm[i] = p.z;
+      result.u_z_mm[i] = static_cast<float>(p.u);
+      result.quality[i] = p.quality;
     }
-    heights[1] = FitPeaks(curves[1], s.z, s.options, s.width, s.height, &need_middle);
-    heights[0] = FitPeaks(curves[0], s.z, s.options, s.width, s.height, &need_small);
-  }
+  });
+  const cv::Mat slope = SlopePerPixel(map.z_mm, s.width, s.height, origin);
+  const double spread_limit = kSpreadLimitSteps * step;
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
+      const float* g = slope.ptr<float>(r);  // mm per px
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
-        double z = kNaN, u_noise = 0.0, window = 0.0;
         // The largest window's quality decides validity: its peak over mean is the least noisy, and a small
         // window's noise peak on a texture-free spot must not pass for a height.
         if (!(result.quality[i] >= s.options.min_quality)) continue;
-        if (s.curves.windows.size() == 1) {
-          z = heights[0].z[i], u_noise = heights[0].u[i], window = s.curves.windows[0].window;
-        } else {
-          // The largest window whose half-width spans at most half a step of height; else the mean of the
-          // smaller two (their errors on a wall are partly independent textures' weights).
-          const std::size_t large = heights.size() - 1;
-          if (fits(large, i) && std::isfinite(heights[large].z[i])) {
-            z = heights[large].z[i], u_noise = heights[large].u[i], window = s.curves.windows[large].window;
-          } else if (fits(1, i) || !std::isfinite(heights[0].z[i])) {
-            z = heights[1].z[i], u_noise = heights[1].u[i], window = s.curves.windows[1].window;
-          } else if (!std::isfinite(heights[1].z[i])) {
-            z = heights[0].z[i], u_noise = heights[0].u[i], window = s.curves.windows[0].window;
+        double z = map.z_mm[i], u_noise = result.u_z_mm[i], window = large.window;
+        const auto fits = [&](const WindowCurves& c) { return g[col] * (c.window / 2) <= spread_limit; };
+        // The largest window whose half-width spans at most half a step of height; else the mean of the
+        // smaller two (their errors on a wall are partly independent textures' weights).
+        if (curves.size() > 1 && !(fits(large) && std::isfinite(z))) {
+          const Peak middle = FitPeak(curves[1], i, s.z, s.options);
+          const Peak small = fits(curves[1]) ? Peak{} : FitPeak(curves[0], i, s.z, s.options);
+          if (fits(curves[1]) || !std::isfinite(small.z)) {
+            z = middle.z, u_noise = middle.u, window = curves[1].window;
+          } else if (!std::isfinite(middle.z)) {
+            z = small.z, u_noise = small.u, window = curves[0].window;
           } else {
-            z = 0.5 * (heights[0].z[i] + heights[1].z[i]);
-            u_noise = 0.5 * std::hypot(heights[0].u[i], heights[1].u[i]);
-            window = 0.5 * (s.curves.windows[0].window + s.curves.windows[1].window);
+            z = 0.5 * (small.z + middle.z);
+            u_noise = 0.5 * std::hypot(small.u, middle.u);
+            window = 0.5 * (curves[0].window + curves[1].window);
           }
         }
-        if (!std::isfinite(z)) continue;
         map.z_mm[i] = z;
-        result.window_px[i] = static_cast<float>(window);
-        // The model's part: the interpolation between images (a fraction of the step) and the heights mixed
-        // in the window on a slope (a fraction of the height spread over the window).
-        result.u_z_mm[i] = static_cast<float>(u_noise);
+        result.u_z_mm[i] = std::isfinite(z) ? static_cast<float>(u_noise) : kNaN;
+        if (std::isfinite(z)) result.window_px[i] = static_cast<float>(window);
       }
     }
   });
+  // Invalid: NaN height and uncertainty (the quality loop above skipped them).
+  for (std::size_t i = 0; i < size; ++i) {
+    if (!(result.quality[i] >= s.options.min_quality)) map.z_mm[i] = std::numeric_limits<double>::quiet_NaN();
+    if (!std::isfinite(map.z_mm[i])) result.u_z_mm[i] = kNaN;
+  }
   // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
   // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
   // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
-  const cv::Mat scatter = LocalScatter(map.z_mm, s.width, s.height);
+  const cv::Mat scatter = LocalScatter(map.z_mm, s.width, s.height, origin);
+  const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
+      const float* scatter_row = scatter.ptr<float>(r);
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
-        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter.at<double>(r, col);
-        const double u_step = kStepFraction * step;
+        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
         result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step));
       }
     }
