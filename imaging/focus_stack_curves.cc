@@ -1,6 +1,7 @@
 #include "imaging/focus_stack_curves.h"
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -122,28 +123,49 @@ const cv::Mat& WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure,
 
 // One image's measure `m` folded into one row of a window's curves; p1, p2: the measures of the two images before
 // it. Branch-free (selects), so that it vectorises.
-void FoldRow(WindowCurves& c, std::size_t row, int width, std::int32_t k, const float* m, const float* p1,
-             const float* p2) {
-  float* best = c.best.data() + row;
-  float* left2 = c.left2.data() + row;
-  float* left = c.left.data() + row;
-  float* right = c.right.data() + row;
-  float* right2 = c.right2.data() + row;
-  float* sum = c.sum.data() + row;
-  float* floor = c.floor.data() + row;
-  std::int32_t* index = c.index.data() + row;
-  for (int col = 0; col < width; ++col) {
+void FoldRow(WindowCurves& c, std::size_t row, int width, std::int32_t k, const float* __restrict m,
+             const float* __restrict p1, const float* __restrict p2) {
+  float* __restrict best = c.best.data() + row;
+  float* __restrict left2 = c.left2.data() + row;
+  float* __restrict left = c.left.data() + row;
+  float* __restrict right = c.right.data() + row;
+  float* __restrict right2 = c.right2.data() + row;
+  float* __restrict sum = c.sum.data() + row;
+  float* __restrict floor = c.floor.data() + row;
+  std::int32_t* __restrict index = c.index.data() + row;
+  int col = 0;
+#if CV_SIMD
+  // OpenCV's universal intrinsics: the selects below, a vector of pixels at a time (GCC does not vectorise the
+  // scalar loop: it keeps the selects as branches).
+  const cv::v_float32 nan = cv::vx_setall_f32(kNaN);
+  const cv::v_int32 kv = cv::vx_setall_s32(k), k1 = cv::vx_setall_s32(k - 1), k2 = cv::vx_setall_s32(k - 2);
+  constexpr int kLanes = cv::v_float32::nlanes;
+  for (; col + kLanes <= width; col += kLanes) {
+    const cv::v_float32 v = cv::vx_load(m + col), b = cv::vx_load(best + col);
+    const cv::v_int32 at = cv::vx_load(index + col);
+    const cv::v_float32 better = v > b;
+    const cv::v_float32 at1 = cv::v_reinterpret_as_f32(at == k1), at2 = cv::v_reinterpret_as_f32(at == k2);
+    cv::v_store(best + col, cv::v_select(better, v, b));
+    cv::v_store(index + col, cv::v_select(cv::v_reinterpret_as_s32(better), kv, at));
+    cv::v_store(left2 + col, cv::v_select(better, cv::vx_load(p2 + col), cv::vx_load(left2 + col)));
+    cv::v_store(left + col, cv::v_select(better, cv::vx_load(p1 + col), cv::vx_load(left + col)));
+    cv::v_store(right + col, cv::v_select(better, nan, cv::v_select(at1, v, cv::vx_load(right + col))));
+    cv::v_store(right2 + col, cv::v_select(better, nan, cv::v_select(at2, v, cv::vx_load(right2 + col))));
+    cv::v_store(sum + col, cv::vx_load(sum + col) + v);
+    cv::v_store(floor + col, cv::v_min(cv::vx_load(floor + col), v));
+  }
+  cv::vx_cleanup();
+#endif
+  for (; col < width; ++col) {
     const float v = m[col];
     const std::int32_t at = index[col];
-    const float r1 = at == k - 1 ? v : right[col];
-    const float r2 = at == k - 2 ? v : right2[col];
     const bool better = v > best[col];
-    best[col] = better ? v : best[col];
-    index[col] = better ? k : at;
-    left2[col] = better ? p2[col] : left2[col];
-    left[col] = better ? p1[col] : left[col];
-    right[col] = better ? kNaN : r1;
-    right2[col] = better ? kNaN : r2;
+    if (at == k - 1) right[col] = v;
+    if (at == k - 2) right2[col] = v;
+    if (better) {
+      best[col] = v, index[col] = k, left2[col] = p2[col], left[col] = p1[col];
+      right[col] = right2[col] = kNaN;
+    }
     sum[col] += v;
     floor[col] = std::min(floor[col], v);
   }
