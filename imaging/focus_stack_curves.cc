@@ -8,6 +8,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <new>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace fvm::imaging {
 namespace {
@@ -184,6 +189,22 @@ float PixelValue(const cv::Mat& image, int r, int col, int channel) {
 }
 
 }  // namespace
+
+template <typename T>
+T* HugePageAllocator<T>::allocate(std::size_t n) {
+  constexpr std::size_t kHugePage = std::size_t(2) << 20;
+  const std::size_t bytes = std::max<std::size_t>(n * sizeof(T), 1);
+  const bool huge = bytes >= kHugePage;
+  const std::size_t rounded = huge ? (bytes + kHugePage - 1) / kHugePage * kHugePage : bytes;
+  void* p = huge ? std::aligned_alloc(kHugePage, rounded) : std::malloc(rounded);
+  if (!p) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+  if (huge) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: without huge pages it runs as before
+#endif
+  return static_cast<T*>(p);
+}
+template struct HugePageAllocator<float>;
+template struct HugePageAllocator<std::int32_t>;
 
 void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body) {
   const int stripes = (rows + kStripeRows - 1) / kStripeRows;

@@ -10,6 +10,7 @@
 // run on OpenCV's thread pool.
 
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <vector>
 
@@ -20,14 +21,30 @@ namespace fvm::imaging {
 
 inline constexpr int kFocusBatch = 8;
 
+// Memory for the curves' arrays (hundreds of MB for a 4-megapixel stack) in 2 MB transparent huge pages where
+// Linux allows them: faulting in 4 kB pages one by one cost a fifth of the reconstruction's time.
+template <typename T>
+struct HugePageAllocator {
+  using value_type = T;
+  HugePageAllocator() = default;
+  template <typename U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  T* allocate(std::size_t n);
+  void deallocate(T* p, std::size_t) { std::free(p); }
+  template <typename U>
+  bool operator==(const HugePageAllocator<U>&) const { return true; }
+};
+template <typename T>
+using HugeVector = std::vector<T, HugePageAllocator<T>>;
+
 // One window's reduced focus curves (row-major, one value per pixel each).
 struct WindowCurves {
   int window = 5;
   bool gaussian = false;  // a Gaussian-weighted window (sigma 0.3 window) instead of a box
-  std::vector<float> best, left2, left, right, right2, sum, floor;
-  std::vector<std::int32_t> index;
+  HugeVector<float> best, left2, left, right, right2, sum, floor;
+  HugeVector<std::int32_t> index;
   // The measures of the last two images taken (carried from one batch to the next).
-  std::vector<float> previous2, previous;
+  HugeVector<float> previous2, previous;
 
   void Reset(int w, bool gaussian_window, std::size_t n);
 };

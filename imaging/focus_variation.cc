@@ -347,7 +347,8 @@ FocusResult FocusAccumulator::Finish() const {
   // and only there are their peaks fitted.
   const std::vector<WindowCurves>& curves = s.curves.windows;
   const WindowCurves& large = curves.back();
-  result.peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  result.peak_index.assign(peak_index.begin(), peak_index.end());
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
       const Peak p = FitPeak(large, i, s.z, s.options);
