@@ -32,7 +32,7 @@ constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // The large window is taken where the surface's height changes by at most this many steps over its half-width.
 constexpr double kSpreadLimitSteps = 0.5;
 constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
-// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeaks).
+// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeak).
 constexpr double kNarrowShare = 0.05;
 // The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
 // (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
@@ -395,11 +395,6 @@ FocusResult FocusAccumulator::Finish() const {
       }
     }
   });
-  // Invalid: NaN height and uncertainty (the quality loop above skipped them).
-  for (std::size_t i = 0; i < size; ++i) {
-    if (!(result.quality[i] >= s.options.min_quality)) map.z_mm[i] = std::numeric_limits<double>::quiet_NaN();
-    if (!std::isfinite(map.z_mm[i])) result.u_z_mm[i] = kNaN;
-  }
   // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
   // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
   // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
