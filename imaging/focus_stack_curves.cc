@@ -203,6 +203,17 @@ T* HugePageAllocator<T>::allocate(std::size_t n) {
 #endif
   return static_cast<T*>(p);
 }
+void AdviseHugePages(void* data, std::size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  constexpr std::uintptr_t kHugePage = std::uintptr_t(2) << 20;
+  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(data) + kHugePage - 1) / kHugePage * kHugePage;
+  const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(data) + bytes) / kHugePage * kHugePage;
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
+#else
+  (void)data, (void)bytes;
+#endif
+}
+
 template struct HugePageAllocator<float>;
 template struct HugePageAllocator<std::int32_t>;
 

@@ -37,6 +37,15 @@ struct HugePageAllocator {
 template <typename T>
 using HugeVector = std::vector<T, HugePageAllocator<T>>;
 
+// Reserves room for n elements in an ordinary vector (the result's maps) and advises huge pages over the whole
+// 2 MB pages inside it, before anything touches them.
+void AdviseHugePages(void* data, std::size_t bytes);
+template <typename T>
+void ReserveInHugePages(std::vector<T>& v, std::size_t n) {
+  v.reserve(n);
+  AdviseHugePages(v.data(), v.capacity() * sizeof(T));
+}
+
 // One window's reduced focus curves (row-major, one value per pixel each).
 struct WindowCurves {
   int window = 5;

@@ -250,19 +250,31 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
   return out;
 }
 
-// Heights (mm) with holes as float maps for the filters: relative to `origin` (so that float keeps the nm of
-// a stage tens of mm out), 0 in the holes, and the mask of the valid points. The maps are filtered in place;
-// float halves the memory (and the fresh pages) of double.
+// Float maps of the height map's size over memory in huge pages, reused from map to map: fresh 4 kB pages cost
+// more than the filters that fill them (a page fault per 4 kB on a virtual machine).
+struct MapBuffers {
+  int width = 0, height = 0;
+  HugeVector<float> storage[5];
+
+  cv::Mat operator[](int i) {
+    HugeVector<float>& v = storage[i];
+    v.resize(std::size_t(width) * std::size_t(height));
+    return cv::Mat(height, width, CV_32F, v.data());
+  }
+};
+
+// Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
+// keeps the nm of a stage tens of mm out), 0 in the holes, and the mask of the valid points.
 struct HoleyMap {
   cv::Mat heights, valid, work;
 
-  HoleyMap(const std::vector<double>& z, int width, int height, double origin)
-      : heights(height, width, CV_32F), valid(height, width, CV_32F) {
-    for (int r = 0; r < height; ++r) {
+  HoleyMap(const std::vector<double>& z, double origin, MapBuffers& buffers)
+      : heights(buffers[0]), valid(buffers[1]), work(buffers[2]) {
+    for (int r = 0; r < heights.rows; ++r) {
       float* h = heights.ptr<float>(r);
       float* v = valid.ptr<float>(r);
-      const double* row = z.data() + std::size_t(r) * std::size_t(width);
-      for (int col = 0; col < width; ++col) {
+      const double* row = z.data() + std::size_t(r) * std::size_t(heights.cols);
+      for (int col = 0; col < heights.cols; ++col) {
         const bool ok = std::isfinite(row[col]);
         h[col] = ok ? float(row[col] - origin) : 0.0f;
         v[col] = ok ? 1.0f : 0.0f;
@@ -283,35 +295,36 @@ struct HoleyMap {
   }
 };
 
-// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean.
-cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height, double origin) {
-  HoleyMap map(z, width, height, origin);
-  cv::Mat smooth, gx, gy;
+// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean (in buffer 4,
+// which the scatter below leaves alone).
+cv::Mat SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+  HoleyMap map(z, origin, buffers);
+  cv::Mat smooth = buffers[3], gx = buffers[4];
   map.Smooth(kSlopeSmoothingPx, smooth);
   cv::Sobel(smooth, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::Sobel(smooth, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::magnitude(gx, gy, gx);
+  cv::Sobel(smooth, map.work, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::magnitude(gx, map.work, gx);
   return gx;
 }
 
-// The rms of the heights about their smooth local mean, over a window around each valid point.
-cv::Mat LocalScatter(const std::vector<double>& z, int width, int height, double origin) {
-  HoleyMap map(z, width, height, origin);
-  cv::Mat residual;
+// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 3).
+cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+  HoleyMap map(z, origin, buffers);
+  cv::Mat residual = buffers[3];
   map.Smooth(kSlopeSmoothingPx, residual);
-  for (int r = 0; r < height; ++r) {
+  for (int r = 0; r < residual.rows; ++r) {
     float* o = residual.ptr<float>(r);
     const float* h = map.heights.ptr<float>(r);
     const float* v = map.valid.ptr<float>(r);
-    for (int col = 0; col < width; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+    for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
   }
   const cv::Size box(kScatterWindowPx, kScatterWindowPx);
   cv::boxFilter(residual, residual, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
   cv::boxFilter(map.valid, map.work, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  for (int r = 0; r < height; ++r) {
+  for (int r = 0; r < residual.rows; ++r) {
     float* o = residual.ptr<float>(r);
     const float* count = map.work.ptr<float>(r);
-    for (int col = 0; col < width; ++col) o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+    for (int col = 0; col < residual.cols; ++col) o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
   }
   return residual;
 }
@@ -338,11 +351,17 @@ FocusResult FocusAccumulator::Finish() const {
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
+  ReserveInHugePages(map.z_mm, size);
+  ReserveInHugePages(result.u_z_mm, size);
+  ReserveInHugePages(result.quality, size);
+  ReserveInHugePages(result.window_px, size);
+  ReserveInHugePages(result.peak_index, size);
+  ReserveInHugePages(result.texture, s.curves.texture.size());
   map.z_mm.resize(size);
   result.u_z_mm.resize(size);
   result.quality.resize(size);
   result.window_px.assign(size, kNaN);
-  result.texture = s.curves.texture;
+  result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
   result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
   const double origin = s.z.front();
@@ -361,7 +380,8 @@ FocusResult FocusAccumulator::Finish() const {
       result.quality[i] = p.quality;
     }
   });
-  const cv::Mat slope = SlopePerPixel(map.z_mm, s.width, s.height, origin);
+  MapBuffers buffers{s.width, s.height, {}};
+  const cv::Mat slope = SlopePerPixel(map.z_mm, origin, buffers);
   const double spread_limit = kSpreadLimitSteps * step;
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
@@ -398,7 +418,7 @@ FocusResult FocusAccumulator::Finish() const {
   // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
   // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
   // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
-  const cv::Mat scatter = LocalScatter(map.z_mm, s.width, s.height, origin);
+  const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
