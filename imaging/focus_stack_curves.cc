@@ -257,12 +257,15 @@ void FocusCurves::Take(const StackImage* grey, const StackImage* texture_images,
     const std::size_t plane = std::size_t(r1 - r0) * std::size_t(width);
     Scratch& scratch = ThreadScratch();
     scratch.measures.resize(std::size_t(count) * n_windows * plane);
-    const auto slot = [&](int j, std::size_t w) { return scratch.measures.data() + (std::size_t(j) * n_windows + w) * plane; };
+    const auto slot = [&](int j, std::size_t w) {
+      return scratch.measures.data() + (std::size_t(j) * n_windows + w) * plane;
+    };
     for (int j = 0; j < count; ++j) {
       const cv::Mat& per_pixel = PixelMeasure(images[std::size_t(j)], b0, b1, measure, scratch);
       for (std::size_t w = 0; w < n_windows; ++w) {
         const cv::Mat& m = WindowMeasure(per_pixel, measure, windows[w].window, windows[w].gaussian, scratch);
-        for (int r = r0; r < r1; ++r) std::copy_n(m.ptr<float>(r - b0), width, slot(j, w) + std::size_t(r - r0) * std::size_t(width));
+        for (int r = r0; r < r1; ++r)
+          std::copy_n(m.ptr<float>(r - b0), width, slot(j, w) + std::size_t(r - r0) * std::size_t(width));
       }
     }
     for (int r = r0; r < r1; ++r) {
@@ -275,7 +278,8 @@ void FocusCurves::Take(const StackImage* grey, const StackImage* texture_images,
           if (j == -2) return c.previous2.data() + row;
           return slot(j, w) + local;
         };
-        for (int j = 0; j < count; ++j) FoldRow(c, row, width, first + j, measure_row(j), measure_row(j - 1), measure_row(j - 2));
+        for (int j = 0; j < count; ++j)
+          FoldRow(c, row, width, first + j, measure_row(j), measure_row(j - 1), measure_row(j - 2));
         // Carry the last two measures to the next batch (previous2 first: with one image, it is the old previous).
         std::copy_n(measure_row(count - 2), width, c.previous2.data() + row);
         std::copy_n(measure_row(count - 1), width, c.previous.data() + row);

@@ -245,7 +245,8 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
     variance += d * d;
   }
   // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
-  out.u = narrow ? std::hypot(std::sqrt(variance), kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
+  out.u = narrow ? std::hypot(std::sqrt(variance),
+                              kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
                  : std::sqrt(variance);
   return out;
 }
@@ -324,7 +325,8 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& bu
   for (int r = 0; r < residual.rows; ++r) {
     float* o = residual.ptr<float>(r);
     const float* count = map.work.ptr<float>(r);
-    for (int col = 0; col < residual.cols; ++col) o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+    for (int col = 0; col < residual.cols; ++col)
+      o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
   }
   return residual;
 }
