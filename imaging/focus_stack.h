@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -33,5 +34,20 @@ struct StackImage {
             channels};
   }
 };
+
+// Copies a view's pixels into `image`, reusing its memory when the size and type repeat (a stack's images are
+// copied into the same few buffers, not into fresh pages each time).
+inline void CopyInto(const StackImageView& view, StackImage& image) {
+  image.width = view.width;
+  image.height = view.height;
+  image.channels = view.channels;
+  std::visit(
+      [&](auto span) {
+        using T = std::remove_const_t<typename decltype(span)::element_type>;
+        if (!std::holds_alternative<std::vector<T>>(image.pixels)) image.pixels = std::vector<T>();
+        std::get<std::vector<T>>(image.pixels).assign(span.begin(), span.end());
+      },
+      view.pixels);
+}
 
 }  // namespace fvm::imaging

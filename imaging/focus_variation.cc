@@ -12,28 +12,15 @@
 
 #include "core/input_error.h"
 #include "imaging/focus_peak.h"
+#include "imaging/focus_stack_curves.h"
 
 namespace fvm::imaging {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-// Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run
-// filter exactly the same bands and give the same bits.
-constexpr int kStripeRows = 32;
 
 std::string Describe(std::string_view name, int index) {
   return name.empty() ? "image " + std::to_string(index + 1) + " of the stack" : std::string(name);
-}
-
-cv::Mat WrapPixels(const StackImageView& image) {
-  return std::visit(
-      [&](auto span) {
-        using T = typename decltype(span)::element_type;
-        const int type = std::is_same_v<T, const std::uint8_t> ? CV_8U : std::is_same_v<T, const std::uint16_t> ? CV_16U : CV_32F;
-        // OpenCV never writes through this header; it only lacks a const Mat type.
-        return cv::Mat(image.height, image.width, CV_MAKETYPE(type, image.channels), const_cast<void*>(static_cast<const void*>(span.data())));
-      },
-      image.pixels);
 }
 
 std::size_t PixelCount(const StackImageView& image) {
@@ -44,81 +31,19 @@ std::size_t PixelCount(const StackImageView& image) {
 constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // The large window is taken where the surface's height changes by at most this many steps over its half-width.
 constexpr double kSpreadLimitSteps = 0.5;
-constexpr double kSlopeSmoothingPx = 2.0;
-constexpr double kGaussianWindowSigma = 0.3;
-// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeaks).
-constexpr double kNarrowShare = 0.05;  // per px of window: 0.9 px for 3, 1.5 px for 5  // sigma of the smoothing of the heights before their slope
-// The uncertainty model (see Finish), calibrated on rendered stacks for 95 % coverage of 1.96 u_z over z steps
-// of 0.5 to 2 blur sigmas and apertures 0.3 to 0.9: the measure's noise per pixel over its floor, the share of
-// the step the interpolation leaves, the share of the height spread in the window.
+constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
+// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeak).
+constexpr double kNarrowShare = 0.05;
+// The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
+// (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
+// floor, the share of the step the interpolation leaves, the share of the heights' local scatter, and for a
+// curve too narrow for the power fit (the 3-point log fit's error between images) a share of the step.
 constexpr double kNoiseScale = 0.2;
 constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.03;
-constexpr double kScatterScale = 1.35;
+constexpr double kStepFraction = 0.055;
+constexpr double kScatterScale = 0.9;
+constexpr double kNarrowStepFraction = 0.4;
 constexpr int kScatterWindowPx = 9;
-
-// The measure per pixel before it is averaged over a window: the modified Laplacian or the gradient energy; for
-// the variance the grey levels themselves (shifted by the band's mean: E[I^2] - E[I]^2 in float loses
-// everything to cancellation when the grey level is large against the contrast, as in 16-bit images).
-// Scratch images of one thread, kept from band to band and image to image: OpenCV reuses a Mat's memory when
-// the size and type repeat, and allocating (and faulting in) fresh pages for every band cost a tenth of the time.
-struct Scratch {
-  cv::Mat grey, dx, dy, per_pixel, window, mean_sq, values;
-};
-
-Scratch& ThreadScratch() {
-  thread_local Scratch scratch;
-  return scratch;
-}
-
-const cv::Mat& PixelMeasure(const cv::Mat& band, FocusMeasure measure, Scratch& b) {
-  band.convertTo(b.grey, CV_32F);
-  switch (measure) {
-    case FocusMeasure::kModifiedLaplacian:
-      cv::Sobel(b.grey, b.dx, CV_32F, 2, 0, 1, 1.0, 0.0, cv::BORDER_REFLECT);  // ksize 1: the bare [1 -2 1]
-      cv::Sobel(b.grey, b.dy, CV_32F, 0, 2, 1, 1.0, 0.0, cv::BORDER_REFLECT);
-      b.dx = cv::abs(b.dx);
-      b.dy = cv::abs(b.dy);
-      cv::add(b.dx, b.dy, b.per_pixel);
-      return b.per_pixel;
-    case FocusMeasure::kTenengrad:
-      cv::Sobel(b.grey, b.dx, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::Sobel(b.grey, b.dy, CV_32F, 0, 1, 3, 1.0, 0.0, cv::BORDER_REFLECT);
-      cv::multiply(b.dx, b.dx, b.dx);
-      cv::multiply(b.dy, b.dy, b.dy);
-      cv::add(b.dx, b.dy, b.per_pixel);
-      return b.per_pixel;
-    case FocusMeasure::kVariance:
-      cv::subtract(b.grey, cv::mean(b.grey)[0], b.per_pixel);
-      return b.per_pixel;
-  }
-  return b.per_pixel;
-}
-
-// The focus measure over window x window pixels (float, same size as the band). The band carries a margin of
-// rows beyond the rows that are kept (WindowReach), so that the filters see real neighbours there; at the
-// image's own edges they reflect.
-// `gaussian`: weighted by a Gaussian of sigma 0.3 window instead of evenly (the adaptive mode's wall windows:
-// the centre's own height weighs most, where a box mixes in the heights at its edge as much).
-const cv::Mat& WindowMeasure(const cv::Mat& pixel_measure, FocusMeasure measure, int window, bool gaussian,
-                             Scratch& b) {
-  const cv::Size box(window, window);
-  if (gaussian) {
-    const int side = 2 * window + 1;  // +-3.3 sigma
-    cv::GaussianBlur(pixel_measure, b.window, cv::Size(side, side), kGaussianWindowSigma * window, 0.0,
-                     cv::BORDER_REFLECT);
-  } else {
-    cv::boxFilter(pixel_measure, b.window, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-  }
-  if (measure == FocusMeasure::kVariance) {
-    cv::multiply(pixel_measure, pixel_measure, b.dx);
-    cv::boxFilter(b.dx, b.mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
-    cv::multiply(b.window, b.window, b.window);
-    cv::subtract(b.mean_sq, b.window, b.window);
-    cv::max(b.window, 0.0, b.window);
-  }
-  return b.window;
-}
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -133,19 +58,6 @@ double BlurExponent(FocusMeasure measure) {
       return 2.0;
   }
   return 2.0;
-}
-
-template <typename Body>
-void ForStripes(int rows, bool parallel, const Body& body) {
-  const int stripes = (rows + kStripeRows - 1) / kStripeRows;
-  const auto run = [&](const cv::Range& range) {
-    for (int s = range.start; s < range.end; ++s) body(s * kStripeRows, std::min(rows, (s + 1) * kStripeRows));
-  };
-  if (parallel) {
-    cv::parallel_for_(cv::Range(0, stripes), run);
-  } else {
-    run(cv::Range(0, stripes));
-  }
 }
 
 }  // namespace
@@ -182,37 +94,21 @@ void FocusVariationOptions::Check() const {
   }
 }
 
-// One window's focus curves, reduced as the images come: per pixel the largest measure so far, its image, the
-// measure in the images before and after it (NaN until seen), the sum and the smallest over all images (mean and
-// floor), and the previous image's measure.
-struct WindowCurves {
-  int window = 5;
-  bool gaussian = false;  // Gaussian-weighted window (the adaptive mode's small ones)
-  std::vector<float> best, left2, left, right, right2, sum, floor, previous2, previous;
-  std::vector<std::int32_t> index;
-
-  void Reset(int w, std::size_t n) {
-    window = w;
-    best.assign(n, 0.0f);
-    left2.assign(n, kNaN);
-    left.assign(n, kNaN);
-    right.assign(n, kNaN);
-    right2.assign(n, kNaN);
-    previous2.assign(n, kNaN);
-    sum.assign(n, 0.0f);
-    floor.assign(n, std::numeric_limits<float>::max());
-    previous.assign(n, kNaN);
-    index.assign(n, 0);
-  }
-};
-
 struct FocusAccumulator::State {
   FocusVariationOptions options;
   int width = 0, height = 0;
   std::vector<double> z;
-  std::vector<WindowCurves> windows;
-  std::vector<float> texture;  // the all-in-focus pixels: their values in the first window's best image
-  int texture_channels = 1;
+  FocusCurves curves;
+  // Images taken but not yet folded into the curves (a batch, see focus_stack_curves.h), copied into buffers
+  // that serve batch after batch; the colour images only when they are not the grey ones.
+  std::vector<StackImage> pending = std::vector<StackImage>(kFocusBatch), pending_colour = pending;
+  int pending_count = 0;
+  bool colour = false;
+
+  void Flush() {
+    curves.Take(pending.data(), colour ? pending_colour.data() : nullptr, pending_count);
+    pending_count = 0;
+  }
 };
 
 FocusAccumulator::FocusAccumulator(const FocusVariationOptions& options) : state_(std::make_unique<State>()) {
@@ -239,9 +135,9 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
       PixelCount(texture) != std::size_t(image.width) * std::size_t(image.height) * std::size_t(texture.channels)) {
     throw InputError(what + ": the colour image differs in size from the grey one or has not 1 or 3 channels");
   }
-  if (k > 0 && texture.channels != s.texture_channels) {
+  if (k > 0 && texture.channels != s.curves.texture_channels) {
     throw InputError(what + ": " + std::to_string(texture.channels) + " colour channel(s), unlike the first image's " +
-                     std::to_string(s.texture_channels));
+                     std::to_string(s.curves.texture_channels));
   }
   if (!std::isfinite(z_mm)) throw InputError(what + ": the z position is not a finite number");
   if (k == 0) {
@@ -253,18 +149,21 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     s.width = image.width;
     s.height = image.height;
     const std::size_t n = std::size_t(s.width) * std::size_t(s.height);
-    s.windows.clear();
+    FocusCurves& curves = s.curves;
+    curves = FocusCurves{};
+    curves.width = s.width;
+    curves.height = s.height;
+    curves.measure = s.options.measure;
+    curves.parallel = s.options.parallel;
     if (s.options.adaptive_window) {
       for (int w : kAdaptiveWindows) {
-        WindowCurves& c = s.windows.emplace_back();
-        c.Reset(w, n);
-        c.gaussian = w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1];
+        curves.windows.emplace_back().Reset(w, w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1], n);
       }
     } else {
-      s.windows.emplace_back().Reset(s.options.window, n);
+      curves.windows.emplace_back().Reset(s.options.window, false, n);
     }
-    s.texture_channels = texture.channels;
-    s.texture.assign(n * std::size_t(texture.channels), 0.0f);
+    curves.texture_channels = texture.channels;
+    curves.texture.assign(n * std::size_t(texture.channels), 0.0f);
   } else {
     if (image.width != s.width || image.height != s.height) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -284,175 +183,152 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   }
   s.z.push_back(z_mm);
 
-  const cv::Mat pixels = WrapPixels(image), texture_pixels = WrapPixels(texture);
-  // Derivative (1 px) plus the window's half-width (a Gaussian window's kernel reaches one window out):
-  // beyond that, a band's edge does not reach the rows it keeps.
-  int margin = 0;
-  for (const WindowCurves& c : s.windows) margin = std::max(margin, (c.gaussian ? c.window : c.window / 2) + 1);
-  const FocusMeasure measure = s.options.measure;
-  ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
-    const int b0 = std::max(0, r0 - margin), b1 = std::min(s.height, r1 + margin);
-    const cv::Mat band = pixels.rowRange(b0, b1);
-    Scratch& scratch = ThreadScratch();
-    const cv::Mat& per_pixel = PixelMeasure(band, measure, scratch);
-    for (std::size_t w = 0; w < s.windows.size(); ++w) {
-      WindowCurves& c = s.windows[w];
-      const cv::Mat& m = WindowMeasure(per_pixel, measure, c.window, c.gaussian, scratch);
-      cv::Mat& values = scratch.values;
-      if (w == 0) texture_pixels.rowRange(b0, b1).convertTo(values, CV_MAKETYPE(CV_32F, texture.channels));
-      const std::size_t channels = std::size_t(texture.channels);
-      for (int r = r0; r < r1; ++r) {
-        const float* row_m = m.ptr<float>(r - b0);
-        const float* row_g = w == 0 ? values.ptr<float>(r - b0) : nullptr;
-        const std::size_t row = std::size_t(r) * std::size_t(s.width);
-        for (int col = 0; col < s.width; ++col) {
-          const std::size_t i = row + std::size_t(col);
-          const float v = row_m[col];
-          if (c.index[i] == k - 1) c.right[i] = v;
-          if (c.index[i] == k - 2) c.right2[i] = v;
-          if (k == 0 || v > c.best[i]) {
-            c.best[i] = v;
-            c.index[i] = k;
-            c.left2[i] = c.previous2[i];
-            c.left[i] = c.previous[i];
-            c.right[i] = kNaN;
-            c.right2[i] = kNaN;
-            if (row_g) {
-              std::copy_n(row_g + std::size_t(col) * channels, channels, s.texture.begin() + std::ptrdiff_t(i * channels));
-            }
-          }
-          c.sum[i] += v;
-          c.floor[i] = std::min(c.floor[i], v);
-          c.previous2[i] = c.previous[i];
-          c.previous[i] = v;
-        }
-      }
-    }
-  });
+  if (k == 0) s.colour = colour != nullptr;
+  CopyInto(image, s.pending[std::size_t(s.pending_count)]);
+  if (s.colour) CopyInto(texture, s.pending_colour[std::size_t(s.pending_count)]);
+  if (++s.pending_count == kFocusBatch) s.Flush();
 }
 
 namespace {
 
-// One window's heights and their noise: the peak fit per pixel, and the change of its vertex when each of the
-// three measures moves by its noise (the floor of the curve, the measure far out of focus, over the window's
-// side: the sum of window^2 pixels of independent noise).
-struct WindowHeights {
-  std::vector<double> z;      // mm, NaN where invalid
-  std::vector<double> u;      // mm, the noise part of the uncertainty
-  std::vector<float> quality;
+// One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
+// change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
+// focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.
+struct Peak {
+  double z = std::numeric_limits<double>::quiet_NaN();
+  double u = std::numeric_limits<double>::quiet_NaN();
+  float quality = 0.0f;
 };
 
-WindowHeights FitPeaks(const WindowCurves& c, const std::vector<double>& z, const FocusVariationOptions& options,
-                       int width, int height) {
+Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
+             const FocusVariationOptions& options) {
   const int n = static_cast<int>(z.size());
-  const std::size_t size = c.best.size();
-  WindowHeights out;
-  out.z.assign(size, std::numeric_limits<double>::quiet_NaN());
-  out.u.assign(size, std::numeric_limits<double>::quiet_NaN());
-  out.quality.assign(size, 0.0f);
-  const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
-  const float min_quality = static_cast<float>(options.min_quality);
-  const double noise_scale = kNoiseScale / double(c.window);
-  ForStripes(height, options.parallel, [&](int r0, int r1) {
-    for (std::size_t i = std::size_t(r0) * std::size_t(width); i < std::size_t(r1) * std::size_t(width); ++i) {
-      const float mean = c.sum[i] / static_cast<float>(n);
-      const float quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
-      out.quality[i] = quality;
-      const int k = c.index[i];
-      if (!(quality >= min_quality)) continue;
-      // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user
-      // asks for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step
-      // of uncertainty.
-      if (k == 0 || k == n - 1) {
-        if (options.keep_end_peaks) out.z[i] = z[std::size_t(k)], out.u[i] = std::abs(z[1] - z[0]);
-        continue;
-      }
-      const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
-      const double sigma = noise_scale * std::max(double(c.floor[i]), 0.0);
-      const double floor_i = kFloorShare * c.floor[i];
-      // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
-      // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
-      // through the raw measures does better.
-      const bool narrow = std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
-      if (options.peak_fit == PeakFit::kPower && !narrow) {
-        double u_noise = 0.0;
-        out.z[i] = PowerVertex(z, k, f, kFloorShare * c.floor[i], power, sigma, &u_noise);
-        out.u[i] = u_noise;
-        continue;
-      }
-      // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
-      const auto vertex = [&](const std::array<double, 5>& g) {
-        std::array<double, 3> h = {g[1], g[2], g[3]};
-        if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
-          for (double& v : h) v = std::log(v);
-        }
-        return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
-      };
-      const double z0 = vertex(f);
-      out.z[i] = z0;
-      double variance = 0.0;
-      for (std::size_t j = 1; j < 4; ++j) {
-        if (!std::isfinite(f[j])) continue;
-        std::array<double, 5> g = f;
-        g[j] += sigma;
-        const double d = vertex(g) - z0;
-        variance += d * d;
-      }
-      out.u[i] = std::sqrt(variance);
+  Peak out;
+  const float mean = c.sum[i] / static_cast<float>(n);
+  out.quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
+  const int k = c.index[i];
+  if (!(out.quality >= static_cast<float>(options.min_quality))) return out;
+  // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user asks
+  // for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step of
+  // uncertainty.
+  if (k == 0 || k == n - 1) {
+    if (options.keep_end_peaks) out.z = z[std::size_t(k)], out.u = std::abs(z[1] - z[0]);
+    return out;
+  }
+  const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
+  const double sigma = kNoiseScale / double(c.window) * std::max(double(c.floor[i]), 0.0);
+  const double floor_i = kFloorShare * c.floor[i];
+  // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
+  // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
+  // through the raw measures does better.
+  const bool narrow = std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
+  if (options.peak_fit == PeakFit::kPower && !narrow) {
+    const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
+    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u);
+    return out;
+  }
+  // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
+  const auto vertex = [&](const std::array<double, 5>& g) {
+    std::array<double, 3> h = {g[1], g[2], g[3]};
+    if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
+      for (double& v : h) v = std::log(v);
     }
-  });
+    return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
+  };
+  out.z = vertex(f);
+  double variance = 0.0;
+  for (std::size_t j = 1; j < 4; ++j) {
+    if (!std::isfinite(f[j])) continue;
+    std::array<double, 5> g = f;
+    g[j] += sigma;
+    const double d = vertex(g) - out.z;
+    variance += d * d;
+  }
+  // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
+  out.u = narrow ? std::hypot(std::sqrt(variance),
+                              kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
+                 : std::sqrt(variance);
   return out;
 }
 
-// The local slope (height change per pixel, mm) of a map with holes: a Gaussian average over the valid points
-// only (the blur of the heights over the blur of the valid mask), then Sobel.
-// A map with holes as heights (0 in the holes) and a mask of its valid points.
-void SplitValid(const std::vector<double>& z, int width, int height, cv::Mat& heights, cv::Mat& valid) {
-  heights.create(height, width, CV_64F);
-  valid.create(height, width, CV_64F);
-  for (int r = 0; r < height; ++r) {
-    for (int col = 0; col < width; ++col) {
-      const double v = z[std::size_t(r) * std::size_t(width) + std::size_t(col)];
-      heights.at<double>(r, col) = std::isfinite(v) ? v : 0.0;
-      valid.at<double>(r, col) = std::isfinite(v) ? 1.0 : 0.0;
+// Float maps of the height map's size over memory in huge pages, reused from map to map: fresh 4 kB pages cost
+// more than the filters that fill them (a page fault per 4 kB on a virtual machine).
+struct MapBuffers {
+  int width = 0, height = 0;
+  HugeVector<float> storage[5];
+
+  cv::Mat operator[](int i) {
+    HugeVector<float>& v = storage[i];
+    v.resize(std::size_t(width) * std::size_t(height));
+    return cv::Mat(height, width, CV_32F, v.data());
+  }
+};
+
+// Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
+// keeps the nm of a stage tens of mm out), 0 in the holes, and the mask of the valid points.
+struct HoleyMap {
+  cv::Mat heights, valid, work;
+
+  HoleyMap(const std::vector<double>& z, double origin, MapBuffers& buffers)
+      : heights(buffers[0]), valid(buffers[1]), work(buffers[2]) {
+    for (int r = 0; r < heights.rows; ++r) {
+      float* h = heights.ptr<float>(r);
+      float* v = valid.ptr<float>(r);
+      const double* row = z.data() + std::size_t(r) * std::size_t(heights.cols);
+      for (int col = 0; col < heights.cols; ++col) {
+        const bool ok = std::isfinite(row[col]);
+        h[col] = ok ? float(row[col] - origin) : 0.0f;
+        v[col] = ok ? 1.0f : 0.0f;
+      }
     }
   }
+
+  // The local mean of the valid points into `out`: a Gaussian average over them only (the blur of the heights
+  // over the blur of the mask).
+  void Smooth(double sigma_px, cv::Mat& out) {
+    cv::GaussianBlur(heights, out, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(valid, work, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    for (int r = 0; r < out.rows; ++r) {
+      float* o = out.ptr<float>(r);
+      const float* w = work.ptr<float>(r);
+      for (int col = 0; col < out.cols; ++col) o[col] /= std::max(w[col], 1e-6f);
+    }
+  }
+};
+
+// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean (in buffer 4,
+// which the scatter below leaves alone).
+cv::Mat SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+  HoleyMap map(z, origin, buffers);
+  cv::Mat smooth = buffers[3], gx = buffers[4];
+  map.Smooth(kSlopeSmoothingPx, smooth);
+  cv::Sobel(smooth, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::Sobel(smooth, map.work, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+  cv::magnitude(gx, map.work, gx);
+  return gx;
 }
 
-// The local mean of a map with holes: a Gaussian average over the valid points only (the blur of the heights
-// over the blur of the valid mask).
-cv::Mat SmoothValid(const cv::Mat& heights, const cv::Mat& valid, double sigma_px) {
-  cv::Mat sum, weight;
-  cv::GaussianBlur(heights, sum, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  cv::GaussianBlur(valid, weight, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  return sum / cv::max(weight, 1e-6);
-}
-
-// The rms of the heights about their smooth local mean, over a window around each valid point.
-cv::Mat LocalScatter(const std::vector<double>& z, int width, int height) {
-  cv::Mat heights, valid;
-  SplitValid(z, width, height, heights, valid);
-  cv::Mat residual = heights - SmoothValid(heights, valid, kSlopeSmoothingPx);
-  residual = residual.mul(residual).mul(valid);
-  cv::Mat sum, count;
+// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 3).
+cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+  HoleyMap map(z, origin, buffers);
+  cv::Mat residual = buffers[3];
+  map.Smooth(kSlopeSmoothingPx, residual);
+  for (int r = 0; r < residual.rows; ++r) {
+    float* o = residual.ptr<float>(r);
+    const float* h = map.heights.ptr<float>(r);
+    const float* v = map.valid.ptr<float>(r);
+    for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+  }
   const cv::Size box(kScatterWindowPx, kScatterWindowPx);
-  cv::boxFilter(residual, sum, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  cv::boxFilter(valid, count, CV_64F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  cv::Mat scatter;
-  cv::sqrt(sum / cv::max(count, 1.0), scatter);
-  return scatter;
-}
-
-// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean.
-cv::Mat SlopePerPixel(const std::vector<double>& z, int width, int height) {
-  cv::Mat heights, valid;
-  SplitValid(z, width, height, heights, valid);
-  heights = SmoothValid(heights, valid, kSlopeSmoothingPx);
-  cv::Mat gx, gy, slope;
-  cv::Sobel(heights, gx, CV_64F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::Sobel(heights, gy, CV_64F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::magnitude(gx, gy, slope);
-  return slope;
+  cv::boxFilter(residual, residual, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  cv::boxFilter(map.valid, map.work, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  for (int r = 0; r < residual.rows; ++r) {
+    float* o = residual.ptr<float>(r);
+    const float* count = map.work.ptr<float>(r);
+    for (int col = 0; col < residual.cols; ++col)
+      o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+  }
+  return residual;
 }
 
 }  // namespace
@@ -464,6 +340,8 @@ FocusResult FocusAccumulator::Finish() const {
     throw InputError("focus variation: the stack has " + std::to_string(n) +
                      " image(s); at least 3 are needed (a focus peak needs an image on either side of it)");
   }
+  State& folding = *state_;  // the images still pending are folded in, which changes no result
+  folding.Flush();
   FocusResult result;
   HeightMap& map = result.height;
   map.size_x = s.width;
@@ -475,67 +353,82 @@ FocusResult FocusAccumulator::Finish() const {
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
-  map.z_mm.assign(size, std::numeric_limits<double>::quiet_NaN());
-  result.u_z_mm.assign(size, kNaN);
+  ReserveInHugePages(map.z_mm, size);
+  ReserveInHugePages(result.u_z_mm, size);
+  ReserveInHugePages(result.quality, size);
+  ReserveInHugePages(result.window_px, size);
+  ReserveInHugePages(result.peak_index, size);
+  ReserveInHugePages(result.texture, s.curves.texture.size());
+  map.z_mm.resize(size);
+  result.u_z_mm.resize(size);
+  result.quality.resize(size);
   result.window_px.assign(size, kNaN);
-  result.texture = s.texture;
-  result.texture_channels = s.texture_channels;
+  result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
+  result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
+  const double origin = s.z.front();
 
-  std::vector<WindowHeights> heights;
-  for (const WindowCurves& c : s.windows) heights.push_back(FitPeaks(c, s.z, s.options, s.width, s.height));
-  const WindowCurves& last = s.windows.back();
-  result.quality = heights.back().quality;
-  result.peak_index = s.windows.size() > 1 ? s.windows[1].index : last.index;
-  const cv::Mat slope = SlopePerPixel(heights.back().z, s.width, s.height);
+  // The largest window's heights everywhere; their slope says where the smaller windows serve instead (walls),
+  // and only there are their peaks fitted.
+  const std::vector<WindowCurves>& curves = s.curves.windows;
+  const WindowCurves& large = curves.back();
+  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  result.peak_index.assign(peak_index.begin(), peak_index.end());
+  ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
+    for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
+      const Peak p = FitPeak(large, i, s.z, s.options);
+      map.z_mm[i] = p.z;
+      result.u_z_mm[i] = static_cast<float>(p.u);
+      result.quality[i] = p.quality;
+    }
+  });
+  MapBuffers buffers{s.width, s.height, {}};
+  const cv::Mat slope = SlopePerPixel(map.z_mm, origin, buffers);
+  const double spread_limit = kSpreadLimitSteps * step;
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
+      const float* g = slope.ptr<float>(r);  // mm per px
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
-        const double g = slope.at<double>(r, col);  // mm per px
-        double z = kNaN, u_noise = 0.0, window = 0.0;
         // The largest window's quality decides validity: its peak over mean is the least noisy, and a small
         // window's noise peak on a texture-free spot must not pass for a height.
         if (!(result.quality[i] >= s.options.min_quality)) continue;
-        if (s.windows.size() == 1) {
-          z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
-        } else {
-          // The largest window whose half-width spans at most half a step of height; else the mean of the
-          // smaller two (their errors on a wall are partly independent textures' weights).
-          const std::size_t large = heights.size() - 1;
-          if (g * (s.windows[large].window / 2) <= kSpreadLimitSteps * step && std::isfinite(heights[large].z[i])) {
-            z = heights[large].z[i], u_noise = heights[large].u[i], window = s.windows[large].window;
-          } else if (g * (s.windows[1].window / 2) <= kSpreadLimitSteps * step || !std::isfinite(heights[0].z[i])) {
-            z = heights[1].z[i], u_noise = heights[1].u[i], window = s.windows[1].window;
-          } else if (!std::isfinite(heights[1].z[i])) {
-            z = heights[0].z[i], u_noise = heights[0].u[i], window = s.windows[0].window;
+        double z = map.z_mm[i], u_noise = result.u_z_mm[i], window = large.window;
+        const auto fits = [&](const WindowCurves& c) { return g[col] * (c.window / 2) <= spread_limit; };
+        // The largest window whose half-width spans at most half a step of height; else the mean of the
+        // smaller two (their errors on a wall are partly independent textures' weights).
+        if (curves.size() > 1 && !(fits(large) && std::isfinite(z))) {
+          const Peak middle = FitPeak(curves[1], i, s.z, s.options);
+          const Peak small = fits(curves[1]) ? Peak{} : FitPeak(curves[0], i, s.z, s.options);
+          if (fits(curves[1]) || !std::isfinite(small.z)) {
+            z = middle.z, u_noise = middle.u, window = curves[1].window;
+          } else if (!std::isfinite(middle.z)) {
+            z = small.z, u_noise = small.u, window = curves[0].window;
           } else {
-            z = 0.5 * (heights[0].z[i] + heights[1].z[i]);
-            u_noise = 0.5 * std::hypot(heights[0].u[i], heights[1].u[i]);
-            window = 0.5 * (s.windows[0].window + s.windows[1].window);
+            z = 0.5 * (small.z + middle.z);
+            u_noise = 0.5 * std::hypot(small.u, middle.u);
+            window = 0.5 * (curves[0].window + curves[1].window);
           }
         }
-        if (!std::isfinite(z)) continue;
         map.z_mm[i] = z;
-        result.window_px[i] = static_cast<float>(window);
-        // The model's part: the interpolation between images (a fraction of the step) and the heights mixed
-        // in the window on a slope (a fraction of the height spread over the window).
-        result.u_z_mm[i] = static_cast<float>(u_noise);
+        result.u_z_mm[i] = std::isfinite(z) ? static_cast<float>(u_noise) : kNaN;
+        if (std::isfinite(z)) result.window_px[i] = static_cast<float>(window);
       }
     }
   });
   // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
   // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
   // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
-  const cv::Mat scatter = LocalScatter(map.z_mm, s.width, s.height);
+  const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
+  const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
+      const float* scatter_row = scatter.ptr<float>(r);
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
-        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter.at<double>(r, col);
-        const double u_step = kStepFraction * step;
+        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
         result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step));
       }
     }

@@ -77,7 +77,8 @@ struct FocusResult {
   int texture_channels = 1;  // the window each height comes from (the mean of two where two are averaged)
 };
 
-// Takes the images of a stack in order. Not thread-safe itself; it parallelises each image over rows.
+// Takes the images of a stack in order. Not thread-safe itself; it copies them into a batch of a few images and
+// folds each batch into the curves in parallel stripes of rows (focus_stack_curves.h).
 class FocusAccumulator {
  public:
   explicit FocusAccumulator(const FocusVariationOptions& options);

@@ -72,6 +72,7 @@ struct RegionErrors {
   double rms_steps[3] = {0, 0, 0};
   double all_rms_steps = 0.0;
   double coverage = 0.0;        // share of |error| <= 1.96 u_z over the valid pixels
+  double region_coverage[3] = {0, 0, 0};
   double valid_share = 0.0;     // of the pixels compared
   std::size_t count[3] = {0, 0, 0};
 };
@@ -95,7 +96,7 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   const imaging::FocusResult result = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, fo);
   RegionErrors e;
   double sum[3] = {0, 0, 0};
-  std::size_t covered = 0, valid = 0, compared = 0;
+  std::size_t covered = 0, valid = 0, compared = 0, region_covered[3] = {0, 0, 0};
   const int border = 9;  // the largest window's reach, where it reflects at the image's edge
   for (int y = border; y < kSize - border; ++y) {
     for (int x = border; x < kSize - border; ++x) {
@@ -107,17 +108,23 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
       const double d = z - scene.truth.z_mm[i];
       sum[scene.region[i]] += d * d;
       ++e.count[scene.region[i]];
-      covered += std::abs(d) <= 1.96 * result.u_z_mm[i];
+      const bool inside = std::abs(d) <= 1.96 * result.u_z_mm[i];
+      covered += inside;
+      region_covered[scene.region[i]] += inside;
     }
   }
-  for (int r = 0; r < 3; ++r) e.rms_steps[r] = std::sqrt(sum[r] / double(e.count[r])) / step_mm;
+  for (int r = 0; r < 3; ++r) {
+    e.rms_steps[r] = std::sqrt(sum[r] / double(e.count[r])) / step_mm;
+    e.region_coverage[r] = double(region_covered[r]) / double(e.count[r]);
+  }
   e.all_rms_steps = std::sqrt((sum[0] + sum[1] + sum[2]) / double(valid)) / step_mm;
   e.coverage = double(covered) / double(valid);
   e.valid_share = double(valid) / double(compared);
   std::printf("step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
-              "coverage %.3f, valid %.4f\n",
+              "coverage %.3f (flat %.3f, wall %.3f, bottom %.3f), valid %.4f\n",
               step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
-              e.all_rms_steps, e.coverage, e.valid_share);
+              e.all_rms_steps, e.coverage, e.region_coverage[0], e.region_coverage[1], e.region_coverage[2],
+              e.valid_share);
   return e;
 }
 
@@ -128,8 +135,9 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
 //   the scene (1 um, NA 0.9) is held to the goal itself: 0.1 step per region (wall 0.098 measured);
 //   at 0.5 um steps the wall is 0.18 step (0.09 um: the error on a wall is in um, set by the texture's weights
 //   in the window, not by the step); at 2 um steps with NA 0.9 the blur grows by 2 px per step and the focus
-//   curve falls to its floor within one step: 0.235 step, undersampled (the old 3-point Gaussian default: 0.175); coverage is within 93-97 % only at 1 um,
-//   NA 0.9 (0.75 to 0.91 elsewhere).
+//   curve falls to its floor within one step: 0.235 step, undersampled (the old 3-point Gaussian default: 0.175);
+//   coverage is within 93-97 % at 1 um, NA 0.9 (0.964); elsewhere u_z still falls short, on the flat most
+//   (0.925 at NA 0.5, 0.88 at NA 0.7, 0.92 at 0.5 um steps, 0.81 at 2 um steps), held there.
 struct Case {
   double step_um, na;
   double max_all, max_region, min_coverage, max_coverage;
@@ -152,10 +160,10 @@ TEST_P(FocusAccuracy, PerRegionAndCoverage) {
 
 INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                          ::testing::Values(Case{1.0, 0.9, 0.09, 0.1, 0.93, 0.97},  // the scene
-                                           Case{1.0, 0.7, 0.1, 0.105, 0.7, 1.0},
-                                           Case{1.0, 0.5, 0.1, 0.115, 0.85, 1.0},
-                                           Case{0.5, 0.9, 0.155, 0.205, 0.75, 1.0},
-                                           Case{2.0, 0.9, 0.27, 0.29, 0.65, 1.0}),
+                                           Case{1.0, 0.7, 0.1, 0.105, 0.85, 0.97},
+                                           Case{1.0, 0.5, 0.1, 0.115, 0.9, 0.97},
+                                           Case{0.5, 0.9, 0.155, 0.205, 0.89, 0.97},
+                                           Case{2.0, 0.9, 0.27, 0.29, 0.77, 0.97}),
                          [](const auto& info) {
                            return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
                                   std::to_string(int(std::lround(info.param.na * 10)));

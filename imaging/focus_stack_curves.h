@@ -1,0 +1,83 @@
+#pragma once
+// The focus curves of a stack, reduced as its images come (used by focus_variation.cc): per pixel and per
+// window, the largest focus measure, its image, the measures of the two images on either side of it, the sum and
+// the smallest over all images (mean and floor). Nothing else of the curve is kept, so memory stays a few images
+// whatever the stack's depth.
+//
+// Speed: images are taken in batches of kFocusBatch. Per stripe of rows, the batch's measures are computed (one
+// modified Laplacian per image, shared by the windows) and each row's state is updated by all the batch's images
+// while it sits in the cache; the update is a branch-free loop over the row that the compiler vectorises. Stripes
+// run on OpenCV's thread pool.
+
+#include <cstdint>
+#include <cstdlib>
+#include <functional>
+#include <vector>
+
+#include "imaging/focus_stack.h"
+#include "imaging/focus_variation.h"
+
+namespace fvm::imaging {
+
+inline constexpr int kFocusBatch = 8;
+
+// Memory for the curves' arrays (hundreds of MB for a 4-megapixel stack) in 2 MB transparent huge pages where
+// Linux allows them: faulting in 4 kB pages one by one cost a fifth of the reconstruction's time.
+template <typename T>
+struct HugePageAllocator {
+  using value_type = T;
+  HugePageAllocator() = default;
+  template <typename U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  T* allocate(std::size_t n);
+  void deallocate(T* p, std::size_t) { std::free(p); }
+  template <typename U>
+  bool operator==(const HugePageAllocator<U>&) const { return true; }
+};
+template <typename T>
+using HugeVector = std::vector<T, HugePageAllocator<T>>;
+
+// Reserves room for n elements in an ordinary vector (the result's maps) and advises huge pages over the whole
+// 2 MB pages inside it, before anything touches them.
+void AdviseHugePages(void* data, std::size_t bytes);
+template <typename T>
+void ReserveInHugePages(std::vector<T>& v, std::size_t n) {
+  v.reserve(n);
+  AdviseHugePages(v.data(), v.capacity() * sizeof(T));
+}
+
+// One window's reduced focus curves (row-major, one value per pixel each).
+struct WindowCurves {
+  int window = 5;
+  bool gaussian = false;  // a Gaussian-weighted window (sigma 0.3 window) instead of a box
+  HugeVector<float> best, left2, left, right, right2, sum, floor;
+  HugeVector<std::int32_t> index;
+  // The measures of the last two images taken (carried from one batch to the next).
+  HugeVector<float> previous2, previous;
+
+  void Reset(int w, bool gaussian_window, std::size_t n);
+};
+
+struct FocusCurves {
+  int width = 0, height = 0;
+  FocusMeasure measure = FocusMeasure::kModifiedLaplacian;
+  bool parallel = true;
+  std::vector<WindowCurves> windows;
+  // The all-in-focus pixels: each pixel's value in the first window's best image (texture_channels each).
+  std::vector<float> texture;
+  int texture_channels = 1;
+  int taken = 0;  // images folded into the curves
+
+  // Folds `count` images (grey, and what the texture is made of: their colour, or null for the grey images
+  // themselves) into the curves; the first is image number `taken`.
+  void Take(const StackImage* grey, const StackImage* texture_images, int count);
+};
+
+// Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run
+// filter exactly the same bands and give the same bits.
+inline constexpr int kStripeRows = 32;
+
+// Calls body(first_row, end_row) for each stripe of kStripeRows rows, on OpenCV's thread pool when `parallel`.
+void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body);
+
+}  // namespace fvm::imaging
