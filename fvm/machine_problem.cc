@@ -31,7 +31,7 @@ void AddMachineOptions(CLI::App* sub, MachineArgs& args) {
   sub->add_option("--tracker", args.tracker, "tracker noise model for the weights")
       ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
       ->capture_default_str();
-  sub->add_flag("--unweighted", args.unweighted, "equal weights instead of the tracker's covariances");
+  sub->add_flag("--unweighted", args.unweighted, "equal weights instead of the readings' covariances (their cxx..czz columns, or the tracker's noise model)");
   sub->add_option("--validate", args.validate, "other readings to judge the model on (never fitted)");
   AddMaxErrorOption(sub, args);
 }

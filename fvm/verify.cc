@@ -29,7 +29,6 @@ void Run(const VerifyArgs& args) {
   const std::optional<artefacts::TrackerReadings>& validation = problem.validation;
   const stage::AxisChain& chain = problem.chain;
   const stage::IdentificationOptions& options = problem.options;
-  const stage::TrackerNoise& noise = problem.noise;
   const bool weighted = problem.weighted;
   const std::vector<stage::Observation>& observations = problem.observations;
 
@@ -52,7 +51,7 @@ void Run(const VerifyArgs& args) {
   doc["basis"] = args.basis;
   doc["order"] = chosen.order;
   doc["points"] = readings.points.size();
-  doc["weights"] = weighted ? "tracker " + noise.name : std::string("equal");
+  doc["weights"] = problem.WeightsName();
   doc["initial"] = ErrorJson(v.initial);
   doc["final"] = ErrorJson(v.final);
   doc["final"]["rms_um"] = r.rms_mm * 1e3;
@@ -96,7 +95,7 @@ void Run(const VerifyArgs& args) {
     fmt::print("{}\n", doc.dump(2));
   } else {
     fmt::print("verified {} {} points ({} weights), order {} {}{}:\n", readings.points.size(), chain.code,
-               weighted ? "tracker " + noise.name : std::string("equal"), chosen.order, args.basis,
+               problem.WeightsName(), chosen.order, args.basis,
                fits.size() > 1 ? fmt::format(" (chosen by {})", verified.ChosenBy()) : "");
     fmt::print("  volumetric error   initial max {:.1f} / mean {:.1f} / min {:.1f} um   final max {:.1f} / mean {:.1f} / min {:.1f} um\n",
                v.initial.max_um, v.initial.mean_um, v.initial.min_um, v.final.max_um, v.final.mean_um, v.final.min_um);
@@ -123,7 +122,8 @@ void RegisterVerify(CLI::App& app) {
   AddDetails(sub,
              "Identifies the 21 geometric error functions of a three-axis machine (polynomials of --order in --basis) "
              "and the tracker pose from readings at commanded points, each weighted by the tracker's noise model "
-             "(a 3x3 covariance per point). Volumetric error: distance between a reading and the model's prediction "
+             "(a 3x3 covariance per point), or by its own covariance where the readings carry one (cxx..czz, as "
+             "fvm multilaterate --verify-readings writes). Volumetric error: distance between a reading and the model's prediction "
              "of the ideal machine (initial) or of the identified one (final), in the tracker frame. Error functions "
              "only matter up to their value at each axis' origin, which the tracker pose absorbs: the pose is "
              "estimated jointly unless --pose holds it, and terms the data cannot separate are fixed and named.");
