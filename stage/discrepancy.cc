@@ -17,6 +17,7 @@
 #include "stage/outlier_flagging.h"
 #include "stage/residual_findings.h"
 #include "stage/stitched_frame.h"
+#include "stage/unexplained_remainder.h"
 #include "stage/validation.h"
 
 namespace fvm::stage {
@@ -538,43 +539,14 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   }
   for (const Applied& a : applied) d.steps.push_back(a.step);
 
-  // Do the identification data fit to noise now? Not while a candidate the held-out placements refused still
-  // explains part of them significantly, nor while they stay far above the noise between neighbouring calottes
-  // (which no smooth pattern reaches: twice that per coordinate is far beyond chance for a batch's 100+ equations).
-  // Then nothing else is named for what is left: the turn of the held-out frames, above all, would take the pattern
-  // a drift leaves on placements measured in order (perpendicular to each bar, growing along it).
-  const double noise_mm = NeighbourNoise(fit.residuals, problem.identify);
-  const double dof = std::max(1.0, 3.0 * static_cast<double>(fit.residuals.size()) - fit.calibration.layout.NumFree());
-  const double left_mm = std::sqrt(ResidualSquares(fit.residuals) / dof);
-  const bool above_noise = noise_mm > 0 && left_mm > 2.0 * noise_mm;
-  const auto likeliest = [&](const std::vector<std::string>& names) {
-    std::string also;
-    for (size_t k = 1; k < names.size(); ++k) also += (also.empty() ? "" : ", ") + names[k];
-    return fmt::format("the likeliest cause is the refused {}{}, which these data cannot show on its own (see the notes)",
-                       names.front(), also.empty() ? "" : " (also refused: " + also + ")");
-  };
   std::vector<std::string> refused_now;
   for (const Candidate* c : refused) refused_now.push_back(Named(*c));
-  const ResidualSummary fit_summary = Summarize(fit.residuals);
-  if (!refused.empty() || above_noise) {
-    d.unexplained = fmt::format(
-        "unexplained: {:.2f} um rms per coordinate remains in the identification residuals ({:.1f} times the noise "
-        "between neighbouring calottes, {:.2f} um){}; {}. No other effect is named for it",
-        left_mm * 1e3, noise_mm > 0 ? left_mm / noise_mm : 0.0, noise_mm * 1e3,
-        refused.empty() ? "" : ", and a candidate the held-out placements refused still explains part of it significantly",
-        refused.empty() ? "it is a shape neither the model nor the listed effects take: try a higher model order"
-                        : likeliest(refused_now));
-  } else if (!ever_refused.empty()) {
-    // A candidate refused earlier left its pattern where the identification data cannot see it any more (later
-    // effects took it there) but the held-out placements still do: the turn test would name it frame_rotation.
-    if (validation.count > 0 && validation.mean_mm > 2.0 * fit_summary.mean_mm) {
-      d.unexplained = fmt::format(
-          "unexplained: the held-out placements keep {:.2f} um mean residual against {:.2f} um for the identification "
-          "placements; {}. The turn of the held-out frames is not tested: it would take the pattern a refused candidate "
-          "leaves on placements measured in order",
-          validation.mean_mm * 1e3, fit_summary.mean_mm * 1e3, likeliest(ever_refused));
-    }
-  } else if (turns_testable && step <= kMostSteps) {
+  const Remainder remainder = JudgeRemainder(fit.residuals, fit.calibration.layout.NumFree(), problem.identify,
+                                             refused_now, ever_refused, validation);
+  d.unexplained = remainder.unexplained;
+  // Where the data do not fit to noise, nothing else is named for what is left: the turn of the held-out frames,
+  // above all, would take the pattern a drift leaves on placements measured in order.
+  if (remainder.fits_noise && turns_testable && step <= kMostSteps) {
     // The identification data fit to noise now: do the held-out placements turn about their first tiles?
     const double alpha_step = options.alpha / std::pow(2.0, step);
     std::optional<DriftCorrection> drift;
@@ -588,44 +560,9 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, drift, alpha_step);
     if (applied.empty()) d.candidates.push_back(turn.score);
     if (turn.score.significant) {
-      DiagnosisStep s;
-      s.effect = "frame_rotation";
-      s.component = "z";
-      double yaw_sq = 0, u_sq = 0;
-      for (const PlacementTurn& t : turn.turns) {
-        const Eigen::Vector3d u = t.predicted.diagonal().cwiseMax(0.0).cwiseSqrt();
-        const std::string name = static_cast<size_t>(t.group) < validate.groups.size() ? validate.groups[static_cast<size_t>(t.group)]
-                                                                                      : std::to_string(t.group);
-        d.turns.push_back({name, t.rotation, u});
-        yaw_sq += t.rotation.z() * t.rotation.z();
-        u_sq += u.z() * u.z();
-      }
-      // The rms yaw over the placements less what their own noise adds, and the standard uncertainty of that rms.
-      const double count = static_cast<double>(std::max<size_t>(1, turn.turns.size()));
-      s.size = std::sqrt(std::max(0.0, yaw_sq - u_sq) / count) * 1e6;
-      s.size_u = std::sqrt(u_sq / count / count) * 1e6;
-      s.size_unit = "urad";
-      s.before = s.after = Summarize(fit.residuals);
-      s.validation_before = validation;
-      s.validation_after = Summarize(turn.residuals_after);
-      s.candidates = {turn.score};
-      const std::vector<std::string> turn_terms = TurnCoefficients(fit.calibration.layout);
-      std::string terms;
-      for (const std::string& t : turn_terms) terms += (terms.empty() ? "" : ", ") + t;
-      s.explanation = fmt::format(
-          "The held-out placements' residuals grow perpendicular to, and in proportion to, their distance from the "
-          "first tile: each stitched measurement is turned about its first tile ({:.1f} +- {:.1f} urad rms yaw over {} "
-          "placements). The instrument registers tiles by translation, so a mosaic keeps the orientation the stage "
-          "had at its first tile; identification placements that share a start share that turn and the model's "
-          "constant terms absorb it, so only placements that start elsewhere show it. {}",
-          s.size, s.size_u, turn.turns.size(),
-          turn_terms.empty()
-              ? "This model has no rotation terms that vary over the stage: a model of order 1 or more (27, 42) can "
-                "tell the turn at each first tile."
-              : fmt::format("fvm calibrate --stitched-frame rotated (the default) turns each placement by the model's own "
-                            "{}.", terms));
-      validation = s.validation_after;
-      d.steps.push_back(s);
+      d.steps.push_back(FrameRotationStep(turn, fit.calibration.layout, Summarize(fit.residuals), validation,
+                                          validate.groups, &d.turns));
+      validation = d.steps.back().validation_after;
     }
   }
 

@@ -34,4 +34,11 @@ struct DriftCorrection {
 TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
                           const std::optional<DriftCorrection>& drift, double alpha_each);
 
+// The diagnosis step a significant turn test makes: the rms yaw (less what the noise adds) with its uncertainty,
+// the residuals with each placement's turn taken out, and what to do about it with this `layout`. Each placement's
+// turn goes to `turns`, named by `groups`. `fit` and `validation`: the identification and held-out residuals so far.
+DiagnosisStep FrameRotationStep(const TurnTest& turn, const ParameterLayout& layout, const ResidualSummary& fit,
+                                const ResidualSummary& validation, const std::vector<std::string>& groups,
+                                std::vector<PlacementTurnFinding>* turns);
+
 }  // namespace fvm::stage
