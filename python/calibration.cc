@@ -10,6 +10,7 @@
 #include <set>
 
 #include "artefacts/io/batch.h"
+#include "artefacts/io/raw_export_batch.h"
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
@@ -108,7 +109,8 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
                         const std::string& anchor, const std::string& loss, double loss_scale_um,
                         const std::string& stitched_frame, int threads,
                         const std::optional<std::vector<std::string>>& identify,
-                        const std::optional<std::vector<std::string>>& validate, bool allow_unconverged) {
+                        const std::optional<std::vector<std::string>>& validate, bool allow_unconverged,
+                        const std::string& artefact) {
   artefacts::Batch batch;
   std::string source;
   if (py::isinstance<py::dict>(batch_arg)) {
@@ -118,7 +120,10 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
     if (identify || validate) throw InputError("identify / validate go with a batch of arrays: a directory has batch.json");
     source = py::str(batch_arg);
     py::gil_scoped_release release;
-    batch = artefacts::ReadBatch(source);
+    // Centre exports, or the instrument's raw surface exports (X3P, AL3D, SDF, TIFF) searched for the artefact's
+    // calottes, as `fvm calibrate DIR --artefact NAME` does.
+    batch = artefacts::HoldsRawExports(source) ? artefacts::ReadRawExportBatch(source, {artefact}).batch
+                                               : artefacts::ReadBatch(source);
   }
   workflows::CalibrateOptions options;
   options.model.model = py::str(model);
@@ -273,9 +278,11 @@ void BindCalibration(py::module_& m) {
   m.def("calibrate", &Calibrate, py::arg("batch"), py::arg("model") = "27", py::arg("terms") = "",
         py::arg("anchor") = "none", py::arg("loss") = "none", py::arg("loss_scale_um") = 5.0,
         py::arg("stitched_frame") = "rotated", py::arg("threads") = 0, py::arg("identify") = std::nullopt,
-        py::arg("validate") = std::nullopt, py::arg("allow_unconverged") = false,
+        py::arg("validate") = std::nullopt, py::arg("allow_unconverged") = false, py::arg("artefact") = "bar17",
         "Identifies the stage model (9, 15, 27 or 42 parameters, or `terms`) from a batch, as `fvm calibrate BATCH "
-        "--model N` does: a batch directory (pairs <placement>.stitched.csv / .free.csv, optional batch.json), or "
+        "--model N` does: a batch directory (pairs <placement>.stitched.csv / .free.csv, optional batch.json; or "
+        "the raw surface exports <placement>.stitched.x3p / .free.x3p etc., searched for the calottes of "
+        "`artefact`), or "
         "a dict {name: {'ids': [...], 'stitched': N x 3, 'free': N x 3}} with optional identify / validate lists "
         "of names. Raises fvm.InputError for a bad batch or a model it cannot carry, fvm.NotConvergedError when the "
         "solver did not converge (unless allow_unconverged).\n\nExample:\n"

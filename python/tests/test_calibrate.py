@@ -86,3 +86,15 @@ def test_bad_batches_raise_the_command_lines_messages(tmp_path):
         fvm.calibrate(str(SAMPLE), model=8)
     with pytest.raises(fvm.InputError, match="both identified and validated"):
         fvm.calibrate({"a": {"ids": [1, 2, 3], "stitched": np.eye(3), "free": np.eye(3)}}, identify=["a"], validate=["a"])
+
+
+def test_raw_surface_exports_give_the_command_lines_calibration(tmp_path):
+    # A batch of the instrument's raw X3P exports (simulated, coarse 0.1 mm pixels to keep it to seconds): the
+    # calottes are searched in each surface as `fvm calibrate DIR` does, so the parameters are the same bits.
+    raw = tmp_path / "raw"
+    run_cli("simulate", "fvm-batch", "-o", raw, "--seed", "7", "--surfaces", "x3p", "--surface-pixel-mm", "0.1")
+    out, _ = run_cli("calibrate", raw, "--model", "27", "--json")
+    cli = json.loads(out)
+    p = fvm.calibrate(str(raw), model=27).parameters
+    assert p["names"] == [q["name"] for q in cli["parameters"]]
+    assert p["values"].tolist() == [q["value"] for q in cli["parameters"]]
