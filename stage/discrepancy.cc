@@ -349,8 +349,6 @@ double ResidualSquares(const std::vector<Eigen::Vector3d>& residuals) {
   return s;
 }
 
-}  // namespace
-
 // A candidate's name as the notes and the steps give it: the effect and its component.
 std::string Named(const Candidate& c) {
   return c.score.component.empty() ? c.score.effect : c.score.effect + " " + c.score.component;
@@ -370,6 +368,8 @@ std::pair<const Candidate*, double> MostlyThePatternOf(const Candidate& c, const
   }
   return {most, most_share};
 }
+
+}  // namespace
 
 Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
                    const DiagnosisOptions& options) {
@@ -441,6 +441,10 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     if (step == 1) d.candidates = scores;
     bool accepted = false;
     refused.clear();
+    const auto refuse = [&](const Candidate& c) {
+      refused.push_back(&c);
+      if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
+    };
     for (const Candidate& c : candidates) {
       if (!c.score.significant) break;
       Applied a = MakeApplied(c, problem, fit);
@@ -464,8 +468,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
                                               "anything else that grows along it; measuring every other placement "
                                               "backwards shows the drift at the shared start"
                                             : ""));
-        refused.push_back(&c);
-        if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
+        refuse(c);
         continue;
       }
       // An effect that is mostly the pattern of one the held-out placements refused would take what that one left
@@ -477,8 +480,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
                                       "({:.2f} -> {:.2f} um): it would take what that one leaves; not named",
                                       step, Named(c), 100 * share, Named(*other), validation.mean_mm * 1e3,
                                       next_validation.mean_mm * 1e3));
-        refused.push_back(&c);
-        if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
+        refuse(c);
         continue;
       }
       if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem.layout, refit.calibration);

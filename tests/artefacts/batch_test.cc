@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/input_error.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

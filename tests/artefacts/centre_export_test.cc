@@ -8,7 +8,7 @@
 
 #include "core/file_io.h"
 #include "core/input_error.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

@@ -12,7 +12,7 @@
 #include "artefacts/io/machine_truth_file.h"
 #include "core/input_error.h"
 #include "stage/pose.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "artefacts/simulation/machine_tool_simulation.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

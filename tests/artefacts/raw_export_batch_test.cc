@@ -10,7 +10,7 @@
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "artefacts/simulation/raw_export_simulation.h"
 #include "imaging/io/surface_file.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

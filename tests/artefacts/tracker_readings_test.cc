@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "core/input_error.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::artefacts {
 namespace {

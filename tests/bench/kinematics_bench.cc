@@ -4,7 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "stage/parameter_layout.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

@@ -14,7 +14,7 @@
 
 #include "stage/calibration.h"
 #include "stage/scan_correction.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

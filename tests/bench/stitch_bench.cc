@@ -72,7 +72,7 @@ BENCHMARK_CAPTURE(BM_RegisterGrid, published_225_tiles_one_thread, 15, true, tru
 // px for a nominal 297, a printed grid that repeats): what fvm stitch does (pairs on the thread pool) against the
 // same on one thread, the baseline. Counters: pairs accepted and the mean overlap correlation at the positions.
 #include "imaging/overlap_correlation.h"
-#include "tests/imaging/starrynight_strip.h"
+#include "tests/support/starrynight_strip.h"
 
 namespace {
 

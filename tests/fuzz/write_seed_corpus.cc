@@ -14,7 +14,7 @@
 #include "imaging/io/tile_image.h"
 #include "imaging/io/x3p.h"
 #include "imaging/point_cloud.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/surface_samples.h"
 
 namespace {
 

@@ -23,8 +23,8 @@
 #include "imaging/io/x3p.h"
 #include "stage/calibration.h"
 #include "stage/io/calibration_file.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/fvm/run_fvm.h"
+#include "tests/support/test_support.h"
+#include "tests/support/run_fvm.h"
 
 namespace fvm {
 namespace {

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "tests/artefacts/test_support.h"
-#include "tests/fvm/run_fvm.h"
+#include "tests/support/test_support.h"
+#include "tests/support/run_fvm.h"
 
 namespace fvm::testing {
 namespace {

@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "tests/artefacts/test_support.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/test_support.h"
+#include "tests/support/surface_samples.h"
 
 namespace fvm::imaging {
 namespace {

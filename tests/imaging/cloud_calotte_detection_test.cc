@@ -12,7 +12,7 @@
 
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/simulation/calotte_surface.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::imaging {
 namespace {

@@ -15,8 +15,8 @@
 #include "artefacts/io/centre_export.h"
 #include "imaging/io/point_cloud_io.h"
 #include "imaging/io/x3p.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/fvm/run_fvm.h"
+#include "tests/support/test_support.h"
+#include "tests/support/run_fvm.h"
 
 namespace fvm {
 namespace {

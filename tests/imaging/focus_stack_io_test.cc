@@ -15,7 +15,7 @@
 #include "imaging/io/focus_stack_files.h"
 #include "imaging/io/focus_stack_io.h"
 #include "imaging/focus_variation.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm {
 namespace {

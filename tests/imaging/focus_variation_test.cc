@@ -13,7 +13,7 @@
 #include "artefacts/simulation/calotte_surface.h"
 #include "artefacts/simulation/focus_stack_render.h"
 #include "imaging/focus_variation.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::imaging {
 namespace {

@@ -13,8 +13,8 @@
 #include "imaging/io/pcd_file.h"
 #include "imaging/io/ply_file.h"
 #include "imaging/io/point_cloud_io.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/test_support.h"
+#include "tests/support/surface_samples.h"
 
 namespace fvm::imaging {
 namespace {

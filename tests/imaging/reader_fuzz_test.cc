@@ -17,8 +17,8 @@
 #include "imaging/io/sdf.h"
 #include "imaging/io/x3p.h"
 #include "imaging/io/zip_archive.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/test_support.h"
+#include "tests/support/surface_samples.h"
 
 namespace fvm::imaging {
 namespace {

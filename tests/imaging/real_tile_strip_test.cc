@@ -9,7 +9,7 @@
 #include <cstdio>
 
 #include "imaging/overlap_correlation.h"
-#include "tests/imaging/starrynight_strip.h"
+#include "tests/support/starrynight_strip.h"
 
 namespace fvm::imaging {
 namespace {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "imaging/io/surface_file.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/test_support.h"
+#include "tests/support/surface_samples.h"
 
 namespace fvm::imaging {
 namespace {

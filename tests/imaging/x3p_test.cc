@@ -12,8 +12,8 @@
 #include "imaging/height_map.h"
 #include "imaging/io/md5.h"
 #include "imaging/io/zip_archive.h"
-#include "tests/artefacts/test_support.h"
-#include "tests/imaging/surface_samples.h"
+#include "tests/support/test_support.h"
+#include "tests/support/surface_samples.h"
 
 namespace fvm::imaging {
 namespace {

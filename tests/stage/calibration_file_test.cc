@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "core/input_error.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

@@ -12,7 +12,7 @@
 #include "artefacts/batch_observations.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "stage/fvm_stage_models.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

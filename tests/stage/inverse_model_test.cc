@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

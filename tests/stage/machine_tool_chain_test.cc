@@ -5,7 +5,7 @@
 #include <Eigen/LU>
 
 #include "stage/parameter_layout.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "stage/parameter_layout.h"
 #include "tests/stage/published_model.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "stage/identification.h"
-#include "tests/stage/test_models.h"
+#include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {

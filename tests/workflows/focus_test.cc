@@ -7,7 +7,7 @@
 
 #include "artefacts/simulation/focus_stack_render.h"
 #include "imaging/io/focus_stack_io.h"
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::workflows {
 namespace {

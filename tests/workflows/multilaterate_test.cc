@@ -5,7 +5,7 @@
 #include <Eigen/Cholesky>
 #include <fstream>
 
-#include "../artefacts/test_support.h"
+#include "tests/support/test_support.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "core/file_io.h"
 #include "core/number_text.h"

@@ -4,7 +4,7 @@
 
 #include <set>
 
-#include "../artefacts/test_support.h"
+#include "tests/support/test_support.h"
 #include "artefacts/geometry/test_piece.h"
 #include "artefacts/simulation/test_piece_simulation.h"
 

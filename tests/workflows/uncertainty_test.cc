@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../artefacts/test_support.h"
+#include "tests/support/test_support.h"
 #include "artefacts/io/batch.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "core/input_error.h"

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "../artefacts/test_support.h"
+#include "tests/support/test_support.h"
 #include "stage/monte_carlo.h"
 #include "tests/workflows/simulated_machine.h"
 

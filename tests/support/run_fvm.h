@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "tests/artefacts/test_support.h"
+#include "tests/support/test_support.h"
 
 namespace fvm::testing {
 
