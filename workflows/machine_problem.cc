@@ -62,7 +62,7 @@ artefacts::Workspace WorkspaceOf(const MachineProblemOptions& options, const art
 
 std::string MachineProblem::WeightsName() const {
   if (!weighted) return "equal";
-  return !readings.points.empty() && readings.points.front().covariance ? "the readings' covariances" : "tracker " + noise.name;
+  return artefacts::CarriesCovariances(readings) ? "the readings' covariances" : "tracker " + noise.name;
 }
 
 stage::ParameterLayout MachineProblem::Layout(int order) const {
@@ -105,8 +105,7 @@ MachineProblem MakeMachineProblem(const MachineProblemOptions& o, artefacts::Tra
   }
   p.noise = stage::TrackerNoise::Preset(o.tracker);
   // Readings that carry their own covariance (multilaterated points: all or none) are weighed by it.
-  const bool own_covariances = !p.readings.points.empty() && p.readings.points.front().covariance.has_value();
-  p.weighted = !o.unweighted && (own_covariances || !p.noise.IsNoiseFree());
+  p.weighted = !o.unweighted && (artefacts::CarriesCovariances(p.readings) || !p.noise.IsNoiseFree());
   p.observations = artefacts::TrackerObservations(p.readings, p.weighted ? &p.noise : nullptr);
   if (p.validation) p.validation_observations = artefacts::TrackerObservations(*p.validation, nullptr);
   p.workspace = WorkspaceOf(o, p.readings, p.validation);

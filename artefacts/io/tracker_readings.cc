@@ -216,7 +216,7 @@ void CheckTrackerReadings(const TrackerReadings& data, const std::string& name) 
     if (!seen.emplace(p.id, i).second) refuse("the id appears twice");
     if (p.tool < 0 || p.tool >= kMaxTools) refuse(fmt::format("tool {} is not 1 .. {}", p.tool + 1, kMaxTools));
     if (p.covariance && !IsCovariance(*p.covariance)) refuse("the covariance is not positive definite");
-    if (p.covariance.has_value() != data.points.front().covariance.has_value()) {
+    if (p.covariance.has_value() != CarriesCovariances(data)) {
       refuse("a covariance is given for some points only; give one for every point or for none");
     }
   }
@@ -243,7 +243,7 @@ void WriteTrackerReadings(const std::filesystem::path& path, const TrackerReadin
   for (const char* name : data.spherical ? kSpherical : data.cmm ? kCmm : kCartesian) header.emplace_back(name);
   if (with_approach) header.emplace_back("approach");
   if (with_tool) header.emplace_back("tool");
-  const bool with_covariance = data.points.front().covariance.has_value();  // all or none (checked above)
+  const bool with_covariance = CarriesCovariances(data);  // all or none (checked above)
   if (with_covariance) header.insert(header.end(), std::begin(kCovariance), std::end(kCovariance));
   out += CsvLine(header);
   for (const TrackerReading& p : data.points) {

@@ -58,6 +58,11 @@ TrackerReadings ReadTrackerReadings(const std::filesystem::path& path);
 // twice, a tool outside 1 .. kMaxTools, a covariance not positive definite or given for some points only.
 void CheckTrackerReadings(const TrackerReadings& data, const std::string& name);
 
+// Whether the readings carry their own covariances (all points do or none: the reader and the check see to it).
+inline bool CarriesCovariances(const TrackerReadings& data) {
+  return !data.points.empty() && data.points.front().covariance.has_value();
+}
+
 // Writes id,x,y,z,xt,yt,zt (or range,azimuth,elevation when `spherical`) [,approach][,tool][,cxx..czz], comments first,
 // atomically. Numbers are written as the shortest text that reads back to the same double (at least 1 nm and
 // 1e-10 rad; Cartesian values round-trip bit for bit, spherical ones to ~1e-13 relative through the conversion).
