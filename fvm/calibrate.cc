@@ -112,7 +112,7 @@ ReportData MakeReport(const CalibrateArgs& args, const std::string& source, cons
   data.summary = {{"model", r.calibration.model},
                   {"free parameters", std::to_string(r.calibration.layout.NumFree())},
                   {"fixed (not identifiable)", std::to_string(r.fixed.size())},
-                  {"identification rms", fmt::format("{:.2f} um", r.rms_mm * 1e3)},
+                  {"identification rms", fmt::format("{:.2f} um", r.residual_summary.rms_um())},
                   {"shown data", shown_what},
                   {"rigid fit per placement, after", frame_free(judged_after.rigid)},
                   {"distances, all pairs, after", frame_free(judged_after.distances)},
@@ -243,8 +243,8 @@ void Run(const CalibrateArgs& args) {
   fmt::print("\n  {:<34} {:>8} {:>8} {:>8}\n", "3D centre error (um)", "mean", "rms", "max");
   fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}\n", "identification, before", id_before.mean_mm * 1e3, id_before.rms_mm * 1e3,
              id_before.max_mm * 1e3);
-  fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}\n", "identification, after", result.mean_mm * 1e3, result.rms_mm * 1e3,
-             result.max_mm * 1e3);
+  fmt::print("  {:<34} {:>8.2f} {:>8.2f} {:>8.2f}\n", "identification, after", result.residual_summary.mean_um(), result.residual_summary.rms_um(),
+             result.residual_summary.max_um());
   if (validate) PrintValidation(doc["validation"]);
   if (!args.output.empty()) fmt::print("\ncalibration written to {}\n", args.output);
   if (!args.report.empty()) fmt::print("report written to {}/index.html\n", args.report);
@@ -345,7 +345,7 @@ void RunScans(const CalibrateArgs& args) {
   fmt::print("\n  no scan can tell the pixel size from xTx1, yTy1 (taken from --pixel-mm), nor the camera's turn against\n"
              "  the stage axes from the constant yaw and squareness xRz0, yRz0, xWy0 (the result is in the first tile's frame)\n");
   fmt::print("\n  registered displacements after the fit: rms {:.3f} um (weighted rms {:.2f}: 1 = as the registrations' own "
-             "covariances say)\n", result.rms_mm * 1e3, result.weighted_rms);
+             "covariances say)\n", result.residual_summary.rms_um(), result.weighted_rms);
   fmt::print("  the residuals' white part is {:.2f} x the registrations' covariance; chained along the scans they leave "
              "{:.3f} um rms that the model cannot take\n", split.white_ratio, misfit_um);
   fmt::print("  predicted xy stage-error uncertainty over the scanned box (k=1): {:.3f} um rms from the coefficients",

@@ -74,6 +74,8 @@ void AddTilesSimulate(CLI::App* tiles);
 void RegisterStitch(CLI::App& app);
 // fvm simulate fvm-batch ... (fvm/simulate.cc).
 void RegisterSimulate(CLI::App& app);
+// fvm simulate tracker -o DIR (fvm/simulate_tracker.cc), under `simulate`.
+void RegisterSimulateTracker(CLI::App* simulate);
 // fvm simulate scan -o DIR (fvm/simulate_scan.cc), under `simulate`.
 void RegisterSimulateScan(CLI::App* simulate);
 

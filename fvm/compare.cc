@@ -44,7 +44,7 @@ void Run(const CompareArgs& args) {
                              {"n_params", s.nominal},
                              {"n_identified", id.calibration.layout.NumFree()},
                              {"fixed", id.fixed.size()},
-                             {"identification", {{"mean_um", id.mean_mm * 1e3}, {"rms_um", id.rms_mm * 1e3}, {"max_um", id.max_mm * 1e3}}},
+                             {"identification", {{"mean_um", id.residual_summary.mean_um()}, {"rms_um", id.residual_summary.rms_um()}, {"max_um", id.residual_summary.max_um()}}},
                              {"validation",
                               {{"centres", s.validation.count},
                                {"mean_um", s.validation.mean_mm * 1e3},
@@ -74,7 +74,7 @@ void Run(const CompareArgs& args) {
     const stage::IdentificationResult& id = s.identification;
     fmt::print("  {:>5} {:>6} {:>6} | {:>8.2f} | {:>8.2f} {:>9.2f} | {:>8.2f} {:>9.2f} | {:>8.2f} {:>8.2f} {:>9.2f} | {:>9.1f} {:>9.1f} "
                "{:>8.3g}\n",
-               s.model, s.nominal, id.fixed.size(), id.rms_mm * 1e3, s.rigid.rms_mm * 1e3, s.rigid.predicted_rms_mm * 1e3,
+               s.model, s.nominal, id.fixed.size(), id.residual_summary.rms_um(), s.rigid.rms_mm * 1e3, s.rigid.predicted_rms_mm * 1e3,
                s.distances.rms_mm * 1e3, s.distances.predicted_rms_mm * 1e3, s.validation.rms_mm * 1e3,
                s.validation.max_mm * 1e3, s.validation.predicted_rms_mm * 1e3, s.aic, s.bic, id.condition_number);
   }

@@ -76,8 +76,8 @@ nlohmann::json PlausibilityJson(const stage::IdentificationResult& identified, d
           {"largest_share", largest.share}};
 }
 
-nlohmann::json ErrorJson(const stage::VolumetricError& e) {
-  return {{"mean_um", e.mean_um}, {"max_um", e.max_um}, {"min_um", e.min_um}};
+nlohmann::json ErrorJson(const stage::ResidualSummary& e) {
+  return {{"mean_um", e.mean_um()}, {"max_um", e.max_um()}, {"min_um", e.min_um()}};
 }
 
 nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance) {

@@ -48,7 +48,7 @@ using workflows::NotConvergedReason;
 nlohmann::json PlausibilityJson(const stage::IdentificationResult& identified, double max_error_mm);
 
 // {"mean_um", "max_um", "min_um"} of a volumetric error.
-nlohmann::json ErrorJson(const stage::VolumetricError& e);
+nlohmann::json ErrorJson(const stage::ResidualSummary& e);
 // An instrument pose (tracker, or a test piece's datum): translation, rotation vector, XYZ Euler angles, and the
 // standard uncertainties when `covariance` is given.
 nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 6>* covariance);

@@ -94,7 +94,7 @@ void Run(const MultilaterateArgs& args) {
   doc["converged"] = result.converged;
 
   // --truth: the error of each point against known true positions (simulations: true_points.csv).
-  std::optional<workflows::TruthError> truth_error;
+  std::optional<stage::ResidualSummary> truth_error;
   if (!args.truth.empty()) {
     truth_error = workflows::ErrorAgainstTruth(m, args.truth);
     doc["truth_error"] = {{"mean_um", truth_error->mean_mm * 1e3}, {"rms_um", truth_error->rms_mm * 1e3},

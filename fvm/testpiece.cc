@@ -8,11 +8,11 @@
 #include <filesystem>
 #include <map>
 
-#include "artefacts/geometry/test_piece.h"
+#include "artefacts/geometry/machined_piece.h"
 #include "artefacts/io/machine_truth_file.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
-#include "artefacts/simulation/test_piece_simulation.h"
+#include "artefacts/simulation/machined_piece_simulation.h"
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
@@ -22,14 +22,14 @@
 #include "fvm/option_parsing.h"
 #include "stage/io/calibration_file.h"
 #include "stage/series_extraction.h"
-#include "stage/test_piece_verification.h"
-#include "workflows/test_piece_verify.h"
+#include "stage/machined_piece_verification.h"
+#include "workflows/machined_piece_verify.h"
 
 namespace fvm::cli {
 namespace {
 
-artefacts::TestPieceDescription PieceOf(const std::string& path) {
-  return path.empty() ? artefacts::PublishedTestPiece() : artefacts::ReadTestPiece(path);
+artefacts::MachinedPieceDescription PieceOf(const std::string& path) {
+  return path.empty() ? artefacts::PublishedMachinedPiece() : artefacts::ReadMachinedPiece(path);
 }
 
 // PIECE, the optional description both design and simulate take.
@@ -47,7 +47,7 @@ struct DesignArgs {
 };
 
 void RunDesign(const DesignArgs& args) {
-  const artefacts::TestPieceDescription piece = PieceOf(args.piece);
+  const artefacts::MachinedPieceDescription piece = PieceOf(args.piece);
   const std::vector<artefacts::PiecePoint> points = artefacts::NominalPoints(piece);
   if (points.empty()) throw InputError(fmt::format("{}: the piece has no probe points; give each feature \"points\"", args.piece));
   if (!args.output.empty()) artefacts::WriteNominalPoints(args.output, points);
@@ -56,7 +56,7 @@ void RunDesign(const DesignArgs& args) {
     WriteFileAtomically(std::filesystem::path(args.cmm) / "program.txt", artefacts::CmmProgram(points));
   }
   if (!args.gcode.empty()) WriteFileAtomically(args.gcode, artefacts::CuttingProgram(piece));
-  if (!args.describe.empty()) WriteFileAtomically(args.describe, artefacts::TestPieceJson(piece));
+  if (!args.describe.empty()) WriteFileAtomically(args.describe, artefacts::MachinedPieceJson(piece));
   std::map<std::string, int> per_series, per_kind;
   for (const artefacts::PiecePoint& p : points) {
     if (IsSeries(p.series)) ++per_series[p.series];
@@ -79,7 +79,7 @@ void RunDesign(const DesignArgs& args) {
 
 // ---------------------------------------------------------------------------------------------- verify
 
-struct TestPieceVerifyArgs : MachineArgs {
+struct MachinedPieceVerifyArgs : MachineArgs {
   int order = 2;
   std::string nominal, report;
   bool json = false;
@@ -120,10 +120,10 @@ MachineReportData::Table Histogram(const std::vector<MachineReportData::PointErr
   return t;
 }
 
-void RunVerify(const TestPieceVerifyArgs& args) {
+void RunVerify(const MachinedPieceVerifyArgs& args) {
   const MachineProblem problem = LoadMachineProblem(args);
-  const workflows::TestPieceVerifyResult verified = workflows::VerifyTestPiece(problem, {args.order, args.nominal});
-  const stage::TestPieceVerification& v = verified.verification;
+  const workflows::MachinedPieceVerifyResult verified = workflows::VerifyMachinedPiece(problem, {args.order, args.nominal});
+  const stage::MachinedPieceVerification& v = verified.verification;
   const stage::IdentificationResult& r = v.result.identified;
   const std::vector<stage::TermRecovery>& geometric = verified.geometric;
   const std::string& geometric_from = verified.geometric_from;
@@ -137,13 +137,13 @@ void RunVerify(const TestPieceVerifyArgs& args) {
   doc["weights"] = "equal (CMM)";
   doc["initial"] = ErrorJson(v.result.initial);
   doc["final"] = ErrorJson(v.result.final);
-  doc["final"]["rms_um"] = r.rms_mm * 1e3;
+  doc["final"]["rms_um"] = r.residual_summary.rms_um();
   if (verified.validation) {
     doc["validation"] = {{"points", problem.validation->points.size()}, {"initial", ErrorJson(verified.validation->before)},
                          {"final", ErrorJson(verified.validation->after)}};
   }
   doc["iterations"] = nlohmann::json::array();
-  for (const stage::VolumetricError& e : v.iterations) doc["iterations"].push_back(ErrorJson(e));
+  for (const stage::ResidualSummary& e : v.iterations) doc["iterations"].push_back(ErrorJson(e));
   if (verified.extraction) {
     doc["extraction"] = nlohmann::json::array();
     for (const stage::ExtractedError& e : *verified.extraction) {
@@ -178,8 +178,8 @@ void RunVerify(const TestPieceVerifyArgs& args) {
     MachineReportData::Table log{"Iterations", "Volumetric error after each solver iteration (0: the ideal machine at the initial datum).",
                                  {"iteration", "max (um)", "mean (um)", "min (um)"}, {}};
     for (size_t i = 0; i < v.iterations.size(); ++i) {
-      const stage::VolumetricError& e = v.iterations[i];
-      log.rows.push_back({std::to_string(i), fmt::format("{:.2f}", e.max_um), fmt::format("{:.2f}", e.mean_um), fmt::format("{:.2f}", e.min_um)});
+      const stage::ResidualSummary& e = v.iterations[i];
+      log.rows.push_back({std::to_string(i), fmt::format("{:.2f}", e.max_um()), fmt::format("{:.2f}", e.mean_um()), fmt::format("{:.2f}", e.min_um())});
     }
     data.tables.insert(data.tables.begin(), log);
     data.tables.insert(data.tables.begin() + 1, Histogram(data.readings));
@@ -197,12 +197,12 @@ void RunVerify(const TestPieceVerifyArgs& args) {
     fmt::print("verified the test piece: {} points, {} {} order {}\n", problem.readings.points.size(), problem.chain.code, args.basis, args.order);
     fmt::print("  iteration      max     mean      min (um)\n");
     for (size_t i = 0; i < v.iterations.size(); ++i) {
-      fmt::print("  {:9d} {:8.2f} {:8.2f} {:8.2f}\n", i, v.iterations[i].max_um, v.iterations[i].mean_um, v.iterations[i].min_um);
+      fmt::print("  {:9d} {:8.2f} {:8.2f} {:8.2f}\n", i, v.iterations[i].max_um(), v.iterations[i].mean_um(), v.iterations[i].min_um());
     }
     if (problem.validation) {
       fmt::print("  validation ({} points): mean {:.2f} -> {:.2f} um, max {:.2f} -> {:.2f} um\n", problem.validation->points.size(),
-                 verified.validation->before.mean_um, verified.validation->after.mean_um, verified.validation->before.max_um,
-                 verified.validation->after.max_um);
+                 verified.validation->before.mean_um(), verified.validation->after.mean_um(), verified.validation->before.max_um(),
+                 verified.validation->after.max_um());
     }
     std::string lost;
     for (const stage::TermRecovery& t : geometric) {
@@ -233,7 +233,7 @@ std::vector<Eigen::Vector3d> ProposedTools(const Eigen::Vector3d& tool) {
 }
 
 void RunSimulate(const SimulateArgs& args) {
-  const artefacts::TestPieceDescription piece = PieceOf(args.piece);
+  const artefacts::MachinedPieceDescription piece = PieceOf(args.piece);
   std::vector<artefacts::PiecePoint> points = artefacts::NominalPoints(piece);
   if (args.only != "all") {
     std::erase_if(points, [&](const artefacts::PiecePoint& p) {
@@ -250,7 +250,7 @@ void RunSimulate(const SimulateArgs& args) {
   cmm.datum = ParsePose(args.datum, "--datum");
   cmm.sigma_mm = args.noise_um * 1e-3;
   cmm.seed = args.seed;
-  artefacts::TrackerReadings measured = artefacts::SimulateTestPiece(chain, truth, points, cmm);
+  artefacts::TrackerReadings measured = artefacts::SimulateMachinedPiece(chain, truth, points, cmm);
   std::vector<artefacts::PiecePoint> nominal = points;
   if (args.proposed) {
     std::vector<artefacts::PiecePoint> series;
@@ -265,7 +265,7 @@ void RunSimulate(const SimulateArgs& args) {
       other.tool_offset = tools[k];
       artefacts::CmmSimulation c = cmm;
       c.seed = cmm.seed + k + 1;
-      for (artefacts::TrackerReading r : artefacts::SimulateTestPiece(other, truth, again, c).points) {
+      for (artefacts::TrackerReading r : artefacts::SimulateMachinedPiece(other, truth, again, c).points) {
         r.tool = static_cast<int>(k) + 1;
         measured.points.push_back(r);
       }
@@ -285,7 +285,7 @@ void RunSimulate(const SimulateArgs& args) {
     for (const artefacts::PlannedPoint& p : artefacts::PlanMesh(ws, step)) grid.push_back({"G" + p.id.substr(1), p.nominal, "", "", {}});
     artefacts::CmmSimulation exact = cmm;
     exact.sigma_mm = 0.0;
-    artefacts::TrackerReadings g = artefacts::SimulateTestPiece(chain, truth, grid, exact);
+    artefacts::TrackerReadings g = artefacts::SimulateMachinedPiece(chain, truth, grid, exact);
     g.comments = {"fvm simulate testpiece: noise-free validation grid over the piece"};
     artefacts::WriteTrackerReadings(dir / "validation.csv", g);
   }
@@ -336,7 +336,7 @@ void RegisterTestPiece(CLI::App& app) {
   d->footer("Example:\n  fvm testpiece design -o nominal.csv --gcode piece.nc --cmm cmm --describe piece.json");
   d->callback([design] { RunDesign(*design); });
 
-  auto verify = std::make_shared<TestPieceVerifyArgs>();
+  auto verify = std::make_shared<MachinedPieceVerifyArgs>();
   verify->basis = "chebyshev";
   verify->tools = {"0,0,100"};
   verify->tracker = "none";

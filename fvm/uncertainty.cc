@@ -190,7 +190,7 @@ void RunStage(const UncertaintyArgs& args) {
              args.runs, reference.calibration.model, args.data, identify.observations.size(), sigma_mm * 1e3, args.seed,
              seconds, converged);
   fmt::print("  identification mean error  {:.3f} +- {:.3f} um (the batch's own fit: {:.3f} um)\n",
-             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.mean_mm * 1e3);
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.residual_summary.mean_um());
   if (validate) {
     const nlohmann::json& v = doc["validation_rms_um"];
     fmt::print("  validation rms ({} centres)  {:.3f} +- {:.3f} um, 95 % of runs below {:.3f} um; the batch's {:.3f} um, "
@@ -295,7 +295,7 @@ void Run(const UncertaintyArgs& args) {
   doc["weights"] = problem.WeightsName();
   doc["final_mean_um"] = DistributionJson(stage::SummarizeSample(finals));
   doc["validation_mean_um"] = problem.validation ? DistributionJson(stage::SummarizeSample(validations)) : nlohmann::json(nullptr);
-  doc["reference"] = {{"final_mean_um", reference.final.mean_um}, {"initial_mean_um", reference.initial.mean_um}};
+  doc["reference"] = {{"final_mean_um", reference.final.mean_um()}, {"initial_mean_um", reference.initial.mean_um()}};
   const stage::SampleSummary model_error = stage::SummarizeSample(u.model_error_pooled_um);
   doc["pooled_um"] = {{"initial", DistributionJson(stage::SummarizeSample(u.initial_pooled_um))},
                       {"final", DistributionJson(stage::SummarizeSample(u.final_pooled_um))},
@@ -349,7 +349,7 @@ void Run(const UncertaintyArgs& args) {
              problem.readings.points.size(), problem.chain.code, problem.WeightsName(), args.order, args.seed, seconds,
              converged);
   fmt::print("  final mean error       {:.2f} +- {:.2f} um (the readings' own fit: {:.2f} um)\n",
-             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.final.mean_um);
+             doc["final_mean_um"]["mean"].get<double>(), doc["final_mean_um"]["sd"].get<double>(), reference.final.mean_um());
   if (problem.validation) {
     const auto& v = doc["validation_mean_um"];
     fmt::print("  validation mean error  {:.2f} +- {:.2f} um, 95 % of runs below {:.2f} um\n", v["mean"].get<double>(),

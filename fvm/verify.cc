@@ -54,7 +54,7 @@ void Run(const VerifyArgs& args) {
   doc["weights"] = problem.WeightsName();
   doc["initial"] = ErrorJson(v.initial);
   doc["final"] = ErrorJson(v.final);
-  doc["final"]["rms_um"] = r.rms_mm * 1e3;
+  doc["final"]["rms_um"] = r.residual_summary.rms_um();
   if (weighted) doc["final"]["weighted_rms"] = r.weighted_rms;
   if (validation) {
     doc["validation"] = {{"points", validation->points.size()},
@@ -98,10 +98,10 @@ void Run(const VerifyArgs& args) {
                problem.WeightsName(), chosen.order, args.basis,
                fits.size() > 1 ? fmt::format(" (chosen by {})", verified.ChosenBy()) : "");
     fmt::print("  volumetric error   initial max {:.1f} / mean {:.1f} / min {:.1f} um   final max {:.1f} / mean {:.1f} / min {:.1f} um\n",
-               v.initial.max_um, v.initial.mean_um, v.initial.min_um, v.final.max_um, v.final.mean_um, v.final.min_um);
+               v.initial.max_um(), v.initial.mean_um(), v.initial.min_um(), v.final.max_um(), v.final.mean_um(), v.final.min_um());
     if (validation) {
       fmt::print("  validation ({} points) initial mean {:.1f} um, final mean {:.1f} um (max {:.1f})\n", validation->points.size(),
-                 chosen.validation->before.mean_um, chosen.validation->after.mean_um, chosen.validation->after.max_um);
+                 chosen.validation->before.mean_um(), chosen.validation->after.mean_um(), chosen.validation->after.max_um());
     }
     const nlohmann::json& p = doc["pose"];
     fmt::print("  tracker pose ({}): {:.3f}, {:.3f}, {:.3f} mm; XYZ Euler {:.4f}, {:.4f}, {:.4f} deg\n",

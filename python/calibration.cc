@@ -148,8 +148,8 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
   }
   PyCalibration out{r, false, {}};
   py::dict identification = py::dict(py::arg("placements") = batch.identify, py::arg("centres") = r.residuals.size(),
-                                     py::arg("mean_um") = r.mean_mm * 1e3, py::arg("rms_um") = r.rms_mm * 1e3,
-                                     py::arg("max_um") = r.max_mm * 1e3,
+                                     py::arg("mean_um") = r.residual_summary.mean_um(), py::arg("rms_um") = r.residual_summary.rms_um(),
+                                     py::arg("max_um") = r.residual_summary.max_um(),
                                      py::arg("before_mean_um") = c->identification_before.mean_mm * 1e3);
   out.summary["batch"] = source;
   out.summary["identification"] = identification;

@@ -70,9 +70,9 @@ std::vector<Eigen::Vector3d> ToolsFrom(const py::object& tool) {
   return PointsFrom(a, "tool");
 }
 
-py::dict ErrorDict(const stage::VolumetricError& e) {
-  return py::dict(py::arg("points") = e.points, py::arg("mean_um") = e.mean_um, py::arg("max_um") = e.max_um,
-                  py::arg("min_um") = e.min_um);
+py::dict ErrorDict(const stage::ResidualSummary& e) {
+  return py::dict(py::arg("points") = e.count, py::arg("mean_um") = e.mean_um(), py::arg("max_um") = e.max_um(),
+                  py::arg("min_um") = e.min_um());
 }
 
 py::dict PoseDict(const stage::Pose& p) {
@@ -122,7 +122,7 @@ py::dict Verify(const py::object& readings, const py::object& tool, const std::s
   out["weights"] = problem->WeightsName();
   out["initial"] = ErrorDict(v.initial);
   py::dict final_error = ErrorDict(v.final);
-  final_error["rms_um"] = r.rms_mm * 1e3;
+  final_error["rms_um"] = r.residual_summary.rms_um();
   out["final"] = final_error;
   if (chosen.validation) {
     out["validation"] = py::dict(py::arg("points") = problem->validation->points.size(),

@@ -455,10 +455,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     const PreparedObservation& o = prepared.observations[static_cast<size_t>(i)];
     result.residuals.push_back(o.colour * whitened.segment<3>(3 * i));  // unobserved coordinates: 0
   }
-  const ResidualSummary summary = Summarize(result.residuals);
-  result.mean_mm = summary.mean_mm;
-  result.rms_mm = summary.rms_mm;
-  result.max_mm = summary.max_mm;
+  result.residual_summary = Summarize(result.residuals);
   const double dof = std::max(1.0, static_cast<double>(equations - n - pose_count));
   double plain_squared = 0.0;
   for (const Eigen::Vector3d& r : result.residuals) plain_squared += r.squaredNorm();

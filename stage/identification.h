@@ -22,6 +22,7 @@
 #include "stage/calibration.h"
 #include "stage/parameter_layout.h"
 #include "stage/pose.h"
+#include "stage/residual_summary.h"
 #include "stage/stitched_frame.h"
 
 namespace fvm::stage {
@@ -110,7 +111,7 @@ struct IdentificationResult {
   Calibration calibration;
   std::vector<FixedCoefficient> fixed;     // what the rank treatment fixed at zero, and why
   std::vector<Eigen::Vector3d> residuals;  // model - measured for each observation (instrument frame), mm
-  double mean_mm = 0, rms_mm = 0, max_mm = 0;  // of the Euclidean residuals
+  ResidualSummary residual_summary;        // of the Euclidean residuals
   // Weighted fits: sqrt(chi^2 / degrees of freedom), 1 when the residuals are as large as the covariances say.
   double weighted_rms = 0;
   Pose pose;                               // the instrument pose used (estimated or held)

@@ -19,11 +19,6 @@ AxisChain ChainWithTool(const AxisChain& chain, const std::vector<Eigen::Vector3
 
 }  // namespace
 
-VolumetricError SummarizeVolumetric(const std::vector<Eigen::Vector3d>& residuals_mm) {
-  const ResidualSummary s = Summarize(residuals_mm);
-  return {s.count, s.mean_mm * 1e3, s.max_mm * 1e3, s.min_mm * 1e3};
-}
-
 std::vector<Eigen::Vector3d> PredictedReadings(const ParameterLayout& layout, const std::vector<double>* values,
                                                const Pose& pose, const std::vector<Observation>& points,
                                                const std::vector<Eigen::Vector3d>& tool_offsets) {
@@ -100,8 +95,8 @@ VerificationResult VerifyMachine(const ParameterLayout& layout, const std::vecto
   VerificationResult result(Identify(layout, readings, options));
   CheckPlausibleMachine(result.identified, options.max_error_mm);
   result.initial_pose = initial_pose;
-  result.initial = SummarizeVolumetric(VolumetricResiduals(layout, nullptr, initial_pose, readings, options.tool_offsets));
-  result.final = SummarizeVolumetric(result.identified.residuals);
+  result.initial = Summarize(VolumetricResiduals(layout, nullptr, initial_pose, readings, options.tool_offsets));
+  result.final = Summarize(result.identified.residuals);
   return result;
 }
 

@@ -14,21 +14,15 @@
 #include <vector>
 
 #include "stage/identification.h"
+#include "stage/residual_summary.h"
 
 namespace fvm::stage {
-
-// Max / mean / min of the Euclidean volumetric errors of a point set, in um as the published studies quote them.
-struct VolumetricError {
-  int points = 0;
-  double mean_um = 0, max_um = 0, min_um = 0;
-};
-VolumetricError SummarizeVolumetric(const std::vector<Eigen::Vector3d>& residuals_mm);
 
 struct VerificationResult {
   explicit VerificationResult(IdentificationResult r) : identified(std::move(r)) {}
   IdentificationResult identified;  // the error model and the final pose (identified.pose)
   Pose initial_pose;                // the pose the initial error is stated in
-  VolumetricError initial, final;
+  ResidualSummary initial, final;  // the volumetric errors before and after
 };
 
 // The layout `fvm verify` identifies: the 18 translation and rotation terms of `chain` as polynomials of `order` in

@@ -59,15 +59,15 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
     MachineMonteCarloRun& out = runs[static_cast<size_t>(index)];
     out.converged = r.converged;
     out.pose = r.pose;
-    out.final = SummarizeVolumetric(r.residuals);
+    out.final = Summarize(r.residuals);
     const std::vector<Eigen::Vector3d> ideal = VolumetricResiduals(layout, nullptr, verification.initial_pose, drawn, tools);
-    out.initial = SummarizeVolumetric(ideal);
+    out.initial = Summarize(ideal);
     for (size_t i = 0; i < drawn.size(); ++i) {
       out.initial_um.push_back(ideal[i].norm() * 1e3);
       out.final_um.push_back(r.residuals[i].norm() * 1e3);
     }
     const Calibration& c = r.calibration;
-    if (!validation.empty()) out.validation = SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, r.pose, validation, tools));
+    if (!validation.empty()) out.validation = Summarize(VolumetricResiduals(c.layout, &c.values, r.pose, validation, tools));
     out.deviation_mm = PredictedReadings(c.layout, &c.values, r.pose, evaluation, tools);
     for (size_t i = 0; i < evaluation.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
     if (options.on_run_done) options.on_run_done();
@@ -115,8 +115,8 @@ std::vector<StageMonteCarloRun> StageMonteCarlo(const ParameterLayout& layout, c
     const IdentificationResult r = Identify(layout, drawn, run_options);
     StageMonteCarloRun& out = runs[static_cast<size_t>(index)];
     out.converged = r.converged;
-    out.fit_mean_mm = r.mean_mm;
-    out.fit_rms_mm = r.rms_mm;
+    out.fit_mean_mm = r.residual_summary.mean_mm;
+    out.fit_rms_mm = r.residual_summary.rms_mm;
     if (validate != nullptr) out.validation = Validate(&r.calibration, validate->observations, validate->anchors, identification.frame);
     out.deviation_mm = PredictedCentres(r.calibration, evaluation, !evaluation.anchors.empty());
     for (size_t i = 0; i < out.deviation_mm.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];

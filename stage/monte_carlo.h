@@ -46,9 +46,9 @@ struct MonteCarloRun {
 };
 
 struct MachineMonteCarloRun : MonteCarloRun {
-  VolumetricError initial;     // the ideal machine (the reference's initial pose) against the run's drawn readings
-  VolumetricError final;       // the run's model against its own drawn readings
-  VolumetricError validation;  // the run's model against the validation readings (points 0 without them)
+  ResidualSummary initial;     // the ideal machine (the reference's initial pose) against the run's drawn readings
+  ResidualSummary final;       // the run's model against its own drawn readings
+  ResidualSummary validation;  // the run's model against the validation readings (points 0 without them)
   Pose pose;                   // the run's tracker pose
   std::vector<double> initial_um, final_um;  // per reading: |ideal machine - drawn reading|, |run's model - drawn reading|
 };

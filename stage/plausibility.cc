@@ -152,7 +152,7 @@ void CheckPlausibleMachine(const IdentificationResult& identified, double max_er
         "reading {} stays {} from the identified machine (residual rms {}), beyond what any machine's error can be "
         "(bound {}): the readings cannot come from this machine at these commands; check that each reading belongs "
         "to its commanded point, the units (mm) and the tool offset",
-        worst + 1, Length(identified.residuals[worst].norm()), Length(identified.rms_mm), BoundText(bound, longest, is_default)));
+        worst + 1, Length(identified.residuals[worst].norm()), Length(identified.residual_summary.rms_mm), BoundText(bound, longest, is_default)));
   }
 }
 

@@ -131,8 +131,8 @@ InputError VerificationRefusal(const std::string& source, const std::invalid_arg
 VolumetricChange JudgeOn(const stage::VerificationResult& v, const std::vector<stage::Observation>& observations,
                          const std::vector<Eigen::Vector3d>& tools) {
   const stage::Calibration& cal = v.identified.calibration;
-  return {stage::SummarizeVolumetric(stage::VolumetricResiduals(cal.layout, nullptr, v.initial_pose, observations, tools)),
-          stage::SummarizeVolumetric(
+  return {stage::Summarize(stage::VolumetricResiduals(cal.layout, nullptr, v.initial_pose, observations, tools)),
+          stage::Summarize(
               stage::VolumetricResiduals(cal.layout, &cal.values, v.identified.pose, observations, tools))};
 }
 

@@ -77,7 +77,7 @@ void CheckTrackerSight(const MachineProblem& problem, const stage::Pose& pose);
 // The volumetric error of `observations` before (ideal machine, initial pose) and after (identified model and
 // pose) a verification: held-out points judged by the model.
 struct VolumetricChange {
-  stage::VolumetricError before, after;
+  stage::ResidualSummary before, after;
 };
 VolumetricChange JudgeOn(const stage::VerificationResult& v, const std::vector<stage::Observation>& observations,
                          const std::vector<Eigen::Vector3d>& tools);

@@ -111,19 +111,19 @@ Multilateration Multilaterate(const MultilaterateOptions& args) {
   return m;
 }
 
-std::map<std::string, artefacts::NominalPoint, std::less<>> NominalCoordinates(const Multilateration& m,
+std::map<std::string, artefacts::ListedPoint, std::less<>> NominalCoordinates(const Multilateration& m,
                                                                               const std::string& nominal_file) {
-  std::map<std::string, artefacts::NominalPoint, std::less<>> nominal;
+  std::map<std::string, artefacts::ListedPoint, std::less<>> nominal;
   if (!nominal_file.empty()) {
-    nominal = artefacts::ReadNominalPoints(nominal_file);
+    nominal = artefacts::PointsById(artefacts::ReadPointList(nominal_file));
   } else if (m.data.nominal) {
-    for (const artefacts::StationReadingRow& r : m.data.rows) nominal.emplace(r.id, artefacts::NominalPoint{r.nominal, ""});
+    for (const artefacts::StationReadingRow& r : m.data.rows) nominal.emplace(r.id, artefacts::ListedPoint{r.id, r.nominal, ""});
   }
   return nominal;
 }
 
 artefacts::TrackerReadings VerifyReadings(const Multilateration& m, const MultilaterateOptions& args,
-                                          const std::map<std::string, artefacts::NominalPoint, std::less<>>& nominal,
+                                          const std::map<std::string, artefacts::ListedPoint, std::less<>>& nominal,
                                           const std::string& nominal_file, const std::string& target) {
   if (nominal.empty()) {
     throw InputError(fmt::format("--verify-readings {}: needs each point's nominal machine coordinates: x,y,z columns in "
@@ -151,19 +151,15 @@ artefacts::TrackerReadings VerifyReadings(const Multilateration& m, const Multil
   return out;
 }
 
-TruthError ErrorAgainstTruth(const Multilateration& m, const std::string& truth_file) {
-  const auto truth = artefacts::ReadNominalPoints(truth_file);
-  double sum = 0, worst = 0, sum2 = 0;
+stage::ResidualSummary ErrorAgainstTruth(const Multilateration& m, const std::string& truth_file) {
+  const auto truth = artefacts::PointsById(artefacts::ReadPointList(truth_file));
+  std::vector<Eigen::Vector3d> errors;
   for (size_t j = 0; j < m.result.points.size(); ++j) {
     const auto it = truth.find(m.problem.point_ids[j]);
     if (it == truth.end()) throw InputError(fmt::format("{}: point {} is not there", truth_file, m.problem.point_ids[j]));
-    const double e = (m.result.points[j] - it->second.position).norm();
-    sum += e;
-    sum2 += e * e;
-    worst = std::max(worst, e);
+    errors.push_back(m.result.points[j] - it->second.position);
   }
-  const double n = static_cast<double>(m.result.points.size());
-  return {sum / n, std::sqrt(sum2 / n), worst};
+  return stage::Summarize(errors);
 }
 
 }  // namespace fvm::workflows

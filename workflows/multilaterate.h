@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "artefacts/io/multilateration_readings.h"
+#include "artefacts/io/point_list.h"
 #include "artefacts/io/tracker_readings.h"
 #include "stage/multilateration.h"
+#include "stage/residual_summary.h"
 
 namespace fvm::workflows {
 
@@ -41,21 +43,18 @@ Multilateration Multilaterate(const MultilaterateOptions& options);
 
 // The points' nominal machine coordinates: from `nominal_file` (id,x,y,z[,approach]) when given, else the readings'
 // x,y,z columns; empty when neither has them.
-std::map<std::string, artefacts::NominalPoint, std::less<>> NominalCoordinates(const Multilateration& m,
+std::map<std::string, artefacts::ListedPoint, std::less<>> NominalCoordinates(const Multilateration& m,
                                                                               const std::string& nominal_file);
 
 // The multilaterated points as tracker readings (nominal x,y,z; xt,yt,zt the point in the stations' frame) for a
 // machine verification, to be written to `target` (named in refusals as --verify-readings). Throws InputError when
 // `nominal` is empty or misses a point.
 artefacts::TrackerReadings VerifyReadings(const Multilateration& m, const MultilaterateOptions& options,
-                                          const std::map<std::string, artefacts::NominalPoint, std::less<>>& nominal,
+                                          const std::map<std::string, artefacts::ListedPoint, std::less<>>& nominal,
                                           const std::string& nominal_file, const std::string& target);
 
 // Distances between the multilaterated points and their true positions (mm).
-struct TruthError {
-  double mean_mm = 0, rms_mm = 0, max_mm = 0;
-};
 // `truth_file`: id,x,y,z in the same frame (simulations: true_points.csv); a point missing there is an InputError.
-TruthError ErrorAgainstTruth(const Multilateration& m, const std::string& truth_file);
+stage::ResidualSummary ErrorAgainstTruth(const Multilateration& m, const std::string& truth_file);
 
 }  // namespace fvm::workflows

@@ -50,8 +50,8 @@ MachineUncertainty RunMachineMonteCarlo(const MachineProblem& problem, const Mac
                                     OptionsOf(settings, problem.weighted));
   u.seconds = Seconds(start);
   for (const stage::MachineMonteCarloRun& r : u.runs) {
-    u.final_mean_um.push_back(r.final.mean_um);
-    if (problem.validation) u.validation_mean_um.push_back(r.validation.mean_um);
+    u.final_mean_um.push_back(r.final.mean_um());
+    if (problem.validation) u.validation_mean_um.push_back(r.validation.mean_um());
     u.converged += r.converged ? 1 : 0;
   }
   for (const stage::MachineMonteCarloRun& r : u.runs) {

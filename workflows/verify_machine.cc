@@ -16,7 +16,7 @@ MachineVerification VerifyMachine(const MachineProblem& problem, const VerifyMac
     const double k = static_cast<double>(r.calibration.layout.NumFree() + (estimate_pose ? 6 : 0));
     const double dof = std::max(1.0, n_eq - k);
     const double fit_term = problem.weighted ? r.weighted_rms * r.weighted_rms * dof
-                                             : n_eq * std::log(std::max(r.rms_mm * r.rms_mm, 1e-30));
+                                             : n_eq * std::log(std::max(r.residual_summary.rms_mm * r.residual_summary.rms_mm, 1e-30));
     fit.bic = fit_term + k * std::log(n_eq);
     if (problem.validation) {
       fit.validation = JudgeOn(fit.result, problem.validation_observations, problem.options.tool_offsets);
@@ -26,7 +26,7 @@ MachineVerification VerifyMachine(const MachineProblem& problem, const VerifyMac
   for (size_t i = 1; i < out.fits.size(); ++i) {
     const OrderFit& a = out.fits[i];
     const OrderFit& best = out.fits[out.chosen];
-    const bool better = a.validation ? a.validation->after.mean_um < best.validation->after.mean_um : a.bic < best.bic;
+    const bool better = a.validation ? a.validation->after.mean_um() < best.validation->after.mean_um() : a.bic < best.bic;
     if (better) out.chosen = i;
   }
   CheckTrackerSight(problem, out.Chosen().result.identified.pose);

@@ -214,27 +214,4 @@ void WriteMultilateratedPoints(const std::filesystem::path& path, const std::vec
   WriteFileAtomically(path, out);
 }
 
-std::map<std::string, NominalPoint, std::less<>> ReadNominalPoints(const std::filesystem::path& path) {
-  CsvOptions options;
-  options.expected_header = "id,x,y,z";
-  const CsvTable table = ReadCsv(path, options);
-  const int c_id = table.Require("id");
-  const int c[3] = {table.Require("x"), table.Require("y"), table.Require("z")};
-  const int c_approach = table.Optional("approach");
-  std::map<std::string, NominalPoint, std::less<>> out;
-  for (const CsvRow& row : table.rows()) {
-    const std::string id(TrimBlanks(table.Text(row, c_id)));
-    if (id.empty()) table.Fail(row, "the id is empty");
-    NominalPoint p;
-    for (int k = 0; k < 3; ++k) {
-      p.position[k] = table.Double(row, c[k], "point " + id);
-      if (std::abs(p.position[k]) > kMaxMm) table.Fail(row, fmt::format("point {}: beyond 100 m; coordinates are in mm", id));
-    }
-    if (c_approach >= 0) p.approach = std::string(TrimBlanks(table.Text(row, c_approach)));
-    if (!out.emplace(id, p).second) table.Fail(row, fmt::format("point {} appears twice", id));
-  }
-  if (out.empty()) throw InputError(fmt::format("{}: no point rows after the header", table.name()));
-  return out;
-}
-
 }  // namespace fvm::artefacts

@@ -17,7 +17,6 @@
 
 #include <Eigen/Core>
 #include <filesystem>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -66,13 +65,5 @@ struct MultilateratedPoint {
 };
 void WriteMultilateratedPoints(const std::filesystem::path& path, const std::vector<MultilateratedPoint>& points,
                                const std::vector<std::string>& comments);
-
-// Nominal coordinates by id from a CSV with id,x,y,z (e.g. points.csv of fvm simulate tracker; other columns are
-// ignored, `approach` kept). Throws InputError with file and line on a bad value or a duplicate id.
-struct NominalPoint {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  std::string approach;
-};
-std::map<std::string, NominalPoint, std::less<>> ReadNominalPoints(const std::filesystem::path& path);
 
 }  // namespace fvm::artefacts

@@ -195,27 +195,25 @@ std::string GCodeProgram(const std::vector<PlannedPoint>& points, double dwell_s
   return out;
 }
 
-double VolumetricErrorMm(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q) {
+Eigen::Vector3d VolumetricErrorVector(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q) {
   stage::AxisChain machine = chain;
   machine.instrument.reset();
   double e[stage::kNumErrorTerms];
   TermValuesAt(truth, q, e);
   const double zero[stage::kNumErrorTerms] = {};
-  return (stage::ChainForward(machine, e, q) - stage::ChainForward(machine, zero, q)).norm();
+  return stage::ChainForward(machine, e, q) - stage::ChainForward(machine, zero, q);
 }
 
-ErrorSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
-                                    const std::vector<PlannedPoint>& points) {
-  ErrorSummary s;
-  if (points.empty()) return s;
-  double sum = 0.0;
-  for (const PlannedPoint& p : points) {
-    const double um = 1000.0 * VolumetricErrorMm(chain, truth, p.nominal);
-    sum += um;
-    s.max_um = std::max(s.max_um, um);
-  }
-  s.mean_um = sum / static_cast<double>(points.size());
-  return s;
+double VolumetricErrorMm(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q) {
+  return VolumetricErrorVector(chain, truth, q).norm();
+}
+
+stage::ResidualSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
+                                              const std::vector<PlannedPoint>& points) {
+  std::vector<Eigen::Vector3d> errors;
+  errors.reserve(points.size());
+  for (const PlannedPoint& p : points) errors.push_back(VolumetricErrorVector(chain, truth, p.nominal));
+  return stage::Summarize(errors);
 }
 
 MachineTruth RandomMachineTruth(const stage::AxisChain& chain, const Workspace& ws, std::uint64_t seed,
@@ -252,7 +250,7 @@ MachineTruth RandomMachineTruth(const stage::AxisChain& chain, const Workspace& 
   // products of small angles, so a few rounds converge to rounding.
   const std::vector<PlannedPoint> grid = PlanMesh(ws, (ws.max - ws.min) / 10.0);
   for (int round = 0; round < 6; ++round) {
-    const double mean = VolumetricErrorSummary(chain, truth, grid).mean_um;
+    const double mean = VolumetricErrorSummary(chain, truth, grid).mean_um();
     if (!(mean > 0.0)) throw std::invalid_argument("the random machine has no volumetric error (degenerate chain?)");
     const double factor = mean_error_um / mean;
     if (std::abs(factor - 1.0) < 1e-12) break;

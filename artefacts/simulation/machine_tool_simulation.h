@@ -22,6 +22,7 @@
 #include "stage/axis_chain.h"
 #include "stage/error_terms.h"
 #include "stage/pose.h"
+#include "stage/residual_summary.h"
 #include "stage/tracker.h"
 
 namespace fvm::artefacts {
@@ -77,14 +78,12 @@ MachineTruth RandomMachineTruth(const stage::AxisChain& chain, const Workspace& 
 // The same for the published machine of [IJSIMM 2016]: chain XFYZ, tool offset (0, 0, 100) mm.
 MachineTruth RandomMachineTruth(const Workspace& ws, std::uint64_t seed, double mean_error_um = 35.0);
 
-// Volumetric error (mm) of the tool point commanded to q: |ChainForward(e(q), q) - ChainForward(0, q)| in the
-// machine frame (the chain's instrument pose is ignored).
+// Volumetric error (mm) of the tool point commanded to q: ChainForward(e(q), q) - ChainForward(0, q) in the
+// machine frame (the chain's instrument pose is ignored), and its length.
+Eigen::Vector3d VolumetricErrorVector(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q);
 double VolumetricErrorMm(const stage::AxisChain& chain, const MachineTruth& truth, const Eigen::Vector3d& q);
-struct ErrorSummary {
-  double mean_um = 0.0;
-  double max_um = 0.0;
-};
-ErrorSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
+// The volumetric errors of the truth at `points`.
+stage::ResidualSummary VolumetricErrorSummary(const stage::AxisChain& chain, const MachineTruth& truth,
                                     const std::vector<PlannedPoint>& points);
 
 // The tracker readings of the machine `truth` at `points`: the tool point ChainForward(chain, e(q), q) in the

@@ -98,8 +98,8 @@ json CalibrationToJson(const stage::IdentificationResult& result) {
     const Eigen::Vector3d& r = *cal.frame_reference;
     doc["frame_reference_mm"] = {r.x(), r.y(), r.z()};  // the first tile whose view the part frame is (stitched_frame.h)
   }
-  doc["identification"] = {{"centres", result.residuals.size()}, {"mean_um", result.mean_mm * 1e3},
-                           {"rms_um", result.rms_mm * 1e3},       {"max_um", result.max_mm * 1e3},
+  doc["identification"] = {{"centres", result.residuals.size()}, {"mean_um", result.residual_summary.mean_um()},
+                           {"rms_um", result.residual_summary.rms_um()},       {"max_um", result.residual_summary.max_um()},
                            {"iterations", result.iterations},     {"converged", result.converged}};
   return doc;
 }

@@ -150,13 +150,13 @@ TEST(MachineTruth, VanishesAtTheOriginAndHasTheRequestedMeanError) {
   // The mean over the 11 x 11 x 11 mesh it was scaled on: within 1 % (by construction to rounding).
   const auto grid = PlanMesh(kPublished, (kPublished.max - kPublished.min) / 10.0);
   ASSERT_EQ(grid.size(), 1331u);
-  EXPECT_NEAR(VolumetricErrorSummary(chain, truth, grid).mean_um, 35.0, 0.35);
+  EXPECT_NEAR(VolumetricErrorSummary(chain, truth, grid).mean_um(), 35.0, 0.35);
   // Another size, another chain.
   stage::AxisChain other = stage::AxisChain::Parse("YXFZ");
-  EXPECT_NEAR(VolumetricErrorSummary(other, RandomMachineTruth(other, kPublished, 4, 120.0), grid).mean_um, 120.0, 1.2);
+  EXPECT_NEAR(VolumetricErrorSummary(other, RandomMachineTruth(other, kPublished, 4, 120.0), grid).mean_um(), 120.0, 1.2);
   // The finer published mesh (5408 points) sees about the same mean: within 10 % (a different sample of one field).
   const auto fine = PlanMesh(kPublished, Eigen::Vector3d(100, 100, 100));
-  EXPECT_NEAR(VolumetricErrorSummary(chain, truth, fine).mean_um, 35.0, 3.5);
+  EXPECT_NEAR(VolumetricErrorSummary(chain, truth, fine).mean_um(), 35.0, 3.5);
   // The published-machine overload is the same as XFYZ with the 100 mm tool.
   const MachineTruth plain = RandomMachineTruth(kPublished, 3, 35.0);
   EXPECT_EQ(plain.terms[0].poly, truth.terms[0].poly);

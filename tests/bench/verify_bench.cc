@@ -171,10 +171,10 @@ void BM_VerifyOrder3(benchmark::State& state) {
   const ParameterLayout layout = Order3Legendre();
   for (auto _ : state) {
     const VerificationResult v = VerifyMachine(layout, obs, Estimated());
-    benchmark::DoNotOptimize(v.final.mean_um);
+    benchmark::DoNotOptimize(v.final.mean_um());
     const double dof = 3.0 * static_cast<double>(obs.size()) - v.identified.calibration.layout.NumFree() - kPose;
     state.counters["cost"] = 0.5 * v.identified.weighted_rms * v.identified.weighted_rms * dof;
-    state.counters["final_mean_um"] = v.final.mean_um;
+    state.counters["final_mean_um"] = v.final.mean_um();
     state.counters["free"] = v.identified.calibration.layout.NumFree();
     state.counters["iterations"] = v.identified.iterations;
   }

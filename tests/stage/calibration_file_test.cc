@@ -34,7 +34,7 @@ IdentificationResult SmallResult() {
   Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4, Eigen::Vector3d(-185.0, -15.0, -50.0)};
   cal.covariance << 4e-8, 1e-12, 0, 1e-12, 9e-12, 2e-13, 0, 2e-13, 1.6e-11;
   IdentificationResult result(cal);
-  result.rms_mm = 1.25e-3;
+  result.residual_summary.rms_mm = 1.25e-3;
   result.converged = true;
   return result;
 }

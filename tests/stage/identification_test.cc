@@ -52,8 +52,8 @@ TEST(Identification, OrdersOneAndTwoConvergeAndBeatTheSimplifiedModel) {
       // rms, the ripple 0.3 um / sqrt(2) per translation term it rides on (at most ~0.4 um rms added in
       // quadrature over the coordinates: 1.28 um); allow the parameter uncertainty on top. A model that got the
       // published equation wrong (a sign, a transposed rotation) leaves tens of um here.
-      EXPECT_LT(r.rms_mm, 1.6e-3) << model;
-      EXPECT_GT(r.rms_mm, 0.9e-3) << model;  // fewer than 51 x 3 - 27 degrees of freedom cannot explain less
+      EXPECT_LT(r.residual_summary.rms_mm, 1.6e-3) << model;
+      EXPECT_GT(r.residual_summary.rms_mm, 0.9e-3) << model;  // fewer than 51 x 3 - 27 degrees of freedom cannot explain less
     }
   }
 }

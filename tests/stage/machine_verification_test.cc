@@ -155,12 +155,12 @@ TEST(MachineVerification, RecoversAPolynomialMachineAndTheTrackerPoseWithoutNois
   const std::vector<Observation> readings = Readings(truth, Mesh({500, 500, 400}), tracker, nullptr, 0);
   ASSERT_EQ(readings.size(), 96u);  // the [IJSIMM 2016] mesh
   const VerificationResult r = VerifyMachine(MachineLayout(Basis::kPower, 3), readings, Estimated());
-  EXPECT_GT(r.initial.mean_um, 10.0);
+  EXPECT_GT(r.initial.mean_um(), 10.0);
   // Small-angle inverse and products of errors are in both models alike: what is left is rounding.
-  EXPECT_LT(r.final.max_um, 1e-3);
+  EXPECT_LT(r.final.max_um(), 1e-3);
   const std::vector<Observation> unseen = Readings(truth, Mesh({250, 250, 200}), tracker, nullptr, 0);
-  EXPECT_LT(SummarizeVolumetric(VolumetricResiduals(r.identified.calibration.layout, &r.identified.calibration.values,
-                                                    r.identified.pose, unseen)).max_um, 1e-3);
+  EXPECT_LT(Summarize(VolumetricResiduals(r.identified.calibration.layout, &r.identified.calibration.values,
+                                                    r.identified.pose, unseen)).max_um(), 1e-3);
   // The constant terms cannot be told from the pose: they are fixed and say so.
   int absorbed = 0;
   for (const FixedCoefficient& f : r.identified.fixed) absorbed += f.reason.find("pose") != std::string::npos;
@@ -190,7 +190,7 @@ TEST(MachineVerification, ASecondToolOffsetMakesMoreTermsIdentifiable) {
   }
   const VerificationResult dual = VerifyMachine(MachineLayout(Basis::kPower, 3), both, two_tools);
   EXPECT_LT(dual.identified.fixed.size(), single.identified.fixed.size());
-  EXPECT_LT(dual.final.max_um, 1e-3);
+  EXPECT_LT(dual.final.max_um(), 1e-3);
   // Named reasons: with the tool offset in z only, ex(z) and ey(z) act only through it.
   bool zrx_named = false;
   for (const FixedCoefficient& f : single.identified.fixed) zrx_named |= f.name.rfind("zR", 0) == 0;
@@ -230,8 +230,8 @@ TEST(MachineVerification, OtherChainsRecoverTheirMachineWithoutNoise) {
       readings.push_back(o);
     }
     const VerificationResult r = VerifyMachine(layout, readings, Estimated());
-    EXPECT_GT(r.initial.mean_um, 5.0) << code;
-    EXPECT_LT(r.final.max_um, 1e-3) << code;
+    EXPECT_GT(r.initial.mean_um(), 5.0) << code;
+    EXPECT_LT(r.final.max_um(), 1e-3) << code;
     EXPECT_NEAR(r.identified.pose.translation.x(), tracker.translation.x(), 1.0) << code;
   }
 }
@@ -320,7 +320,7 @@ TEST(MachineVerification, MatchesAnIndependentWeightedFitOnNonPolynomialErrorsWi
   const VerificationResult r = VerifyMachine(MachineLayout(Basis::kPower, 2), readings, Estimated());
   ASSERT_TRUE(r.identified.converged) << r.identified.solver_report;
   const ParameterLayout& layout = r.identified.calibration.layout;
-  const double ours = SummarizeVolumetric(VolumetricResiduals(layout, &r.identified.calibration.values, r.identified.pose, unseen)).mean_um;
+  const double ours = Summarize(VolumetricResiduals(layout, &r.identified.calibration.values, r.identified.pose, unseen)).mean_um();
 
   const ReferenceFit reference = FitIndependently(layout, readings, tracker);
   std::vector<int> free_coefficients;
@@ -333,7 +333,7 @@ TEST(MachineVerification, MatchesAnIndependentWeightedFitOnNonPolynomialErrorsWi
     theirs += (SeedReading(LayoutErrors(layout, free_coefficients, v, o.command), o.command, reference.rotation, reference.translation) -
                o.measured).norm() * 1e3 / static_cast<double>(unseen.size());
   }
-  const double before = SummarizeVolumetric(VolumetricResiduals(layout, nullptr, r.initial_pose, unseen)).mean_um;
+  const double before = Summarize(VolumetricResiduals(layout, nullptr, r.initial_pose, unseen)).mean_um();
   // The target: within 10 % of the independent fit; and the model must have learnt something, though
   // 24 urad of angle noise at 2-3 m (50-70 um across the beam) leaves its coefficients noisy.
   EXPECT_NEAR(ours, theirs, 0.1 * theirs) << "before " << before;

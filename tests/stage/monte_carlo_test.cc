@@ -81,7 +81,7 @@ TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
     const Calibration& c = v.identified.calibration;
     predictions.push_back(PredictedReadings(c.layout, &c.values, v.identified.pose, study.validation, {}));
     real_validation_means.push_back(
-        SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, v.identified.pose, study.validation, {})).mean_um);
+        Summarize(VolumetricResiduals(c.layout, &c.values, v.identified.pose, study.validation, {})).mean_um());
     if (k == 0) first.emplace(std::move(v));
   }
   // The Monte Carlo from the first measurement alone.
@@ -130,7 +130,7 @@ TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   std::vector<double> mc_validation_means;
   for (const MachineMonteCarloRun& r : runs) {
     EXPECT_TRUE(r.converged);
-    mc_validation_means.push_back(r.validation.mean_um);
+    mc_validation_means.push_back(r.validation.mean_um());
   }
   const SampleSummary real = SummarizeSample(real_validation_means), simulated = SummarizeSample(mc_validation_means);
   std::printf("validation mean error: independent %.2f +- %.2f um, Monte Carlo %.2f +- %.2f um\n", real.mean, real.sd,
@@ -154,12 +154,12 @@ TEST(MachineMonteCarlo, SameBitsForAnyThreadCount) {
   const std::vector<MachineMonteCarloRun> two = MachineMonteCarlo(layout, v, readings, {}, study.noise, Options(), mc);
   ASSERT_EQ(one.size(), two.size());
   for (size_t r = 0; r < one.size(); ++r) {
-    EXPECT_EQ(one[r].final.mean_um, two[r].final.mean_um);
+    EXPECT_EQ(one[r].final.mean_um(), two[r].final.mean_um());
     for (size_t p = 0; p < one[r].deviation_mm.size(); ++p) EXPECT_EQ(one[r].deviation_mm[p], two[r].deviation_mm[p]);
   }
   mc.seed = 43;
   const std::vector<MachineMonteCarloRun> other = MachineMonteCarlo(layout, v, readings, {}, study.noise, Options(), mc);
-  EXPECT_NE(one[0].final.mean_um, other[0].final.mean_um);
+  EXPECT_NE(one[0].final.mean_um(), other[0].final.mean_um());
 }
 
 TEST(MachineMonteCarlo, NoiseFreeTrackerGivesNoSpread) {

@@ -115,8 +115,8 @@ TEST(StitchedFrame, IdentificationFollowsTheTurnOfPlacementsThatStartApart) {
     const IdentificationResult rotated = Identify(layout, m.identify.observations, options);
     ASSERT_TRUE(rotated.converged);
     // Noise of 0.5 um per coordinate in both measurements: 1.22 um rms of the 3-D residual, less what the fit takes.
-    EXPECT_LT(rotated.rms_mm, 1.3e-3) << "seed " << seed;
-    EXPECT_LT(rotated.rms_mm, translated.rms_mm) << "seed " << seed;
+    EXPECT_LT(rotated.residual_summary.rms_mm, 1.3e-3) << "seed " << seed;
+    EXPECT_LT(rotated.residual_summary.rms_mm, translated.residual_summary.rms_mm) << "seed " << seed;
     ASSERT_TRUE(rotated.calibration.frame_reference.has_value());
     EXPECT_TRUE(rotated.calibration.frame_reference->isApprox(m.identify.anchors.front()));
   }

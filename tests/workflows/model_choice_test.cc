@@ -40,8 +40,8 @@ TEST(IdentifyModel, ExplainsTheSimulatedStageDownToTheNoise) {
   const stage::IdentificationResult r = IdentifyModel({"15", ""}, set, IdentifySettings{});
   EXPECT_EQ(r.calibration.model, "15");
   ASSERT_TRUE(r.converged);
-  EXPECT_GT(r.rms_mm * 1e3, 0.9);
-  EXPECT_LT(r.rms_mm * 1e3, 1.3);
+  EXPECT_GT(r.residual_summary.rms_um(), 0.9);
+  EXPECT_LT(r.residual_summary.rms_um(), 1.3);
   // A bar cannot tell every coefficient of the 15 model: the rest are fixed and named.
   EXPECT_EQ(r.calibration.layout.NumFree() + static_cast<int>(r.fixed.size()), 15);
 }

@@ -65,7 +65,7 @@ TEST(Multilaterate, RecoversSimulatedPointsWithinTheirCovariance) {
   const double n = static_cast<double>(net.targets.size());
   EXPECT_GT(chi2 / n, 2.0);
   EXPECT_LT(chi2 / n, 4.0);
-  const TruthError e = ErrorAgainstTruth(m, (net.dir.path() / "true_points.csv").string());
+  const stage::ResidualSummary e = ErrorAgainstTruth(m, (net.dir.path() / "true_points.csv").string());
   EXPECT_NEAR(e.mean_mm, sum / n, 1e-12);
   EXPECT_NEAR(e.max_mm, worst, 1e-12);
   // The stated uncertainty is the one the points show: mean |u| within 20 % of the rms error (sd of the rms of

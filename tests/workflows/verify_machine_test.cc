@@ -35,7 +35,7 @@ TEST(VerifyMachine, RecoversASimulatedMachineWithinItsUncertainty) {
   EXPECT_GT(r.identified.weighted_rms, 0.85);
   EXPECT_LT(r.identified.weighted_rms, 1.15);
   // Before: the machine (100 um mean) and the noise; after: the noise alone (about 15 um of 3-D reading error).
-  EXPECT_GT(r.initial.mean_um, 3 * r.final.mean_um);
+  EXPECT_GT(r.initial.mean_um(), 3 * r.final.mean_um());
 
   const stage::Calibration& cal = r.identified.calibration;
   const std::vector<Eigen::Vector3d> predicted = stage::PredictedReadings(
@@ -70,7 +70,7 @@ TEST(VerifyMachine, ChoosesTheOrderTheMachineNeeds) {
   EXPECT_EQ(by_validation.ChosenBy(), "validation mean");
   EXPECT_EQ(by_validation.Chosen().order, 3);
   // The held-out points are noise-free: what is left on them is the model's own uncertainty, a few um.
-  EXPECT_LT(by_validation.Chosen().validation->after.mean_um, 0.2 * by_validation.Chosen().validation->before.mean_um);
+  EXPECT_LT(by_validation.Chosen().validation->after.mean_um(), 0.2 * by_validation.Chosen().validation->before.mean_um());
 }
 
 TEST(VerifyMachine, ATravelThatMissesAPointIsRefusedNamingTheFileLineAndPoint) {

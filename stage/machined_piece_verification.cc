@@ -1,4 +1,4 @@
-#include "stage/test_piece_verification.h"
+#include "stage/machined_piece_verification.h"
 
 #include <cmath>
 #include <string_view>
@@ -59,13 +59,13 @@ std::vector<TermRecovery> TermRecoveries(const IdentificationResult& identified)
   return out;
 }
 
-TestPieceVerification VerifyTestPiece(const ParameterLayout& layout, const std::vector<Observation>& readings,
+MachinedPieceVerification VerifyMachinedPiece(const ParameterLayout& layout, const std::vector<Observation>& readings,
                                       IdentificationOptions options) {
-  std::vector<VolumetricError> log;
+  std::vector<ResidualSummary> log;
   options.on_iteration = [&](const ParameterLayout& solved, const std::vector<double>& values, const Pose& pose) {
-    log.push_back(SummarizeVolumetric(VolumetricResiduals(solved, &values, pose, readings, options.tool_offsets)));
+    log.push_back(Summarize(VolumetricResiduals(solved, &values, pose, readings, options.tool_offsets)));
   };
-  TestPieceVerification out(VerifyMachine(layout, readings, options));
+  MachinedPieceVerification out(VerifyMachine(layout, readings, options));
   out.iterations.push_back(out.result.initial);
   out.iterations.insert(out.iterations.end(), log.begin(), log.end());
   out.terms = TermRecoveries(out.result.identified);

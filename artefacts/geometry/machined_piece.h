@@ -1,7 +1,8 @@
 #pragma once
 // The machined test piece of [Lorente 2021] (a block with slots, a stepped pyramid, crenellations and conical holes,
 // cut by the machine under test and measured on a CMM), as a parametric description: features that are axis-aligned
-// boxes, each with the probe points a CMM measures on it.
+// boxes, each with the probe points a CMM measures on it. The code calls it the machined piece (MachinedPiece,
+// machined_piece_*) so that its files and types do not read as test code; users meet the standard's name, test piece.
 //
 // Coordinates are machine coordinates (mm): the tool command at which the feature's point was cut, so a piece cut
 // by a perfect machine measures exactly these. Features are of two classes:
@@ -42,7 +43,7 @@ struct PieceFeature {
   std::vector<ProbePoint> points;
 };
 
-struct TestPieceDescription {
+struct MachinedPieceDescription {
   Eigen::Vector3d envelope = Eigen::Vector3d(300, 270, 180);  // block size, mm
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();           // corner of the envelope in machine coordinates
   std::vector<PieceFeature> features;
@@ -54,13 +55,13 @@ struct TestPieceDescription {
 // its four edges up to z 180, four main slots 20 mm wide, a four-level pyramid, three side slots on each of two lateral
 // faces, and conical holes in two side faces for the Z series. 480 probe points, 167 of them on the pyramid; the
 // series X1..Z3 as [Lorente 2021] section 6.2.1 arranges them (see README, "The machined test piece").
-TestPieceDescription PublishedTestPiece();
+MachinedPieceDescription PublishedMachinedPiece();
 
 // Parses the JSON above. Throws InputError naming `name` and the feature on a malformed description, and listing
 // Problems() when the geometry is not valid.
-TestPieceDescription ParseTestPiece(std::string_view json_text, const std::string& name);
-TestPieceDescription ReadTestPiece(const std::string& path);
-std::string TestPieceJson(const TestPieceDescription& piece);
+MachinedPieceDescription ParseMachinedPiece(std::string_view json_text, const std::string& name);
+MachinedPieceDescription ReadMachinedPiece(const std::string& path);
+std::string MachinedPieceJson(const MachinedPieceDescription& piece);
 
 // One nominal point of the piece in machine coordinates: id T0001... in feature order, the series it belongs to
 // or else its feature's name, its feature and kind.
@@ -71,7 +72,7 @@ struct PiecePoint {
   std::string feature;
   FeatureKind kind = FeatureKind::kSlot;
 };
-std::vector<PiecePoint> NominalPoints(const TestPieceDescription& piece);
+std::vector<PiecePoint> NominalPoints(const MachinedPieceDescription& piece);
 
 // NOMINAL.csv: id,x,y,z,series (written atomically).
 void WriteNominalPoints(const std::string& path, const std::vector<PiecePoint>& points);
@@ -85,6 +86,6 @@ std::string CmmProgram(const std::vector<PiecePoint>& points);
 // The [ISO 6983-1] tool path that cuts every feature: roughing boxes as pocket passes and holes as G81 drill cycles,
 // with a safe height above the envelope. A plain program for a simulator or a controller's dry run, not a CAM
 // output with stock allowances.
-std::string CuttingProgram(const TestPieceDescription& piece, double tool_diameter_mm = 10.0);
+std::string CuttingProgram(const MachinedPieceDescription& piece, double tool_diameter_mm = 10.0);
 
 }  // namespace fvm::artefacts

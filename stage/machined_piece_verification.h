@@ -28,17 +28,17 @@ struct TermRecovery {
   std::string reason;          // why not, from the rank treatment (the first fixed coefficient's reason)
 };
 
-struct TestPieceVerification {
-  explicit TestPieceVerification(VerificationResult r) : result(std::move(r)) {}
+struct MachinedPieceVerification {
+  explicit MachinedPieceVerification(VerificationResult r) : result(std::move(r)) {}
   VerificationResult result;
-  std::vector<VolumetricError> iterations;  // [0]: ideal machine at the initial datum; then each solver iteration
+  std::vector<ResidualSummary> iterations;  // [0]: ideal machine at the initial datum; then each solver iteration
   std::vector<TermRecovery> terms;          // the 21 terms, in error_terms.h order
   std::vector<FixedCoefficient> datum_absorbs;  // the fixed coefficients whose effect the datum (pose) reproduces
 };
 
 // Identifies `layout` (MachineLayout over the piece's extent) from CMM readings of the piece: options.instrument is
 // kEstimated (the datum, started from the rigid best fit) or kHeld (a known datum).
-TestPieceVerification VerifyTestPiece(const ParameterLayout& layout, const std::vector<Observation>& readings,
+MachinedPieceVerification VerifyMachinedPiece(const ParameterLayout& layout, const std::vector<Observation>& readings,
                                       IdentificationOptions options);
 
 // The 21 terms' recovery under an identification result.

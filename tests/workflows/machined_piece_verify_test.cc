@@ -1,12 +1,12 @@
-#include "workflows/test_piece_verify.h"
+#include "workflows/machined_piece_verify.h"
 
 #include <gtest/gtest.h>
 
 #include <set>
 
 #include "tests/support/test_support.h"
-#include "artefacts/geometry/test_piece.h"
-#include "artefacts/simulation/test_piece_simulation.h"
+#include "artefacts/geometry/machined_piece.h"
+#include "artefacts/simulation/machined_piece_simulation.h"
 
 namespace fvm::workflows {
 namespace {
@@ -21,7 +21,7 @@ struct MeasuredPiece {
   std::string nominal;
 
   MeasuredPiece() {
-    const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
+    const artefacts::MachinedPieceDescription piece = artefacts::PublishedMachinedPiece();
     const std::vector<artefacts::PiecePoint> points = artefacts::NominalPoints(piece);
     stage::AxisChain chain = stage::AxisChain::Parse("XFYZ");
     chain.tool_offset = Eigen::Vector3d(0, 0, 100);
@@ -32,7 +32,7 @@ struct MeasuredPiece {
     cmm.sigma_mm = kCmmNoiseUm * 1e-3;
     cmm.seed = 41;
     artefacts::TrackerReadings noise_free;
-    const artefacts::TrackerReadings measured = artefacts::SimulateTestPiece(chain, truth, points, cmm, &noise_free);
+    const artefacts::TrackerReadings measured = artefacts::SimulateMachinedPiece(chain, truth, points, cmm, &noise_free);
     artefacts::WriteTrackerReadings(dir.path() / "measured.csv", measured);
     nominal = (dir.path() / "nominal.csv").string();
     artefacts::WriteNominalPoints(nominal, points);
@@ -43,7 +43,7 @@ struct MeasuredPiece {
       grid.push_back({id, p.nominal, "", "", {}});
     }
     cmm.sigma_mm = 0;
-    artefacts::WriteTrackerReadings(dir.path() / "validation.csv", artefacts::SimulateTestPiece(chain, truth, grid, cmm));
+    artefacts::WriteTrackerReadings(dir.path() / "validation.csv", artefacts::SimulateMachinedPiece(chain, truth, grid, cmm));
     options.data = (dir.path() / "measured.csv").string();
     options.validate = (dir.path() / "validation.csv").string();
     options.basis = "chebyshev";
@@ -57,29 +57,29 @@ struct MeasuredPiece {
 // a little less for the ~50 parameters of 3 x 480 equations; over 480 points its mean has a standard deviation of
 // 0.67 s / sqrt(480) = 0.03 s, so 1.4-1.75 um is 5 of them. On the noise-free grid what is left is the model's
 // uncertainty, s sqrt(p / N) = 0.3 um: below 0.5 um, from about 100 um before.
-TEST(VerifyTestPiece, LeavesTheCmmNoiseOnThePieceAndTheModelUncertaintyOnTheGrid) {
+TEST(VerifyMachinedPiece, LeavesTheCmmNoiseOnThePieceAndTheModelUncertaintyOnTheGrid) {
   const MeasuredPiece piece;
-  const TestPieceVerifyResult r = VerifyTestPiece(LoadMachineProblem(piece.options), {2, ""});
-  const stage::TestPieceVerification& v = r.verification;
+  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, ""});
+  const stage::MachinedPieceVerification& v = r.verification;
   ASSERT_TRUE(v.result.identified.converged);
-  EXPECT_GT(v.result.final.mean_um, 1.4 * kCmmNoiseUm);
-  EXPECT_LT(v.result.final.mean_um, 1.75 * kCmmNoiseUm);
+  EXPECT_GT(v.result.final.mean_um(), 1.4 * kCmmNoiseUm);
+  EXPECT_LT(v.result.final.mean_um(), 1.75 * kCmmNoiseUm);
   ASSERT_TRUE(r.validation.has_value());
-  EXPECT_GT(r.validation->before.mean_um, 50.0);
-  EXPECT_LT(r.validation->after.mean_um, 0.5);
+  EXPECT_GT(r.validation->before.mean_um(), 50.0);
+  EXPECT_LT(r.validation->after.mean_um(), 0.5);
   // The log starts at the ideal machine and ends at the final fit.
   ASSERT_GE(v.iterations.size(), 2u);
-  EXPECT_DOUBLE_EQ(v.iterations.front().mean_um, v.result.initial.mean_um);
-  EXPECT_NEAR(v.iterations.back().mean_um, v.result.final.mean_um, 0.01);
+  EXPECT_DOUBLE_EQ(v.iterations.front().mean_um(), v.result.initial.mean_um());
+  EXPECT_NEAR(v.iterations.back().mean_um(), v.result.final.mean_um(), 0.01);
   EXPECT_EQ(r.geometric_from, "all points");
   EXPECT_FALSE(r.extraction.has_value());
 }
 
 // The series X1..Z3 alone: [Lorente 2021] finds that they cannot give the Z yaws and roll-pitch of Z nor ECY
 // (hence the proposed series with more tools); the job says the same and extracts errors from them.
-TEST(VerifyTestPiece, TheSeriesAloneLeaveTheYawsOfZAndEcyUnrecovered) {
+TEST(VerifyMachinedPiece, TheSeriesAloneLeaveTheYawsOfZAndEcyUnrecovered) {
   const MeasuredPiece piece;
-  const TestPieceVerifyResult r = VerifyTestPiece(LoadMachineProblem(piece.options), {2, piece.nominal});
+  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, piece.nominal});
   EXPECT_EQ(r.geometric_from.rfind("series X1..Z3 (", 0), 0u) << r.geometric_from;
   std::set<std::string> lost;
   for (const stage::TermRecovery& t : r.geometric) {
@@ -90,12 +90,12 @@ TEST(VerifyTestPiece, TheSeriesAloneLeaveTheYawsOfZAndEcyUnrecovered) {
   EXPECT_FALSE(r.extraction->empty());
 }
 
-TEST(VerifyTestPiece, ANominalFileWithoutSeriesIsRefusedNamingBothFiles) {
+TEST(VerifyMachinedPiece, ANominalFileWithoutSeriesIsRefusedNamingBothFiles) {
   const MeasuredPiece piece;
   const std::string other = (piece.dir.path() / "other.csv").string();
   artefacts::WriteNominalPoints(other, {{"Q1", Eigen::Vector3d(1, 2, 3), "X1", "", {}}});
   try {
-    VerifyTestPiece(LoadMachineProblem(piece.options), {2, other});
+    VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, other});
     FAIL() << "a nominal file without the piece's points was accepted";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), other + ": no point of " + piece.options.data +

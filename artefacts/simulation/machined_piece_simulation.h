@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "artefacts/geometry/test_piece.h"
+#include "artefacts/geometry/machined_piece.h"
 #include "artefacts/io/tracker_readings.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "stage/axis_chain.h"
@@ -26,7 +26,7 @@ namespace fvm::artefacts {
 MachineTruth PublishedTestFunctions(const Workspace& ws);
 
 // The workspace a piece spans: its envelope in machine coordinates.
-Workspace PieceWorkspace(const TestPieceDescription& piece);
+Workspace PieceWorkspace(const MachinedPieceDescription& piece);
 
 struct CmmSimulation {
   stage::Pose datum;            // the piece in the CMM frame: machine (part) coordinates -> CMM by ToPosedFrame
@@ -36,7 +36,7 @@ struct CmmSimulation {
 
 // The CMM readings (cmm = true: id,x,y,z,xm,ym,zm) of the piece cut by `truth` on `chain` at `points`; the
 // noise-free readings go to `noise_free` when given.
-TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
+TrackerReadings SimulateMachinedPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
                                   const CmmSimulation& cmm, TrackerReadings* noise_free = nullptr);
 
 }  // namespace fvm::artefacts

@@ -9,18 +9,18 @@
 #include <vector>
 
 #include "stage/series_extraction.h"
-#include "stage/test_piece_verification.h"
+#include "stage/machined_piece_verification.h"
 #include "workflows/machine_problem.h"
 
 namespace fvm::workflows {
 
-struct TestPieceVerifyOptions {
+struct MachinedPieceVerifyOptions {
   int order = 2;        // polynomial order of each error function
   std::string nominal;  // NOMINAL.csv id,x,y,z,series of the piece: its series X1..Z3; empty: all points judge
 };
 
-struct TestPieceVerifyResult {
-  stage::TestPieceVerification verification;
+struct MachinedPieceVerifyResult {
+  stage::MachinedPieceVerification verification;
   std::optional<VolumetricChange> validation;  // the held-out readings, when the problem has them
   std::vector<stage::TermRecovery> geometric;  // per error: recovered by the series alone (or all points)
   std::string geometric_from;                  // "all points" or "series X1..Z3 (N points)"
@@ -31,7 +31,7 @@ struct TestPieceVerifyResult {
 
 // Refusals name the data or nominal file: a verification the data refuse, a nominal file with no point of a series,
 // series that alone cannot be verified.
-TestPieceVerifyResult VerifyTestPiece(const MachineProblem& problem, const TestPieceVerifyOptions& options);
+MachinedPieceVerifyResult VerifyMachinedPiece(const MachineProblem& problem, const MachinedPieceVerifyOptions& options);
 
 // "X1".."Z3": the series of the geometric verification.
 bool IsSeries(const std::string& name);

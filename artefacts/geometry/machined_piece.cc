@@ -1,4 +1,4 @@
-#include "artefacts/geometry/test_piece.h"
+#include "artefacts/geometry/machined_piece.h"
 
 #include <fmt/core.h>
 
@@ -89,7 +89,7 @@ std::string_view FeatureKindName(FeatureKind kind) {
 
 bool IsCut(FeatureKind kind) { return kind == FeatureKind::kSlot || kind == FeatureKind::kSideSlot || kind == FeatureKind::kHole; }
 
-std::vector<std::string> TestPieceDescription::Problems() const {
+std::vector<std::string> MachinedPieceDescription::Problems() const {
   std::vector<std::string> out;
   std::set<std::string> names;
   for (const PieceFeature& f : features) {
@@ -133,8 +133,8 @@ std::vector<std::string> TestPieceDescription::Problems() const {
   return out;
 }
 
-TestPieceDescription PublishedTestPiece() {
-  TestPieceDescription piece;
+MachinedPieceDescription PublishedMachinedPiece() {
+  MachinedPieceDescription piece;
   std::vector<PieceFeature>& f = piece.features;
   constexpr double kTop = 180, kBlock = 100;
   // Crenellations: teeth 10 mm wide at 20 mm pitch on a 10 mm band along each edge, standing from the block's top
@@ -214,7 +214,7 @@ TestPieceDescription PublishedTestPiece() {
   return piece;
 }
 
-TestPieceDescription ParseTestPiece(std::string_view json_text, const std::string& name) {
+MachinedPieceDescription ParseMachinedPiece(std::string_view json_text, const std::string& name) {
   json j;
   try {
     j = json::parse(json_text);
@@ -222,7 +222,7 @@ TestPieceDescription ParseTestPiece(std::string_view json_text, const std::strin
     throw InputError(fmt::format("{}: not valid JSON ({}); see fvm testpiece design --help for the format", name, e.what()));
   }
   if (!j.is_object()) throw InputError(name + ": the description must be a JSON object with \"envelope_mm\" and \"features\"");
-  TestPieceDescription piece;
+  MachinedPieceDescription piece;
   piece.features.clear();
   if (!j.contains("envelope_mm")) throw InputError(name + ": no \"envelope_mm\": give the block's size [x, y, z] in mm");
   piece.envelope = Vector(j["envelope_mm"], name + ": envelope_mm");
@@ -279,15 +279,15 @@ TestPieceDescription ParseTestPiece(std::string_view json_text, const std::strin
   return piece;
 }
 
-TestPieceDescription ReadTestPiece(const std::string& path) {
+MachinedPieceDescription ReadMachinedPiece(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the piece description");
   std::stringstream text;
   text << in.rdbuf();
-  return ParseTestPiece(text.str(), path);
+  return ParseMachinedPiece(text.str(), path);
 }
 
-std::string TestPieceJson(const TestPieceDescription& piece) {
+std::string MachinedPieceJson(const MachinedPieceDescription& piece) {
   const auto vec = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
   json j{{"envelope_mm", vec(piece.envelope)}, {"origin_mm", vec(piece.origin)}, {"features", json::array()}};
   for (const PieceFeature& f : piece.features) {
@@ -304,7 +304,7 @@ std::string TestPieceJson(const TestPieceDescription& piece) {
   return j.dump(1) + "\n";
 }
 
-std::vector<PiecePoint> NominalPoints(const TestPieceDescription& piece) {
+std::vector<PiecePoint> NominalPoints(const MachinedPieceDescription& piece) {
   std::vector<PiecePoint> out;
   for (const PieceFeature& f : piece.features) {
     for (const ProbePoint& p : f.points) {
@@ -333,7 +333,7 @@ std::string CmmProgram(const std::vector<PiecePoint>& points) {
   return out;
 }
 
-std::string CuttingProgram(const TestPieceDescription& piece, double tool_diameter_mm) {
+std::string CuttingProgram(const MachinedPieceDescription& piece, double tool_diameter_mm) {
   const double safe = piece.origin.z() + piece.envelope.z() + 10.0;
   std::string out = "%\n";
   out += fmt::format("(FVM TEST PIECE {:.0f} X {:.0f} X {:.0f} MM, TOOL D{:.1f})\nG90 G21 G17 G94\n", piece.envelope.x(), piece.envelope.y(),

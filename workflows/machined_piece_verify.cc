@@ -1,4 +1,4 @@
-#include "workflows/test_piece_verify.h"
+#include "workflows/machined_piece_verify.h"
 
 #include <fmt/core.h>
 
@@ -24,12 +24,12 @@ std::map<std::string, std::string> ReadSeries(const std::string& path) {
 
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
 
-TestPieceVerifyResult VerifyTestPiece(const MachineProblem& problem, const TestPieceVerifyOptions& options) {
+MachinedPieceVerifyResult VerifyMachinedPiece(const MachineProblem& problem, const MachinedPieceVerifyOptions& options) {
   const stage::ParameterLayout layout = problem.Layout(options.order);
-  TestPieceVerifyResult out{
-      RefusalsNamingTheData(problem, [&] { return stage::VerifyTestPiece(layout, problem.observations, problem.options); }),
+  MachinedPieceVerifyResult out{
+      RefusalsNamingTheData(problem, [&] { return stage::VerifyMachinedPiece(layout, problem.observations, problem.options); }),
       std::nullopt, {}, "all points", std::nullopt};
-  const stage::TestPieceVerification& v = out.verification;
+  const stage::MachinedPieceVerification& v = out.verification;
   const stage::IdentificationResult& r = v.result.identified;
   if (problem.validation) out.validation = JudgeOn(v.result, problem.validation_observations, problem.options.tool_offsets);
 
@@ -48,7 +48,7 @@ TestPieceVerifyResult VerifyTestPiece(const MachineProblem& problem, const TestP
                                  options.nominal, problem.readings.source));
   }
   try {
-    out.geometric = stage::VerifyTestPiece(layout, on_series, problem.options).terms;
+    out.geometric = stage::VerifyMachinedPiece(layout, on_series, problem.options).terms;
   } catch (const std::invalid_argument& e) {
     throw InputError(fmt::format("{}: the series alone: {}", options.nominal, e.what()));
   }

@@ -14,11 +14,11 @@
 #include <map>
 #include <stdexcept>
 
-#include "artefacts/geometry/test_piece.h"
-#include "artefacts/simulation/test_piece_simulation.h"
+#include "artefacts/geometry/machined_piece.h"
+#include "artefacts/simulation/machined_piece_simulation.h"
 #include "artefacts/tracker_observations.h"
 #include "stage/series_extraction.h"
-#include "stage/test_piece_verification.h"
+#include "stage/machined_piece_verification.h"
 
 namespace fvm::stage {
 namespace {
@@ -124,58 +124,58 @@ double IndependentGridMeanUm(const IndependentFit& fit, const artefacts::Tracker
 
 // ----- the tests -----
 
-TEST(TestPieceVerification, MatchesAnIndependentFitOnANoiseFreeGrid) {
-  const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
+TEST(MachinedPieceVerification, MatchesAnIndependentFitOnANoiseFreeGrid) {
+  const artefacts::MachinedPieceDescription piece = artefacts::PublishedMachinedPiece();
   const artefacts::Workspace ws = artefacts::PieceWorkspace(piece);
   const AxisChain chain = Xfyz();
   const artefacts::MachineTruth truth = artefacts::RandomMachineTruth(chain, ws, 12, 30.0);  // not polynomials
   artefacts::CmmSimulation cmm{Datum(), 0.001, 12};
-  const artefacts::TrackerReadings measured = artefacts::SimulateTestPiece(chain, truth, artefacts::NominalPoints(piece), cmm);
+  const artefacts::TrackerReadings measured = artefacts::SimulateMachinedPiece(chain, truth, artefacts::NominalPoints(piece), cmm);
   std::vector<artefacts::PiecePoint> grid_points;
   for (const artefacts::PlannedPoint& p : artefacts::PlanMesh(ws, Eigen::Vector3d(30, 30, 30))) grid_points.push_back({p.id, p.nominal, "", "", {}});
   artefacts::CmmSimulation exact = cmm;
   exact.sigma_mm = 0.0;
-  const artefacts::TrackerReadings grid = artefacts::SimulateTestPiece(chain, truth, grid_points, exact);
+  const artefacts::TrackerReadings grid = artefacts::SimulateMachinedPiece(chain, truth, grid_points, exact);
 
   IdentificationOptions options;
   options.instrument = InstrumentPose::kEstimated;
   options.num_threads = 1;
-  const TestPieceVerification v = VerifyTestPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 3), Observations(measured), options);
+  const MachinedPieceVerification v = VerifyMachinedPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 3), Observations(measured), options);
   const IdentificationResult& r = v.result.identified;
-  const VolumetricError ours = SummarizeVolumetric(
+  const ResidualSummary ours = Summarize(
       VolumetricResiduals(r.calibration.layout, &r.calibration.values, r.pose, Observations(grid)));
-  const VolumetricError before = SummarizeVolumetric(VolumetricResiduals(r.calibration.layout, nullptr, v.result.initial_pose, Observations(grid)));
+  const ResidualSummary before = Summarize(VolumetricResiduals(r.calibration.layout, nullptr, v.result.initial_pose, Observations(grid)));
   const double independent = IndependentGridMeanUm(FitIndependently(measured, ws), grid);
 
   // The machine's sines (long waves of 0.3-0.8 of the piece's extent, ball-screw periods) leave a model error of
   // about 5 um that no cubic removes; the 1 um noise moves either fit by ~0.2 um on the grid. Within 10 % of each
   // other is the target (they agree to 0.01 %: 5.488 and 5.489 um).
-  std::cout << "grid mean: before " << before.mean_um << " um, ours " << ours.mean_um << " um, independent " << independent << " um\n";
-  EXPECT_GT(before.mean_um, 2.0 * independent) << "the verification must remove most of the error";
-  EXPECT_NEAR(ours.mean_um, independent, 0.10 * independent) << "ours " << ours.mean_um << " um, independent " << independent << " um";
+  std::cout << "grid mean: before " << before.mean_um() << " um, ours " << ours.mean_um() << " um, independent " << independent << " um\n";
+  EXPECT_GT(before.mean_um(), 2.0 * independent) << "the verification must remove most of the error";
+  EXPECT_NEAR(ours.mean_um(), independent, 0.10 * independent) << "ours " << ours.mean_um() << " um, independent " << independent << " um";
   // The datum found is the one the piece was measured at (the absorbed constants move it by tens of um at most).
   EXPECT_LT((r.pose.translation - Datum().translation).norm(), 0.2);
   EXPECT_LT((r.pose.rotation - Datum().rotation).norm(), 1e-3);
 }
 
-TEST(TestPieceVerification, PublishedTestFunctionsFitToTheNoiseAndLogIterations) {
-  const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
+TEST(MachinedPieceVerification, PublishedTestFunctionsFitToTheNoiseAndLogIterations) {
+  const artefacts::MachinedPieceDescription piece = artefacts::PublishedMachinedPiece();
   const artefacts::Workspace ws = artefacts::PieceWorkspace(piece);
   const AxisChain chain = Xfyz();
   artefacts::CmmSimulation cmm{Datum(), 0.001, 3};
   const artefacts::TrackerReadings measured =
-      artefacts::SimulateTestPiece(chain, artefacts::PublishedTestFunctions(ws), artefacts::NominalPoints(piece), cmm);
+      artefacts::SimulateMachinedPiece(chain, artefacts::PublishedTestFunctions(ws), artefacts::NominalPoints(piece), cmm);
   IdentificationOptions options;
   options.instrument = InstrumentPose::kEstimated;
   options.num_threads = 1;
-  const TestPieceVerification v = VerifyTestPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 2), Observations(measured), options);
+  const MachinedPieceVerification v = VerifyMachinedPiece(MachineLayout(chain, PieceTravel(ws), Basis::kChebyshev, 2), Observations(measured), options);
   // [Lorente 2021] Table 4's functions are quadratics: an order-2 basis holds them, so what remains is the CMM noise,
   // whose 3D norm averages 1.6 sigma (chi with 3 degrees of freedom), a little less after the fit takes its share.
-  EXPECT_GT(v.result.initial.mean_um, 30.0);
-  EXPECT_NEAR(v.result.final.mean_um, 1.55, 0.15);
+  EXPECT_GT(v.result.initial.mean_um(), 30.0);
+  EXPECT_NEAR(v.result.final.mean_um(), 1.55, 0.15);
   ASSERT_GE(v.iterations.size(), 2u);
-  EXPECT_DOUBLE_EQ(v.iterations.front().mean_um, v.result.initial.mean_um);
-  EXPECT_NEAR(v.iterations.back().mean_um, v.result.final.mean_um, 1e-6);
+  EXPECT_DOUBLE_EQ(v.iterations.front().mean_um(), v.result.initial.mean_um());
+  EXPECT_NEAR(v.iterations.back().mean_um(), v.result.final.mean_um(), 1e-6);
 }
 
 // The yaws of the tool-side axes (ECY, ECZ) turn the tool about its own axis: a cutting tool on the spindle axis
@@ -183,8 +183,8 @@ TEST(TestPieceVerification, PublishedTestFunctionsFitToTheNoiseAndLogIterations)
 // one constant length, exactly as the straightness of Z moves it. Cutting the Z series again with a boring bar
 // whose edge sits 30 mm off the spindle axis (spindle oriented at 0 and 180 deg) and a second tool length makes
 // all four recoverable.
-TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
-  const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
+TEST(MachinedPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
+  const artefacts::MachinedPieceDescription piece = artefacts::PublishedMachinedPiece();
   const artefacts::Workspace ws = artefacts::PieceWorkspace(piece);
   const artefacts::MachineTruth truth = artefacts::PublishedTestFunctions(ws);
   std::vector<artefacts::PiecePoint> series;
@@ -197,16 +197,16 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   options.num_threads = 1;
   // The term by its ISO name; a name the verification does not report fails the test instead of reading as "not
   // recovered".
-  const auto term = [](const TestPieceVerification& v, const std::string& iso) -> const TermRecovery& {
+  const auto term = [](const MachinedPieceVerification& v, const std::string& iso) -> const TermRecovery& {
     const auto t = std::find_if(v.terms.begin(), v.terms.end(), [&](const TermRecovery& r) { return r.error == iso; });
     if (t == v.terms.end()) throw std::logic_error("no term named " + iso);
     return *t;
   };
-  const auto recovered = [&](const TestPieceVerification& v, const std::string& iso) { return term(v, iso).recoverable; };
+  const auto recovered = [&](const MachinedPieceVerification& v, const std::string& iso) { return term(v, iso).recoverable; };
   artefacts::CmmSimulation cmm{Datum(), 0.001, 5};
   const AxisChain one = Xfyz();
-  const TestPieceVerification plain =
-      VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), Observations(artefacts::SimulateTestPiece(one, truth, series, cmm)), options);
+  const MachinedPieceVerification plain =
+      VerifyMachinedPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), Observations(artefacts::SimulateMachinedPiece(one, truth, series, cmm)), options);
   EXPECT_FALSE(recovered(plain, "ECZ"));
   EXPECT_FALSE(recovered(plain, "ECY"));
   EXPECT_FALSE(recovered(plain, "EAZ"));
@@ -217,13 +217,13 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
   std::vector<Observation> all;
   for (size_t t = 0; t < tools.size(); ++t) {
     cmm.seed = 5 + t;
-    for (Observation o : Observations(artefacts::SimulateTestPiece(Xfyz(tools[t]), truth, series, cmm))) {
+    for (Observation o : Observations(artefacts::SimulateMachinedPiece(Xfyz(tools[t]), truth, series, cmm))) {
       o.tool = static_cast<int>(t);
       all.push_back(o);
     }
   }
   options.tool_offsets = tools;
-  const TestPieceVerification proposed = VerifyTestPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
+  const MachinedPieceVerification proposed = VerifyMachinedPiece(MachineLayout(one, PieceTravel(ws), Basis::kChebyshev, 2), all, options);
   for (const char* iso : {"ECZ", "ECY", "EAZ", "EBZ", "EBY"}) EXPECT_TRUE(recovered(proposed, iso)) << iso;
   // ECZ at the far end of Z (180 mm), its largest value, is 6.1e-6 * 180 + 6.2e-10 * 180^2 = 1118 urad in [Lorente 2021] Table 4.
   const TermRecovery& ecz = term(proposed, "ECZ");
@@ -235,8 +235,8 @@ TEST(TestPieceVerification, OffAxisToolsRecoverTheZRotationsThatOneToolCannot) {
 // read in the machine frame without noise: each extracted function follows the truth (zero-referenced alike) to within
 // the second-order terms the formulas leave out (rotations of 1e-3 rad times deviations of 0.3 mm over 100-260 mm
 // levers: a few urad, a fraction of a um).
-TEST(TestPieceVerification, ExtractionFormulasFollowTheTruthAlongTheSeries) {
-  const artefacts::TestPieceDescription piece = artefacts::PublishedTestPiece();
+TEST(MachinedPieceVerification, ExtractionFormulasFollowTheTruthAlongTheSeries) {
+  const artefacts::MachinedPieceDescription piece = artefacts::PublishedMachinedPiece();
   const artefacts::Workspace ws = artefacts::PieceWorkspace(piece);
   const artefacts::MachineTruth truth = artefacts::PublishedTestFunctions(ws);
   std::vector<artefacts::PiecePoint> points;
@@ -248,7 +248,7 @@ TEST(TestPieceVerification, ExtractionFormulasFollowTheTruthAlongTheSeries) {
     }
   }
   artefacts::CmmSimulation cmm{stage::Pose{}, 0.0, 1};
-  const artefacts::TrackerReadings measured = artefacts::SimulateTestPiece(Xfyz(), truth, points, cmm);
+  const artefacts::TrackerReadings measured = artefacts::SimulateMachinedPiece(Xfyz(), truth, points, cmm);
   std::map<std::string, std::vector<SeriesPoint>> series;
   for (const artefacts::TrackerReading& r : measured.points) {
     series[series_of[r.id]].push_back({r.nominal, r.measured - (r.nominal + kTool)});

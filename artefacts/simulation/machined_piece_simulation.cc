@@ -1,4 +1,4 @@
-#include "artefacts/simulation/test_piece_simulation.h"
+#include "artefacts/simulation/machined_piece_simulation.h"
 
 #include "core/random.h"
 #include "stage/error_terms.h"
@@ -32,14 +32,14 @@ MachineTruth PublishedTestFunctions(const Workspace& ws) {
   return truth;
 }
 
-Workspace PieceWorkspace(const TestPieceDescription& piece) {
+Workspace PieceWorkspace(const MachinedPieceDescription& piece) {
   Workspace ws;
   ws.min = piece.origin;
   ws.max = piece.origin + piece.envelope;
   return ws;
 }
 
-TrackerReadings SimulateTestPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
+TrackerReadings SimulateMachinedPiece(const stage::AxisChain& chain, const MachineTruth& truth, const std::vector<PiecePoint>& points,
                                   const CmmSimulation& cmm, TrackerReadings* noise_free) {
   // The cut is the tracker model with the CMM as the instrument at the datum and no tracker noise ...
   stage::AxisChain cut = chain;
