@@ -68,27 +68,33 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
   const double det = s[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (s[1] * s[4] - s[3] * s[2]) +
                      s[2] * (s[1] * s[3] - s[2] * s[2]);
   if (!(std::abs(det) > 0.0)) return z1;
-  const auto solve = [&](const double* tt, double& vertex) {
-    const double det1 = s[0] * (tt[1] * s[4] - s[3] * tt[2]) - tt[0] * (s[1] * s[4] - s[3] * s[2]) +
-                        s[2] * (s[1] * tt[2] - tt[1] * s[2]);
-    const double det2 = s[0] * (s[2] * tt[2] - tt[1] * s[3]) - s[1] * (s[1] * tt[2] - tt[1] * s[2]) +
-                        tt[0] * (s[1] * s[3] - s[2] * s[2]);
+  // det1 and det2 (the determinants with the second and third column replaced by t) are linear in t: their
+  // cofactors, so that the vertex for a moved t (the noise below) costs two dot products.
+  const double a1[3] = {s[3] * s[2] - s[1] * s[4], s[0] * s[4] - s[2] * s[2], s[1] * s[2] - s[0] * s[3]};
+  const double a2[3] = {s[1] * s[3] - s[2] * s[2], s[1] * s[2] - s[0] * s[3], s[0] * s[2] - s[1] * s[1]};
+  const auto solve = [&](double det1, double det2, double& vertex) {
     if (!(det2 / det > 0.0)) return false;  // no minimum of P: no peak
     const double v = std::clamp(-det1 / (2.0 * det2), -1.0, 1.0);
     if (!std::isfinite(v)) return false;
     vertex = std::clamp(z1 + v * scale, lo, hi);
     return true;
   };
+  const double det1 = a1[0] * t[0] + a1[1] * t[1] + a1[2] * t[2];
+  const double det2 = a2[0] * t[0] + a2[1] * t[1] + a2[2] * t[2];
   double z0 = z1;
-  if (!solve(t, z0)) return z1;
+  if (!solve(det1, det2, z0)) return z1;
   if (u_noise) {
     double variance = 0.0;
     for (int j = 0; j < 5; ++j) {
       if (!(weight[j] > 0.0)) continue;
-      const double dp = power * p[j] * sigma / f[std::size_t(j)];
-      double moved[3], un = weight[j] * dp, vertex = z1;
-      for (int n = 0; n < 3; ++n, un *= u[j]) moved[n] = t[n] + un;
-      if (!solve(moved, vertex)) vertex = z1;
+      // t moves by w dP (1, u, u^2) when the measure moves by sigma.
+      const double d0 = weight[j] * power * p[j] * sigma / f[std::size_t(j)];
+      const double dt[3] = {d0, d0 * u[j], d0 * u[j] * u[j]};
+      double vertex = z1;
+      if (!solve(det1 + a1[0] * dt[0] + a1[1] * dt[1] + a1[2] * dt[2],
+                 det2 + a2[0] * dt[0] + a2[1] * dt[1] + a2[2] * dt[2], vertex)) {
+        vertex = z1;
+      }
       variance += (vertex - z0) * (vertex - z0);
     }
     *u_noise = std::sqrt(variance);
