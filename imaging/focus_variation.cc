@@ -386,27 +386,39 @@ FocusResult FocusAccumulator::Finish() const {
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
-  ReserveInHugePages(map.z_mm, size);
-  ReserveInHugePages(result.u_z_mm, size);
-  ReserveInHugePages(result.quality, size);
-  ReserveInHugePages(result.window_px, size);
-  ReserveInHugePages(result.peak_index, size);
-  ReserveInHugePages(result.texture, s.curves.texture.size());
-  map.z_mm.resize(size);
-  result.u_z_mm.resize(size);
-  result.quality.resize(size);
-  result.window_px.assign(size, kNaN);
-  result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
+  const std::vector<WindowCurves>& curves = s.curves.windows;
+  const WindowCurves& large = curves.back();
+  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  // The result's maps, each filled (and its fresh pages faulted in, which on a virtual machine costs more than
+  // the filling) by its own thread: one after the other they were the reconstruction's longest serial part.
+  const std::function<void()> allocations[] = {
+      [&] { ReserveInHugePages(map.z_mm, size), map.z_mm.resize(size); },
+      [&] { ReserveInHugePages(result.u_z_mm, size), result.u_z_mm.resize(size); },
+      [&] { ReserveInHugePages(result.quality, size), result.quality.resize(size); },
+      [&] { ReserveInHugePages(result.window_px, size), result.window_px.assign(size, kNaN); },
+      [&] {
+        ReserveInHugePages(result.peak_index, size);
+        result.peak_index.assign(peak_index.begin(), peak_index.end());
+      },
+      [&] {
+        ReserveInHugePages(result.texture, s.curves.texture.size());
+        result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
+      }};
+  const auto allocate = [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) allocations[i]();
+  };
+  const cv::Range all_maps(0, int(std::size(allocations)));
+  if (s.options.parallel) {
+    cv::parallel_for_(all_maps, allocate, double(all_maps.end));
+  } else {
+    allocate(all_maps);
+  }
   result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
   const double origin = s.z.front();
 
   // The largest window's heights everywhere; their slope says where the smaller windows serve instead (walls),
   // and only there are their peaks fitted.
-  const std::vector<WindowCurves>& curves = s.curves.windows;
-  const WindowCurves& large = curves.back();
-  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
-  result.peak_index.assign(peak_index.begin(), peak_index.end());
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
       const Peak p = FitPeak(large, i, s.z, s.options);
