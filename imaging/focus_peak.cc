@@ -15,6 +15,34 @@ double Power(double x, double power) {
   return std::pow(x, power);
 }
 
+// The Birge ratio of the weighted fit: sqrt(chi^2 / dof) of the points about the parabola, their noise being
+// `sigma` on the measure (weights over `weight_scale`^2), times kMisfitScale, at least 1; 1 without a spare point
+// (3 points fit any parabola). A focus curve that departs from the model (the renderer's and the optics' blur
+// are no exact power law) shows it here, and the vertex's noise is scaled by it: where the misfit dominates, the
+// noise estimate is the points' own scatter, whatever sigma. kMisfitScale is calibrated with the constants of
+// focus_variation.cc on the stacks of focus_accuracy_test.cc.
+constexpr double kMisfitScale = 1.15;
+double MisfitRatio(const double* s, const double* t, double det, const double* weight, const double* u,
+                   const double* p, double weight_scale) {
+  int points = 0;
+  for (int j = 0; j < 5; ++j) points += weight[j] > 0.0;
+  if (points <= 3 || !std::isfinite(weight_scale)) return 1.0;
+  const double det0 = t[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (t[1] * s[4] - s[3] * t[2]) +
+                      s[2] * (t[1] * s[3] - s[2] * t[2]);
+  const double det1 = s[0] * (t[1] * s[4] - s[3] * t[2]) - t[0] * (s[1] * s[4] - s[3] * s[2]) +
+                      s[2] * (s[1] * t[2] - t[1] * s[2]);
+  const double det2 = s[0] * (s[2] * t[2] - t[1] * s[3]) - s[1] * (s[1] * t[2] - t[1] * s[2]) +
+                      t[0] * (s[1] * s[3] - s[2] * s[2]);
+  double chi2 = 0.0;
+  for (int j = 0; j < 5; ++j) {
+    if (!(weight[j] > 0.0)) continue;
+    const double r = p[j] - (det0 + det1 * u[j] + det2 * u[j] * u[j]) / det;
+    chi2 += weight[j] * r * r;
+  }
+  chi2 *= weight_scale * weight_scale;
+  return std::max(1.0, kMisfitScale * std::sqrt(chi2 / double(points - 3)));
+}
+
 }  // namespace
 
 // The vertex of the parabola through (z0, f0), (z1, f1), (z2, f2), with f1 the largest; z1 when the three are
@@ -97,7 +125,7 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
       }
       variance += (vertex - z0) * (vertex - z0);
     }
-    *u_noise = std::sqrt(variance);
+    *u_noise = std::sqrt(variance) * MisfitRatio(s, t, det, weight, u, p, f[2] / (power * sigma));
   }
   return z0;
 }

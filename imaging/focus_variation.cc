@@ -37,11 +37,12 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 constexpr double kNarrowShare = 0.05;
 // The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
 // (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
-// floor, the share of the step the interpolation leaves, the share of the heights' local scatter, and for a
-// curve too narrow for the power fit (the 3-point log fit's error between images) a share of the step.
-constexpr double kNoiseScale = 0.2;
+// floor (scaled by the power fit's misfit, focus_peak.cc), the share of the step the interpolation leaves, the
+// share of the heights' local scatter, and for a curve too narrow for the power fit (the 3-point log fit's error
+// between images) a share of the step.
+constexpr double kNoiseScale = 0.12;
 constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.055;
+constexpr double kStepFraction = 0.025;
 constexpr double kScatterScale = 0.9;
 constexpr double kNarrowStepFraction = 0.4;
 constexpr int kScatterWindowPx = 9;
