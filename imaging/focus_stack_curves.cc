@@ -108,6 +108,13 @@ const cv::Mat& PixelMeasure(const cv::Mat& image, int b0, int b1, FocusMeasure m
   return b.per_pixel;
 }
 
+// The mean over window x window pixels: a separable filter of equal taps (OpenCV's vectorised row and column
+// filters; boxFilter's running sum along the row is scalar and took as long as both Gaussian windows).
+void BoxMean(const cv::Mat& src, int window, cv::Mat& dst) {
+  const cv::Mat taps(window, 1, CV_32F, cv::Scalar(1.0 / window));
+  cv::sepFilter2D(src, dst, CV_32F, taps, taps, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
+}
+
 // The focus measure over window x window pixels of rows k0..k1 of the band into `out` (k1 - k0 rows, the
 // caller's memory). The band carries a margin of rows beyond the rows that are kept: the filters, given the kept
 // rows as a sub-matrix, read their neighbours from the band (OpenCV looks outside a sub-matrix unless told
@@ -116,17 +123,16 @@ const cv::Mat& PixelMeasure(const cv::Mat& image, int b0, int b1, FocusMeasure m
 // own height weighs most, where a box mixes in the heights at its edge as much).
 void WindowMeasure(const cv::Mat& pixel_measure, int k0, int k1, FocusMeasure measure, int window, bool gaussian,
                    Scratch& b, cv::Mat& out) {
-  const cv::Size box(window, window);
   const cv::Mat kept = pixel_measure.rowRange(k0, k1);
   if (gaussian) {
     const int side = 2 * KernelHalfWidth(window, true) + 1;
     cv::GaussianBlur(kept, out, cv::Size(side, side), kGaussianWindowSigma * window, 0.0, cv::BORDER_REFLECT);
   } else {
-    cv::boxFilter(kept, out, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+    BoxMean(kept, window, out);
   }
   if (measure == FocusMeasure::kVariance) {
     cv::multiply(pixel_measure, pixel_measure, b.dx);
-    cv::boxFilter(b.dx.rowRange(k0, k1), b.mean_sq, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+    BoxMean(b.dx.rowRange(k0, k1), window, b.mean_sq);
     cv::multiply(out, out, out);
     cv::subtract(b.mean_sq, out, out);
     cv::max(out, 0.0, out);
