@@ -5,9 +5,9 @@
 // whatever the stack's depth.
 //
 // Speed: images are taken in batches of kFocusBatch. Per stripe of rows, the batch's measures are computed (one
-// modified Laplacian per image, shared by the windows) and each row's state is updated by all the batch's images
-// while it sits in the cache; the update is a branch-free loop over the row that the compiler vectorises. Stripes
-// run on OpenCV's thread pool.
+// modified Laplacian per image, shared by the windows; each window's filter on the kept rows only) and each row's
+// state is updated by all the batch's images, a vector of pixels at a time held in registers. Stripes run on
+// OpenCV's thread pool.
 
 #include <cstdint>
 #include <cstdlib>
