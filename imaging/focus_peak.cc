@@ -4,6 +4,46 @@
 #include <cmath>
 
 namespace fvm::imaging {
+namespace {
+
+// x^power for x > 0, by the cheaper root for the focus measures' transforms (-2/3 for the modified Laplacian,
+// -1/2 for the gradient energy, -1 for the variance): std::pow took most of the peak fit's time.
+double Power(double x, double power) {
+  if (power == -2.0 / 3.0) return 1.0 / std::cbrt(x * x);
+  if (power == -0.5) return 1.0 / std::sqrt(x);
+  if (power == -1.0) return 1.0 / x;
+  return std::pow(x, power);
+}
+
+// The Birge ratio of the weighted fit: sqrt(chi^2 / dof) of the points about the parabola, their noise being
+// `sigma` on the measure (weights over `weight_scale`^2), times kMisfitScale, at least 1; 1 without a spare point
+// (3 points fit any parabola). A focus curve that departs from the model (the renderer's and the optics' blur
+// are no exact power law) shows it here, and the vertex's noise is scaled by it: where the misfit dominates, the
+// noise estimate is the points' own scatter, whatever sigma. kMisfitScale is calibrated with the constants of
+// focus_variation.cc on the stacks of focus_accuracy_test.cc.
+constexpr double kMisfitScale = 1.15;
+double MisfitRatio(const double* s, const double* t, double det, const double* weight, const double* u,
+                   const double* p, double weight_scale) {
+  int points = 0;
+  for (int j = 0; j < 5; ++j) points += weight[j] > 0.0;
+  if (points <= 3 || !std::isfinite(weight_scale)) return 1.0;
+  const double det0 = t[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (t[1] * s[4] - s[3] * t[2]) +
+                      s[2] * (t[1] * s[3] - s[2] * t[2]);
+  const double det1 = s[0] * (t[1] * s[4] - s[3] * t[2]) - t[0] * (s[1] * s[4] - s[3] * s[2]) +
+                      s[2] * (s[1] * t[2] - t[1] * s[2]);
+  const double det2 = s[0] * (s[2] * t[2] - t[1] * s[3]) - s[1] * (s[1] * t[2] - t[1] * s[2]) +
+                      t[0] * (s[1] * s[3] - s[2] * s[2]);
+  double chi2 = 0.0;
+  for (int j = 0; j < 5; ++j) {
+    if (!(weight[j] > 0.0)) continue;
+    const double r = p[j] - (det0 + det1 * u[j] + det2 * u[j] * u[j]) / det;
+    chi2 += weight[j] * r * r;
+  }
+  chi2 *= weight_scale * weight_scale;
+  return std::max(1.0, kMisfitScale * std::sqrt(chi2 / double(points - 3)));
+}
+
+}  // namespace
 
 // The vertex of the parabola through (z0, f0), (z1, f1), (z2, f2), with f1 the largest; z1 when the three are
 // not a maximum (flat or collinear). Stays between z0 and z2.
@@ -42,7 +82,7 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
     const int image = k + j - 2;
     if (!(f[std::size_t(j)] > 0.0) || image < 0 || image >= int(z.size())) continue;
     const double ratio = f[std::size_t(j)] / f[2];
-    p[j] = std::pow(ratio, power);
+    p[j] = Power(ratio, power);
     weight[j] = ratio * ratio / (p[j] * p[j]);  // ratio^(2 - 2 power)
     u[j] = (z[std::size_t(image)] - z1) / scale;
     double un = weight[j];
@@ -56,30 +96,36 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
   const double det = s[0] * (s[2] * s[4] - s[3] * s[3]) - s[1] * (s[1] * s[4] - s[3] * s[2]) +
                      s[2] * (s[1] * s[3] - s[2] * s[2]);
   if (!(std::abs(det) > 0.0)) return z1;
-  const auto solve = [&](const double* tt, double& vertex) {
-    const double det1 = s[0] * (tt[1] * s[4] - s[3] * tt[2]) - tt[0] * (s[1] * s[4] - s[3] * s[2]) +
-                        s[2] * (s[1] * tt[2] - tt[1] * s[2]);
-    const double det2 = s[0] * (s[2] * tt[2] - tt[1] * s[3]) - s[1] * (s[1] * tt[2] - tt[1] * s[2]) +
-                        tt[0] * (s[1] * s[3] - s[2] * s[2]);
+  // det1 and det2 (the determinants with the second and third column replaced by t) are linear in t: their
+  // cofactors, so that the vertex for a moved t (the noise below) costs two dot products.
+  const double a1[3] = {s[3] * s[2] - s[1] * s[4], s[0] * s[4] - s[2] * s[2], s[1] * s[2] - s[0] * s[3]};
+  const double a2[3] = {s[1] * s[3] - s[2] * s[2], s[1] * s[2] - s[0] * s[3], s[0] * s[2] - s[1] * s[1]};
+  const auto solve = [&](double det1, double det2, double& vertex) {
     if (!(det2 / det > 0.0)) return false;  // no minimum of P: no peak
     const double v = std::clamp(-det1 / (2.0 * det2), -1.0, 1.0);
     if (!std::isfinite(v)) return false;
     vertex = std::clamp(z1 + v * scale, lo, hi);
     return true;
   };
+  const double det1 = a1[0] * t[0] + a1[1] * t[1] + a1[2] * t[2];
+  const double det2 = a2[0] * t[0] + a2[1] * t[1] + a2[2] * t[2];
   double z0 = z1;
-  if (!solve(t, z0)) return z1;
+  if (!solve(det1, det2, z0)) return z1;
   if (u_noise) {
     double variance = 0.0;
     for (int j = 0; j < 5; ++j) {
       if (!(weight[j] > 0.0)) continue;
-      const double dp = power * p[j] * sigma / f[std::size_t(j)];
-      double moved[3], un = weight[j] * dp, vertex = z1;
-      for (int n = 0; n < 3; ++n, un *= u[j]) moved[n] = t[n] + un;
-      if (!solve(moved, vertex)) vertex = z1;
+      // t moves by w dP (1, u, u^2) when the measure moves by sigma.
+      const double d0 = weight[j] * power * p[j] * sigma / f[std::size_t(j)];
+      const double dt[3] = {d0, d0 * u[j], d0 * u[j] * u[j]};
+      double vertex = z1;
+      if (!solve(det1 + a1[0] * dt[0] + a1[1] * dt[1] + a1[2] * dt[2],
+                 det2 + a2[0] * dt[0] + a2[1] * dt[1] + a2[2] * dt[2], vertex)) {
+        vertex = z1;
+      }
       variance += (vertex - z0) * (vertex - z0);
     }
-    *u_noise = std::sqrt(variance);
+    *u_noise = std::sqrt(variance) * MisfitRatio(s, t, det, weight, u, p, f[2] / (power * sigma));
   }
   return z0;
 }

@@ -5,13 +5,15 @@
 // whatever the stack's depth.
 //
 // Speed: images are taken in batches of kFocusBatch. Per stripe of rows, the batch's measures are computed (one
-// modified Laplacian per image, shared by the windows) and each row's state is updated by all the batch's images
-// while it sits in the cache; the update is a branch-free loop over the row that the compiler vectorises. Stripes
-// run on OpenCV's thread pool.
+// modified Laplacian per image, shared by the windows; each window's filter on the kept rows only) and each row's
+// state is updated by all the batch's images, a vector of pixels at a time held in registers. Stripes run on
+// OpenCV's thread pool.
 
 #include <cstdint>
 #include <cstdlib>
 #include <functional>
+#include <new>
+#include <utility>
 #include <vector>
 
 #include "imaging/focus_stack.h"
@@ -22,7 +24,9 @@ namespace fvm::imaging {
 inline constexpr int kFocusBatch = 8;
 
 // Memory for the curves' arrays (hundreds of MB for a 4-megapixel stack) in 2 MB transparent huge pages where
-// Linux allows them: faulting in 4 kB pages one by one cost a fifth of the reconstruction's time.
+// Linux allows them: faulting in 4 kB pages one by one cost a fifth of the reconstruction's time. resize()
+// leaves new elements uninitialised (default-initialised), so that the first touch, which faults the pages in,
+// happens where they are first written: in parallel stripes, not in one thread's fill.
 template <typename T>
 struct HugePageAllocator {
   using value_type = T;
@@ -31,6 +35,14 @@ struct HugePageAllocator {
   HugePageAllocator(const HugePageAllocator<U>&) {}
   T* allocate(std::size_t n);
   void deallocate(T* p, std::size_t) { std::free(p); }
+  template <typename U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <typename U>
   bool operator==(const HugePageAllocator<U>&) const { return true; }
 };
@@ -55,7 +67,11 @@ struct WindowCurves {
   // The measures of the last two images taken (carried from one batch to the next).
   HugeVector<float> previous2, previous;
 
+  // Sizes the arrays for n pixels without touching them; the first batch sets each stripe's start values
+  // (Start) in parallel.
   void Reset(int w, bool gaussian_window, std::size_t n);
+  // The start values of pixels [begin, end): no peak yet.
+  void Start(std::size_t begin, std::size_t end);
 };
 
 struct FocusCurves {
@@ -64,13 +80,13 @@ struct FocusCurves {
   bool parallel = true;
   std::vector<WindowCurves> windows;
   // The all-in-focus pixels: each pixel's value in the first window's best image (texture_channels each).
-  std::vector<float> texture;
+  HugeVector<float> texture;
   int texture_channels = 1;
   int taken = 0;  // images folded into the curves
 
   // Folds `count` images (grey, and what the texture is made of: their colour, or null for the grey images
-  // themselves) into the curves; the first is image number `taken`.
-  void Take(const StackImage* grey, const StackImage* texture_images, int count);
+  // themselves) into the curves; the first is image number `taken`. count <= kFocusBatch.
+  void Take(const StackImageView* grey, const StackImageView* texture_images, int count);
 };
 
 // Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run

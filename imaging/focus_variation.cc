@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -36,11 +37,12 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 constexpr double kNarrowShare = 0.05;
 // The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
 // (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
-// floor, the share of the step the interpolation leaves, the share of the heights' local scatter, and for a
-// curve too narrow for the power fit (the 3-point log fit's error between images) a share of the step.
-constexpr double kNoiseScale = 0.2;
+// floor (scaled by the power fit's misfit, focus_peak.cc), the share of the step the interpolation leaves, the
+// share of the heights' local scatter, and for a curve too narrow for the power fit (the 3-point log fit's error
+// between images) a share of the step.
+constexpr double kNoiseScale = 0.12;
 constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.055;
+constexpr double kStepFraction = 0.025;
 constexpr double kScatterScale = 0.9;
 constexpr double kNarrowStepFraction = 0.4;
 constexpr int kScatterWindowPx = 9;
@@ -100,13 +102,29 @@ struct FocusAccumulator::State {
   std::vector<double> z;
   FocusCurves curves;
   // Images taken but not yet folded into the curves (a batch, see focus_stack_curves.h), copied into buffers
-  // that serve batch after batch; the colour images only when they are not the grey ones.
+  // that serve batch after batch; the colour images only when they are not the grey ones. With `borrow` (a
+  // stack held in memory by ReconstructFocusStack, alive until Finish) the caller's images are not copied.
   std::vector<StackImage> pending = std::vector<StackImage>(kFocusBatch), pending_colour = pending;
+  std::vector<StackImageView> views = std::vector<StackImageView>(kFocusBatch), colour_views = views;
   int pending_count = 0;
   bool colour = false;
+  bool borrow = false;
+
+  void Pend(const StackImageView& image, const StackImageView* texture) {
+    const std::size_t j = std::size_t(pending_count);
+    if (borrow) {
+      views[j] = image;
+      if (texture) colour_views[j] = *texture;
+    } else {
+      CopyInto(image, pending[j]);
+      views[j] = pending[j].View();
+      if (texture) CopyInto(*texture, pending_colour[j]), colour_views[j] = pending_colour[j].View();
+    }
+    if (++pending_count == kFocusBatch) Flush();
+  }
 
   void Flush() {
-    curves.Take(pending.data(), colour ? pending_colour.data() : nullptr, pending_count);
+    curves.Take(views.data(), colour ? colour_views.data() : nullptr, pending_count);
     pending_count = 0;
   }
 };
@@ -163,7 +181,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
       curves.windows.emplace_back().Reset(s.options.window, false, n);
     }
     curves.texture_channels = texture.channels;
-    curves.texture.assign(n * std::size_t(texture.channels), 0.0f);
+    curves.texture.resize(n * std::size_t(texture.channels));  // set by the first batch, in parallel
   } else {
     if (image.width != s.width || image.height != s.height) {
       throw InputError(what + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
@@ -184,9 +202,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   s.z.push_back(z_mm);
 
   if (k == 0) s.colour = colour != nullptr;
-  CopyInto(image, s.pending[std::size_t(s.pending_count)]);
-  if (s.colour) CopyInto(texture, s.pending_colour[std::size_t(s.pending_count)]);
-  if (++s.pending_count == kFocusBatch) s.Flush();
+  s.Pend(image, s.colour ? &texture : nullptr);
 }
 
 namespace {
@@ -252,16 +268,22 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
 }
 
 // Float maps of the height map's size over memory in huge pages, reused from map to map: fresh 4 kB pages cost
-// more than the filters that fill them (a page fault per 4 kB on a virtual machine).
+// more than the filters that fill them (a page fault per 4 kB on a virtual machine). The maps are filled and
+// filtered in stripes of rows in parallel (ForStripes): a filter applied to a stripe of a map reads the rows
+// beyond it from the map itself (OpenCV filters a sub-matrix with its real neighbours unless told
+// BORDER_ISOLATED), so each stripe's result is that of the whole map's filter.
 struct MapBuffers {
   int width = 0, height = 0;
-  HugeVector<float> storage[5];
+  bool parallel = true;
+  HugeVector<float> storage[6];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];
-    v.resize(std::size_t(width) * std::size_t(height));
+    v.resize(std::size_t(width) * std::size_t(height));  // left uninitialised: each pass writes all of it
     return cv::Mat(height, width, CV_32F, v.data());
   }
+  // body(r0, r1) for each stripe of rows; every stripe of a pass ends before the next pass starts.
+  void Pass(const std::function<void(int, int)>& body) const { ForStripes(height, parallel, body); }
 };
 
 // Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
@@ -271,24 +293,27 @@ struct HoleyMap {
 
   HoleyMap(const std::vector<double>& z, double origin, MapBuffers& buffers)
       : heights(buffers[0]), valid(buffers[1]), work(buffers[2]) {
-    for (int r = 0; r < heights.rows; ++r) {
-      float* h = heights.ptr<float>(r);
-      float* v = valid.ptr<float>(r);
-      const double* row = z.data() + std::size_t(r) * std::size_t(heights.cols);
-      for (int col = 0; col < heights.cols; ++col) {
-        const bool ok = std::isfinite(row[col]);
-        h[col] = ok ? float(row[col] - origin) : 0.0f;
-        v[col] = ok ? 1.0f : 0.0f;
+    buffers.Pass([&](int r0, int r1) {
+      for (int r = r0; r < r1; ++r) {
+        float* h = heights.ptr<float>(r);
+        float* v = valid.ptr<float>(r);
+        const double* row = z.data() + std::size_t(r) * std::size_t(heights.cols);
+        for (int col = 0; col < heights.cols; ++col) {
+          const bool ok = std::isfinite(row[col]);
+          h[col] = ok ? float(row[col] - origin) : 0.0f;
+          v[col] = ok ? 1.0f : 0.0f;
+        }
       }
-    }
+    });
   }
 
-  // The local mean of the valid points into `out`: a Gaussian average over them only (the blur of the heights
-  // over the blur of the mask).
-  void Smooth(double sigma_px, cv::Mat& out) {
-    cv::GaussianBlur(heights, out, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(valid, work, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    for (int r = 0; r < out.rows; ++r) {
+  // The local mean of the valid points in rows r0..r1 of `out`: a Gaussian average over them only (the blur of
+  // the heights over the blur of the mask).
+  void Smooth(double sigma_px, int r0, int r1, cv::Mat& out) {
+    cv::Mat o_rows = out.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
+    cv::GaussianBlur(heights.rowRange(r0, r1), o_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
       float* o = out.ptr<float>(r);
       const float* w = work.ptr<float>(r);
       for (int col = 0; col < out.cols; ++col) o[col] /= std::max(w[col], 1e-6f);
@@ -301,34 +326,43 @@ struct HoleyMap {
 cv::Mat SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
   HoleyMap map(z, origin, buffers);
   cv::Mat smooth = buffers[3], gx = buffers[4];
-  map.Smooth(kSlopeSmoothingPx, smooth);
-  cv::Sobel(smooth, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::Sobel(smooth, map.work, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  cv::magnitude(gx, map.work, gx);
+  buffers.Pass([&](int r0, int r1) { map.Smooth(kSlopeSmoothingPx, r0, r1, smooth); });
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat gx_rows = gx.rowRange(r0, r1), gy_rows = map.work.rowRange(r0, r1);
+    cv::Sobel(smooth.rowRange(r0, r1), gx_rows, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Sobel(smooth.rowRange(r0, r1), gy_rows, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::magnitude(gx_rows, gy_rows, gx_rows);
+  });
   return gx;
 }
 
-// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 3).
+// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 5).
 cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
   HoleyMap map(z, origin, buffers);
-  cv::Mat residual = buffers[3];
-  map.Smooth(kSlopeSmoothingPx, residual);
-  for (int r = 0; r < residual.rows; ++r) {
-    float* o = residual.ptr<float>(r);
-    const float* h = map.heights.ptr<float>(r);
-    const float* v = map.valid.ptr<float>(r);
-    for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
-  }
+  cv::Mat residual = buffers[3], scatter = buffers[5];
+  buffers.Pass([&](int r0, int r1) {
+    map.Smooth(kSlopeSmoothingPx, r0, r1, residual);
+    for (int r = r0; r < r1; ++r) {
+      float* o = residual.ptr<float>(r);
+      const float* h = map.heights.ptr<float>(r);
+      const float* v = map.valid.ptr<float>(r);
+      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+    }
+  });
   const cv::Size box(kScatterWindowPx, kScatterWindowPx);
-  cv::boxFilter(residual, residual, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  cv::boxFilter(map.valid, map.work, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  for (int r = 0; r < residual.rows; ++r) {
-    float* o = residual.ptr<float>(r);
-    const float* count = map.work.ptr<float>(r);
-    for (int col = 0; col < residual.cols; ++col)
-      o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
-  }
-  return residual;
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat s_rows = scatter.rowRange(r0, r1), count_rows = map.work.rowRange(r0, r1);
+    cv::boxFilter(residual.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::boxFilter(map.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
+                  cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
+      float* o = scatter.ptr<float>(r);
+      const float* count = map.work.ptr<float>(r);
+      for (int col = 0; col < scatter.cols; ++col)
+        o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+    }
+  });
+  return scatter;
 }
 
 }  // namespace
@@ -353,27 +387,39 @@ FocusResult FocusAccumulator::Finish() const {
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
-  ReserveInHugePages(map.z_mm, size);
-  ReserveInHugePages(result.u_z_mm, size);
-  ReserveInHugePages(result.quality, size);
-  ReserveInHugePages(result.window_px, size);
-  ReserveInHugePages(result.peak_index, size);
-  ReserveInHugePages(result.texture, s.curves.texture.size());
-  map.z_mm.resize(size);
-  result.u_z_mm.resize(size);
-  result.quality.resize(size);
-  result.window_px.assign(size, kNaN);
-  result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
+  const std::vector<WindowCurves>& curves = s.curves.windows;
+  const WindowCurves& large = curves.back();
+  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  // The result's maps, each filled (and its fresh pages faulted in, which on a virtual machine costs more than
+  // the filling) by its own thread: one after the other they were the reconstruction's longest serial part.
+  const std::function<void()> allocations[] = {
+      [&] { ReserveInHugePages(map.z_mm, size), map.z_mm.resize(size); },
+      [&] { ReserveInHugePages(result.u_z_mm, size), result.u_z_mm.resize(size); },
+      [&] { ReserveInHugePages(result.quality, size), result.quality.resize(size); },
+      [&] { ReserveInHugePages(result.window_px, size), result.window_px.assign(size, kNaN); },
+      [&] {
+        ReserveInHugePages(result.peak_index, size);
+        result.peak_index.assign(peak_index.begin(), peak_index.end());
+      },
+      [&] {
+        ReserveInHugePages(result.texture, s.curves.texture.size());
+        result.texture.assign(s.curves.texture.begin(), s.curves.texture.end());
+      }};
+  const auto allocate = [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) allocations[i]();
+  };
+  const cv::Range all_maps(0, int(std::size(allocations)));
+  if (s.options.parallel) {
+    cv::parallel_for_(all_maps, allocate, double(all_maps.end));
+  } else {
+    allocate(all_maps);
+  }
   result.texture_channels = s.curves.texture_channels;
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
   const double origin = s.z.front();
 
   // The largest window's heights everywhere; their slope says where the smaller windows serve instead (walls),
   // and only there are their peaks fitted.
-  const std::vector<WindowCurves>& curves = s.curves.windows;
-  const WindowCurves& large = curves.back();
-  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
-  result.peak_index.assign(peak_index.begin(), peak_index.end());
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
       const Peak p = FitPeak(large, i, s.z, s.options);
@@ -382,7 +428,7 @@ FocusResult FocusAccumulator::Finish() const {
       result.quality[i] = p.quality;
     }
   });
-  MapBuffers buffers{s.width, s.height, {}};
+  MapBuffers buffers{s.width, s.height, s.options.parallel, {}};
   const cv::Mat slope = SlopePerPixel(map.z_mm, origin, buffers);
   const double spread_limit = kSpreadLimitSteps * step;
 
@@ -443,6 +489,7 @@ FocusResult ReconstructFocusStack(const std::vector<StackImageView>& images, con
                      std::to_string(z_mm.size()) + " z positions");
   }
   FocusAccumulator accumulator(options);
+  accumulator.state_->borrow = true;  // the images outlive the accumulator
   for (std::size_t i = 0; i < images.size(); ++i) accumulator.Add(images[i], z_mm[i]);
   return accumulator.Finish();
 }

@@ -99,6 +99,8 @@ class FocusAccumulator {
   FocusResult Finish() const;
 
  private:
+  friend FocusResult ReconstructFocusStack(const std::vector<StackImageView>&, const std::vector<double>&,
+                                           const FocusVariationOptions&);
   struct State;
   std::unique_ptr<State> state_;
 };
