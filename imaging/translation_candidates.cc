@@ -272,6 +272,37 @@ WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::V
   return out;
 }
 
+Eigen::Vector2d PolishPeak(const TileImage& a, const TileImage& b, const Eigen::Vector2i& start, int radius,
+                           const MatchScale& scale) {
+  const bool logarithm = MatchingDomain(View(a), View(b));
+  const Prepared pa = MatchingCrop(View(a), scale, logarithm), pb = MatchingCrop(View(b), scale, logarithm);
+  // b's pixel u meets a's u + offset: OverlapNcc's e is the offset itself on whole tiles. One pixel beyond the
+  // radius, so that the best one has neighbours for the parabola.
+  const int reach = radius + 1, side = 2 * reach + 1;
+  std::vector<double> ncc(static_cast<size_t>(side * side), -2.0);
+  const auto at = [&](int dx, int dy) -> double& { return ncc[static_cast<size_t>((dy + reach) * side + dx + reach)]; };
+  Eigen::Vector2i best = Eigen::Vector2i::Zero();
+  for (int dy = -reach; dy <= reach; ++dy) {
+    for (int dx = -reach; dx <= reach; ++dx) {
+      int pixels = 0;
+      const double v = OverlapNcc(pa, pb, start + Eigen::Vector2i(dx, dy), pixels);
+      if (pixels == 0) continue;
+      at(dx, dy) = v;
+      if (std::max(std::abs(dx), std::abs(dy)) <= radius && v > at(best.x(), best.y())) best = {dx, dy};
+    }
+  }
+  // The vertex of the parabola through the best and its two neighbours, per axis; none where the three do not
+  // bend down (a flat or rising side), or when it lies beyond half a pixel.
+  const auto vertex = [](double left, double centre, double right) {
+    const double bend = left - 2.0 * centre + right;
+    if (!(bend < 0.0) || left < -1.5 || right < -1.5) return 0.0;
+    return std::clamp(0.5 * (left - right) / bend, -0.5, 0.5);
+  };
+  return (start + best).cast<double>() +
+         Eigen::Vector2d(vertex(at(best.x() - 1, best.y()), at(best.x(), best.y()), at(best.x() + 1, best.y())),
+                         vertex(at(best.x(), best.y() - 1), at(best.x(), best.y()), at(best.x(), best.y() + 1)));
+}
+
 // Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.
 std::pair<Eigen::Vector2d, double> PhaseShift(const cv::Mat& a, const cv::Mat& b) {
   cv::Mat window;
