@@ -272,11 +272,15 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
     searched.searched = true;
     searched.candidates = wide.candidates;
     searched.response = best.peak;
-    if (!RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, 0.5 * wide.scale) &&
-        options.refine && wide.scale > 1) {
+    const double level_px = 0.5 * wide.scale;
+    const bool settled = RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, level_px);
+    const bool to_level = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(searched.information).eigenvalues()(0) <=
+                          (1.0 + 1e-9) / (level_px * level_px);
+    if ((!settled || to_level) && options.refine && wide.scale > 1) {
       // The refinement wandered off the level's pixel (on the real strip, tiles turned against each other by a
-      // few tenths of a degree: no one shift fits their whole overlap): the peak is sought again at full
-      // resolution near it, and refined from there; where it wanders again, that peak stands, to half a pixel.
+      // few tenths of a degree: no one shift fits their whole overlap), or the gradients left a direction to the
+      // level's pixel: the peak is sought again at full resolution near it, and refined from there; where it
+      // wanders again, that peak stands, to half a pixel.
       PairRegistration polished = searched;
       polished.rejection.clear();
       const Eigen::Vector2d peak =
