@@ -14,23 +14,30 @@
 namespace fvm::imaging {
 namespace {
 
+// The NCC of the values as stored, summed here directly, over the rows [y0, y1) of a's frame that the overlap holds
+// when b's top-left lies at the whole pixel o in a's frame; `pixels` counts them.
+double DirectNcc(const TileImage& a, const TileImage& b, const Eigen::Vector2i& o, int y0, int y1, int& pixels) {
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0, n = 0;
+  for (int y = std::max({0, o.y(), y0}); y < std::min({929, 929 + o.y(), y1}); ++y) {
+    for (int x = std::max(0, o.x()); x < std::min(594, 594 + o.x()); ++x) {
+      const double va = a(y, x), vb = b(y - o.y(), x - o.x());
+      sa += va, sb += vb, saa += va * va, sbb += vb * vb, sab += va * vb, n += 1;
+    }
+  }
+  pixels = static_cast<int>(n);
+  return (sab / n - sa / n * sb / n) / std::sqrt((saa / n - sa / n * sa / n) * (sbb / n - sb / n * sb / n));
+}
+
 TEST(RealTileStrip, OverlapCorrelationIsTheMeasure) {
   const testing::RealStrip strip = testing::LoadStarrynight();
   if (strip.images.empty()) GTEST_SKIP() << "../shared/realdata absent";
   // An independent check of OverlapNcc: the overlap of tiles 1 and 2 at Fiji's offset, summed here directly.
   const Eigen::Vector2d offset = strip.fiji_px[1] - strip.fiji_px[0];
-  const auto ox = static_cast<int>(offset.x()), oy = static_cast<int>(offset.y());
-  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0, n = 0;
-  for (int y = std::max(0, oy); y < std::min(929, 929 + oy); ++y) {
-    for (int x = std::max(0, ox); x < std::min(594, 594 + ox); ++x) {
-      const double a = strip.images[0](y, x), b = strip.images[1](y - oy, x - ox);
-      sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b, n += 1;
-    }
-  }
-  const double direct = (sab / n - sa / n * sb / n) / std::sqrt((saa / n - sa / n * sa / n) * (sbb / n - sb / n * sb / n));
+  int n = 0;
+  const double direct = DirectNcc(strip.images[0], strip.images[1], offset.cast<int>(), 0, 929, n);
   const OverlapCorrelation measured = OverlapNcc(strip.images[0], strip.images[1], offset);
   EXPECT_NEAR(measured.ncc, direct, 1e-9);
-  EXPECT_EQ(measured.pixels, static_cast<int>(n));
+  EXPECT_EQ(measured.pixels, n);
   // A tenth of a pixel off resamples b bilinearly: the correlation moves by little.
   EXPECT_NEAR(OverlapNcc(strip.images[0], strip.images[1], offset + Eigen::Vector2d(0.1, 0.1)).ncc, direct, 0.02);
 }
@@ -99,18 +106,9 @@ TEST(RealTileStrip, FijiMatchesWorseInEveryThirdOfTheOverlap) {
   const testing::RealStrip strip = testing::LoadStarrynight();
   if (strip.images.empty()) GTEST_SKIP() << "../shared/realdata absent";
   const RegistrationResult result = RegisterTileGrid(strip.images, strip.tiles, RegistrationOptions{});
-  // The NCC of the values as stored over rows [y0, y1) of a's frame when b's top-left lies at the whole pixel o.
   const auto third = [&](size_t k, const Eigen::Vector2i& o, int band) {
-    const TileImage &a = strip.images[k], &b = strip.images[k + 1];
-    const int y0 = std::max({0, o.y(), band * 310}), y1 = std::min({929, 929 + o.y(), band * 310 + 310});
-    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0, n = 0;
-    for (int y = y0; y < y1; ++y) {
-      for (int x = std::max(0, o.x()); x < std::min(594, 594 + o.x()); ++x) {
-        const double va = a(y, x), vb = b(y - o.y(), x - o.x());
-        sa += va, sb += vb, saa += va * va, sbb += vb * vb, sab += va * vb, n += 1;
-      }
-    }
-    return (sab / n - sa / n * sb / n) / std::sqrt((saa / n - sa / n * sa / n) * (sbb / n - sb / n * sb / n));
+    int pixels = 0;
+    return DirectNcc(strip.images[k], strip.images[k + 1], o, band * 310, band * 310 + 310, pixels);
   };
   for (const size_t k : {0u, 6u}) {
     const Eigen::Vector2i ours = (result.positions.positions_px[k + 1] - result.positions.positions_px[k]).array().round().cast<int>();
