@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <map>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -276,31 +277,38 @@ Eigen::Vector2d PolishPeak(const TileImage& a, const TileImage& b, const Eigen::
                            const MatchScale& scale) {
   const bool logarithm = MatchingDomain(View(a), View(b));
   const Prepared pa = MatchingCrop(View(a), scale, logarithm), pb = MatchingCrop(View(b), scale, logarithm);
-  // b's pixel u meets a's u + offset: OverlapNcc's e is the offset itself on whole tiles. One pixel beyond the
-  // radius, so that the best one has neighbours for the parabola.
-  const int reach = radius + 1, side = 2 * reach + 1;
-  std::vector<double> ncc(static_cast<size_t>(side * side), -2.0);
-  const auto at = [&](int dx, int dy) -> double& { return ncc[static_cast<size_t>((dy + reach) * side + dx + reach)]; };
-  Eigen::Vector2i best = Eigen::Vector2i::Zero();
-  for (int dy = -reach; dy <= reach; ++dy) {
-    for (int dx = -reach; dx <= reach; ++dx) {
-      int pixels = 0;
-      const double v = OverlapNcc(pa, pb, start + Eigen::Vector2i(dx, dy), pixels);
-      if (pixels == 0) continue;
-      at(dx, dy) = v;
-      if (std::max(std::abs(dx), std::abs(dy)) <= radius && v > at(best.x(), best.y())) best = {dx, dy};
+  // b's pixel u meets a's u + offset: OverlapNcc's e is the offset itself on whole tiles. Each offset once.
+  std::map<std::pair<int, int>, double> seen;
+  const auto ncc = [&](const Eigen::Vector2i& o) {
+    const auto [it, fresh] = seen.try_emplace({o.x(), o.y()}, -2.0);
+    int pixels = 0;
+    if (fresh) it->second = OverlapNcc(pa, pb, o, pixels);
+    if (fresh && pixels == 0) it->second = -2.0;
+    return it->second;
+  };
+  // Uphill a pixel at a time within the radius (the peak lies within half a level's pixel of the start, so a few
+  // steps: 20-30 overlaps where every offset of the radius would be 49-81).
+  Eigen::Vector2i best = start;
+  for (int step = 0; step <= 2 * radius; ++step) {
+    Eigen::Vector2i next = best;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const Eigen::Vector2i o = best + Eigen::Vector2i(dx, dy);
+        if ((o - start).cwiseAbs().maxCoeff() <= radius && ncc(o) > ncc(next)) next = o;
+      }
     }
+    if (next == best) break;
+    best = next;
   }
   // The vertex of the parabola through the best and its two neighbours, per axis; none where the three do not
-  // bend down (a flat or rising side), or when it lies beyond half a pixel.
-  const auto vertex = [](double left, double centre, double right) {
+  // bend down (a flat or rising side), and at most half a pixel away.
+  const auto vertex = [&](const Eigen::Vector2i& along) {
+    const double left = ncc(best - along), centre = ncc(best), right = ncc(best + along);
     const double bend = left - 2.0 * centre + right;
     if (!(bend < 0.0) || left < -1.5 || right < -1.5) return 0.0;
     return std::clamp(0.5 * (left - right) / bend, -0.5, 0.5);
   };
-  return (start + best).cast<double>() +
-         Eigen::Vector2d(vertex(at(best.x() - 1, best.y()), at(best.x(), best.y()), at(best.x() + 1, best.y())),
-                         vertex(at(best.x(), best.y() - 1), at(best.x(), best.y()), at(best.x(), best.y() + 1)));
+  return best.cast<double>() + Eigen::Vector2d(vertex(Eigen::Vector2i::UnitX()), vertex(Eigen::Vector2i::UnitY()));
 }
 
 // Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.
