@@ -66,7 +66,7 @@ TEST(RealTileStrip, RegistersEveryPairAsWellAsFiji) {
   }
   std::printf("mean overlap ncc: fvm %.4f, Fiji %.4f; %d of 9 pairs\n", ours_mean, fiji_mean, accepted);
   EXPECT_EQ(accepted, 9);
-  // The goal: a mean at least Fiji's, and no pair below 0.3 where Fiji's is above 0.5. Measured 0.788
+  // The goal: a mean at least Fiji's, and no pair below 0.3 where Fiji's is above 0.5. Measured 0.785
   // against 0.744 (before the search over the whole plausible range: 0.598, the steps of 242-245 px taken for
   // ~300-330 px); every pair at least Fiji's less 0.01 (the bilinear resampling of fvm's sub-pixel offsets reads a
   // noisy overlap up to a few hundredths low).
@@ -82,8 +82,8 @@ TEST(RealTileStrip, RegistersEveryPairAsWellAsFiji) {
     within_2px += off <= 2.0;
     // Where Fiji's overlap correlates well (above 0.7: all but 7-8), the steps agree within 4 px: the real tiles
     // are no pure translation of each other (their best offsets move by pixels with the band they are judged
-    // in), and Fiji's positions are whole pixels. At 7-8 (Fiji 0.52) fvm steps 353.6 px where Fiji steps 334, and
-    // its overlap correlates 0.66.
+    // in), and Fiji's positions are whole pixels. At 7-8 (Fiji 0.52) fvm steps 352.8 px where Fiji steps 334, and
+    // its overlap correlates 0.65.
     if (fiji[k].correlation.ncc > 0.7) {
       EXPECT_LE(off, 4.0) << k + 1 << "-" << k + 2;
     }
