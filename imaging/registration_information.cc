@@ -15,8 +15,9 @@ namespace fvm::imaging::detail {
 namespace {
 
 // The quality and information of aligned crops; `area`: pixels per independent noise sample (1 for the crops as
-// they are, more once smoothed).
-Alignment Measure(const cv::Mat& warped, const cv::Mat& target, const cv::Mat& usable, double area) {
+// they are, more once smoothed); `inflation`: the factor by which the errors exceed the noise's part (1, or
+// kThinOverlapInflation).
+Alignment Measure(const cv::Mat& warped, const cv::Mat& target, const cv::Mat& usable, double area, double inflation) {
   Alignment out;
   // Gradients of both aligned crops.
   cv::Mat bx, by, ax, ay;
@@ -72,7 +73,7 @@ Alignment Measure(const cv::Mat& warped, const cv::Mat& target, const cv::Mat& u
     // dominate (Lanczos resampling of texture near 0.2 cycles / px, remnants of the shading): 0.005 px, the rms
     // error of noise-light synthetic pairs; without it the information overstated 512 px pairs 15-fold.
     const double noise_part = area * variance * u.dot(energy_b * u) / (texture * texture);
-    out.information += 1.0 / (noise_part + kSystematicPx * kSystematicPx) * u * u.transpose();
+    out.information += 1.0 / (inflation * inflation * noise_part + kSystematicPx * kSystematicPx) * u * u.transpose();
   }
   return out;
 }
@@ -85,7 +86,8 @@ Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Ve
   const cv::Mat target = b.value(*inner);
   const cv::Mat warped = ShiftedCrop(a.value, e, *inner);
   const cv::Mat usable = Usable(a.valid, b.valid, e, *inner);
-  Alignment out = Measure(warped, target, usable, 1.0);
+  const double inflation = b.pad > 0 ? kThinOverlapInflation : 1.0;  // pad: a thin overlap, mirrored out
+  Alignment out = Measure(warped, target, usable, 1.0, inflation);
   if (!out.information.isZero() || !(match_sigma > 0.0)) return out;
   // Where the pixel noise drowns the texture's gradients (camera tiles of a printed grid), the same with the noise
   // smoothed away: the gradients of the smoothed crops, their noise counted over the pixels one Gaussian of
@@ -94,7 +96,7 @@ Alignment MeasureAlignment(const Prepared& a, const Prepared& b, const Eigen::Ve
   cv::Mat smooth_w, smooth_t;
   cv::GaussianBlur(warped, smooth_w, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
   cv::GaussianBlur(target, smooth_t, cv::Size(0, 0), match_sigma, match_sigma, cv::BORDER_REFLECT);
-  out.information = Measure(smooth_w, smooth_t, usable, 4.0 * std::numbers::pi * match_sigma * match_sigma).information;
+  out.information = Measure(smooth_w, smooth_t, usable, 4.0 * std::numbers::pi * match_sigma * match_sigma, inflation).information;
   return out;
 }
 

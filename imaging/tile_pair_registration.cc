@@ -67,7 +67,8 @@ Eigen::Vector2d WholeFrameShift(const TileImage& a, const TileImage& b, const Ei
 // offset it could not refine claims a pixel's variance less); otherwise it is the nominal overlap's
 // phase-correlation peak, refined once on one crop (`reuse`, when given, is the crop at its whole pixel).
 // `clear_peak_px` > 0: the overlap NCC over the whole plausible range had one clear peak, located to this (px).
-void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
+// Returns whether the sub-pixel refinement settled (false also when it was not asked for).
+bool RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d offset,
                       const RegistrationOptions& options, bool searched, std::optional<Overlap> reuse,
                       PairRegistration& pair, double clear_peak_px = 0.0) {
   const Eigen::Vector2d nominal_px = pair.nominal_px;
@@ -86,7 +87,7 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
   overlap = crop == 0 && reuse ? std::move(reuse) : CropOverlap(a, b, whole, options.highpass_sigma_px);
   if (!overlap) {
     pair.rejection = "the measured overlap is narrower than 8 px";
-    return;
+    return false;
   }
   e = offset - whole.cast<double>();
   if (options.refine) {
@@ -171,6 +172,7 @@ void RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
     pair.rejection = "the overlap has no texture that stands out of the noise in any direction";
   }
   pair.accepted = pair.rejection.empty();
+  return settled && options.refine;
 }
 
 }  // namespace
@@ -270,7 +272,22 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
     searched.searched = true;
     searched.candidates = wide.candidates;
     searched.response = best.peak;
-    RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, 0.5 * wide.scale);
+    const double level_px = 0.5 * wide.scale;
+    const bool settled = RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, level_px);
+    const bool to_level = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(searched.information).eigenvalues()(0) <=
+                          (1.0 + 1e-9) / (level_px * level_px);
+    if ((!settled || to_level) && options.refine && wide.scale > 1) {
+      // The refinement wandered off the level's pixel (on the real strip, tiles turned against each other by a
+      // few tenths of a degree: no one shift fits their whole overlap), or the gradients left a direction to the
+      // level's pixel: the peak is sought again at full resolution near it, and refined from there; where it
+      // wanders again, that peak stands, to half a pixel.
+      PairRegistration polished = searched;
+      polished.rejection.clear();
+      const Eigen::Vector2d peak =
+          PolishPeak(a, b, best.offset_px.array().round().cast<int>(), wide.scale / 2 + 1, Scale(options));
+      RefineAndMeasure(a, b, peak, options, true, std::nullopt, polished, 0.5);
+      searched = polished;
+    }
     if (searched.accepted) return searched;
   }
   // Otherwise (a ridge or a repeat, which places the match no better than the nominal overlap does, or a clear

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <map>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -270,6 +271,44 @@ WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::V
     out.sharp = chosen != landscape.peaks.end() && chosen->fall >= ambiguous_ncc;
   }
   return out;
+}
+
+Eigen::Vector2d PolishPeak(const TileImage& a, const TileImage& b, const Eigen::Vector2i& start, int radius,
+                           const MatchScale& scale) {
+  const bool logarithm = MatchingDomain(View(a), View(b));
+  const Prepared pa = MatchingCrop(View(a), scale, logarithm), pb = MatchingCrop(View(b), scale, logarithm);
+  // b's pixel u meets a's u + offset: OverlapNcc's e is the offset itself on whole tiles. Each offset once.
+  std::map<std::pair<int, int>, double> seen;
+  const auto ncc = [&](const Eigen::Vector2i& o) {
+    const auto [it, fresh] = seen.try_emplace({o.x(), o.y()}, -2.0);
+    int pixels = 0;
+    if (fresh) it->second = OverlapNcc(pa, pb, o, pixels);
+    if (fresh && pixels == 0) it->second = -2.0;
+    return it->second;
+  };
+  // Uphill a pixel at a time within the radius (the peak lies within half a level's pixel of the start, so a few
+  // steps: 20-30 overlaps where every offset of the radius would be 49-81).
+  Eigen::Vector2i best = start;
+  for (int step = 0; step <= 2 * radius; ++step) {
+    Eigen::Vector2i next = best;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const Eigen::Vector2i o = best + Eigen::Vector2i(dx, dy);
+        if ((o - start).cwiseAbs().maxCoeff() <= radius && ncc(o) > ncc(next)) next = o;
+      }
+    }
+    if (next == best) break;
+    best = next;
+  }
+  // The vertex of the parabola through the best and its two neighbours, per axis; none where the three do not
+  // bend down (a flat or rising side), and at most half a pixel away.
+  const auto vertex = [&](const Eigen::Vector2i& along) {
+    const double left = ncc(best - along), centre = ncc(best), right = ncc(best + along);
+    const double bend = left - 2.0 * centre + right;
+    if (!(bend < 0.0) || left < -1.5 || right < -1.5) return 0.0;
+    return std::clamp(0.5 * (left - right) / bend, -0.5, 0.5);
+  };
+  return best.cast<double>() + Eigen::Vector2d(vertex(Eigen::Vector2i::UnitX()), vertex(Eigen::Vector2i::UnitY()));
 }
 
 // Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.

@@ -48,6 +48,12 @@ struct WideSearch {
 WideSearch WideCandidates(const TileImage& a, const TileImage& b, const Eigen::Vector2d& nominal,
                           const Eigen::Vector2d& search, int peaks, const MatchScale& scale, double ambiguous_ncc);
 
+// Where the overlap NCC in the matching band, on the whole tiles at full resolution, is highest among the whole-pixel
+// offsets within `radius` (per axis) of `start`, to a fraction of a pixel by a parabola through the best and its
+// neighbours along each axis: a landscape peak located on its level's pixel, polished.
+Eigen::Vector2d PolishPeak(const TileImage& a, const TileImage& b, const Eigen::Vector2i& start, int radius,
+                           const MatchScale& scale);
+
 // Shift e such that B(v) = A(v + e), from the phase correlation of same-sized crops, and its peak response.
 std::pair<Eigen::Vector2d, double> PhaseShift(const cv::Mat& a, const cv::Mat& b);
 

@@ -264,8 +264,8 @@ TEST(TileRegistration, SparseThinOverlapsLearnTheStage) {
       if (!pair.accepted) continue;
       // No confident wrong registration: along every direction an accepted pair claims to half a pixel or better,
       // its error is below half a pixel (a pair whose overlap holds one streak of blobs leaves the other direction
-      // to the stage). Not 4 of its standard deviations: on these thin overlaps the claimed ones are too small, by
-      // up to 2x (chi up to 8.5 in seed 1).
+      // to the stage). Not 4 of its standard deviations: their rms is 1 (SearchedThinPairsClaimHonestUncertainties),
+      // but one pair in a few hundred lies 5-6 of them off.
       const Eigen::Vector2d truth = tiles.truth_px[static_cast<size_t>(pair.b)] - tiles.truth_px[static_cast<size_t>(pair.a)];
       const Eigen::Vector2d error = pair.offset_px - truth;
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
@@ -293,6 +293,38 @@ TEST(TileRegistration, SparseThinOverlapsLearnTheStage) {
                 static_cast<int>(seed), accepted, within, worst, nominal_worst, model.east_px.x(), model.east_px.y(),
                 model.south_px.x(), model.south_px.y(), model.repeatability_px.x(), model.repeatability_px.y());
   }
+}
+
+// Issue 30: what a searched pair of a thin, sparse overlap claims is what it holds. Its errors, standardised by its
+// own uncertainty along each direction it determines, must have an rms of 1 within the issue's band 0.8-1.25 over
+// the sparse sets of seeds 1-4 (about 270 directions: the rms scatters by some 4 %). Before the thin overlaps' floor
+// (registration_information.h), the noise-only claims gave 2.2 over seeds 1-8; with it 1.0.
+TEST(TileRegistration, SearchedThinPairsClaimHonestUncertainties) {
+  double sum = 0.0;
+  int directions = 0;
+  for (const std::uint64_t seed : {1u, 2u, 3u, 4u}) {
+    artefacts::SparseTileOptions options;
+    options.seed = seed;
+    const auto tiles = artefacts::SynthesizeSparseTiles(options);
+    const RegistrationResult result = RegisterTileGrid(tiles.images, tiles.tiles, RegistrationOptions{});
+    for (const auto& pair : result.pairs) {
+      if (!pair.accepted || !pair.searched) continue;
+      const Eigen::Vector2d error = pair.offset_px - (tiles.truth_px[static_cast<size_t>(pair.b)] -
+                                                      tiles.truth_px[static_cast<size_t>(pair.a)]);
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> along(pair.information);
+      for (int k = 0; k < 2; ++k) {
+        const double lambda = along.eigenvalues()(k);
+        if (!(lambda > 1e-9 * along.eigenvalues()(1))) continue;  // left to the stage
+        sum += std::pow(along.eigenvectors().col(k).dot(error), 2) * lambda;
+        ++directions;
+      }
+    }
+  }
+  const double rms = std::sqrt(sum / directions);
+  std::printf("searched thin pairs: rms standardised error %.3f over %d directions\n", rms, directions);
+  EXPECT_GT(directions, 150);
+  EXPECT_GT(rms, 0.8);
+  EXPECT_LT(rms, 1.25);
 }
 
 // Stitching fails honestly: tiles of pure noise register no pair, the model is not estimated, and every tile
