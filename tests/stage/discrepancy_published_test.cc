@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <set>
 #include <sstream>
 #include <string>
@@ -105,31 +106,38 @@ TEST(DiscrepancyOnPublishedData, NamesABendAndBlundersWithoutFlaggingGoodCentres
 }
 
 
-// The case: a drift and a scale on the 15 model, the identification bars on 20 mm wedges measured each in
-// one direction (their height grows with time: a drift and pitch and roll look alike), the exports not turned.
-// The held-out placements refuse the drift, rightly; then nothing may be named for what it leaves, above all not
-// frame_rotation, which is not in these data: the residual left and its likeliest cause are said instead.
+// The case: a drift and a scale, the identification bars on 20 mm wedges measured each in one direction
+// (their height grows with time: a drift and pitch and roll look alike), the exports not turned. The held-out
+// placements refuse the drift, rightly; then nothing may be named for what it leaves, above all not frame_rotation,
+// which is not in these data: the residual left and its likeliest cause are said instead. On the 9, 15 and 27
+// models alike.
 TEST(DiscrepancyOnPublishedData, NamesNothingForWhatARefusedDriftLeaves) {
-  int refusals = 0;
-  for (unsigned seed : {1u, 2u, 3u, 4u}) {
-    PublishedEffects effects;
-    effects.scale = 3e-4;
-    effects.drift_mm_per_s = Eigen::Vector3d(3e-3, -1.5e-3, 0.9e-3) / 60.0;
-    effects.rise_mm = 20.0;
-    const Diagnosis d = DiagnosePublished("15", MeasureOnPublishedStage(Stage(seed, false), seed, kNoiseMm, 10, false, false, effects));
-    const bool drift_refused = std::any_of(d.notes.begin(), d.notes.end(), [](const std::string& n) {
-      return n.find("thermal_drift fits the identification data better but makes the held-out placements worse") !=
-                 std::string::npos &&
-             n.find("measuring every other placement backwards") != std::string::npos;
-    });
-    if (!drift_refused) continue;  // named instead (seeds 2 and 4): not this case
-    ++refusals;
-    EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("frame_rotation"))) << "seed " << seed << ": " << d.unexplained;
-    EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("thermal_drift"))) << "seed " << seed;
-    EXPECT_THAT(d.unexplained, ::testing::StartsWith("unexplained: ")) << "seed " << seed;
-    EXPECT_THAT(d.unexplained, ::testing::HasSubstr("the likeliest cause is the refused thermal_drift")) << "seed " << seed;
+  for (const char* model : {"9", "15", "27"}) {
+    int refusals = 0;
+    for (unsigned seed : {1u, 2u, 3u}) {
+      PublishedEffects effects;
+      effects.scale = 3e-4;
+      effects.drift_mm_per_s = Eigen::Vector3d(3e-3, -1.5e-3, 0.9e-3) / 60.0;
+      effects.rise_mm = 20.0;
+      const Diagnosis d = DiagnosePublished(model, MeasureOnPublishedStage(Stage(seed, false), seed, kNoiseMm, 10, false, false, effects));
+      std::printf("model %s seed %u: named", model, seed);
+      for (const std::string& n : Named(d)) std::printf(" %s", n.c_str());
+      std::printf("\n  unexplained: %s\n", d.unexplained.c_str());
+      for (const std::string& n : d.notes) std::printf("  note: %s\n", n.c_str());
+      EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("frame_rotation"))) << model << " seed " << seed << ": " << d.unexplained;
+      const bool drift_refused = std::any_of(d.notes.begin(), d.notes.end(), [](const std::string& n) {
+        return n.find("thermal_drift fits the identification data better but makes the held-out placements worse") !=
+                   std::string::npos &&
+               n.find("measuring every other placement backwards") != std::string::npos;
+      });
+      if (!drift_refused) continue;
+      ++refusals;
+      EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("thermal_drift"))) << model << " seed " << seed;
+      EXPECT_THAT(d.unexplained, ::testing::StartsWith("unexplained: ")) << model << " seed " << seed;
+      EXPECT_THAT(d.unexplained, ::testing::HasSubstr("the likeliest cause is the refused thermal_drift")) << model << " seed " << seed;
+    }
+    EXPECT_GE(refusals, 1) << model;
   }
-  EXPECT_EQ(refusals, 2);  // seeds 1 and 3: the case is there to be tested
 }
 
 }  // namespace
