@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -112,6 +112,10 @@ TEST(DiscrepancyOnPublishedData, NamesABendAndBlundersWithoutFlaggingGoodCentres
 // which is not in these data: the residual left and its likeliest cause are said instead. On the 9, 15 and 27
 // models alike.
 TEST(DiscrepancyOnPublishedData, NamesNothingForWhatARefusedDriftLeaves) {
+  // Seeds 1-3 whose drift is not named: none on the 9 model (without pitch and roll, the drift's pattern along the
+  // wedges is its own, and it is named rightly), two on the 15 (the held-out placements refuse it), all three on the
+  // 27 (its linear terms take the drift: no candidate at all, and the turns would take what it leaves).
+  const std::map<std::string, int> expected_refusals{{"9", 0}, {"15", 2}, {"27", 3}};
   for (const char* model : {"9", "15", "27"}) {
     int refusals = 0;
     for (unsigned seed : {1u, 2u, 3u}) {
@@ -120,23 +124,24 @@ TEST(DiscrepancyOnPublishedData, NamesNothingForWhatARefusedDriftLeaves) {
       effects.drift_mm_per_s = Eigen::Vector3d(3e-3, -1.5e-3, 0.9e-3) / 60.0;
       effects.rise_mm = 20.0;
       const Diagnosis d = DiagnosePublished(model, MeasureOnPublishedStage(Stage(seed, false), seed, kNoiseMm, 10, false, false, effects));
-      std::printf("model %s seed %u: named", model, seed);
-      for (const std::string& n : Named(d)) std::printf(" %s", n.c_str());
-      std::printf("\n  unexplained: %s\n", d.unexplained.c_str());
-      for (const std::string& n : d.notes) std::printf("  note: %s\n", n.c_str());
       EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("frame_rotation"))) << model << " seed " << seed << ": " << d.unexplained;
-      const bool drift_refused = std::any_of(d.notes.begin(), d.notes.end(), [](const std::string& n) {
-        return n.find("thermal_drift fits the identification data better but makes the held-out placements worse") !=
-                   std::string::npos &&
-               n.find("measuring every other placement backwards") != std::string::npos;
-      });
-      if (!drift_refused) continue;
+      // A drift named is this case identified; otherwise it must be named as the likeliest cause of what is left,
+      // with the reason the data could not show it (the held-out placements refused it, or it took the turns' place).
+      const std::vector<std::string> named = Named(d);
+      if (std::find(named.begin(), named.end(), "thermal_drift") != named.end()) continue;
       ++refusals;
-      EXPECT_THAT(Named(d), ::testing::Not(::testing::Contains("thermal_drift"))) << model << " seed " << seed;
+      const bool reason = std::any_of(d.notes.begin(), d.notes.end(), [](const std::string& n) {
+        return (n.find("thermal_drift fits the identification data better but makes the held-out placements worse") !=
+                    std::string::npos &&
+                n.find("measuring every other placement backwards") != std::string::npos) ||
+               n.find("a drift grows from each first tile as a turn does") != std::string::npos;
+      });
+      EXPECT_TRUE(reason) << model << " seed " << seed;
       EXPECT_THAT(d.unexplained, ::testing::StartsWith("unexplained: ")) << model << " seed " << seed;
-      EXPECT_THAT(d.unexplained, ::testing::HasSubstr("the likeliest cause is the refused thermal_drift")) << model << " seed " << seed;
+      EXPECT_THAT(d.unexplained, ::testing::ContainsRegex("the likeliest cause is (the refused )?a? ?thermal_drift"))
+          << model << " seed " << seed;
     }
-    EXPECT_GE(refusals, 1) << model;
+    EXPECT_EQ(refusals, expected_refusals.at(model)) << model;
   }
 }
 
