@@ -61,9 +61,9 @@ echo
 echo "Repeat measurements of the plan's machine (mesh 75, order 2): $REPEATS repeats, fresh noise on readings and validation"
 observed=()
 for ((k = 1; k <= REPEATS; ++k)); do
-  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --points mesh:100,100,100 --tool 0,0,100 --pose $POSE \
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:100,100,100 --tool 0,0,100 --pose $POSE \
     --seed $((100 + k)) -o "$WORK/r$k" >/dev/null
-  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --points mesh:50,50,50 --tool 0,0,100 --pose $POSE \
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:50,50,50 --tool 0,0,100 --pose $POSE \
     --seed $((200 + k)) -o "$WORK/v$k" >/dev/null
   observed+=("$("$FVM" verify "$WORK/r$k/readings.csv" --order 2 --tool 0,0,100 --fit-pose \
     --validate "$WORK/v$k/readings.csv" --json | jq '.validation.final.mean_um')")
