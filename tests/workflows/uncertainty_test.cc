@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "tests/support/test_support.h"
 #include "artefacts/io/batch.h"
@@ -17,12 +18,12 @@
 namespace fvm::workflows {
 namespace {
 
-MachineProblem Problem(const testing::SimulatedMachine& m, const std::filesystem::path& dir) {
+MachineProblem Problem(const testing::SimulatedMachine& m, const std::filesystem::path& dir, const std::string& tracker = "adm") {
   artefacts::WriteTrackerReadings(dir / "readings.csv", m.readings);
   MachineProblemOptions o;
   o.data = (dir / "readings.csv").string();
   o.tools = {Eigen::Vector3d(0, 0, 100)};
-  o.tracker = "adm";
+  o.tracker = tracker;
   return LoadMachineProblem(o);
 }
 
@@ -69,12 +70,7 @@ TEST(MachineUncertainty, AgreesWithCovariancePropagationAndRepeatsBitForBit) {
 TEST(MachineUncertainty, ANoiseFreeTrackerIsRefused) {
   const testing::SimulatedMachine m = testing::SimulateMachine(32, 300.0);
   fvm::testing::TempDir dir;
-  artefacts::WriteTrackerReadings(dir.path() / "readings.csv", m.readings);
-  MachineProblemOptions o;
-  o.data = (dir.path() / "readings.csv").string();
-  o.tools = {Eigen::Vector3d(0, 0, 100)};
-  o.tracker = "none";
-  EXPECT_THROW(IdentifyMachineReference(LoadMachineProblem(o), 2), InputError);
+  EXPECT_THROW(IdentifyMachineReference(Problem(m, dir.path(), "none"), 2), InputError);
 }
 
 // Readings that carry their own covariances (fvm multilaterate --verify-readings) are drawn from them: with
@@ -89,12 +85,7 @@ TEST(MachineUncertainty, ReadingsWithTheirOwnCovariancesAreDrawnFromThem) {
     m.readings.points[i].covariance = 9e-6 * Eigen::Matrix3d::Identity();
   }
   fvm::testing::TempDir dir;
-  artefacts::WriteTrackerReadings(dir.path() / "readings.csv", m.readings);
-  MachineProblemOptions o;
-  o.data = (dir.path() / "readings.csv").string();
-  o.tools = {Eigen::Vector3d(0, 0, 100)};
-  o.tracker = "none";
-  const MachineProblem problem = LoadMachineProblem(o);
+  const MachineProblem problem = Problem(m, dir.path(), "none");
   const MachineReference reference = IdentifyMachineReference(problem, 2);
   MonteCarloSettings settings;
   settings.runs = 20;
