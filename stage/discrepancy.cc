@@ -564,7 +564,7 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     const std::optional<TurnsRefused> refused_turns =
         turn.score.significant ? DriftInsteadOfTurns(fit.calibration, problem.validate, base_options.frame, turn.residuals_after,
                                                      {step, turn.score.p_value, drift.has_value()}, validation,
-                                                     Summarize(fit.residuals))
+                                                     Summarize(fit.residuals), alpha_step)
                                : std::nullopt;
     if (refused_turns) {
       d.notes.push_back(refused_turns->note);

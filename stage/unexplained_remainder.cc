@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <Eigen/QR>
+#include <boost/math/distributions/fisher_f.hpp>
 #include <algorithm>
 #include <cmath>
 
@@ -61,7 +62,7 @@ Remainder JudgeRemainder(const std::vector<Eigen::Vector3d>& residuals, int num_
 std::optional<TurnsRefused> DriftInsteadOfTurns(const Calibration& calibration, const MeasurementSet& validate,
                                                 StitchedFrame frame, const std::vector<Eigen::Vector3d>& turned_residuals,
                                                 const TurnTestOutcome& turns, const ResidualSummary& validation,
-                                                const ResidualSummary& fit) {
+                                                const ResidualSummary& fit, double alpha) {
   if (validate.t_s.size() != validate.observations.size() || validate.observations.empty()) return std::nullopt;
   const Eigen::VectorXd r = Stack(Validate(&calibration, validate.observations, validate.anchors, frame).residuals);
   // The alternative: three drift rates and the six linear terms of the xy arm from each first tile, common to
@@ -77,9 +78,16 @@ std::optional<TurnsRefused> DriftInsteadOfTurns(const Calibration& calibration, 
     }
   }
   const Eigen::VectorXd left = r - alternative * alternative.colPivHouseholderQr().solve(r);
+  const Eigen::MatrixXd linear = alternative.rightCols(6);
+  const Eigen::VectorXd left_linear = r - linear * linear.colPivHouseholderQr().solve(r);
   const double m = static_cast<double>(r.size());
   const double drift_rms_mm = std::sqrt(left.squaredNorm() / m), turn_rms_mm = std::sqrt(Stack(turned_residuals).squaredNorm() / m);
-  if (drift_rms_mm > turn_rms_mm) return std::nullopt;
+  if (drift_rms_mm > turn_rms_mm || m <= 9.0 || !(left.squaredNorm() > 0)) return std::nullopt;
+  // And the drift must be there: its three rates significant beyond the linear terms (F-test at `alpha`); a turn
+  // common to the placements is the linear terms' rotation part, not a drift.
+  const double f = ((left_linear.squaredNorm() - left.squaredNorm()) / 3.0) / (left.squaredNorm() / (m - 9.0));
+  const double p = f > 0 ? boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<double>(3.0, m - 9.0), f)) : 1.0;
+  if (!(p < alpha)) return std::nullopt;
   TurnsRefused out;
   out.note = fmt::format(
       "step {}: frame_rotation: the held-out placements turn about their first tiles beyond their noise (p = {:.2g}), "

@@ -36,7 +36,8 @@ Remainder JudgeRemainder(const std::vector<Eigen::Vector3d>& residuals, int num_
 // first tile. When three drift rates and six linear terms of the arm, common to every placement and fitted to the
 // held-out residuals of `calibration`, leave no more of them than the turns do (`turned_residuals`: with each
 // placement's turn taken out), the turns are no evidence of a turned frame (a turn that differs from placement to
-// placement, as the stage's rotation at each first tile does, is not common to them): the note that says so, and what remains unexplained
+// placement, as the stage's rotation at each first tile does, is not common to them), provided the drift's rates are
+// significant beyond the linear terms alone (F-test at `alpha`): the note that says so, and what remains unexplained
 // (`validation`, `fit`: the held-out and identification residuals). None when the data carry no times.
 struct TurnsRefused {
   std::string note, unexplained;
@@ -49,6 +50,6 @@ struct TurnTestOutcome {
 std::optional<TurnsRefused> DriftInsteadOfTurns(const Calibration& calibration, const MeasurementSet& validate,
                                                 StitchedFrame frame, const std::vector<Eigen::Vector3d>& turned_residuals,
                                                 const TurnTestOutcome& turns, const ResidualSummary& validation,
-                                                const ResidualSummary& fit);
+                                                const ResidualSummary& fit, double alpha);
 
 }  // namespace fvm::stage
