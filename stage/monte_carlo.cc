@@ -144,12 +144,26 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
                                                      : Eigen::Vector3d::Zero();
     held_out_covariances[p] = validation_covariances[p] + spreads[n_readings + p].covariance;
   }
+  // Validation readings whose residuals are far smaller than their noise would make them (beyond three standard
+  // deviations of sum |r|^2: 2 sum tr C^2) do not carry it: noise-free simulated ones. Their residuals are then all
+  // field and model error, and the runs draw no noise for them.
+  double power = 0, expected = 0, variance = 0;
+  for (size_t p = 0; p < validation.size(); ++p) {
+    power += held_out_left[p].squaredNorm();
+    expected += held_out_covariances[p].trace();
+    variance += 2.0 * (validation_covariances[p] * validation_covariances[p]).trace();
+  }
+  const bool noise_free = options.truth_keeps_residuals && power < expected - 3.0 * std::sqrt(variance);
+  if (noise_free) {
+    for (size_t p = 0; p < validation.size(); ++p) held_out_covariances[p] -= validation_covariances[p];
+  }
   const ResidualField validation_field = ShrunkResidualField(held_out_left, held_out_covariances);
+  const double noise_scale = noise_free ? 0.0 : 1.0;
   for (size_t k = 0; k < runs.size(); ++k) {
     // Run's model - its drawn validation reading = (model - reference model) - field - noise.
     std::vector<Eigen::Vector3d> judged(validation.size());
     for (size_t p = 0; p < validation.size(); ++p) {
-      judged[p] = runs[k].deviation_mm[n_readings + p] - validation_field.offsets_mm[p] - validation_noise[k][p];
+      judged[p] = runs[k].deviation_mm[n_readings + p] - validation_field.offsets_mm[p] - noise_scale * validation_noise[k][p];
     }
     runs[k].validation = SummarizeVolumetric(judged);
   }

@@ -88,6 +88,38 @@ TEST(MachineMonteCarlo, PredictsTheValidationErrorOfRepeatMeasurements) {
   }
 }
 
+// Noise-free validation readings (what `fvm simulate tracker --validation` writes): their residuals are smaller than
+// the tracker's noise, so the runs draw only the share of it that keeps their power (none here). The same 40
+// repeats judged on the machine's exact readings; bounds as above.
+TEST(MachineMonteCarlo, PredictsTheValidationErrorOnNoiseFreeValidationReadings) {
+  const Truth truth = MakeTruth(11, false, 3.0);
+  const ParameterLayout layout = MachineLayout(Basis::kLegendre, 2);
+  const TrackerNoise noise = TrackerNoise::Preset("adm");
+  const std::vector<Observation> exact = Readings(truth, Mesh({250, 250, 200}), Tracker{}, nullptr, 0);
+  std::vector<double> observed;
+  std::optional<Repeat> first;
+  for (int k = 0; k < 40; ++k) {
+    Repeat r = Measure(truth, layout, noise, 500 + static_cast<unsigned>(k));
+    const Calibration& c = r.verified.identified.calibration;
+    observed.push_back(SummarizeVolumetric(VolumetricResiduals(c.layout, &c.values, r.verified.identified.pose, exact)).mean_um);
+    if (k == 0) first.emplace(std::move(r));
+  }
+  MonteCarloOptions mc;
+  mc.runs = 120;
+  mc.seed = 3;
+  std::vector<double> predicted;
+  for (const MachineMonteCarloRun& r : MachineMonteCarlo(layout, first->verified, first->readings, exact, noise, Estimated(), mc)) {
+    predicted.push_back(r.validation.mean_um);
+  }
+  const SampleSummary real = SummarizeSample(observed), simulated = SummarizeSample(predicted);
+  std::printf("noise-free validation: 40 repeats %.2f +- %.2f um; Monte Carlo %.2f +- %.2f um (ratios: mean %.3f, spread %.3f)\n",
+              real.mean, real.sd, simulated.mean, simulated.sd, simulated.mean / real.mean, simulated.sd / real.sd);
+  EXPECT_GT(simulated.mean / real.mean, 0.8);
+  EXPECT_LT(simulated.mean / real.mean, 1.25);
+  EXPECT_GT(simulated.sd / real.sd, 0.8);
+  EXPECT_LT(simulated.sd / real.sd, 1.25);
+}
+
 // Readings that carry their own covariances (multilaterated points: a few um, far below the tracker's tens at
 // 2-3 m): the runs draw each reading's noise from its covariance. 24 repeats drawn here with those covariances
 // scatter their predictions by what the Monte Carlo from one of them predicts (the sd of a pooled 3D sd from 24
