@@ -13,7 +13,8 @@
 # Then the check on repeat measurements ([GUM Supplement 1]: a prediction of what a repeat would show): the same
 # machine read REPEATS times (default 8), each time with fresh tracker noise on its readings and on its validation
 # readings (the mesh at 50 mm, read like the others: real validation readings are noisy too), each verified with
-# `fvm verify --validate`; `fvm uncertainty` from the first repeat alone predicts their validation mean error.
+# `fvm verify --validate`; `fvm uncertainty` from the first repeat alone predicts their validation mean error. The
+# same with the simulator's noise-free validation readings.
 #
 # Usage: bash tests/bench/reproduce_uncertainty.sh [FVM] [RUNS] [REPEATS]
 #        (FVM default build/fvm/fvm, RUNS default 1000, REPEATS default 8)
@@ -68,10 +69,23 @@ for ((k = 1; k <= REPEATS; ++k)); do
   observed+=("$("$FVM" verify "$WORK/r$k/readings.csv" --order 2 --tool 0,0,100 --fit-pose \
     --validate "$WORK/v$k/readings.csv" --json | jq '.validation.final.mean_um')")
 done
-predicted=$("$FVM" uncertainty "$WORK/r1/readings.csv" --order 2 --tool 0,0,100 --fit-pose --runs "$RUNS" --seed 1 \
-  --validate "$WORK/v1/readings.csv" --json | jq -r '"\(.validation_mean_um.mean) \(.validation_mean_um.sd)"')
-printf '%s\n' "${observed[@]}" | awk -v p="$predicted" '
+summary() {  # label, predicted "mean sd"; the observed values on stdin
+  awk -v label="$1" -v p="$2" '
   { x[NR] = $1; s += $1 } END {
     m = s / NR; for (i = 1; i <= NR; ++i) v += (x[i] - m) ^ 2; sd = sqrt(v / (NR - 1)); split(p, q, " ")
-    printf "validation mean error: %d repeats %.2f +- %.2f um; Monte Carlo from the first %.2f +- %.2f um; ratios: mean %.2f, spread %.2f\n",
-      NR, m, sd, q[1], q[2], q[1] / m, q[2] / sd }'
+    printf "%s: %d repeats %.2f +- %.2f um; Monte Carlo from the first %.2f +- %.2f um; ratios: mean %.2f, spread %.2f\n",
+      label, NR, m, sd, q[1], q[2], q[1] / m, q[2] / sd }'
+}
+predicted=$("$FVM" uncertainty "$WORK/r1/readings.csv" --order 2 --tool 0,0,100 --fit-pose --runs "$RUNS" --seed 1 \
+  --validate "$WORK/v1/readings.csv" --json | jq -r '"\(.validation_mean_um.mean) \(.validation_mean_um.sd)"')
+printf '%s\n' "${observed[@]}" | summary "validation mean error" "$predicted"
+observed=()
+for ((k = 1; k <= REPEATS; ++k)); do
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:100,100,100 --tool 0,0,100 \
+    --pose $POSE --seed $((100 + k)) --validation mesh:50,50,50 -o "$WORK/n$k" >/dev/null
+  observed+=("$("$FVM" verify "$WORK/n$k/readings.csv" --order 2 --tool 0,0,100 --fit-pose \
+    --validate "$WORK/n$k/validation.csv" --json | jq '.validation.final.mean_um')")
+done
+predicted=$("$FVM" uncertainty "$WORK/n1/readings.csv" --order 2 --tool 0,0,100 --fit-pose --runs "$RUNS" --seed 1 \
+  --validate "$WORK/n1/validation.csv" --json | jq -r '"\(.validation_mean_um.mean) \(.validation_mean_um.sd)"')
+printf '%s\n' "${observed[@]}" | summary "noise-free validation readings" "$predicted"
