@@ -561,7 +561,15 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
     }
     TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, drift, alpha_step);
     if (applied.empty()) d.candidates.push_back(turn.score);
-    if (turn.score.significant) {
+    const std::optional<TurnsRefused> refused_turns =
+        turn.score.significant ? DriftInsteadOfTurns(fit.calibration, problem.validate, base_options.frame, turn.residuals_after,
+                                                     {step, turn.score.p_value, drift.has_value()}, validation,
+                                                     Summarize(fit.residuals), alpha_step)
+                               : std::nullopt;
+    if (refused_turns) {
+      d.notes.push_back(refused_turns->note);
+      d.unexplained = refused_turns->unexplained;
+    } else if (turn.score.significant) {
       d.steps.push_back(FrameRotationStep(turn, fit.calibration.layout, Summarize(fit.residuals), validation,
                                           validate.groups, &d.turns));
       validation = d.steps.back().validation_after;

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <map>
@@ -12,6 +13,7 @@
 #include <stdexcept>
 
 #include "core/random.h"
+#include "stage/residual_field.h"
 
 namespace fvm::stage {
 
@@ -23,6 +25,30 @@ void ForEachRun(int runs, int threads, const std::function<void(int)>& run) {
     });
   });
 }
+
+namespace {
+
+// Each reading's noise covariance: its own (multilaterated points) or the tracker's model at it.
+std::vector<Eigen::Matrix3d> NoiseCovariances(const std::vector<Observation>& set, bool own, const TrackerNoise& noise) {
+  std::vector<Eigen::Matrix3d> out;
+  for (const Observation& o : set) out.push_back(own ? o.covariance : noise.Covariance(o.measured));
+  return out;
+}
+
+// A reading of `truth` with fresh noise: normal with its own covariance (lower Cholesky factor `own`, when not null),
+// else the tracker's, normal in range, azimuth and elevation. Three draws either way.
+Eigen::Vector3d DrawReading(const Eigen::Vector3d& truth, const Eigen::Matrix3d* own, const TrackerNoise& noise, Random& random) {
+  const double a = random.Normal(), b = random.Normal(), c = random.Normal();
+  return own != nullptr ? Eigen::Vector3d(truth + *own * Eigen::Vector3d(a, b, c)) : noise.Perturb(truth, a, b, c);
+}
+
+std::vector<Eigen::Matrix3d> CholeskyFactors(const std::vector<Eigen::Matrix3d>& covariances) {
+  std::vector<Eigen::Matrix3d> out;
+  for (const Eigen::Matrix3d& c : covariances) out.push_back(c.llt().matrixL());
+  return out;
+}
+
+}  // namespace
 
 std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const VerificationResult& verification,
                                                     const std::vector<Observation>& readings,
@@ -38,22 +64,56 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
   const std::vector<Eigen::Vector3d>& tools = identification.tool_offsets;
   std::vector<Observation> evaluation = readings;
   evaluation.insert(evaluation.end(), validation.begin(), validation.end());
-  const std::vector<Eigen::Vector3d> true_readings = PredictedReadings(truth.layout, &truth.values, reference.pose, readings, tools);
+  const std::vector<Eigen::Vector3d> model_readings = PredictedReadings(truth.layout, &truth.values, reference.pose, readings, tools);
   const std::vector<Eigen::Vector3d> true_evaluation =
       PredictedReadings(truth.layout, &truth.values, reference.pose, evaluation, tools);
+
+  // The truth: the identified model plus what it leaves in the readings, less the noise's expected share of that
+  // (stage/residual_field.h); the fit's degrees of freedom are what its noise alone leaves.
+  const std::vector<Eigen::Matrix3d> reading_covariances = NoiseCovariances(readings, options.readings_carry_covariances, noise);
+  std::vector<Eigen::Vector3d> left(readings.size());
+  for (size_t i = 0; i < readings.size(); ++i) {
+    left[i] = options.truth_keeps_residuals ? Eigen::Vector3d(readings[i].measured - model_readings[i]) : Eigen::Vector3d::Zero();
+  }
+  // What the fit leaves of the noise: the share dof / equations of each reading's covariance, on average.
+  const int pose_count = identification.instrument == InstrumentPose::kEstimated ? 6 : 0;
+  const double equations = 3.0 * static_cast<double>(readings.size());
+  const double left_share = std::max(0.0, equations - truth.layout.NumFree() - pose_count) / std::max(1.0, equations);
+  std::vector<Eigen::Matrix3d> left_covariances = reading_covariances;
+  for (Eigen::Matrix3d& c : left_covariances) c *= left_share;
+  const ResidualField reading_field = ShrunkResidualField(left, left_covariances);
+  std::vector<Eigen::Vector3d> true_readings = model_readings;
+  for (size_t i = 0; i < readings.size(); ++i) true_readings[i] += reading_field.offsets_mm[i];
+  const std::vector<Eigen::Matrix3d> reading_factors =
+      options.readings_carry_covariances ? CholeskyFactors(reading_covariances) : std::vector<Eigen::Matrix3d>{};
+  const std::vector<Eigen::Matrix3d> validation_covariances =
+      NoiseCovariances(validation, options.validation_carries_covariances, noise);
+  const std::vector<Eigen::Matrix3d> validation_factors =
+      options.validation_carries_covariances ? CholeskyFactors(validation_covariances) : std::vector<Eigen::Matrix3d>{};
 
   IdentificationOptions run_options = identification;
   run_options.pose = reference.pose;  // held, or where the estimate starts: the truth of the simulation
   run_options.num_threads = 1;        // the runs are the parallel work; one thread each keeps them deterministic
 
   std::vector<MachineMonteCarloRun> runs(static_cast<size_t>(options.runs));
+  std::vector<std::vector<Eigen::Vector3d>> validation_noise(runs.size());
+  const size_t n_readings = readings.size();
   const auto one_run = [&](int index) {
     Random random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
     std::vector<Observation> drawn = readings;
     for (size_t i = 0; i < drawn.size(); ++i) {
-      const double n_range = random.Normal(), n_azimuth = random.Normal(), n_elevation = random.Normal();
-      drawn[i].measured = noise.Perturb(true_readings[i], n_range, n_azimuth, n_elevation);
-      drawn[i].covariance = options.weighted ? noise.Covariance(drawn[i].measured) : Eigen::Matrix3d::Zero();
+      drawn[i].measured = DrawReading(true_readings[i], reading_factors.empty() ? nullptr : &reading_factors[i], noise, random);
+      if (!options.weighted) {
+        drawn[i].covariance = Eigen::Matrix3d::Zero();
+      } else if (!options.readings_carry_covariances) {
+        drawn[i].covariance = noise.Covariance(drawn[i].measured);
+      }  // else: the reading's own, as given
+    }
+    // The validation readings' fresh noise, drawn now so that the run's stream alone decides it.
+    std::vector<Eigen::Vector3d>& validation_drawn = validation_noise[static_cast<size_t>(index)];
+    for (size_t p = 0; p < validation.size(); ++p) {
+      const Eigen::Vector3d& at = true_evaluation[n_readings + p];
+      validation_drawn.push_back(DrawReading(at, validation_factors.empty() ? nullptr : &validation_factors[p], noise, random) - at);
     }
     const IdentificationResult r = Identify(layout, drawn, run_options);
     MachineMonteCarloRun& out = runs[static_cast<size_t>(index)];
@@ -67,12 +127,46 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
       out.final_um.push_back(r.residuals[i].norm() * 1e3);
     }
     const Calibration& c = r.calibration;
-    if (!validation.empty()) out.validation = Summarize(VolumetricResiduals(c.layout, &c.values, r.pose, validation, tools));
     out.deviation_mm = PredictedReadings(c.layout, &c.values, r.pose, evaluation, tools);
     for (size_t i = 0; i < evaluation.size(); ++i) out.deviation_mm[i] -= true_evaluation[i];
     if (options.on_run_done) options.on_run_done();
   };
   ForEachRun(options.runs, options.threads, one_run);
+  if (validation.empty()) return runs;
+
+  // The validation readings' truth: the model plus what it leaves there, less the expected share of their noise and
+  // of the model's own estimation error, which the runs' spread at those points gives.
+  const std::vector<PointSpread> spreads = PointSpreads(runs);
+  std::vector<Eigen::Vector3d> held_out_left(validation.size());
+  std::vector<Eigen::Matrix3d> held_out_covariances(validation.size());
+  for (size_t p = 0; p < validation.size(); ++p) {
+    held_out_left[p] = options.truth_keeps_residuals ? Eigen::Vector3d(validation[p].measured - true_evaluation[n_readings + p])
+                                                     : Eigen::Vector3d::Zero();
+    held_out_covariances[p] = validation_covariances[p] + spreads[n_readings + p].covariance;
+  }
+  // Validation readings whose residuals are far smaller than their noise would make them (beyond three standard
+  // deviations of sum |r|^2: 2 sum tr C^2) do not carry it: noise-free simulated ones. Their residuals are then all
+  // field and model error, and the runs draw no noise for them.
+  double power = 0, expected = 0, variance = 0;
+  for (size_t p = 0; p < validation.size(); ++p) {
+    power += held_out_left[p].squaredNorm();
+    expected += held_out_covariances[p].trace();
+    variance += 2.0 * (validation_covariances[p] * validation_covariances[p]).trace();
+  }
+  const bool noise_free = options.truth_keeps_residuals && power < expected - 3.0 * std::sqrt(variance);
+  if (noise_free) {
+    for (size_t p = 0; p < validation.size(); ++p) held_out_covariances[p] -= validation_covariances[p];
+  }
+  const ResidualField validation_field = ShrunkResidualField(held_out_left, held_out_covariances);
+  const double noise_scale = noise_free ? 0.0 : 1.0;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    // Run's model - its drawn validation reading = (model - reference model) - field - noise.
+    std::vector<Eigen::Vector3d> judged(validation.size());
+    for (size_t p = 0; p < validation.size(); ++p) {
+      judged[p] = runs[k].deviation_mm[n_readings + p] - validation_field.offsets_mm[p] - noise_scale * validation_noise[k][p];
+    }
+    runs[k].validation = Summarize(judged);
+  }
   return runs;
 }
 

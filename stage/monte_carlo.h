@@ -1,10 +1,13 @@
 #pragma once
 // Monte Carlo uncertainty of an identification ([GUM Supplement 1]; [Pérez 2017], [Aguado 2017], [Pérez 2019 Sensors]),
-// for a machine tool measured by a laser tracker and for the microscope stage. Machine: the identified machine and
-// tracker pose are taken as the truth, the tracker's readings of it are drawn again and
-// again with the tracker's noise (normal in range, azimuth and elevation, [IJSIMM 2016] eqs. 22-24), and each set is
-// identified afresh, rank treatment included, exactly as the original readings were. The spread of what the runs
-// predict is the uncertainty of the verification.
+// for a machine tool measured by a laser tracker and for the microscope stage. Machine: the truth is the identified
+// machine and tracker pose plus the part of the machine its polynomials cannot follow, the readings' residuals shrunk
+// by the share their noise explains (stage/residual_field.h; the validation readings' likewise, less the model's own
+// estimation error too). The tracker's readings of it are drawn again and again with the tracker's noise (normal in
+// range, azimuth and elevation, [IJSIMM 2016] eqs. 22-24), or each reading's own covariance when the readings carry
+// one, and each set is identified afresh, rank treatment included, exactly as the original readings were, and judged
+// on validation readings drawn afresh too. The spread of what the runs predict is the uncertainty of the verification;
+// their validation errors are what a repeat measurement of the machine would show.
 //
 // Reproducible: run i draws from Random(StreamSeed(seed, i)) (core/random.h) and writes only its own result, and
 // each identification runs on one thread, so the results are the same bits for any thread count.
@@ -29,7 +32,15 @@ struct MonteCarloOptions {
   int runs = 1000;
   std::uint64_t seed = 1;
   int threads = 0;                    // 0: all cores
-  bool weighted = true;               // weight each drawn reading by noise.Covariance, as fvm verify does
+  bool weighted = true;               // weight each drawn reading by its covariance, as fvm verify does
+  // Machine: the readings (and the validation readings) carry their own covariances (multilaterated points,
+  // artefacts::CarriesCovariances) in Observation::covariance: each run draws their noise from those, not from the
+  // tracker's model.
+  bool readings_carry_covariances = false;
+  bool validation_carries_covariances = false;
+  // Machine: the truth carries what the reference leaves in the readings (stage/residual_field.h). Off where the
+  // reference's pose is not the one the readings were taken from (tracker placement moves the truth's tracker).
+  bool truth_keeps_residuals = true;
   std::function<void()> on_run_done;  // after each run, from any thread (progress); may be empty
 };
 
@@ -48,15 +59,16 @@ struct MonteCarloRun {
 struct MachineMonteCarloRun : MonteCarloRun {
   ResidualSummary initial;     // the ideal machine (the reference's initial pose) against the run's drawn readings
   ResidualSummary final;       // the run's model against its own drawn readings
-  ResidualSummary validation;  // the run's model against the validation readings (points 0 without them)
+  ResidualSummary validation;  // the run's model against validation readings drawn afresh (points 0 without them)
   Pose pose;                   // the run's tracker pose
   std::vector<double> initial_um, final_um;  // per reading: |ideal machine - drawn reading|, |run's model - drawn reading|
 };
 
 // `layout` is what each run identifies (MachineLayout, before any rank treatment); `reference` is the verification
-// of the real readings (its identified calibration and pose are the simulated truth, its initial pose states the
-// ideal machine's error); `readings` gives the commands and tools
-// to draw at; `validation` (may be empty) are readings the runs are judged on; `identification` the options of the
+// of the real readings (its identified calibration and pose, with what it leaves in them, are the simulated truth;
+// its initial pose states the ideal machine's error); `readings` gives the commands, tools and residuals to draw at;
+// `validation` (may be empty) the readings the runs are judged on, drawn afresh around the truth they show (their
+// covariance is read only with options.validation_carries_covariances); `identification` the options of the
 // original fit (instrument held or estimated, tool offsets; pose and threads are set here). Throws
 // std::invalid_argument for runs < 1 or an identification without a tracker pose.
 std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layout, const VerificationResult& reference,

@@ -90,6 +90,7 @@ TrackerPlacement PlaceTracker(const MachineProblem& problem, const MachineRefere
   mc.seed = options.monte_carlo.seed;
   mc.threads = options.monte_carlo.threads;
   mc.weighted = problem.weighted;
+  mc.truth_keeps_residuals = false;  // the readings' residuals belong to their own tracker's frame, not the moved one
   for (size_t r = 0; r < out.ranked.size(); ++r) {
     PlacementCandidate& c = out.ranked[r];
     if (!(r < static_cast<size_t>(options.confirm) || c.current)) continue;

@@ -5,6 +5,7 @@
 
 #include "artefacts/batch_observations.h"
 #include "artefacts/io/batch.h"
+#include "artefacts/tracker_observations.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 
@@ -21,6 +22,14 @@ stage::MonteCarloOptions OptionsOf(const MonteCarloSettings& settings, bool weig
   return mc;
 }
 
+// One reading's 3D standard deviation (rms over the readings): from their own covariances, or the tracker's model.
+double ReadingSd(const std::vector<stage::Observation>& readings, bool own, const stage::TrackerNoise& noise) {
+  if (!own || readings.empty()) return stage::TrackerReadingSd(readings, noise);
+  double trace = 0;
+  for (const stage::Observation& o : readings) trace += o.covariance.trace();
+  return std::sqrt(trace / static_cast<double>(readings.size()));
+}
+
 double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -28,7 +37,7 @@ double Seconds(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 MachineReference IdentifyMachineReference(const MachineProblem& problem, int order) {
-  if (problem.noise.IsNoiseFree()) {
+  if (problem.noise.IsNoiseFree() && !artefacts::CarriesCovariances(problem.readings)) {
     throw InputError("--tracker none: a noise-free tracker gives every run the same readings; name the tracker's noise "
                      "(published, ifm, adm)");
   }
@@ -45,9 +54,23 @@ MachineUncertainty RunMachineMonteCarlo(const MachineProblem& problem, const Mac
                                         const MonteCarloSettings& settings, const stage::BudgetInputs& budget) {
   MachineUncertainty u;
   const auto start = std::chrono::steady_clock::now();
-  u.runs = stage::MachineMonteCarlo(reference.layout, reference.verification, problem.observations,
-                                    problem.validation_observations, problem.noise, problem.options,
-                                    OptionsOf(settings, problem.weighted));
+  // Readings that carry their own covariances (multilaterated points) are drawn with those; the validation readings
+  // likewise, so they are handed over with their covariances (own or the tracker's: the Monte Carlo reads them only
+  // when they are their own).
+  stage::MonteCarloOptions options = OptionsOf(settings, problem.weighted);
+  const std::vector<stage::Observation> observations = artefacts::TrackerObservations(problem.readings, &problem.noise);
+  options.readings_carry_covariances = artefacts::CarriesCovariances(problem.readings);
+  std::vector<stage::Observation> validation;
+  if (problem.validation) {
+    validation = artefacts::TrackerObservations(*problem.validation, &problem.noise);
+    options.validation_carries_covariances = artefacts::CarriesCovariances(*problem.validation);
+  }
+  std::vector<stage::Observation> readings = problem.observations;
+  if (options.readings_carry_covariances) {
+    for (size_t i = 0; i < readings.size(); ++i) readings[i].covariance = observations[i].covariance;
+  }
+  u.runs = stage::MachineMonteCarlo(reference.layout, reference.verification, readings, validation, problem.noise,
+                                    problem.options, options);
   u.seconds = Seconds(start);
   for (const stage::MachineMonteCarloRun& r : u.runs) {
     u.final_mean_um.push_back(r.final.mean_um());
@@ -63,7 +86,7 @@ MachineUncertainty RunMachineMonteCarlo(const MachineProblem& problem, const Mac
   std::vector<Eigen::Vector3d> commands;
   for (const stage::Observation& o : problem.observations) commands.push_back(o.command);
   u.pairs = stage::PairDistanceSpread(u.runs, commands, 100);
-  u.budget = stage::Budget(u.spreads, problem.observations, stage::TrackerReadingSd(problem.observations, problem.noise),
+  u.budget = stage::Budget(u.spreads, problem.observations, ReadingSd(readings, options.readings_carry_covariances, problem.noise),
                            budget);
   return u;
 }

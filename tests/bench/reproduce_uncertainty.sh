@@ -10,12 +10,20 @@
 # noise. The plane is the mesh's z = 0 layer (25 points); on a plane the tracker pose cannot be estimated (a rotation
 # about the plane's normal is free), so it is held there (--pose), as the published plane study did.
 #
-# Usage: bash tests/bench/reproduce_uncertainty.sh [FVM] [RUNS]   (FVM default build/fvm/fvm, RUNS default 1000)
-# Needs jq. About 20 s on 2 cores.
+# Then the check on repeat measurements ([GUM Supplement 1]: a prediction of what a repeat would show): the same
+# machine read REPEATS times (default 8), each time with fresh tracker noise on its readings and on its validation
+# readings (the mesh at 50 mm, read like the others: real validation readings are noisy too), each verified with
+# `fvm verify --validate`; `fvm uncertainty` from the first repeat alone predicts their validation mean error. The
+# same with the simulator's noise-free validation readings.
+#
+# Usage: bash tests/bench/reproduce_uncertainty.sh [FVM] [RUNS] [REPEATS]
+#        (FVM default build/fvm/fvm, RUNS default 1000, REPEATS default 8)
+# Needs jq. About 30 s on 2 cores.
 set -euo pipefail
 
 FVM=${1:-build/fvm/fvm}
 RUNS=${2:-1000}
+REPEATS=${3:-8}
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 POSE=900,-900,400,0,0,30
@@ -49,3 +57,35 @@ echo
 echo "Tracker placement (mesh 75, order 2): a box beside the machine, 5 x 5 x 5 positions"
 "$FVM" uncertainty "$WORK/plan/readings.csv" --order 2 --tool 0,0,100 --runs 200 --seed 1 \
   --place-tracker -1000,-1500,0,1400,-600,1000 --place-steps 5 --place-confirm 3
+
+echo
+echo "Repeat measurements of the plan's machine (mesh 75, order 2): $REPEATS repeats, fresh noise on readings and validation"
+observed=()
+for ((k = 1; k <= REPEATS; ++k)); do
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:100,100,100 --tool 0,0,100 --pose $POSE \
+    --seed $((100 + k)) -o "$WORK/r$k" >/dev/null
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:50,50,50 --tool 0,0,100 --pose $POSE \
+    --seed $((200 + k)) -o "$WORK/v$k" >/dev/null
+  observed+=("$("$FVM" verify "$WORK/r$k/readings.csv" --order 2 --tool 0,0,100 --fit-pose \
+    --validate "$WORK/v$k/readings.csv" --json | jq '.validation.final.mean_um')")
+done
+summary() {  # label, predicted "mean sd"; the observed values on stdin
+  awk -v label="$1" -v p="$2" '
+  { x[NR] = $1; s += $1 } END {
+    m = s / NR; for (i = 1; i <= NR; ++i) v += (x[i] - m) ^ 2; sd = sqrt(v / (NR - 1)); split(p, q, " ")
+    printf "%s: %d repeats %.2f +- %.2f um; Monte Carlo from the first %.2f +- %.2f um; ratios: mean %.2f, spread %.2f\n",
+      label, NR, m, sd, q[1], q[2], q[1] / m, q[2] / sd }'
+}
+predicted=$("$FVM" uncertainty "$WORK/r1/readings.csv" --order 2 --tool 0,0,100 --fit-pose --runs "$RUNS" --seed 1 \
+  --validate "$WORK/v1/readings.csv" --json | jq -r '"\(.validation_mean_um.mean) \(.validation_mean_um.sd)"')
+printf '%s\n' "${observed[@]}" | summary "validation mean error" "$predicted"
+observed=()
+for ((k = 1; k <= REPEATS; ++k)); do
+  "$FVM" simulate tracker --errors "$WORK/plan/truth.json" --machine 400x400x200 --points mesh:100,100,100 --tool 0,0,100 \
+    --pose $POSE --seed $((100 + k)) --validation mesh:50,50,50 -o "$WORK/n$k" >/dev/null
+  observed+=("$("$FVM" verify "$WORK/n$k/readings.csv" --order 2 --tool 0,0,100 --fit-pose \
+    --validate "$WORK/n$k/validation.csv" --json | jq '.validation.final.mean_um')")
+done
+predicted=$("$FVM" uncertainty "$WORK/n1/readings.csv" --order 2 --tool 0,0,100 --fit-pose --runs "$RUNS" --seed 1 \
+  --validate "$WORK/n1/validation.csv" --json | jq -r '"\(.validation_mean_um.mean) \(.validation_mean_um.sd)"')
+printf '%s\n' "${observed[@]}" | summary "noise-free validation readings" "$predicted"

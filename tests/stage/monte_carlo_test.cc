@@ -62,26 +62,17 @@ struct Study {
   }
 };
 
-double MeanOf(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
-}
-
 TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
   const Study study;
   const ParameterLayout layout = Layout();
   // Reality: 24 independent tracker measurements of the same machine, each identified on its own.
   constexpr int kReal = 24;
   std::vector<std::vector<Eigen::Vector3d>> predictions;
-  std::vector<double> real_validation_means;
   std::optional<VerificationResult> first;
   for (int k = 0; k < kReal; ++k) {
     VerificationResult v = VerifyMachine(layout, study.Readings(100 + static_cast<std::uint64_t>(k)), Options());
     const Calibration& c = v.identified.calibration;
     predictions.push_back(PredictedReadings(c.layout, &c.values, v.identified.pose, study.validation, {}));
-    real_validation_means.push_back(
-        Summarize(VolumetricResiduals(c.layout, &c.values, v.identified.pose, study.validation, {})).mean_um());
     if (k == 0) first.emplace(std::move(v));
   }
   // The Monte Carlo from the first measurement alone.
@@ -126,18 +117,8 @@ TEST(MachineMonteCarlo, PredictsTheSpreadOfIndependentMeasurements) {
               mc_u95 * 1e3);
   EXPECT_NEAR(predicted_u95 / mc_u95, 1.0, 0.25);
 
-  // The mean volumetric error on the validation points: its scatter over the measurements and over the runs.
-  std::vector<double> mc_validation_means;
-  for (const MachineMonteCarloRun& r : runs) {
-    EXPECT_TRUE(r.converged);
-    mc_validation_means.push_back(r.validation.mean_um());
-  }
-  const SampleSummary real = SummarizeSample(real_validation_means), simulated = SummarizeSample(mc_validation_means);
-  std::printf("validation mean error: independent %.2f +- %.2f um, Monte Carlo %.2f +- %.2f um\n", real.mean, real.sd,
-              simulated.mean, simulated.sd);
-  EXPECT_NEAR(simulated.sd / real.sd, 1.0, 0.5);
-  EXPECT_NEAR(simulated.mean, real.mean, 2.0 * real.sd + 1.0);
-  EXPECT_GT(MeanOf(mc_validation_means), 0.0);
+  // The validation mean error against repeat measurements: tests/stage/monte_carlo_repeats_test.cc.
+  for (const MachineMonteCarloRun& r : runs) EXPECT_TRUE(r.converged);
 }
 
 TEST(MachineMonteCarlo, SameBitsForAnyThreadCount) {
@@ -172,7 +153,9 @@ TEST(MachineMonteCarlo, NoiseFreeTrackerGivesNoSpread) {
   mc.weighted = false;
   const std::vector<MachineMonteCarloRun> runs =
       MachineMonteCarlo(layout, v, readings, {}, TrackerNoise::Preset("none"), Options(), mc);
-  for (const PointSpread& s : PointSpreads(runs)) EXPECT_LT(s.u95_mm, 1e-5);
+  // Every run reads the same truth exactly, so all agree (their common offset from the weighted reference is the
+  // unweighted fit's, not a spread).
+  for (const PointSpread& s : PointSpreads(runs)) EXPECT_LT(std::sqrt(s.covariance.trace()), 1e-6);
 }
 
 // The microscope stage: independent centre noise on the same simulated stage (the bundled sample's kind of batch),

@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "tests/support/test_support.h"
 #include "artefacts/io/batch.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "core/input_error.h"
+#include "core/random.h"
 #include "stage/monte_carlo.h"
 #include "tests/workflows/simulated_machine.h"
 #include "workflows/tracker_placement.h"
@@ -16,12 +18,12 @@
 namespace fvm::workflows {
 namespace {
 
-MachineProblem Problem(const testing::SimulatedMachine& m, const std::filesystem::path& dir) {
+MachineProblem Problem(const testing::SimulatedMachine& m, const std::filesystem::path& dir, const std::string& tracker = "adm") {
   artefacts::WriteTrackerReadings(dir / "readings.csv", m.readings);
   MachineProblemOptions o;
   o.data = (dir / "readings.csv").string();
   o.tools = {Eigen::Vector3d(0, 0, 100)};
-  o.tracker = "adm";
+  o.tracker = tracker;
   return LoadMachineProblem(o);
 }
 
@@ -68,12 +70,34 @@ TEST(MachineUncertainty, AgreesWithCovariancePropagationAndRepeatsBitForBit) {
 TEST(MachineUncertainty, ANoiseFreeTrackerIsRefused) {
   const testing::SimulatedMachine m = testing::SimulateMachine(32, 300.0);
   fvm::testing::TempDir dir;
-  artefacts::WriteTrackerReadings(dir.path() / "readings.csv", m.readings);
-  MachineProblemOptions o;
-  o.data = (dir.path() / "readings.csv").string();
-  o.tools = {Eigen::Vector3d(0, 0, 100)};
-  o.tracker = "none";
-  EXPECT_THROW(IdentifyMachineReference(LoadMachineProblem(o), 2), InputError);
+  EXPECT_THROW(IdentifyMachineReference(Problem(m, dir.path(), "none"), 2), InputError);
+}
+
+// Readings that carry their own covariances (fvm multilaterate --verify-readings) are drawn from them: with
+// --tracker none the Monte Carlo runs; the budget's one-reading sd is the covariances' (3 um per coordinate:
+// sqrt(3) x 3 um), and the runs' spread is what 3 um of noise leaves: above zero, below one reading's 5.2 um.
+TEST(MachineUncertainty, ReadingsWithTheirOwnCovariancesAreDrawnFromThem) {
+  testing::SimulatedMachine m = testing::SimulateMachine(33, 300.0);
+  Random random(7);
+  for (size_t i = 0; i < m.readings.points.size(); ++i) {
+    const double a = random.Normal(), b = random.Normal(), c = random.Normal();
+    m.readings.points[i].measured = m.noise_free.points[i].measured + 0.003 * Eigen::Vector3d(a, b, c);
+    m.readings.points[i].covariance = 9e-6 * Eigen::Matrix3d::Identity();
+  }
+  fvm::testing::TempDir dir;
+  const MachineProblem problem = Problem(m, dir.path(), "none");
+  const MachineReference reference = IdentifyMachineReference(problem, 2);
+  MonteCarloSettings settings;
+  settings.runs = 20;
+  settings.seed = 3;
+  const MachineUncertainty u = RunMachineMonteCarlo(problem, reference, settings, stage::BudgetInputs{});
+  EXPECT_EQ(u.converged, 20);
+  EXPECT_NEAR(u.budget.u_b_mm, std::sqrt(27e-6), 1e-12);
+  double trace = 0;
+  for (size_t i = 0; i < problem.observations.size(); ++i) trace += u.spreads[i].covariance.trace();
+  const double sd_mm = std::sqrt(trace / static_cast<double>(problem.observations.size()));
+  EXPECT_GT(sd_mm, 0.3e-3);
+  EXPECT_LT(sd_mm, std::sqrt(27e-6));
 }
 
 // The stage: a simulated batch (0.5 um per coordinate, model 15) drawn again around its calibration. The

@@ -1,0 +1,30 @@
+#pragma once
+// The part of a machine its identified model cannot follow, as a Monte Carlo's truth carries it. A truth that is the
+// model alone leaves that part out of every predicted residual; a truth that keeps the readings' residuals whole and
+// draws fresh noise on top counts the noise twice (and, on held-out readings, the model's own estimation error too).
+//
+// A residual (reading - model) is r_i = u_i + e_i: the unfollowed part u and a part e of known covariance C_i (on
+// fitted readings the share of their noise the fit did not take, on held-out readings their noise plus the model's
+// estimation error). The field's power per coordinate is estimated by moments, s_u^2 = max(0, sum(|r_i|^2 - tr C_i)
+// / 3n), taken alike in every direction (a machine's error has no preference for the tracker's axes, while a
+// tracker's noise is far larger across the beam than along it). Each residual's component along a principal axis
+// of C_i (variance l) is then scaled by sqrt(s_u^2 / (s_u^2 + l)): the square root of a Wiener filter's gain, so
+// that the component keeps the field's expected power s_u^2, and fresh noise drawn on top of the field gives
+// residuals of the observed power on average.
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace fvm::stage {
+
+struct ResidualField {
+  std::vector<Eigen::Vector3d> offsets_mm;  // the field at each reading
+  double sigma_mm = 0;                      // s_u: its standard deviation per coordinate
+};
+
+// `residuals_mm`: reading - model; `covariances`: of each residual's part that is not the field (mm^2, positive
+// semi-definite). Throws std::invalid_argument when the two vectors differ in size.
+ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_mm,
+                                  const std::vector<Eigen::Matrix3d>& covariances);
+
+}  // namespace fvm::stage
