@@ -71,7 +71,9 @@ TEST(DiscrepancyOnPublishedData, NamesADriftAndAScaleTogether) {
     const Diagnosis d = DiagnosePublished("15", MeasureOnPublishedStage(Stage(seed, false), seed, kNoiseMm, 10, false, false, effects));
     EXPECT_THAT(Named(d), ::testing::IsSupersetOf({"thermal_drift", "scale"})) << "seed " << seed << ": " << d.explanation;
     for (const DiagnosisStep& s : d.steps) {
-      if (s.effect == "thermal_drift") EXPECT_NEAR(s.size, 3.0, 3 * s.size_u + 0.3) << "seed " << seed;  // um/min along x
+      if (s.effect == "thermal_drift") {
+        EXPECT_NEAR(s.size, 3.0, 3 * s.size_u + 0.3) << "seed " << seed;  // um/min along x
+      }
     }
     EXPECT_LE(d.validation_after.mean_mm, 0.5 * d.validation_before.mean_mm) << "seed " << seed;
   }
@@ -95,7 +97,9 @@ TEST(DiscrepancyOnPublishedData, NamesABendAndBlundersWithoutFlaggingGoodCentres
     EXPECT_THAT(Named(d), ::testing::IsSupersetOf({"higher_order", "outliers"})) << "seed " << seed << ": " << d.explanation;
     std::set<std::string> flagged;
     for (const DiagnosisStep& s : d.steps) {
-      if (s.effect == "higher_order") EXPECT_EQ(s.component, "xTx") << "seed " << seed;
+      if (s.effect == "higher_order") {
+        EXPECT_EQ(s.component, "xTx") << "seed " << seed;
+      }
       if (s.effect != "outliers") continue;
       std::stringstream names(s.component);
       for (std::string name; std::getline(names, name, ',');) flagged.insert(name);

@@ -172,7 +172,11 @@ inline PublishedMeasurements MeasureOnPublishedStage(const PublishedStage& stage
       free.push_back(noisy(q) + effects.drift_mm_per_s * t);
       Eigen::Vector3d stitched = turn * (stage.Part(q) - stage.Part(anchor));
       stitched.head<2>() *= 1.0 + effects.scale;
-      set.observations.push_back({free.back(), noisy(anchor + stitched), group});
+      Observation o;
+      o.command = free.back();
+      o.measured = noisy(anchor + stitched);
+      o.group = group;
+      set.observations.push_back(o);
       set.t_s.push_back(t);
     }
     if (&set == &out.identify && group == 1 && effects.blunders > 0) {
