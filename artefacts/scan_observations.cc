@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -164,6 +165,28 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   out.white_ratio = differences > 0 ? std::sqrt(white / (6.0 * differences)) : 0.0;
   out.misfit_mm = points > 0 ? std::sqrt(misfit / points) : 0.0;
   return out;
+}
+
+double PredictedXyUncertaintyMm(const stage::Calibration& calibration, const std::vector<RegisteredScan>& scans) {
+  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
+  for (const RegisteredScan& scan : scans) {
+    for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
+  }
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+  constexpr int kSide = 11, kPoints = kSide * kSide;
+  const Eigen::Index n = calibration.covariance.rows();
+  if (n == 0 || n != static_cast<Eigen::Index>(calibration.values.size())) return 0.0;
+  Eigen::MatrixXd j(2 * kPoints, n), rigid(2 * kPoints, 3);
+  for (int i = 0; i < kPoints; ++i) {
+    const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * (i % kSide) / (kSide - 1.0),
+                            lo.y() + (hi.y() - lo.y()) * (i / kSide) / (kSide - 1.0), scans.front().encoder_mm.front().z());
+    j.middleRows(2 * i, 2) = stage::ForwardJacobian(calibration.layout, calibration.values.data(), q).topRows(2);
+    rigid.row(2 * i) << 1.0, 0.0, -(q.y() - centre.y());  // a small turn w about z moves (x, y) by w (-y, x)
+    rigid.row(2 * i + 1) << 0.0, 1.0, q.x() - centre.x();
+  }
+  const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(rigid).householderQ() * Eigen::MatrixXd::Identity(2 * kPoints, 3);
+  const Eigen::MatrixXd seen = j - basis * (basis.transpose() * j);
+  return std::sqrt(std::max(0.0, (seen * calibration.covariance * seen.transpose()).trace()) / kPoints);
 }
 
 ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const std::vector<RegisteredScan>& scans,

@@ -18,6 +18,9 @@ namespace fvm::stage {
 
 struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
+  // The share of predicted_rms_mm (in quadrature) of the coefficients identification fixed as undetermined: their
+  // plausible spread, less what the free ones took up of it (stage/undetermined_spread.h). 0 where it fixed none.
+  double undetermined_rms_mm = 0;
   std::vector<Eigen::Vector3d> residuals;
   std::vector<Eigen::MatrixXd> jacobians;  // d(residual) / d(free coefficients) of each, with a calibration
   // How the turn of each measurement's stitched frame entered (rotated frame, with a calibration):
