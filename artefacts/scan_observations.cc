@@ -44,6 +44,55 @@ void RefuseRepeatedScans(const std::vector<RegisteredScan>& scans) {
   }
 }
 
+// Whether observation i continues the run of consecutive pairs of observation i - 1: the same scan, starting where
+// that one ended.
+bool Continues(const stage::MeasurementSet& set, size_t i) {
+  const stage::Observation& o = set.observations[i];
+  return i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
+}
+
+// What the misfit does to the coefficients. The fit takes up the part of what it cannot follow that looks like the
+// model, and that part is in no residual: the misfit is treated as a smooth process along each scan of the character
+// its residuals show, each run's residuals shifted circularly by every lag standing for a misfit that could as well
+// have been, and the coefficients' response to each (the fit's linear map in the registrations' weights) gives their
+// spread. The displacements' turn (tens of microradians over a 2 mm step) is left out of the map.
+Eigen::MatrixXd MisfitResponseCovariance(const stage::Calibration& calibration, const stage::MeasurementSet& set,
+                                         const std::vector<Eigen::Vector3d>& residuals) {
+  const Eigen::Index n = static_cast<Eigen::Index>(calibration.values.size());
+  std::vector<Eigen::MatrixXd> weighted;  // J_i^T W_i, n x 3
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
+  std::vector<std::vector<size_t>> runs;
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const stage::Observation& o = set.observations[i];
+    const Eigen::MatrixXd j = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
+                              stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.from.value_or(o.command));
+    Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
+    w.topLeftCorner<2, 2>() = o.covariance.topLeftCorner<2, 2>().inverse();
+    weighted.push_back(j.transpose() * w);
+    normal += weighted.back() * j;
+    if (!Continues(set, i)) runs.emplace_back();
+    runs.back().push_back(i);
+  }
+  size_t longest = 0;
+  for (const auto& run : runs) longest = std::max(longest, run.size());
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
+  if (longest < 2) return covariance;
+  const Eigen::LDLT<Eigen::MatrixXd> solve(normal);
+  for (size_t lag = 1; lag < longest; ++lag) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    for (const auto& run : runs) {
+      for (size_t k = 0; k < run.size(); ++k) {
+        Eigen::Vector3d r = residuals[run[(k + lag) % run.size()]];
+        r.z() = 0.0;
+        g += weighted[run[k]] * r;
+      }
+    }
+    const Eigen::VectorXd response = solve.solve(g);
+    covariance += response * response.transpose();
+  }
+  return covariance / static_cast<double>(longest - 1);
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector2d> NominalOffsetsPx(const std::vector<Eigen::Vector3d>& encoder_mm, double pixel_mm) {
@@ -145,8 +194,7 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   std::vector<Eigen::Vector2d> run;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const stage::Observation& o = set.observations[i];
-    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-    if (!continues) {
+    if (!Continues(set, i)) {
       close_run();
       chained.push_back(Eigen::Vector2d::Zero());
       run.clear();
@@ -201,6 +249,7 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
+  cal.covariance += MisfitResponseCovariance(cal, set, result.residuals);
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
-#include <cstdio>
+#include <cmath>
 #include <map>
 
 #include "stage/fvm_stage_models.h"
@@ -117,23 +117,31 @@ TEST(Identification, EstimatesLieWithinThreeUncertaintiesOfTheEstimableTruth) {
 }
 
 // What the covariance and noise predict for the validation rms, against what independent measurements show: the
-// published stage, measured through the equation written out, with and without the ripple. Measured (seeds 1-3):
-// observed / predicted 1.37, 0.91, 1.39 without the ripple and 1.51, 1.04, 1.43 with it. 170 centres x 3
-// coordinates scatter a correct prediction's rms by about 3 %, the noise estimate from 51 centres by 6 %; the rest
-// of the excess is the coefficients fixed as undetermined (pitch and roll on a nearly flat bar, 12 of 27): their
-// true values act on the validation placements, and the covariance of the free ones cannot say so. The bound
-// keeps the prediction within a factor of 1.6 of reality until the prediction accounts for them (issue 20).
+// published stage, measured through the equation written out, with and without the ripple. One batch draws its
+// coefficients' error once, a vector of 15 whose rms over the validation placements scatters like a chi-square of a
+// few degrees of freedom: seeds 1-3 alone show observed / predicted 1.37, 0.91, 1.38 (no ripple) and 1.51, 1.04, 1.42
+// (ripple) although noise-free batches leave 0.01 um (no ripple): the prediction is an expectation, and what tests it
+// is the pooled rms over independent batches (20: the pooled ratio moves by about 5 % from 10 batches to 40).
+// Measured over 40: 1.03 without the ripple, 1.10 with it (the ripple's share the model takes up, 0.8 um, is in
+// neither the noise nor the covariance). The coefficients fixed as undetermined carry their plausible spread
+// (undetermined_spread.h): 0.04-0.19 um of the prediction here, since the free coefficients absorb most of what
+// pitch and roll do on bars at one height.
 TEST(Identification, PredictedValidationErrorMatchesObserved) {
-  for (unsigned seed : {1u, 2u, 3u}) {
-    for (double ripple : {0.0, kRippleMm}) {
+  for (double ripple : {0.0, kRippleMm}) {
+    double observed_sq = 0, predicted_sq = 0;
+    for (unsigned seed = 1; seed <= 20; ++seed) {
       const Experiment e = Simulate(seed, 0.5, true, ripple);
       const IdentificationResult r = Identify(FvmModelLayout("27"), e.identify.observations);
       const ValidationStats v = Validate(&r.calibration, e.validate.observations, e.validate.anchors);
-      std::printf("EXP seed %u ripple %g: observed %.3f predicted %.3f (undetermined %.3f) ratio %.3f\n", seed, ripple,
-                  v.rms_mm * 1e3, v.predicted_rms_mm * 1e3, v.undetermined_rms_mm * 1e3, v.rms_mm / v.predicted_rms_mm);
-      EXPECT_GT(v.rms_mm / v.predicted_rms_mm, 0.75) << "seed " << seed << " ripple " << ripple;
-      EXPECT_LT(v.rms_mm / v.predicted_rms_mm, 1.6) << "seed " << seed << " ripple " << ripple;
+      observed_sq += v.rms_mm * v.rms_mm;
+      predicted_sq += v.predicted_rms_mm * v.predicted_rms_mm;
+      // One batch: within the scatter of a single draw of the coefficients' error.
+      EXPECT_GT(v.rms_mm / v.predicted_rms_mm, 0.7) << "seed " << seed << " ripple " << ripple;
+      EXPECT_LT(v.rms_mm / v.predicted_rms_mm, 1.7) << "seed " << seed << " ripple " << ripple;
     }
+    const double ratio = std::sqrt(observed_sq / predicted_sq);
+    EXPECT_GT(ratio, 0.8) << "ripple " << ripple;
+    EXPECT_LT(ratio, 1.25) << "ripple " << ripple;
   }
 }
 
