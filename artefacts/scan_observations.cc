@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -42,55 +41,6 @@ void RefuseRepeatedScans(const std::vector<RegisteredScan>& scans) {
       }
     }
   }
-}
-
-// Whether observation i continues the run of consecutive pairs of observation i - 1: the same scan, starting where
-// that one ended.
-bool Continues(const stage::MeasurementSet& set, size_t i) {
-  const stage::Observation& o = set.observations[i];
-  return i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-}
-
-// What the misfit does to the coefficients. The fit takes up the part of what it cannot follow that looks like the
-// model, and that part is in no residual: the misfit is treated as a smooth process along each scan of the character
-// its residuals show, each run's residuals shifted circularly by every lag standing for a misfit that could as well
-// have been, and the coefficients' response to each (the fit's linear map in the registrations' weights) gives their
-// spread. The displacements' turn (tens of microradians over a 2 mm step) is left out of the map.
-Eigen::MatrixXd MisfitResponseCovariance(const stage::Calibration& calibration, const stage::MeasurementSet& set,
-                                         const std::vector<Eigen::Vector3d>& residuals) {
-  const Eigen::Index n = static_cast<Eigen::Index>(calibration.values.size());
-  std::vector<Eigen::MatrixXd> weighted;  // J_i^T W_i, n x 3
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
-  std::vector<std::vector<size_t>> runs;
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    const stage::Observation& o = set.observations[i];
-    const Eigen::MatrixXd j = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
-                              stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.from.value_or(o.command));
-    Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
-    w.topLeftCorner<2, 2>() = o.covariance.topLeftCorner<2, 2>().inverse();
-    weighted.push_back(j.transpose() * w);
-    normal += weighted.back() * j;
-    if (!Continues(set, i)) runs.emplace_back();
-    runs.back().push_back(i);
-  }
-  size_t longest = 0;
-  for (const auto& run : runs) longest = std::max(longest, run.size());
-  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
-  if (longest < 2) return covariance;
-  const Eigen::LDLT<Eigen::MatrixXd> solve(normal);
-  for (size_t lag = 1; lag < longest; ++lag) {
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    for (const auto& run : runs) {
-      for (size_t k = 0; k < run.size(); ++k) {
-        Eigen::Vector3d r = residuals[run[(k + lag) % run.size()]];
-        r.z() = 0.0;
-        g += weighted[run[k]] * r;
-      }
-    }
-    const Eigen::VectorXd response = solve.solve(g);
-    covariance += response * response.transpose();
-  }
-  return covariance / static_cast<double>(longest - 1);
 }
 
 }  // namespace
@@ -194,7 +144,8 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   std::vector<Eigen::Vector2d> run;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const stage::Observation& o = set.observations[i];
-    if (!Continues(set, i)) {
+    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
+    if (!continues) {
       close_run();
       chained.push_back(Eigen::Vector2d::Zero());
       run.clear();
@@ -215,28 +166,6 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   return out;
 }
 
-double PredictedXyUncertaintyMm(const stage::Calibration& calibration, const std::vector<RegisteredScan>& scans) {
-  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
-  for (const RegisteredScan& scan : scans) {
-    for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
-  }
-  const Eigen::Vector3d centre = 0.5 * (lo + hi);
-  constexpr int kSide = 11, kPoints = kSide * kSide;
-  const Eigen::Index n = calibration.covariance.rows();
-  if (n == 0 || n != static_cast<Eigen::Index>(calibration.values.size())) return 0.0;
-  Eigen::MatrixXd j(2 * kPoints, n), rigid(2 * kPoints, 3);
-  for (int i = 0; i < kPoints; ++i) {
-    const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * (i % kSide) / (kSide - 1.0),
-                            lo.y() + (hi.y() - lo.y()) * (i / kSide) / (kSide - 1.0), scans.front().encoder_mm.front().z());
-    j.middleRows(2 * i, 2) = stage::ForwardJacobian(calibration.layout, calibration.values.data(), q).topRows(2);
-    rigid.row(2 * i) << 1.0, 0.0, -(q.y() - centre.y());  // a small turn w about z moves (x, y) by w (-y, x)
-    rigid.row(2 * i + 1) << 0.0, 1.0, q.x() - centre.x();
-  }
-  const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(rigid).householderQ() * Eigen::MatrixXd::Identity(2 * kPoints, 3);
-  const Eigen::MatrixXd seen = j - basis * (basis.transpose() * j);
-  return std::sqrt(std::max(0.0, (seen * calibration.covariance * seen.transpose()).trace()) / kPoints);
-}
-
 ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const std::vector<RegisteredScan>& scans,
                                   double pixel_mm, double pixel_u_mm, stage::IdentificationOptions options) {
   stage::MeasurementSet set = ScanDisplacements(scans, pixel_mm);
@@ -249,7 +178,6 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
-  cal.covariance += MisfitResponseCovariance(cal, set, result.residuals);
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

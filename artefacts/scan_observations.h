@@ -71,12 +71,6 @@ struct ScanCalibration {
   ScanResidualSplit split;
   stage::MeasurementSet set;  // the displacements fitted
 };
-// The standard uncertainty (k = 1) of the xy stage error a calibration from scans predicts, rms over an 11 x 11 grid
-// of the box the scans cover (at the first tile's height), mm: the coefficients' covariance, less the rigid motion
-// in xy (an offset and a turn about z) that no registered image can tell, which the result's frame fixes by
-// convention and any comparison with a truth removes.
-double PredictedXyUncertaintyMm(const stage::Calibration& calibration, const std::vector<RegisteredScan>& scans);
-
 ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const std::vector<RegisteredScan>& scans,
                                   double pixel_mm, double pixel_u_mm, stage::IdentificationOptions options);
 

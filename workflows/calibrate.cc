@@ -33,9 +33,24 @@ BatchCalibration CalibrateBatch(const artefacts::Batch& batch, const CalibrateOp
 
 namespace {
 
-// The standard uncertainty (k = 1) of the xy stage error a calibration predicts over the box the scans cover, um.
+// The standard uncertainty (k = 1) of the xy stage error a calibration predicts, rms over an 11 x 11 grid of the
+// box the scans cover, um: the figure that compares weightings and the pixel size's share.
 double PredictedXyUm(const stage::Calibration& calibration, const std::vector<artefacts::RegisteredScan>& scans) {
-  return artefacts::PredictedXyUncertaintyMm(calibration, scans) * 1e3;
+  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
+  for (const auto& scan : scans) {
+    for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
+  }
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 0; i <= 10; ++i) {
+    for (int j = 0; j <= 10; ++j) {
+      const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * i / 10.0, lo.y() + (hi.y() - lo.y()) * j / 10.0, lo.z());
+      const Eigen::Matrix3d c = stage::Correct(calibration, q).covariance;
+      sum += c(0, 0) + c(1, 1);
+      ++count;
+    }
+  }
+  return std::sqrt(sum / count) * 1e3;
 }
 
 }  // namespace

@@ -7,8 +7,6 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <random>
 #include <string>
@@ -232,73 +230,6 @@ TEST(ScanCalibration, ResidualsSplitIntoWhiteNoiseAndMisfit) {
   const ScanResidualSplit cycle = SplitScanResiduals(set, smooth);
   EXPECT_NEAR(cycle.misfit_mm, 3e-4 / std::sqrt(2.0), 0.1 * 3e-4);
   EXPECT_LT(cycle.white_ratio, 0.5 * 3e-4 / 1e-4);
-}
-
-// TEMPORARY experiment (issue 31): where the scan prediction's pessimism comes from.
-// White ratio from k-th differences of the whitened residuals along each run.
-double WhiteRatio(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals, int order) {
-  static const double binomial_sq[] = {1, 2, 6, 20, 70, 252};
-  double sum = 0;
-  int count = 0;
-  std::vector<Eigen::Vector2d> run;
-  for (size_t i = 0; i < set.observations.size(); ++i) {
-    const stage::Observation& o = set.observations[i];
-    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-    if (!continues) run.clear();
-    const Eigen::Matrix2d l = o.covariance.topLeftCorner<2, 2>().llt().matrixL();
-    run.push_back(l.triangularView<Eigen::Lower>().solve(Eigen::Vector2d(residuals[i].head<2>())));
-    if (static_cast<int>(run.size()) > order) {
-      std::vector<Eigen::Vector2d> d(run.end() - order - 1, run.end());
-      for (int k = 0; k < order; ++k) {
-        for (size_t m = 0; m + 1 < d.size() - static_cast<size_t>(k); ++m) d[m] = d[m + 1] - d[m];
-      }
-      sum += d[0].squaredNorm();
-      count += 2;
-    }
-  }
-  return std::sqrt(sum / (binomial_sq[order] * count));
-}
-
-TEST(ScanCalibration, DISABLED_Experiment) {
-  const char* px_env = std::getenv("FVM_EXP_PX");
-  const int px = px_env ? std::atoi(px_env) : 384;
-  for (unsigned seed : {1u, 2u, 3u, 4u}) {
-    StageTruth truth = PublishedSizeStage(seed);
-    if (const char* p = std::getenv("FVM_EXP_PERIODIC")) truth.periodic_um = std::atof(p);
-    const Scanned s = ScanAndRegister(truth, {-50.0}, px);
-    const ScanCalibration fit = IdentifyFromScans(stage::FvmModelLayout("27"), s.scans, s.pixel_mm, 0.0, RotatedFrame());
-    const stage::Calibration& cal = fit.result.calibration;
-    const XyComparison observed = CompareInXy(cal, truth, -50.0);
-    StageTruth poly = truth;
-    poly.periodic_um = 0.0;
-    const XyComparison coefficient_error = CompareInXy(cal, poly, -50.0);
-    // Predicted at the same 200 positions, with and without the rigid xy motion projected out.
-    std::mt19937_64 random(7);
-    std::uniform_real_distribution<double> coordinate(-170.0, -30.0);
-    const Eigen::Index n = static_cast<Eigen::Index>(cal.values.size());
-    Eigen::MatrixXd a(400, 3), j(400, n);
-    for (int i = 0; i < 200; ++i) {
-      const Eigen::Vector3d q(coordinate(random), coordinate(random), -50.0);
-      a.row(2 * i) << 1, 0, -q.y();
-      a.row(2 * i + 1) << 0, 1, q.x();
-      j.middleRows(2 * i, 2) = stage::ForwardJacobian(cal.layout, cal.values.data(), q).topRows(2);
-    }
-    const Eigen::MatrixXd qa = Eigen::HouseholderQR<Eigen::MatrixXd>(a).householderQ() * Eigen::MatrixXd::Identity(400, 3);
-    const Eigen::MatrixXd jp = j - qa * (qa.transpose() * j);
-    const double plain = std::sqrt((j * cal.covariance * j.transpose()).trace() / 200) * 1e3;
-    const double projected = std::sqrt((jp * cal.covariance * jp.transpose()).trace() / 200) * 1e3;
-    std::printf("  white ratio by difference order 1..5: %.3f %.3f %.3f %.3f %.3f\n", WhiteRatio(fit.set, fit.result.residuals, 1),
-                WhiteRatio(fit.set, fit.result.residuals, 2), WhiteRatio(fit.set, fit.result.residuals, 3),
-                WhiteRatio(fit.set, fit.result.residuals, 4), WhiteRatio(fit.set, fit.result.residuals, 5));
-    // The same fit's covariance unscaled (registrations' own covariances), for the white ratio's effect.
-    std::printf("seed %u px %d: white %.3f misfit %.3f um weighted_rms %.3f | predicted coef %.3f (rigid removed %.3f) "
-                "combined %.3f / %.3f | observed %.3f (coef part %.3f) ratio obs/pred %.2f / %.2f\n",
-                seed, px, fit.split.white_ratio, fit.split.misfit_mm * 1e3, fit.result.weighted_rms, plain, projected,
-                std::hypot(plain, fit.split.misfit_mm * 1e3), std::hypot(projected, fit.split.misfit_mm * 1e3),
-                observed.rms_um, coefficient_error.rms_um, observed.rms_um / std::hypot(plain, fit.split.misfit_mm * 1e3),
-                observed.rms_um / std::hypot(projected, fit.split.misfit_mm * 1e3));
-    std::fflush(stdout);
-  }
 }
 
 }  // namespace
