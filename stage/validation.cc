@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <optional>
 
@@ -20,76 +19,68 @@ Eigen::Vector3d Compensated(const Calibration* calibration, const Eigen::Vector3
   return p;
 }
 
-// Each observation's residual under a calibration, in its first tile's frame where there are anchors, and
-// d(residual) / d(free coefficients).
-void Linearise(const Calibration& calibration, StitchedFrame model_frame, const std::vector<Observation>& observations,
-               const std::vector<Eigen::Vector3d>& anchors, std::vector<Eigen::Vector3d>* residuals,
-               std::vector<Eigen::MatrixXd>* jacobians) {
-  std::vector<FirstTileCompensation> frames;
-  for (const Eigen::Vector3d& a : anchors) frames.emplace_back(calibration, model_frame, a);
-  for (const Observation& o : observations) {
-    Eigen::MatrixXd j;
-    const Eigen::Vector3d p = anchors.empty() ? Compensated(&calibration, o.command, &j)
-                                              : frames.at(static_cast<size_t>(o.group))(o.command, &j);
-    residuals->push_back(p - o.measured);
-    jacobians->push_back(std::move(j));
-  }
-}
-
 }  // namespace
 
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
                          const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame) {
   ValidationStats stats;
-  if (calibration == nullptr) {
-    // No compensation: the first tile's own error is zero, whatever the frame.
-    for (const Observation& o : observations) stats.residuals.push_back(o.command - o.measured);
-    static_cast<ResidualSummary&>(stats) = Summarize(stats.residuals);
-    return stats;
-  }
-  const bool rotated = frame == StitchedFrame::kRotated && !anchors.empty();
-  if (rotated) {
+  const bool modelled = calibration != nullptr;
+  const bool covariance = modelled && calibration->covariance.size() > 0;
+  if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
     stats.turn_coefficients = TurnCoefficients(calibration->layout);
     stats.turn = stats.turn_coefficients.empty() ? "uncertainty" : "model";
   }
   // Each measurement's frame under the model: the translated one for "none", since only the model can turn it.
   const StitchedFrame model_frame = stats.turn == "model" ? frame : StitchedFrame::kTranslated;
-  Linearise(*calibration, model_frame, observations, anchors, &stats.residuals, &stats.jacobians);
-  const bool covariance = calibration->covariance.size() > 0;
+  std::vector<FirstTileCompensation> frames;
+  if (modelled) {
+    for (const Eigen::Vector3d& a : anchors) frames.emplace_back(*calibration, model_frame, a);
+  }
   std::vector<double> predicted_sq;
-  for (const Eigen::MatrixXd& j : stats.jacobians) {
-    predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
-                           3 * calibration->sigma_mm * calibration->sigma_mm);
-  }
-  // The coefficients identification fixed: their plausible spread, less what the free ones took up of it.
-  const std::optional<Calibration> spread = UndeterminedSpread(*calibration);
-  ValidationStats undetermined;  // the same residuals, with the Jacobians of the spread's coefficients
-  if (spread) {
-    Linearise(*spread, model_frame, observations, anchors, &undetermined.residuals, &undetermined.jacobians);
-    double sum = 0;
-    for (size_t i = 0; i < predicted_sq.size(); ++i) {
-      const Eigen::MatrixXd& j = undetermined.jacobians[i];
-      const double v = (j * spread->covariance * j.transpose()).trace();
-      predicted_sq[i] += v;
-      sum += v;
+  std::vector<Eigen::Vector3d> arms;  // s - a, for the turn the model does not tell
+  for (const Observation& o : observations) {
+    Eigen::MatrixXd j;
+    Eigen::Vector3d r;
+    if (!modelled) {
+      r = o.command - o.measured;  // no compensation: the first tile's own error is zero, whatever the frame
+    } else if (anchors.empty()) {
+      r = Compensated(calibration, o.command, &j) - o.measured;
+    } else {
+      r = frames.at(static_cast<size_t>(o.group))(o.command, &j) - o.measured;
     }
-    if (!predicted_sq.empty()) stats.undetermined_rms_mm = std::sqrt(sum / static_cast<double>(predicted_sq.size()));
+    if (!anchors.empty()) arms.push_back(o.measured - anchors.at(static_cast<size_t>(o.group)));
+    stats.residuals.push_back(r);
+    if (modelled) {
+      stats.jacobians.push_back(j);
+      predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
+                             3 * calibration->sigma_mm * calibration->sigma_mm);
+    }
   }
-  if (rotated) {
-    // The turn the model does not tell: the spread of the fitted turns beyond what they would show without one,
-    // the undetermined coefficients' share included.
+  // The coefficients identification fixed as undetermined: their plausible spread, less what the free ones took up
+  // of it, reported apart (validation.h).
+  if (const std::optional<Calibration> spread = modelled ? UndeterminedSpread(*calibration) : std::nullopt; spread && !observations.empty()) {
+    std::vector<FirstTileCompensation> spread_frames;
+    for (const Eigen::Vector3d& a : anchors) spread_frames.emplace_back(*spread, model_frame, a);
+    double sum = 0;
+    for (const Observation& o : observations) {
+      Eigen::MatrixXd j;
+      if (anchors.empty()) {
+        Compensated(&*spread, o.command, &j);
+      } else {
+        spread_frames.at(static_cast<size_t>(o.group))(o.command, &j);
+      }
+      sum += (j * spread->covariance * j.transpose()).trace();
+    }
+    stats.undetermined_rms_mm = std::sqrt(sum / static_cast<double>(observations.size()));
+  }
+  if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
+    // The turn the model does not tell: the spread of the fitted turns beyond what they would show without one.
     Eigen::Vector3d excess = Eigen::Vector3d::Zero();
     const std::vector<PlacementTurn> turns = PlacementTurns(*calibration, stats, observations, anchors);
-    const std::vector<PlacementTurn> spread_turns =
-        spread ? PlacementTurns(*spread, undetermined, observations, anchors) : std::vector<PlacementTurn>{};
-    for (size_t g = 0; g < turns.size(); ++g) {
-      excess += turns[g].rotation.cwiseAbs2() - turns[g].predicted.diagonal();
-      if (spread_turns.size() == turns.size()) excess -= (spread_turns[g].predicted - spread_turns[g].noise).diagonal();
-    }
+    for (const PlacementTurn& t : turns) excess += t.rotation.cwiseAbs2() - t.predicted.diagonal();
     if (!turns.empty()) stats.turn_u_rad = (excess / static_cast<double>(turns.size())).cwiseMax(0.0).cwiseSqrt();
     for (size_t i = 0; i < predicted_sq.size(); ++i) {
-      const Eigen::Vector3d arm = observations[i].measured - anchors.at(static_cast<size_t>(observations[i].group));
-      for (int c = 0; c < 3; ++c) predicted_sq[i] += std::pow(stats.turn_u_rad[c], 2) * arm.cross(Eigen::Vector3d::Unit(c)).squaredNorm();
+      for (int c = 0; c < 3; ++c) predicted_sq[i] += std::pow(stats.turn_u_rad[c], 2) * arms[i].cross(Eigen::Vector3d::Unit(c)).squaredNorm();
     }
   }
   static_cast<ResidualSummary&>(stats) = Summarize(stats.residuals);
@@ -146,54 +137,19 @@ double Variance(const Calibration* calibration, const Eigen::MatrixXd& j) {
   return (j * calibration->covariance * j.transpose()).trace();
 }
 
-// The model's share of a prediction that is linear in the compensated points of a measurement: the calibration's
-// covariance, plus the spread of the coefficients identification fixed as undetermined (stage/undetermined_spread.h),
-// each through its own Jacobians.
-class ModelVariance {
- public:
-  explicit ModelVariance(const Calibration* calibration)
-      : calibration_(calibration), spread_(calibration ? UndeterminedSpread(*calibration) : std::nullopt) {}
-  // d(compensated points) / d(free coefficients) of the members, stacked (3 rows a point): the calibration's and
-  // the spread's.
-  struct Stacked {
-    Eigen::MatrixXd own, spread;
-  };
-  Stacked Jacobians(const std::vector<const Observation*>& members) const {
-    return {Stack(calibration_, members), spread_ ? Stack(&*spread_, members) : Eigen::MatrixXd()};
-  }
-  // The variance of the figure whose Jacobian `figure` makes of the stacked ones.
-  double operator()(const Stacked& j, const std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>& figure) const {
-    return Variance(calibration_, figure(j.own)) + (spread_ ? Variance(&*spread_, figure(j.spread)) : 0.0);
-  }
-
- private:
-  static Eigen::MatrixXd Stack(const Calibration* c, const std::vector<const Observation*>& members) {
-    if (c == nullptr) return {};
-    Eigen::MatrixXd stacked(3 * static_cast<Eigen::Index>(members.size()), static_cast<Eigen::Index>(c->values.size()));
-    for (size_t i = 0; i < members.size(); ++i) {
-      Eigen::MatrixXd j;
-      Compensated(c, members[i]->command, &j);
-      stacked.middleRows(3 * static_cast<Eigen::Index>(i), 3) = j;
-    }
-    return stacked;
-  }
-  const Calibration* calibration_;
-  std::optional<Calibration> spread_;
-};
-
 }  // namespace
 
 FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector<Observation>& observations) {
   FrameFreeStats stats;
-  const ModelVariance model(calibration);
   double sum_sq = 0, predicted_sq = 0;
   const double sigma = calibration ? calibration->sigma_mm : 0.0;
   for (const auto& [group, members] : ByGroup(observations)) {
     const Eigen::Index n = static_cast<Eigen::Index>(members.size());
     if (n < 3) continue;
     Eigen::Matrix3Xd p(3, n), s(3, n);
+    std::vector<Eigen::MatrixXd> j(static_cast<size_t>(n));
     for (Eigen::Index i = 0; i < n; ++i) {
-      p.col(i) = Compensated(calibration, members[static_cast<size_t>(i)]->command, nullptr);
+      p.col(i) = Compensated(calibration, members[static_cast<size_t>(i)]->command, &j[static_cast<size_t>(i)]);
       s.col(i) = members[static_cast<size_t>(i)]->measured;
     }
     const Eigen::Matrix4d t = Eigen::umeyama(p, s, false);
@@ -215,8 +171,11 @@ FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector
     }
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(rigid);
     const Eigen::MatrixXd q = Eigen::MatrixXd(qr.householderQ()).leftCols(6);
-    predicted_sq += model(model.Jacobians(members),
-                          [&](const Eigen::MatrixXd& stacked) -> Eigen::MatrixXd { return stacked - q * (q.transpose() * stacked); });
+    if (calibration->covariance.size() > 0) {
+      Eigen::MatrixXd stacked(3 * n, calibration->covariance.cols());
+      for (Eigen::Index i = 0; i < n; ++i) stacked.middleRows(3 * i, 3) = j[static_cast<size_t>(i)];
+      predicted_sq += Variance(calibration, stacked - q * (q.transpose() * stacked));
+    }
     predicted_sq += sigma * sigma * static_cast<double>(3 * n - 6);
   }
   if (stats.count > 0) {
@@ -228,13 +187,12 @@ FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector
 
 FrameFreeStats PairDistanceValidation(const Calibration* calibration, const std::vector<Observation>& observations) {
   FrameFreeStats stats;
-  const ModelVariance model(calibration);
   double sum_sq = 0, predicted_sq = 0;
   const double sigma = calibration ? calibration->sigma_mm : 0.0;
   for (const auto& [group, members] : ByGroup(observations)) {
     std::vector<Eigen::Vector3d> p;
-    for (const Observation* o : members) p.push_back(Compensated(calibration, o->command, nullptr));
-    const ModelVariance::Stacked j = calibration ? model.Jacobians(members) : ModelVariance::Stacked{};
+    std::vector<Eigen::MatrixXd> j(members.size());
+    for (size_t i = 0; i < members.size(); ++i) p.push_back(Compensated(calibration, members[i]->command, &j[i]));
     for (size_t a = 0; a < members.size(); ++a) {
       for (size_t b = a + 1; b < members.size(); ++b) {
         const Eigen::Vector3d d = p[a] - p[b];
@@ -244,10 +202,7 @@ FrameFreeStats PairDistanceValidation(const Calibration* calibration, const std:
         ++stats.count;
         if (calibration == nullptr) continue;
         const Eigen::RowVector3d u = d.normalized().transpose();
-        const auto ia = 3 * static_cast<Eigen::Index>(a), ib = 3 * static_cast<Eigen::Index>(b);
-        predicted_sq += model(j, [&](const Eigen::MatrixXd& stacked) -> Eigen::MatrixXd {
-          return u * (stacked.middleRows(ia, 3) - stacked.middleRows(ib, 3));
-        }) + 2 * sigma * sigma;
+        predicted_sq += Variance(calibration, u * (j[a] - j[b])) + 2 * sigma * sigma;
       }
     }
   }

@@ -126,9 +126,8 @@ TEST(Identification, EstimatesLieWithinThreeUncertaintiesOfTheEstimableTruth) {
 // (ripple) although noise-free batches leave 0.01 um (no ripple): the prediction is an expectation, and what tests it
 // is the pooled rms over independent batches (20: the pooled ratio moves by about 5 % from 10 batches to 40).
 // Measured over 40: 1.03 without the ripple, 1.10 with it (the ripple's share the model takes up, 0.8 um, is in
-// neither the noise nor the covariance). The coefficients fixed as undetermined carry their plausible spread
-// (undetermined_spread.h): 0.04-0.19 um of the prediction here, since the free coefficients absorb most of what
-// pitch and roll do on bars at one height.
+// neither the noise nor the covariance). The coefficients fixed as undetermined are not the excess: with the free
+// coefficients' absorption, their plausible spread (undetermined_spread.h) adds 0.04-0.19 um here.
 TEST(Identification, PredictedValidationErrorMatchesObserved) {
   for (double ripple : {0.0, kRippleMm}) {
     double observed_sq = 0, predicted_sq = 0;
