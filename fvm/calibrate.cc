@@ -39,7 +39,7 @@ struct CalibrateArgs {
 
 nlohmann::json StatsJson(const stage::ValidationStats& s) {
   return {{"centres", s.count}, {"mean_um", s.mean_mm * 1e3}, {"rms_um", s.rms_mm * 1e3}, {"max_um", s.max_mm * 1e3},
-          {"predicted_rms_um", s.predicted_rms_mm * 1e3}};
+          {"predicted_rms_um", s.predicted_rms_mm * 1e3}, {"predicted_undetermined_rms_um", s.undetermined_rms_mm * 1e3}};
 }
 
 nlohmann::json FrameFreeJson(const stage::FrameFreeStats& s) {

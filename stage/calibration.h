@@ -21,6 +21,13 @@ struct Calibration {
   // The first tile of the first identification measurement: the model's part frame is the orientation the camera
   // had there (stitched_frame.h). Unset for data not referenced to a first tile.
   std::optional<Eigen::Vector3d> frame_reference;
+  // What identification fixed at zero because its data could not tell it (aliases; pitch and roll on a flat
+  // artefact), and how the free coefficients took each up there. Their true values still act where the
+  // identification did not measure: stage/undetermined_spread.h. Empty for a calibration read from a file.
+  struct Undetermined {
+    std::vector<std::string> names;
+    Eigen::MatrixXd absorbed;  // values.size() x names.size(): d(values) / d(its value) on the identification data
+  } undetermined;
 
   Eigen::VectorXd StandardUncertainty() const { return covariance.diagonal().cwiseSqrt(); }
   Eigen::MatrixXd Correlation() const;

@@ -7,52 +7,30 @@
 #include <Eigen/QR>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
-#include <map>
 #include <string>
 
 #include "stage/discrepancy_scoring.h"
+#include "stage/undetermined_spread.h"
 
 namespace fvm::stage {
 namespace {
 
-// What the coefficients the identification data could not determine (fixed, e.g. pitch and roll on flat bars) add
-// to the covariance of the held-out yaws: their true values still act on placements the identification did not
-// cover. Without a truth to go by, each gets the mean square of the determined coefficients of its kind (rotation,
-// translation, squareness) and power as its variance: empirical Bayes, as large as its determined kin. Their yaw
-// sensitivities are those PlacementTurns gives for the calibration with them set free, in the same frame.
+// What the coefficients identification fixed as undetermined (e.g. pitch and roll on flat bars) add to the
+// covariance of the held-out yaws: their true values still act on placements the identification did not cover,
+// less what the free coefficients took up of them (stage/undetermined_spread.h, the same spread the validation's
+// prediction carries). Their yaw sensitivities are those PlacementTurns gives for the calibration with them set free,
+// in the same frame.
 Eigen::MatrixXd UndeterminedYawCovariance(const Calibration& calibration, const MeasurementSet& validate, StitchedFrame frame,
                                           Eigen::Index placements) {
   Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(placements, placements);
-  const ParameterLayout& layout = calibration.layout;
-  std::map<std::pair<int, int>, std::pair<double, int>> kin;  // (kind, power) -> (sum of squares, count)
-  std::vector<const ParameterLayout::Coefficient*> fixed;
-  for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
-    const std::pair<int, int> key{static_cast<int>(GetErrorTerm(c.term).kind), c.power};
-    const int slot = layout.FreeIndexOf(c.name);
-    if (slot >= 0) {
-      kin[key].first += std::pow(calibration.values[static_cast<size_t>(slot)], 2);
-      ++kin[key].second;
-    } else if (c.state == ParameterLayout::State::kFixed) {
-      fixed.push_back(&c);
-    }
-  }
-  if (fixed.empty()) return covariance;
-  Calibration freed = calibration;
-  for (const ParameterLayout::Coefficient* c : fixed) freed.layout.Free(c->name);
-  freed.values = ValuesByName(layout, calibration.values, freed.layout);
-  for (const ParameterLayout::Coefficient* c : fixed) freed.values[static_cast<size_t>(freed.layout.FreeIndexOf(c->name))] = c->value;
-  freed.covariance = Eigen::MatrixXd::Zero(freed.layout.NumFree(), freed.layout.NumFree());  // asks for the sensitivities
-  const ValidationStats v = Validate(&freed, validate.observations, validate.anchors, frame);
-  const std::vector<PlacementTurn> turns = PlacementTurns(freed, v, validate.observations, validate.anchors);
+  const std::optional<Calibration> spread = UndeterminedSpread(calibration);
+  if (!spread) return covariance;
+  const ValidationStats v = Validate(&*spread, validate.observations, validate.anchors, frame);
+  const std::vector<PlacementTurn> turns = PlacementTurns(*spread, v, validate.observations, validate.anchors);
   if (static_cast<Eigen::Index>(turns.size()) != placements) return covariance;
-  for (const ParameterLayout::Coefficient* c : fixed) {
-    const auto it = kin.find({static_cast<int>(GetErrorTerm(c->term).kind), c->power});
-    if (it == kin.end()) continue;
-    Eigen::VectorXd yaw(placements);
-    for (Eigen::Index g = 0; g < placements; ++g) yaw[g] = turns[static_cast<size_t>(g)].sensitivity(2, freed.layout.FreeIndexOf(c->name));
-    covariance += it->second.first / it->second.second * yaw * yaw.transpose();
-  }
-  return covariance;
+  Eigen::MatrixXd yaw(placements, spread->covariance.cols());
+  for (Eigen::Index g = 0; g < placements; ++g) yaw.row(g) = turns[static_cast<size_t>(g)].sensitivity.row(2);
+  return yaw * spread->covariance * yaw.transpose();
 }
 
 }  // namespace

@@ -117,6 +117,32 @@ std::string FormatValue(const ParameterLayout::Coefficient& c, double si) {
   return fmt::format("{:.3g} {}", si * unit.per_si, unit.name);
 }
 
+// How the kept coefficients take up each fixed one on these data (linearised least squares in units of the
+// plausible sizes `tau`): d(kept) / d(fixed) = N_kk^-1 N_kf from the normal equations of all columns, the pose's
+// rows left out. Kept coefficient columns, in order, are the final layout's free slots.
+Calibration::Undetermined Absorbed(const Eigen::MatrixXd& normal, const Eigen::MatrixXd& kept_normal,
+                                   const std::vector<bool>& fixed, const Eigen::VectorXd& tau,
+                                   const std::vector<std::string>& names, Eigen::Index n_coefficients) {
+  std::vector<int> kept, dropped;
+  for (size_t c = 0; c < fixed.size(); ++c) (fixed[c] ? dropped : kept).push_back(static_cast<int>(c));
+  Calibration::Undetermined u;
+  if (dropped.empty() || kept.empty() || kept_normal.rows() != static_cast<Eigen::Index>(kept.size())) return u;
+  Eigen::MatrixXd cross(kept_normal.rows(), static_cast<Eigen::Index>(dropped.size()));
+  for (Eigen::Index a = 0; a < cross.rows(); ++a) {
+    for (Eigen::Index b = 0; b < cross.cols(); ++b) cross(a, b) = normal(kept[static_cast<size_t>(a)], dropped[static_cast<size_t>(b)]);
+  }
+  const Eigen::MatrixXd taken = kept_normal.ldlt().solve(cross);
+  Eigen::Index free = 0;
+  for (int c : kept) free += c < n_coefficients ? 1 : 0;
+  u.absorbed.resize(free, cross.cols());
+  for (Eigen::Index b = 0; b < cross.cols(); ++b) {
+    const int d = dropped[static_cast<size_t>(b)];
+    u.names.push_back(names[static_cast<size_t>(d)]);
+    for (Eigen::Index a = 0; a < free; ++a) u.absorbed(a, b) = tau[kept[static_cast<size_t>(a)]] * taken(a, b) / tau[d];
+  }
+  return u;
+}
+
 // Calls `report` after every solver iteration (the state is current: update_state_every_iteration).
 class IterationLog : public ceres::IterationCallback {
  public:
@@ -225,7 +251,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     }
   }
 
-  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0, std::nullopt});
+  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0, std::nullopt, {}});
   if (!options.anchors.empty()) result.calibration.frame_reference = options.anchors.front();
   ParameterLayout& layout = result.calibration.layout;
   Prepared prepared = Prepare(layout, observations, options);
@@ -368,6 +394,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       result.fixed.push_back({names[static_cast<size_t>(column)], why});
       fixed[static_cast<size_t>(column)] = true;
     }
+    result.calibration.undetermined = Absorbed(normal, kept_normal, fixed, tau, names, n_coefficients);
   }
   for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
   prepared = Prepare(layout, observations, options);

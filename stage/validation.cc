@@ -4,6 +4,9 @@
 #include <Eigen/QR>
 #include <cmath>
 #include <map>
+#include <optional>
+
+#include "stage/undetermined_spread.h"
 
 namespace fvm::stage {
 namespace {
@@ -52,6 +55,23 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
       predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
                              3 * calibration->sigma_mm * calibration->sigma_mm);
     }
+  }
+  // The coefficients identification fixed as undetermined: their plausible spread, less what the free ones took up
+  // of it, reported apart (validation.h).
+  if (const std::optional<Calibration> spread = modelled ? UndeterminedSpread(*calibration) : std::nullopt; spread && !observations.empty()) {
+    std::vector<FirstTileCompensation> spread_frames;
+    for (const Eigen::Vector3d& a : anchors) spread_frames.emplace_back(*spread, model_frame, a);
+    double sum = 0;
+    for (const Observation& o : observations) {
+      Eigen::MatrixXd j;
+      if (anchors.empty()) {
+        Compensated(&*spread, o.command, &j);
+      } else {
+        spread_frames.at(static_cast<size_t>(o.group))(o.command, &j);
+      }
+      sum += (j * spread->covariance * j.transpose()).trace();
+    }
+    stats.undetermined_rms_mm = std::sqrt(sum / static_cast<double>(observations.size()));
   }
   if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
     // The turn the model does not tell: the spread of the fitted turns beyond what they would show without one.

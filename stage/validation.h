@@ -18,6 +18,11 @@ namespace fvm::stage {
 
 struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
+  // What the coefficients identification fixed as undetermined may add (in quadrature): their plausible spread,
+  // less what the free ones took up of it (stage/undetermined_spread.h); 0 where it fixed none. Apart from
+  // predicted_rms_mm: on exports turned at their first tiles the prior of pitch and roll overstates it (the sample:
+  // 1.50 -> 1.99 um predicted against 1.37 observed).
+  double undetermined_rms_mm = 0;
   std::vector<Eigen::Vector3d> residuals;
   std::vector<Eigen::MatrixXd> jacobians;  // d(residual) / d(free coefficients) of each, with a calibration
   // How the turn of each measurement's stitched frame entered (rotated frame, with a calibration):

@@ -182,7 +182,7 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
         throw fail(fmt::format("{}: {}", key, e.what()));
       }
     }
-    stage::Calibration cal{doc.value("model", ""), layout, {}, {}, doc.value("sigma_mm", 0.0), std::nullopt};
+    stage::Calibration cal{doc.value("model", ""), layout, {}, {}, doc.value("sigma_mm", 0.0), std::nullopt, {}};
     for (const std::string& name : layout.FreeNames()) cal.values.push_back(free_values.at(name));
     const int n = layout.NumFree();
     cal.covariance = Eigen::MatrixXd::Zero(n, n);

@@ -24,7 +24,7 @@ Calibration Model27() {
   const ParameterLayout layout = testing::FullLayout(AxisChain::FvmStage(), testing::FvmTravel(), 1);
   const Eigen::Index n = layout.NumFree();
   const Eigen::MatrixXd a = Eigen::MatrixXd::Random(n, n) * 1e-4;
-  return Calibration{"27", layout, testing::RandomCoefficients(layout, 1), a * a.transpose() * 1e-6, 5e-4, std::nullopt};
+  return Calibration{"27", layout, testing::RandomCoefficients(layout, 1), a * a.transpose() * 1e-6, 5e-4, std::nullopt, {}};
 }
 
 std::vector<Eigen::Vector3d> Cloud(std::size_t n) {

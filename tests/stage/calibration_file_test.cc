@@ -31,7 +31,7 @@ IdentificationResult SmallResult() {
   layout.Fix("xTx1", 0.002);
   layout.Tie("yTx0", "xTx0", -0.5);
   // Free: xTx0, yRz0, xWy.
-  Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4, Eigen::Vector3d(-185.0, -15.0, -50.0)};
+  Calibration cal{"terms:test", layout, {0.0125, 3.5e-5, -1.25e-4}, Eigen::MatrixXd::Zero(3, 3), 4e-4, Eigen::Vector3d(-185.0, -15.0, -50.0), {}};
   cal.covariance << 4e-8, 1e-12, 0, 1e-12, 9e-12, 2e-13, 0, 2e-13, 1.6e-11;
   IdentificationResult result(cal);
   result.residual_summary.rms_mm = 1.25e-3;
@@ -158,7 +158,7 @@ TEST_F(CalibrationFile, WritesAndReadsTheToolOffsetOfAMachineModel) {
   chain.tool_offset = Eigen::Vector3d(12.5, -3.25, 100);
   ParameterLayout layout(chain, {Travel{0, 2500}, Travel{0, 1500}, Travel{0, 1200}});
   layout.SetTerm("zRx", Basis::kLegendre, 1);
-  IdentificationResult machine(Calibration{"machine", layout, {0, 2e-5}, Eigen::MatrixXd::Identity(2, 2) * 1e-12, 0, std::nullopt});
+  IdentificationResult machine(Calibration{"machine", layout, {0, 2e-5}, Eigen::MatrixXd::Identity(2, 2) * 1e-12, 0, std::nullopt, {}});
   const json doc = CalibrationToJson(machine);
   EXPECT_EQ(doc.at("tool_offset_mm"), json({12.5, -3.25, 100.0}));
   const Calibration read = ReadCalibration(Write(doc));

@@ -9,9 +9,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
+#include <cmath>
 #include <map>
+#include <optional>
+#include <random>
 
 #include "stage/fvm_stage_models.h"
+#include "stage/undetermined_spread.h"
 #include "stage/validation.h"
 #include "tests/stage/published_model.h"
 
@@ -89,7 +93,7 @@ TEST(Identification, ValidationWithinTenPercentOfAnIndependentLeastSquaresFit) {
     for (const char* model : {"27", "42"}) {
       const ParameterLayout layout = FvmModelLayout(model);
       const std::vector<double> ls = IndependentLeastSquares(layout, e.identify.observations);
-      const Calibration reference{"ls", layout, ls, {}, 0.0};
+      const Calibration reference{"ls", layout, ls, {}, 0.0, std::nullopt, {}};
       const double ls_mean = Validate(&reference, e.validate.observations, e.validate.anchors).mean_mm;
       const double ours = ValidationMean(Identify(layout, e.identify.observations), e);
       EXPECT_LT(ours, 1.1 * ls_mean) << model << " seed " << seed << ": ours " << ours * 1e3 << " um, least squares "
@@ -116,22 +120,85 @@ TEST(Identification, EstimatesLieWithinThreeUncertaintiesOfTheEstimableTruth) {
 }
 
 // What the covariance and noise predict for the validation rms, against what independent measurements show: the
-// published stage, measured through the equation written out, with and without the ripple. Measured (seeds 1-3):
-// observed / predicted 1.37, 0.91, 1.39 without the ripple and 1.51, 1.04, 1.43 with it. 170 centres x 3
-// coordinates scatter a correct prediction's rms by about 3 %, the noise estimate from 51 centres by 6 %; the rest
-// of the excess is the coefficients fixed as undetermined (pitch and roll on a nearly flat bar, 12 of 27): their
-// true values act on the validation placements, and the covariance of the free ones cannot say so. The bound
-// keeps the prediction within a factor of 1.6 of reality until the prediction accounts for them (issue 20).
+// published stage, measured through the equation written out, with and without the ripple. One batch draws its
+// coefficients' error once, a vector of 15 whose rms over the validation placements scatters like a chi-square of a
+// few degrees of freedom: seeds 1-3 alone show observed / predicted 1.37, 0.91, 1.38 (no ripple) and 1.51, 1.04, 1.42
+// (ripple) although noise-free batches leave 0.01 um (no ripple): the prediction is an expectation, and what tests it
+// is the pooled rms over independent batches (20: the pooled ratio moves by about 5 % from 10 batches to 40).
+// Measured over 40: 1.03 without the ripple, 1.10 with it (the ripple's share the model takes up, 0.8 um, is in
+// neither the noise nor the covariance). The coefficients fixed as undetermined are not the excess: with the free
+// coefficients' absorption, their plausible spread (undetermined_spread.h) adds 0.04-0.19 um here.
 TEST(Identification, PredictedValidationErrorMatchesObserved) {
-  for (unsigned seed : {1u, 2u, 3u}) {
-    for (double ripple : {0.0, kRippleMm}) {
+  for (double ripple : {0.0, kRippleMm}) {
+    double observed_sq = 0, predicted_sq = 0;
+    for (unsigned seed = 1; seed <= 20; ++seed) {
       const Experiment e = Simulate(seed, 0.5, true, ripple);
       const IdentificationResult r = Identify(FvmModelLayout("27"), e.identify.observations);
       const ValidationStats v = Validate(&r.calibration, e.validate.observations, e.validate.anchors);
-      EXPECT_GT(v.rms_mm / v.predicted_rms_mm, 0.75) << "seed " << seed << " ripple " << ripple;
-      EXPECT_LT(v.rms_mm / v.predicted_rms_mm, 1.6) << "seed " << seed << " ripple " << ripple;
+      observed_sq += v.rms_mm * v.rms_mm;
+      predicted_sq += v.predicted_rms_mm * v.predicted_rms_mm;
+      // One batch: within the scatter of a single draw of the coefficients' error.
+      EXPECT_GT(v.rms_mm / v.predicted_rms_mm, 0.7) << "seed " << seed << " ripple " << ripple;
+      EXPECT_LT(v.rms_mm / v.predicted_rms_mm, 1.7) << "seed " << seed << " ripple " << ripple;
     }
+    const double ratio = std::sqrt(observed_sq / predicted_sq);
+    EXPECT_GT(ratio, 0.8) << "ripple " << ripple;
+    EXPECT_LT(ratio, 1.25) << "ripple " << ripple;
   }
+}
+
+// The undetermined coefficients' share of the prediction against draws written here: the fixed coefficients drawn
+// from their prior, their effect on the identification centres refitted by the free ones (linear least squares on
+// central-difference columns of the forward model), and what is left on the validation placements in their first
+// tiles' frames. 400 draws give the rms to about 5 %.
+TEST(Identification, UndeterminedShareIsWhatDrawsOfTheFixedCoefficientsLeaveAfterRefitting) {
+  const Experiment e = Simulate(3);
+  const IdentificationResult r = Identify(FvmModelLayout("27"), e.identify.observations);
+  const std::optional<Calibration> spread = UndeterminedSpread(r.calibration);
+  ASSERT_TRUE(spread.has_value());
+  const ValidationStats v = Validate(&r.calibration, e.validate.observations, e.validate.anchors);
+  ASSERT_GT(v.undetermined_rms_mm, 0.0);
+  const ParameterLayout& freed = spread->layout;
+  const auto columns = [&](const Eigen::Vector3d& q) {
+    Eigen::MatrixXd j(3, freed.NumFree());
+    for (int c = 0; c < freed.NumFree(); ++c) {
+      std::vector<double> up = spread->values, down = spread->values;
+      up[static_cast<size_t>(c)] += 1e-6;
+      down[static_cast<size_t>(c)] -= 1e-6;
+      j.col(c) = (Forward(freed, up, q) - Forward(freed, down, q)) / 2e-6;
+    }
+    return j;
+  };
+  std::vector<int> free_slots, fixed_slots;
+  for (const std::string& name : r.calibration.layout.FreeNames()) free_slots.push_back(freed.FreeIndexOf(name));
+  for (const std::string& name : r.calibration.undetermined.names) fixed_slots.push_back(freed.FreeIndexOf(name));
+  const auto pick = [](const Eigen::MatrixXd& j, const std::vector<int>& slots) {
+    Eigen::MatrixXd out(j.rows(), static_cast<Eigen::Index>(slots.size()));
+    for (size_t k = 0; k < slots.size(); ++k) out.col(static_cast<Eigen::Index>(k)) = j.col(slots[k]);
+    return out;
+  };
+  Eigen::MatrixXd id(3 * e.identify.observations.size(), freed.NumFree()), val(3 * e.validate.observations.size(), freed.NumFree());
+  for (size_t i = 0; i < e.identify.observations.size(); ++i) id.middleRows(3 * static_cast<Eigen::Index>(i), 3) = columns(e.identify.observations[i].command);
+  for (size_t i = 0; i < e.validate.observations.size(); ++i) {
+    const Observation& o = e.validate.observations[i];
+    val.middleRows(3 * static_cast<Eigen::Index>(i), 3) = columns(o.command) - columns(e.validate.anchors[static_cast<size_t>(o.group)]);
+  }
+  const Eigen::MatrixXd id_free = pick(id, free_slots), id_fixed = pick(id, fixed_slots);
+  const Eigen::MatrixXd val_free = pick(val, free_slots), val_fixed = pick(val, fixed_slots);
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> refit(id_free);
+  const Eigen::VectorXd prior = UndeterminedPrior(r.calibration);
+  std::mt19937_64 random(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  double sum = 0;
+  constexpr int kDraws = 400;
+  for (int d = 0; d < kDraws; ++d) {
+    Eigen::VectorXd delta(prior.size());
+    for (Eigen::Index k = 0; k < prior.size(); ++k) delta[k] = std::sqrt(prior[k]) * normal(random);
+    const Eigen::VectorXd taken = refit.solve(Eigen::VectorXd(id_fixed * delta));
+    sum += (val_free * taken - val_fixed * delta).squaredNorm() / static_cast<double>(e.validate.observations.size());
+  }
+  const double drawn = std::sqrt(sum / kDraws);
+  EXPECT_NEAR(v.undetermined_rms_mm, drawn, 0.15 * drawn) << "drawn " << drawn * 1e3 << " um";
 }
 
 TEST(Identification, AnchoringAtTheFirstTileHandlesPlacementsThatStartApart) {

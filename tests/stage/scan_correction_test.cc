@@ -23,7 +23,7 @@ Calibration Model(unsigned seed) {
   Eigen::MatrixXd a(n, n);
   for (Eigen::Index i = 0; i < a.size(); ++i) a.data()[i] = normal(random);
   return Calibration{"27", layout, testing::RandomCoefficients(layout, seed), a * a.transpose(), 5e-4,
-                     Eigen::Vector3d(-190.0, -10.0, -50.0)};
+                     Eigen::Vector3d(-190.0, -10.0, -50.0), {}};
 }
 
 std::vector<Eigen::Vector3d> Points(int n) {

@@ -17,7 +17,7 @@ Calibration Model() {
   layout.SetTerm("xTx", Basis::kPower, 2);
   layout.SetTerm("xWy", Basis::kPower, 0);
   layout.Fix("xTx0", 0.0);
-  Calibration cal{"test", layout, {0.010, -0.004, 2e-5}, Eigen::MatrixXd::Zero(3, 3), 0, std::nullopt};
+  Calibration cal{"test", layout, {0.010, -0.004, 2e-5}, Eigen::MatrixXd::Zero(3, 3), 0, std::nullopt, {}};
   // u(c1) = 2 um, u(c2) = 3 um, correlation -0.5; u(xWy) = 1 urad.
   cal.covariance << 4e-12, -3e-12, 0, -3e-12, 9e-12, 0, 0, 0, 1e-12;
   return cal;
