@@ -18,7 +18,7 @@ TEST(CorrectCentres, TheTrueModelPutsStitchingFreeCentresOnTheStitchedOnes) {
   sim.pitch_error_um = 0.0;
   const artefacts::SimulatedFvmBatch batch = artefacts::SimulateFvmBatch(sim);
   stage::Calibration truth{"27", batch.truth.layout, batch.truth.values,
-                           Eigen::MatrixXd::Zero(batch.truth.layout.NumFree(), batch.truth.layout.NumFree()), 0.0, std::nullopt};
+                           Eigen::MatrixXd::Zero(batch.truth.layout.NumFree(), batch.truth.layout.NumFree()), 0.0, std::nullopt, {}};
   const artefacts::Placement& p = batch.exact.Get(batch.exact.validate.front());
   artefacts::CentreExport free;
   for (size_t i = 0; i < p.ids.size(); ++i) free.centres.push_back({p.ids[i], p.free[i], std::nullopt, std::nullopt, std::nullopt, std::nullopt});
