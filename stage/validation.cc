@@ -19,6 +19,27 @@ Eigen::Vector3d Compensated(const Calibration* calibration, const Eigen::Vector3
   return p;
 }
 
+// The frame each measurement is turned in under the calibration: the rotated one only where the model's own rotation
+// terms turn it (TurnCoefficients); otherwise the translated one, since only the model can turn it.
+StitchedFrame ModelFrame(const Calibration& calibration, const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame) {
+  const bool turned = frame == StitchedFrame::kRotated && !anchors.empty() && !TurnCoefficients(calibration.layout).empty();
+  return turned ? frame : StitchedFrame::kTranslated;
+}
+
+// Each placement's first-tile compensation under the calibration, in `model_frame` (none without anchors).
+std::vector<FirstTileCompensation> FirstTileFrames(const Calibration& calibration, const std::vector<Eigen::Vector3d>& anchors,
+                                                   StitchedFrame model_frame) {
+  std::vector<FirstTileCompensation> frames;
+  for (const Eigen::Vector3d& a : anchors) frames.emplace_back(calibration, model_frame, a);
+  return frames;
+}
+
+// The calibration's prediction of `o` and its Jacobian: in its placement's first-tile frame, or the stage's without.
+Eigen::Vector3d Predicted(const Calibration& calibration, const std::vector<FirstTileCompensation>& frames,
+                          const Observation& o, Eigen::MatrixXd* jacobian) {
+  return frames.empty() ? Compensated(&calibration, o.command, jacobian) : frames.at(static_cast<size_t>(o.group))(o.command, jacobian);
+}
+
 }  // namespace
 
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
@@ -30,12 +51,8 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
     stats.turn_coefficients = TurnCoefficients(calibration->layout);
     stats.turn = stats.turn_coefficients.empty() ? "uncertainty" : "model";
   }
-  // Each measurement's frame under the model: the translated one for "none", since only the model can turn it.
-  const StitchedFrame model_frame = stats.turn == "model" ? frame : StitchedFrame::kTranslated;
-  std::vector<FirstTileCompensation> frames;
-  if (modelled) {
-    for (const Eigen::Vector3d& a : anchors) frames.emplace_back(*calibration, model_frame, a);
-  }
+  const std::vector<FirstTileCompensation> frames =
+      modelled ? FirstTileFrames(*calibration, anchors, ModelFrame(*calibration, anchors, frame)) : std::vector<FirstTileCompensation>{};
   std::vector<double> predicted_sq;
   std::vector<Eigen::Vector3d> arms;  // s - a, for the turn the model does not tell
   for (const Observation& o : observations) {
@@ -43,10 +60,8 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
     Eigen::Vector3d r;
     if (!modelled) {
       r = o.command - o.measured;  // no compensation: the first tile's own error is zero, whatever the frame
-    } else if (anchors.empty()) {
-      r = Compensated(calibration, o.command, &j) - o.measured;
     } else {
-      r = frames.at(static_cast<size_t>(o.group))(o.command, &j) - o.measured;
+      r = Predicted(*calibration, frames, o, &j) - o.measured;
     }
     if (!anchors.empty()) arms.push_back(o.measured - anchors.at(static_cast<size_t>(o.group)));
     stats.residuals.push_back(r);
@@ -55,23 +70,6 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
       predicted_sq.push_back((covariance ? (j * calibration->covariance * j.transpose()).trace() : 0.0) +
                              3 * calibration->sigma_mm * calibration->sigma_mm);
     }
-  }
-  // The coefficients identification fixed as undetermined: their plausible spread, less what the free ones took up
-  // of it, reported apart (validation.h).
-  if (const std::optional<Calibration> spread = modelled ? UndeterminedSpread(*calibration) : std::nullopt; spread && !observations.empty()) {
-    std::vector<FirstTileCompensation> spread_frames;
-    for (const Eigen::Vector3d& a : anchors) spread_frames.emplace_back(*spread, model_frame, a);
-    double sum = 0;
-    for (const Observation& o : observations) {
-      Eigen::MatrixXd j;
-      if (anchors.empty()) {
-        Compensated(&*spread, o.command, &j);
-      } else {
-        spread_frames.at(static_cast<size_t>(o.group))(o.command, &j);
-      }
-      sum += (j * spread->covariance * j.transpose()).trace();
-    }
-    stats.undetermined_rms_mm = std::sqrt(sum / static_cast<double>(observations.size()));
   }
   if (modelled && frame == StitchedFrame::kRotated && !anchors.empty()) {
     // The turn the model does not tell: the spread of the fitted turns beyond what they would show without one.
@@ -88,6 +86,21 @@ ValidationStats Validate(const Calibration* calibration, const std::vector<Obser
   for (double v : predicted_sq) sum += v;
   if (!predicted_sq.empty()) stats.predicted_rms_mm = std::sqrt(sum / static_cast<double>(predicted_sq.size()));
   return stats;
+}
+
+double UndeterminedRms(const Calibration& calibration, const std::vector<Observation>& observations,
+                       const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame) {
+  const std::optional<Calibration> spread = UndeterminedSpread(calibration);
+  if (!spread || observations.empty()) return 0.0;
+  // The spread is propagated in the frames the calibration itself turns the measurements in.
+  const std::vector<FirstTileCompensation> frames = FirstTileFrames(*spread, anchors, ModelFrame(calibration, anchors, frame));
+  double sum = 0;
+  for (const Observation& o : observations) {
+    Eigen::MatrixXd j;
+    Predicted(*spread, frames, o, &j);
+    sum += (j * spread->covariance * j.transpose()).trace();
+  }
+  return std::sqrt(sum / static_cast<double>(observations.size()));
 }
 
 std::vector<PlacementTurn> PlacementTurns(const Calibration& calibration, const ValidationStats& validation,

@@ -18,10 +18,10 @@ namespace fvm::stage {
 
 struct ValidationStats : ResidualSummary {
   double predicted_rms_mm = 0;  // what the calibration's covariance and noise predict for rms_mm
-  // What the coefficients identification fixed as undetermined may add (in quadrature): their plausible spread,
-  // less what the free ones took up of it (stage/undetermined_spread.h); 0 where it fixed none. Apart from
-  // predicted_rms_mm: on exports turned at their first tiles the prior of pitch and roll overstates it (the sample:
-  // 1.50 -> 1.99 um predicted against 1.37 observed).
+  // What the coefficients identification fixed as undetermined may add (in quadrature): UndeterminedRms, filled in
+  // where it is reported (fvm calibrate's judgement); Validate leaves it 0. Apart from predicted_rms_mm: on exports
+  // turned at their first tiles the prior of pitch and roll overstates it (the sample: 1.50 -> 1.99 um predicted
+  // against 1.37 observed).
   double undetermined_rms_mm = 0;
   std::vector<Eigen::Vector3d> residuals;
   std::vector<Eigen::MatrixXd> jacobians;  // d(residual) / d(free coefficients) of each, with a calibration
@@ -45,6 +45,12 @@ struct ValidationStats : ResidualSummary {
 // "no compensation".
 ValidationStats Validate(const Calibration* calibration, const std::vector<Observation>& observations,
                          const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame = StitchedFrame::kTranslated);
+
+// The rms over `observations` (mm) of what the coefficients identification fixed as undetermined may add to Validate's
+// prediction: their plausible spread less what the free ones took up of it (stage/undetermined_spread.h), in the same
+// frames; 0 where it fixed none. Apart from Validate, which every Monte Carlo run and discrepancy step calls.
+double UndeterminedRms(const Calibration& calibration, const std::vector<Observation>& observations,
+                       const std::vector<Eigen::Vector3d>& anchors, StitchedFrame frame = StitchedFrame::kTranslated);
 
 // Each measurement's turn about its first tile fitted to a validation's residuals (FitTurn), with the covariance
 // the fitted turn would have if there were no turn: the noise and the calibration's covariance propagated through

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "artefacts/batch_observations.h"
 #include "core/input_error.h"
@@ -10,8 +11,10 @@
 namespace fvm::workflows {
 
 Judgement Judge(const stage::Calibration* calibration, const stage::MeasurementSet& set, stage::StitchedFrame frame) {
+  stage::ValidationStats first_tile = stage::Validate(calibration, set.observations, set.anchors, frame);
+  if (calibration != nullptr) first_tile.undetermined_rms_mm = stage::UndeterminedRms(*calibration, set.observations, set.anchors, frame);
   return {stage::RigidValidation(calibration, set.observations), stage::PairDistanceValidation(calibration, set.observations),
-          stage::Validate(calibration, set.observations, set.anchors, frame)};
+          std::move(first_tile)};
 }
 
 BeforeAfter JudgeBeforeAfter(const stage::Calibration& calibration, const stage::MeasurementSet& set,

@@ -55,19 +55,17 @@ MachineUncertainty RunMachineMonteCarlo(const MachineProblem& problem, const Mac
   MachineUncertainty u;
   const auto start = std::chrono::steady_clock::now();
   // Readings that carry their own covariances (multilaterated points) are drawn with those; the validation readings
-  // likewise, so they are handed over with their covariances (own or the tracker's: the Monte Carlo reads them only
-  // when they are their own).
+  // likewise, so both are handed over with their covariances (own or the tracker's: the Monte Carlo reads them only
+  // when they are their own). The problem's own observations carry none when the fit is unweighted.
   stage::MonteCarloOptions options = OptionsOf(settings, problem.weighted);
-  const std::vector<stage::Observation> observations = artefacts::TrackerObservations(problem.readings, &problem.noise);
   options.readings_carry_covariances = artefacts::CarriesCovariances(problem.readings);
+  const std::vector<stage::Observation> readings = options.readings_carry_covariances
+                                                       ? artefacts::TrackerObservations(problem.readings, &problem.noise)
+                                                       : problem.observations;
   std::vector<stage::Observation> validation;
   if (problem.validation) {
     validation = artefacts::TrackerObservations(*problem.validation, &problem.noise);
     options.validation_carries_covariances = artefacts::CarriesCovariances(*problem.validation);
-  }
-  std::vector<stage::Observation> readings = problem.observations;
-  if (options.readings_carry_covariances) {
-    for (size_t i = 0; i < readings.size(); ++i) readings[i].covariance = observations[i].covariance;
   }
   u.runs = stage::MachineMonteCarlo(reference.layout, reference.verification, readings, validation, problem.noise,
                                     problem.options, options);
