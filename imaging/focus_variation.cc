@@ -14,6 +14,7 @@
 #include "core/input_error.h"
 #include "imaging/focus_peak.h"
 #include "imaging/focus_stack_curves.h"
+#include "imaging/focus_window_centroid.h"
 
 namespace fvm::imaging {
 namespace {
@@ -275,7 +276,7 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
 struct MapBuffers {
   int width = 0, height = 0;
   bool parallel = true;
-  HugeVector<float> storage[6];
+  HugeVector<float> storage[7];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];
@@ -321,19 +322,23 @@ struct HoleyMap {
   }
 };
 
-// The local slope (height change per pixel, mm) of a map with holes, from its smooth local mean (in buffer 4,
-// which the scatter below leaves alone).
-cv::Mat SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+// The local slope (height change per pixel along x and y, mm) of a map with holes, from its smooth local mean
+// (in buffers 4 and 6, which the scatter below leaves alone).
+struct Slope {
+  cv::Mat x, y;
+  float Magnitude(int r, int col) const { return std::hypot(x.ptr<float>(r)[col], y.ptr<float>(r)[col]); }
+};
+Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
   HoleyMap map(z, origin, buffers);
-  cv::Mat smooth = buffers[3], gx = buffers[4];
+  cv::Mat smooth = buffers[3];
+  Slope slope{buffers[4], buffers[6]};
   buffers.Pass([&](int r0, int r1) { map.Smooth(kSlopeSmoothingPx, r0, r1, smooth); });
   buffers.Pass([&](int r0, int r1) {
-    cv::Mat gx_rows = gx.rowRange(r0, r1), gy_rows = map.work.rowRange(r0, r1);
+    cv::Mat gx_rows = slope.x.rowRange(r0, r1), gy_rows = slope.y.rowRange(r0, r1);
     cv::Sobel(smooth.rowRange(r0, r1), gx_rows, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
     cv::Sobel(smooth.rowRange(r0, r1), gy_rows, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    cv::magnitude(gx_rows, gy_rows, gx_rows);
   });
-  return gx;
+  return slope;
 }
 
 // The rms of the heights about their smooth local mean, over a window around each valid point (buffer 5).
@@ -429,19 +434,19 @@ FocusResult FocusAccumulator::Finish() const {
     }
   });
   MapBuffers buffers{s.width, s.height, s.options.parallel, {}};
-  const cv::Mat slope = SlopePerPixel(map.z_mm, origin, buffers);
+  const Slope slope = SlopePerPixel(map.z_mm, origin, buffers);
   const double spread_limit = kSpreadLimitSteps * step;
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
-      const float* g = slope.ptr<float>(r);  // mm per px
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         // The largest window's quality decides validity: its peak over mean is the least noisy, and a small
         // window's noise peak on a texture-free spot must not pass for a height.
         if (!(result.quality[i] >= s.options.min_quality)) continue;
         double z = map.z_mm[i], u_noise = result.u_z_mm[i], window = large.window;
-        const auto fits = [&](const WindowCurves& c) { return g[col] * (c.window / 2) <= spread_limit; };
+        const float g = slope.Magnitude(r, col);  // mm per px
+        const auto fits = [&](const WindowCurves& c) { return g * (c.window / 2) <= spread_limit; };
         // The largest window whose half-width spans at most half a step of height; else the mean of the
         // smaller two (their errors on a wall are partly independent textures' weights).
         if (curves.size() > 1 && !(fits(large) && std::isfinite(z))) {
@@ -463,6 +468,17 @@ FocusResult FocusAccumulator::Finish() const {
       }
     }
   });
+  // Each window's height is that under the centroid of its pixels' sharpness: moved to its centre along the
+  // slope of the map as now chosen (focus_window_centroid.h).
+  {
+    const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
+    CentroidCorrectionInput in;
+    in.width = s.width, in.height = s.height, in.parallel = s.options.parallel;
+    in.texture = &result.texture, in.channels = result.texture_channels;
+    in.windows = &curves, in.window_px = &result.window_px;
+    in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
+    CorrectWindowCentroids(in, map.z_mm);
+  }
   // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
   // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
   // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
