@@ -58,10 +58,14 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2) 
 
 // The vertex of the parabola fitted by weighted least squares through the transformed measures P = f^power
 // (power < 0: P is smallest at the peak) of the best image k and up to two images on either side. Each point is
-// weighted by 1 / var(P) ~ f^(2 - 2 power) for a measure of constant noise, so that the points near the floor
-// of a narrow focus curve, where the transform blows the noise up, barely count: a narrow curve is fitted by
-// its three top points, a wide one (small aperture, fine steps) by five. Stays between the best image's
-// neighbours; z (mm) of the images, NaN measures (beyond the stack) left out.
+// weighted by (f / f_best)^2, so that the points near the floor of a narrow focus curve, where the transform
+// blows the noise up, barely count, while a wide curve (small aperture, fine steps) is fitted by its five points.
+// Not by 1 / var(P) ~ f^(2 - 2 power) (f^3.3 for the modified Laplacian): near its top the focus curve is
+// flatter than the power law (a blur below a pixel hardly changes the image), and weights that lean on the top
+// points pull the vertex towards or away from the best image by up to a tenth of a step (measured on the
+// stacks of focus_accuracy_test.cc: 0.09 step rms on the flat at 1 um steps and NA 0.7, 0.05 with these
+// weights). Stays between the best image's neighbours; z (mm) of the images, NaN measures (beyond the stack)
+// left out.
 //
 // With `u_noise`, also the vertex's standard deviation when each measure carries noise `sigma`: the change of
 // the vertex when one measure moves by sigma, linearised in the transform (dP = power P sigma / f), summed in
@@ -83,7 +87,7 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
     if (!(f[std::size_t(j)] > 0.0) || image < 0 || image >= int(z.size())) continue;
     const double ratio = f[std::size_t(j)] / f[2];
     p[j] = Power(ratio, power);
-    weight[j] = ratio * ratio / (p[j] * p[j]);  // ratio^(2 - 2 power)
+    weight[j] = ratio * ratio;
     u[j] = (z[std::size_t(image)] - z1) / scale;
     double un = weight[j];
     for (int n = 0; n < 5; ++n, un *= u[j]) {
