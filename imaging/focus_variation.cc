@@ -6,8 +6,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <string>
@@ -45,14 +43,16 @@ constexpr double kCoarseShoulder = 0.6;
 // The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
 // (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
 // floor (scaled by the power fit's misfit, focus_peak.cc), the share of the step the interpolation leaves, the
-// share of the heights' local scatter, and for a curve too narrow for the power fit (the 3-point log fit's error
-// between images) a share of the step.
+// share of the heights' local scatter, for a curve too narrow for the power fit (the 3-point log fit's error
+// between images) a share of the step, and on a slope what the window's centroid correction leaves (a share of
+// a pixel times the slope: 0.08 px, a third of the error it removes).
 constexpr double kNoiseScale = 0.12;
 constexpr double kFloorShare = 1.0;
 constexpr double kStepFraction = 0.025;
 constexpr double kScatterScale = 0.9;
-constexpr double kNarrowStepFraction = 0.4;
+constexpr double kNarrowStepFraction = 0.14;
 constexpr int kScatterWindowPx = 9;
+constexpr double kSlopePx = 0.08;
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -460,14 +460,6 @@ FocusResult FocusAccumulator::Finish() const {
       result.quality[i] = p.quality;
     }
   });
-  if (const char* dump = std::getenv("FVM_DUMP")) {  // DIAG
-    std::FILE* out = std::fopen(dump, "w");
-    for (std::size_t i = 0; i < size; ++i) {
-      const WindowCurves& c = large;
-      std::fprintf(out, "%d %g %g %g %g %g %g %g\n", c.index[i], c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i], c.floor[i], map.z_mm[i]);
-    }
-    std::fclose(out);
-  }
   MapBuffers buffers{s.width, s.height, s.options.parallel, {}};
   const Slope slope = SlopePerPixel(map.z_mm, origin, buffers);
   const double spread_limit = kSpreadLimitSteps * step;
@@ -505,8 +497,8 @@ FocusResult FocusAccumulator::Finish() const {
   });
   // Each window's height is that under the centroid of its pixels' sharpness: moved to its centre along the
   // slope of the map as now chosen (focus_window_centroid.h).
+  const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
   {
-    const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
     CentroidCorrectionInput in;
     in.width = s.width, in.height = s.height, in.parallel = s.options.parallel;
     in.texture = &result.texture, in.channels = result.texture_channels;
@@ -526,7 +518,9 @@ FocusResult FocusAccumulator::Finish() const {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
         const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
-        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step));
+        const double u_slope = kSlopePx * final_slope.Magnitude(r, col);
+        result.u_z_mm[i] = static_cast<float>(
+            std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step + u_slope * u_slope));
       }
     }
   });
