@@ -128,18 +128,14 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   return e;
 }
 
-// Tolerances: measured with this seed, plus 15 % for another seed's texture and noise (the rms over ~150 000
-// pixels whose errors are correlated over the 9 px window, i.e. ~2000 independent patches, varies by ~2 %; the
-// texture's draw moves it more). Where a figure misses the goal it is asserted at what is measured, so
-// that it cannot get worse unseen, and named here:
-//   the scene (1 um, NA 0.9) is held to the goal itself: 0.1 step per region (wall 0.098 measured);
-//   at 0.5 um steps the wall is 0.18 step (0.09 um: the error on a wall is in um, set by the texture's weights
-//   in the window, not by the step); at 2 um steps with NA 0.9 the blur grows by 2 px per step and the focus
-//   curve falls to its floor within one step: 0.235 step, undersampled (the old 3-point Gaussian default: 0.175);
-//   coverage: over ~2000 independent patches its binomial noise is ~0.5 %; it is held to the goal's 93-97 % at
-//   1 um (NA 0.9: 0.966, NA 0.7: 0.942) and at 2 um (0.954); at NA 0.5 u_z over-covers (0.988: the wide focus
-//   curve's 5 points misfit the power law, probably symmetrically: the misfit term counts it, the vertex may not feel
-//   it), held at or below 0.995; at 0.5 um it falls short (0.922, the wall's texture error), held at 0.905.
+// Tolerances: the goals, 0.1 step rms per region (walls included) and 93-97 % coverage of 1.96 u_z,
+// at every row but the 2 um one. Measured with this seed (all / worst region / coverage): 1 um NA 0.9 0.066 /
+// 0.074 (wall) / 94.2 %, NA 0.7 0.053 / 0.057 / 95.5 %, NA 0.5 0.075 / 0.078 / 95.9 %, 0.5 um 0.072 / 0.088
+// (wall) / 96.3 %. The rms over ~150 000 pixels whose errors are correlated over the 9 px window (~2000
+// independent patches) varies by ~2 % from seed to seed, the coverage by ~0.5 %. At 2 um steps with NA 0.9 the
+// focus curve (0.7 um depth of field) is undersampled: its top is flat over +-0.3 um and its neighbours lie on
+// the tails, so the 3-point log fit pulls heights within a third of a step of an image towards it: 0.141 step
+// (flat 0.191, the wall 0.082), held at what is measured plus ~15 %, not at the goal.
 struct Case {
   double step_um, na;
   double max_all, max_region, min_coverage, max_coverage;
@@ -162,10 +158,10 @@ TEST_P(FocusAccuracy, PerRegionAndCoverage) {
 
 INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                          ::testing::Values(Case{1.0, 0.9, 0.09, 0.1, 0.93, 0.97},  // the scene
-                                           Case{1.0, 0.7, 0.1, 0.105, 0.93, 0.97},
-                                           Case{1.0, 0.5, 0.1, 0.115, 0.93, 0.995},
-                                           Case{0.5, 0.9, 0.155, 0.205, 0.905, 0.97},
-                                           Case{2.0, 0.9, 0.27, 0.29, 0.93, 0.97}),
+                                           Case{1.0, 0.7, 0.1, 0.1, 0.93, 0.97},
+                                           Case{1.0, 0.5, 0.1, 0.1, 0.93, 0.97},
+                                           Case{0.5, 0.9, 0.1, 0.1, 0.93, 0.97},
+                                           Case{2.0, 0.9, 0.16, 0.22, 0.93, 0.97}),
                          [](const auto& info) {
                            return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
                                   std::to_string(int(std::lround(info.param.na * 10)));
