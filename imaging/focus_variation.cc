@@ -286,7 +286,8 @@ bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quali
   for (std::size_t i = 0; i < c.best.size(); i += kEvery) {
     const int k = c.index[i];
     const float peak = c.best[i] - c.floor[i];
-    if (k == 0 || k + 1 >= int(images) || !(peak > 0.0f) || !(c.best[i] * float(images) >= float(min_quality) * c.sum[i])) continue;
+    const bool valid = c.best[i] * float(images) >= float(min_quality) * c.sum[i];  // peak over mean
+    if (k == 0 || k + 1 >= int(images) || !(peak > 0.0f) || !valid) continue;
     shoulder.push_back((c.left[i] + c.right[i] - 2.0f * c.floor[i]) / peak);
   }
   if (shoulder.empty()) return false;

@@ -19,7 +19,8 @@ constexpr double kWeightPower = 1.5;
 // The grey level of pixel (col, r) of the all-in-focus image, clamped to the image (a 1 px reflection).
 float Grey(const CentroidCorrectionInput& in, int col, int r) {
   col = std::clamp(col, 0, in.width - 1), r = std::clamp(r, 0, in.height - 1);
-  const float* p = in.texture->data() + (std::size_t(r) * std::size_t(in.width) + std::size_t(col)) * std::size_t(in.channels);
+  const std::size_t pixel = std::size_t(r) * std::size_t(in.width) + std::size_t(col);
+  const float* p = in.texture->data() + pixel * std::size_t(in.channels);
   float sum = 0.0f;
   for (int c = 0; c < in.channels; ++c) sum += p[c];
   return sum / float(in.channels);
