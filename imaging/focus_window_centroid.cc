@@ -3,7 +3,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <algorithm>
 #include <cmath>
 
 namespace fvm::imaging {
@@ -16,32 +15,35 @@ namespace {
 // sharpest pixels more than in proportion).
 constexpr double kWeightPower = 1.5;
 
-// The grey level of pixel (col, r) of the all-in-focus image, clamped to the image (a 1 px reflection).
-float Grey(const CentroidCorrectionInput& in, int col, int r) {
-  col = std::clamp(col, 0, in.width - 1), r = std::clamp(r, 0, in.height - 1);
-  const std::size_t pixel = std::size_t(r) * std::size_t(in.width) + std::size_t(col);
-  const float* p = in.texture->data() + pixel * std::size_t(in.channels);
-  float sum = 0.0f;
-  for (int c = 0; c < in.channels; ++c) sum += p[c];
-  return sum / float(in.channels);
-}
-
 }  // namespace
 
 void CorrectWindowCentroids(const CentroidCorrectionInput& in, std::vector<double>& z_mm) {
   const std::size_t size = std::size_t(in.width) * std::size_t(in.height);
-  HugeVector<float> weight_storage(size);
+  // The all-in-focus image in grey (the mean of its channels), then each pixel's sharpness: the modified
+  // Laplacian |2I - I_left - I_right| + |2I - I_up - I_down| (reflected at the edges), to the power 1.5.
+  HugeVector<float> grey_storage, weight_storage(size);
+  cv::Mat grey(in.height, in.width, CV_32F, const_cast<float*>(in.texture->data()));
+  if (in.channels != 1) {
+    grey_storage.resize(size);
+    grey = cv::Mat(in.height, in.width, CV_32F, grey_storage.data());
+  }
+  const cv::Mat colour(in.height, in.width, CV_32FC(in.channels), const_cast<float*>(in.texture->data()));
   cv::Mat weight(in.height, in.width, CV_32F, weight_storage.data());
+  static_assert(kWeightPower == 1.5, "the weights below are s sqrt(s)");
+  const cv::Mat second = (cv::Mat_<float>(1, 3) << -1.0f, 2.0f, -1.0f), one = (cv::Mat_<float>(1, 1) << 1.0f);
   ForStripes(in.height, in.parallel, [&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* w = weight.ptr<float>(r);
-      for (int col = 0; col < in.width; ++col) {
-        const float centre = 2.0f * Grey(in, col, r);
-        const float sharpness = std::abs(centre - Grey(in, col - 1, r) - Grey(in, col + 1, r)) +
-                                std::abs(centre - Grey(in, col, r - 1) - Grey(in, col, r + 1));
-        w[col] = float(std::pow(double(sharpness), kWeightPower));
-      }
-    }
+    if (in.channels == 1) return;
+    cv::Mat g = grey.rowRange(r0, r1);
+    cv::transform(colour.rowRange(r0, r1), g, cv::Mat(1, in.channels, CV_32F, cv::Scalar(1.0 / in.channels)));
+  });
+  ForStripes(in.height, in.parallel, [&](int r0, int r1) {
+    cv::Mat dx, dy, w = weight.rowRange(r0, r1);
+    const cv::Mat rows = grey.rowRange(r0, r1);  // the filters read the rows beyond the stripe from the image
+    cv::sepFilter2D(rows, dx, CV_32F, second, one, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
+    cv::sepFilter2D(rows, dy, CV_32F, one, second, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
+    cv::add(cv::abs(dx), cv::abs(dy), dx);
+    cv::sqrt(dx, dy);
+    cv::multiply(dx, dy, w);
   });
   const std::vector<WindowCurves>& windows = *in.windows;
   const std::vector<float>& window_px = *in.window_px;
