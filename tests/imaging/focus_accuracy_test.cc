@@ -77,7 +77,8 @@ struct RegionErrors {
   std::size_t count[3] = {0, 0, 0};
 };
 
-RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_t seed) {
+RegionErrors Measure(const Scene& scene, double step_um, double na, imaging::FocusMeasure measure,
+                     std::uint64_t seed) {
   double z_min = 1e9, z_max = -1e9;
   for (double z : scene.truth.z_mm) z_min = std::min(z_min, z), z_max = std::max(z_max, z);
   artefacts::FocusStackRenderOptions o;
@@ -93,6 +94,7 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   const artefacts::RenderedFocusStack stack = artefacts::RenderFocusStack(scene.truth, o);
   imaging::FocusVariationOptions fo;
   fo.dx_mm = kPixelMm;
+  fo.measure = measure;
   const imaging::FocusResult result = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, fo);
   RegionErrors e;
   double sum[3] = {0, 0, 0};
@@ -120,9 +122,9 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   e.all_rms_steps = std::sqrt((sum[0] + sum[1] + sum[2]) / double(valid)) / step_mm;
   e.coverage = double(covered) / double(valid);
   e.valid_share = double(valid) / double(compared);
-  std::printf("step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
+  std::printf("%s, step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
               "coverage %.3f (flat %.3f, wall %.3f, bottom %.3f), valid %.4f\n",
-              step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
+              imaging::FocusMeasureName(measure).c_str(), step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
               e.all_rms_steps, e.coverage, e.region_coverage[0], e.region_coverage[1], e.region_coverage[2],
               e.valid_share);
   return e;
@@ -135,10 +137,13 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
 // independent patches) varies by ~2 % from seed to seed, the coverage by ~0.5 %. At 2 um steps with NA 0.9 the
 // focus curve (0.7 um depth of field) is undersampled: its top is flat over +-0.3 um and its neighbours lie on
 // the tails, so the 3-point log fit pulls heights within a third of a step of an image towards it: 0.141 step
-// (flat 0.191, the wall 0.082), held at what is measured plus ~15 %, not at the goal.
+// (flat 0.191, the wall 0.082), held at what is measured plus ~15 %, not at the goal. There the gradient energy
+// (`--measure tenengrad`, whose Sobel filter widens the curve) meets it: 0.084 step (flat 0.092); its u_z,
+// calibrated on the modified Laplacian, over-covers (99.8 %), so only the lower bound is held.
 struct Case {
   double step_um, na;
   double max_all, max_region, min_coverage, max_coverage;
+  imaging::FocusMeasure measure = imaging::FocusMeasure::kModifiedLaplacian;
 };
 
 class FocusAccuracy : public ::testing::TestWithParam<Case> {};
@@ -146,7 +151,7 @@ class FocusAccuracy : public ::testing::TestWithParam<Case> {};
 TEST_P(FocusAccuracy, PerRegionAndCoverage) {
   static const Scene scene = MakeScene();
   const Case& c = GetParam();
-  const RegionErrors e = Measure(scene, c.step_um, c.na, 11);
+  const RegionErrors e = Measure(scene, c.step_um, c.na, c.measure, 11);
   EXPECT_GT(e.count[kWall], 20000u);
   EXPECT_GT(e.count[kBottom], 20000u);
   EXPECT_GT(e.valid_share, c.step_um > 1.5 ? 0.95 : 0.999);
@@ -161,10 +166,12 @@ INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                                            Case{1.0, 0.7, 0.1, 0.1, 0.93, 0.97},
                                            Case{1.0, 0.5, 0.1, 0.1, 0.93, 0.97},
                                            Case{0.5, 0.9, 0.1, 0.1, 0.93, 0.97},
-                                           Case{2.0, 0.9, 0.16, 0.22, 0.93, 0.97}),
+                                           Case{2.0, 0.9, 0.16, 0.22, 0.93, 0.97},
+                                           Case{2.0, 0.9, 0.1, 0.1, 0.93, 1.0, imaging::FocusMeasure::kTenengrad}),
                          [](const auto& info) {
                            return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
-                                  std::to_string(int(std::lround(info.param.na * 10)));
+                                  std::to_string(int(std::lround(info.param.na * 10))) +
+                                  (info.param.measure == imaging::FocusMeasure::kTenengrad ? "_tenengrad" : "");
                          });
 
 }  // namespace
