@@ -14,7 +14,7 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2);
 // The vertex of the parabola fitted by weighted least squares through the transformed measures P = (f -
 // floor)^power (power < 0: P is smallest at the peak) of the best image k of z (mm) and up to two images on
 // either side (f[2] the best; NaN or non-positive measures, and images beyond the stack, left out). Each point
-// is weighted by 1 / var(P), so that a narrow curve is fitted by its top three points, a wide one by five. Stays
+// is weighted by (f / f_best)^2, so that a narrow curve is fitted by its top three points, a wide one by five. Stays
 // between the best image's neighbours. With `u_noise`, also the vertex's standard deviation for a noise `sigma`
 // on each measure (linearised in the transform, summed in quadrature over the points), scaled up by the fit's
 // misfit where the points scatter about the parabola more than `sigma` explains (4 or 5 points).

@@ -269,6 +269,13 @@ void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& bo
   }
 }
 
+std::vector<float> WindowTaps(int window, bool gaussian) {
+  if (!gaussian) return std::vector<float>(std::size_t(window), 1.0f / float(window));
+  const cv::Mat taps =
+      cv::getGaussianKernel(2 * KernelHalfWidth(window, true) + 1, kGaussianWindowSigma * window, CV_32F);
+  return std::vector<float>(taps.begin<float>(), taps.end<float>());
+}
+
 void WindowCurves::Reset(int w, bool gaussian_window, std::size_t n) {
   window = w;
   gaussian = gaussian_window;

@@ -89,6 +89,10 @@ struct FocusCurves {
   void Take(const StackImageView* grey, const StackImageView* texture_images, int count);
 };
 
+// The 1-D taps of a window's separable filter (the measure over the window is this filter along x, then y): a
+// Gaussian of sigma 0.3 window to 2.5 sigma, or window equal taps; they sum to 1.
+std::vector<float> WindowTaps(int window, bool gaussian);
+
 // Rows per stripe. Fixed (not derived from the thread count) so that the parallel and the single-threaded run
 // filter exactly the same bands and give the same bits.
 inline constexpr int kStripeRows = 32;

@@ -77,7 +77,8 @@ struct RegionErrors {
   std::size_t count[3] = {0, 0, 0};
 };
 
-RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_t seed) {
+RegionErrors Measure(const Scene& scene, double step_um, double na, imaging::FocusMeasure measure,
+                     std::uint64_t seed) {
   double z_min = 1e9, z_max = -1e9;
   for (double z : scene.truth.z_mm) z_min = std::min(z_min, z), z_max = std::max(z_max, z);
   artefacts::FocusStackRenderOptions o;
@@ -93,6 +94,7 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   const artefacts::RenderedFocusStack stack = artefacts::RenderFocusStack(scene.truth, o);
   imaging::FocusVariationOptions fo;
   fo.dx_mm = kPixelMm;
+  fo.measure = measure;
   const imaging::FocusResult result = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, fo);
   RegionErrors e;
   double sum[3] = {0, 0, 0};
@@ -120,29 +122,28 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, std::uint64_
   e.all_rms_steps = std::sqrt((sum[0] + sum[1] + sum[2]) / double(valid)) / step_mm;
   e.coverage = double(covered) / double(valid);
   e.valid_share = double(valid) / double(compared);
-  std::printf("step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
+  std::printf("%s, step %.1f um, NA %.2f (blur %.2f px/um): rms flat %.3f, wall %.3f, bottom %.3f, all %.3f step; "
               "coverage %.3f (flat %.3f, wall %.3f, bottom %.3f), valid %.4f\n",
-              step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
+              imaging::FocusMeasureName(measure).c_str(), step_um, na, o.sigma_px_per_mm * 1e-3, e.rms_steps[0], e.rms_steps[1], e.rms_steps[2],
               e.all_rms_steps, e.coverage, e.region_coverage[0], e.region_coverage[1], e.region_coverage[2],
               e.valid_share);
   return e;
 }
 
-// Tolerances: measured with this seed, plus 15 % for another seed's texture and noise (the rms over ~150 000
-// pixels whose errors are correlated over the 9 px window, i.e. ~2000 independent patches, varies by ~2 %; the
-// texture's draw moves it more). Where a figure misses the goal it is asserted at what is measured, so
-// that it cannot get worse unseen, and named here:
-//   the scene (1 um, NA 0.9) is held to the goal itself: 0.1 step per region (wall 0.098 measured);
-//   at 0.5 um steps the wall is 0.18 step (0.09 um: the error on a wall is in um, set by the texture's weights
-//   in the window, not by the step); at 2 um steps with NA 0.9 the blur grows by 2 px per step and the focus
-//   curve falls to its floor within one step: 0.235 step, undersampled (the old 3-point Gaussian default: 0.175);
-//   coverage: over ~2000 independent patches its binomial noise is ~0.5 %; it is held to the goal's 93-97 % at
-//   1 um (NA 0.9: 0.966, NA 0.7: 0.942) and at 2 um (0.954); at NA 0.5 u_z over-covers (0.988: the wide focus
-//   curve's 5 points misfit the power law, probably symmetrically: the misfit term counts it, the vertex may not feel
-//   it), held at or below 0.995; at 0.5 um it falls short (0.922, the wall's texture error), held at 0.905.
+// Tolerances: the goals, 0.1 step rms per region (walls included) and 93-97 % coverage of 1.96 u_z,
+// at every row but the 2 um one. Measured with this seed (all / worst region / coverage): 1 um NA 0.9 0.066 /
+// 0.074 (wall) / 94.2 %, NA 0.7 0.053 / 0.057 / 95.5 %, NA 0.5 0.075 / 0.078 / 95.9 %, 0.5 um 0.072 / 0.088
+// (wall) / 96.3 %. The rms over ~150 000 pixels whose errors are correlated over the 9 px window (~2000
+// independent patches) varies by ~2 % from seed to seed, the coverage by ~0.5 %. At 2 um steps with NA 0.9 the
+// focus curve (0.7 um depth of field) is undersampled: its top is flat over +-0.3 um and its neighbours lie on
+// the tails, so the 3-point log fit pulls heights within a third of a step of an image towards it: 0.141 step
+// (flat 0.191, the wall 0.082), held at what is measured plus ~15 %, not at the goal. There the gradient energy
+// (`--measure tenengrad`, whose Sobel filter widens the curve) meets it: 0.084 step (flat 0.092); its u_z,
+// calibrated on the modified Laplacian, over-covers (99.8 %), so only the lower bound is held.
 struct Case {
   double step_um, na;
   double max_all, max_region, min_coverage, max_coverage;
+  imaging::FocusMeasure measure = imaging::FocusMeasure::kModifiedLaplacian;
 };
 
 class FocusAccuracy : public ::testing::TestWithParam<Case> {};
@@ -150,7 +151,7 @@ class FocusAccuracy : public ::testing::TestWithParam<Case> {};
 TEST_P(FocusAccuracy, PerRegionAndCoverage) {
   static const Scene scene = MakeScene();
   const Case& c = GetParam();
-  const RegionErrors e = Measure(scene, c.step_um, c.na, 11);
+  const RegionErrors e = Measure(scene, c.step_um, c.na, c.measure, 11);
   EXPECT_GT(e.count[kWall], 20000u);
   EXPECT_GT(e.count[kBottom], 20000u);
   EXPECT_GT(e.valid_share, c.step_um > 1.5 ? 0.95 : 0.999);
@@ -162,13 +163,15 @@ TEST_P(FocusAccuracy, PerRegionAndCoverage) {
 
 INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                          ::testing::Values(Case{1.0, 0.9, 0.09, 0.1, 0.93, 0.97},  // the scene
-                                           Case{1.0, 0.7, 0.1, 0.105, 0.93, 0.97},
-                                           Case{1.0, 0.5, 0.1, 0.115, 0.93, 0.995},
-                                           Case{0.5, 0.9, 0.155, 0.205, 0.905, 0.97},
-                                           Case{2.0, 0.9, 0.27, 0.29, 0.93, 0.97}),
+                                           Case{1.0, 0.7, 0.1, 0.1, 0.93, 0.97},
+                                           Case{1.0, 0.5, 0.1, 0.1, 0.93, 0.97},
+                                           Case{0.5, 0.9, 0.1, 0.1, 0.93, 0.97},
+                                           Case{2.0, 0.9, 0.16, 0.22, 0.93, 0.97},
+                                           Case{2.0, 0.9, 0.1, 0.1, 0.93, 1.0, imaging::FocusMeasure::kTenengrad}),
                          [](const auto& info) {
                            return "step" + std::to_string(int(std::lround(info.param.step_um * 10))) + "tenths_um_NA" +
-                                  std::to_string(int(std::lround(info.param.na * 10)));
+                                  std::to_string(int(std::lround(info.param.na * 10))) +
+                                  (info.param.measure == imaging::FocusMeasure::kTenengrad ? "_tenengrad" : "");
                          });
 
 }  // namespace
