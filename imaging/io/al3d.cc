@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
 
@@ -25,11 +26,7 @@ constexpr std::size_t kKeySize = 20;
 constexpr std::size_t kValueSize = 30;
 constexpr std::size_t kTagSize = kKeySize + kValueSize + 2;  // key, value, CRLF
 constexpr std::size_t kCommentSize = 256;
-constexpr double kMmPerMetre = 1000.0;
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
-constexpr const char* kReexport = "the file is damaged or incomplete: export it from the instrument again";
-
-[[noreturn]] void Fail(const std::string& name, const std::string& problem) { throw InputError(name + ": " + problem); }
+constexpr const char* kAl3dReexport = "the file is damaged or incomplete: export it from the instrument again";
 
 struct Tag {
   std::string key;
@@ -44,10 +41,10 @@ Tag ParseTag(const std::string& name, std::string_view bytes, std::size_t index)
   const std::string_view value = bytes.substr(kKeySize, kValueSize);
   const std::string where = "header tag " + std::to_string(index + 1);
   if (key[kKeySize - 1] != '\0' || key[0] == '\0' || value[kValueSize - 1] != '\0') {
-    Fail(name, where + " is not a NUL-terminated key and value; " + kReexport);
+    FailReading(name, where + " is not a NUL-terminated key and value; " + kAl3dReexport);
   }
   if (bytes.substr(kKeySize + kValueSize, 2) != "\r\n") {
-    Fail(name, where + " ('" + Field(key) + "') does not end in CR LF; " + kReexport);
+    FailReading(name, where + " ('" + Field(key) + "') does not end in CR LF; " + kAl3dReexport);
   }
   return {Field(key), Field(value)};
 }
@@ -66,21 +63,21 @@ class Header {
     const Tag* tag = Find(key);
     if (!tag) return std::nullopt;
     const std::optional<double> value = ParseDouble(tag->value);
-    if (!value) Fail(name_, "header tag " + key + " is '" + tag->value + "', not a number; " + kReexport);
+    if (!value) FailReading(name_, "header tag " + key + " is '" + tag->value + "', not a number; " + kAl3dReexport);
     return value;
   }
   double RequiredNumber(const std::string& key) const {
     const std::optional<double> value = Number(key);
-    if (!value) Fail(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kReexport);
+    if (!value) FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
     return *value;
   }
   std::uint64_t RequiredCount(const std::string& key, std::uint64_t max) const {
     const Tag* tag = Find(key);
-    if (!tag) Fail(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kReexport);
+    if (!tag) FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
     const std::optional<std::int64_t> value = ParseInt(tag->value);
     if (!value || *value < 0 || static_cast<std::uint64_t>(*value) > max) {
-      Fail(name_, "header tag " + key + " is '" + tag->value + "', not a count between 0 and " + std::to_string(max) +
-                      "; " + kReexport);
+      FailReading(name_, "header tag " + key + " is '" + tag->value + "', not a count between 0 and " + std::to_string(max) +
+                      "; " + kAl3dReexport);
     }
     return static_cast<std::uint64_t>(*value);
   }
@@ -93,25 +90,25 @@ class Header {
 }  // namespace
 
 HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
-  if (bytes.empty()) Fail(name, "the file is empty; export it again");
+  if (bytes.empty()) FailReading(name, "the file is empty; export it again");
   if (bytes.size() < kMagic.size() || std::string_view(bytes).substr(0, kMagic.size()) != kMagic) {
-    Fail(name, "does not start with the AL3D signature 'AliconaImaging': not an Alicona AL3D file");
+    FailReading(name, "does not start with the AL3D signature 'AliconaImaging': not an Alicona AL3D file");
   }
   if (bytes.size() < kMagic.size() + 2 * kTagSize + kCommentSize)
-    Fail(name, "the AL3D header is truncated; " + std::string(kReexport));
+    FailReading(name, "the AL3D header is truncated; " + std::string(kAl3dReexport));
   const std::string_view view(bytes);
   std::size_t pos = kMagic.size();
   const Tag version = ParseTag(name, view.substr(pos, kTagSize), 0);
   const Tag counter = ParseTag(name, view.substr(pos + kTagSize, kTagSize), 1);
   pos += 2 * kTagSize;
   if (version.key != "Version" || counter.key != "TagCount") {
-    Fail(name, "the AL3D header does not start with the Version and TagCount tags; " + std::string(kReexport));
+    FailReading(name, "the AL3D header does not start with the Version and TagCount tags; " + std::string(kAl3dReexport));
   }
   const std::optional<std::int64_t> count = ParseInt(counter.value);
   const std::size_t room = (bytes.size() - pos - kCommentSize) / kTagSize;
   if (!count || *count < 0 || static_cast<std::uint64_t>(*count) > room) {
-    Fail(name, "TagCount is '" + counter.value + "' but the file has room for " + std::to_string(room) + " tags; " +
-                   kReexport);
+    FailReading(name, "TagCount is '" + counter.value + "' but the file has room for " + std::to_string(room) + " tags; " +
+                   kAl3dReexport);
   }
   std::vector<Tag> tags;
   for (std::int64_t i = 0; i < *count; ++i, pos += kTagSize) {
@@ -119,33 +116,33 @@ HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
   }
   const std::string_view comment = view.substr(pos, kCommentSize);
   if (comment.substr(kCommentSize - 2) != "\r\n")
-    Fail(name, "the AL3D comment does not end in CR LF; " + std::string(kReexport));
+    FailReading(name, "the AL3D comment does not end in CR LF; " + std::string(kAl3dReexport));
   const std::size_t header_end = pos + kCommentSize;
 
   const Header header(name, tags);
   const std::uint64_t cols = header.RequiredCount("Cols", kMaxPoints);
   const std::uint64_t rows = header.RequiredCount("Rows", kMaxPoints);
   if (cols == 0 || rows == 0 || cols * rows > kMaxPoints) {
-    Fail(name, "Cols x Rows is " + std::to_string(cols) + " x " + std::to_string(rows) +
-                   ", not a depth image fvm can hold; " + kReexport);
+    FailReading(name, "Cols x Rows is " + std::to_string(cols) + " x " + std::to_string(rows) +
+                   ", not a depth image fvm can hold; " + kAl3dReexport);
   }
   // The sign of the pixel size only says which way the image runs; Gwyddion reads it the same way.
   const double dx_m = std::fabs(header.RequiredNumber("PixelSizeXMeter"));
   const double dy_m = std::fabs(header.RequiredNumber("PixelSizeYMeter"));
   if (!(dx_m > 0.0) || !(dy_m > 0.0) || !std::isfinite(dx_m) || !std::isfinite(dy_m)) {
-    Fail(name, "PixelSizeXMeter / PixelSizeYMeter are not positive sizes; " + std::string(kReexport));
+    FailReading(name, "PixelSizeXMeter / PixelSizeYMeter are not positive sizes; " + std::string(kAl3dReexport));
   }
   const std::optional<double> offset = header.Number("DepthImageOffset");
   if (!offset || *offset == 0.0) {
-    Fail(name, "holds no depth image (DepthImageOffset is missing or 0): export the measurement with its depth data");
+    FailReading(name, "holds no depth image (DepthImageOffset is missing or 0): export the measurement with its depth data");
   }
   const std::uint64_t stride = (cols * sizeof(float) + 7) / 8 * 8;
   const std::uint64_t image_bytes = rows * stride;
   if (*offset < static_cast<double>(header_end) || *offset != std::floor(*offset) ||
       *offset + static_cast<double>(image_bytes) > static_cast<double>(bytes.size())) {
-    Fail(name, "the depth image (" + std::to_string(rows) + " rows of " + std::to_string(stride) + " bytes at " +
+    FailReading(name, "the depth image (" + std::to_string(rows) + " rows of " + std::to_string(stride) + " bytes at " +
                    "DepthImageOffset " + FormatShortest(*offset) + ") does not lie within the file's " +
-                   std::to_string(bytes.size()) + " bytes; " + kReexport);
+                   std::to_string(bytes.size()) + " bytes; " + kAl3dReexport);
   }
   const auto depth_offset = static_cast<std::size_t>(*offset);
   const double invalid = header.Number("InvalidPixelValue").value_or(std::numeric_limits<double>::quiet_NaN());

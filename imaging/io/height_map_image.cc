@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
 #include "imaging/io/image_codec.h"
@@ -22,11 +23,8 @@ namespace fvm::imaging {
 namespace {
 
 constexpr std::string_view kDescriptionTag = "fvm height map";
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 
-[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& problem) {
-  throw InputError(path.string() + ": " + problem);
-}
+[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& problem) { FailReading(path.string(), problem); }
 
 // "fvm height map; dx_mm=0.001; dy_mm=0.001; ..." -> {dx_mm: 0.001, ...}; empty for other descriptions.
 std::map<std::string, double> ParseDescription(std::string_view text) {

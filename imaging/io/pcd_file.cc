@@ -12,20 +12,16 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/number_text.h"
 
 namespace fvm::imaging {
 namespace {
 
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 // An LZF back reference of 3 bytes copies at most 264 bytes: no body expands more than that.
 constexpr std::uint64_t kMaxLzfExpansion = 88;
 
-const char* const kRewrite = "; the file is damaged or not PCD: export it again";
-
-[[noreturn]] void Fail(const std::string& where, const std::string& problem) {
-  throw InputError(where + ": " + problem);
-}
+const char* const kPcdRewrite = "; the file is damaged or not PCD: export it again";
 
 struct Field {
   std::string name;
@@ -34,7 +30,7 @@ struct Field {
   std::uint64_t count = 1;
 };
 
-struct Header {
+struct PcdHeader {
   std::vector<Field> fields;
   std::uint64_t width = 0, height = 0;
   std::string data;           // ascii, binary or binary_compressed
@@ -44,12 +40,12 @@ struct Header {
 
 std::uint64_t CountOf(std::string_view word, const std::string& where, const std::string& what) {
   const std::optional<std::int64_t> value = ParseInt(word);
-  if (!value || *value < 0) Fail(where, what + " is " + QuotedForMessage(word) + ", not a count" + kRewrite);
+  if (!value || *value < 0) FailReading(where, what + " is " + QuotedForMessage(word) + ", not a count" + kPcdRewrite);
   return static_cast<std::uint64_t>(*value);
 }
 
-Header ReadHeader(std::string_view bytes, const std::string& name) {
-  Header header;
+PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
+  PcdHeader header;
   std::vector<std::string_view> fields, sizes, types, counts;
   std::optional<std::uint64_t> width, height, points;
   bool version = false;
@@ -57,7 +53,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
   while (true) {
     const size_t newline = bytes.find('\n', start);
     if (newline == std::string_view::npos) {
-      Fail(name, "its PCD header does not end with a DATA line" + std::string(kRewrite));
+      FailReading(name, "its PCD header does not end with a DATA line" + std::string(kPcdRewrite));
     }
     const std::string_view line = bytes.substr(start, newline - start);
     start = newline + 1;
@@ -68,14 +64,14 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     const std::string key = AsciiLower(words[0]);
     const std::vector<std::string_view> values(words.begin() + 1, words.end());
     if (!version && key != "version") {
-      Fail(where, "a PCD header starts with VERSION, not " + QuotedForMessage(words[0]) + kRewrite);
+      FailReading(where, "a PCD header starts with VERSION, not " + QuotedForMessage(words[0]) + kPcdRewrite);
     }
     const auto one = [&]() {
-      if (values.size() != 1) Fail(where, key + " takes one value, not " + std::to_string(values.size()) + kRewrite);
+      if (values.size() != 1) FailReading(where, key + " takes one value, not " + std::to_string(values.size()) + kPcdRewrite);
       return values[0];
     };
     const auto once = [&](bool seen) {
-      if (seen) Fail(where, "a second " + key + " line" + kRewrite);
+      if (seen) FailReading(where, "a second " + key + " line" + kPcdRewrite);
     };
     if (key == "version") {
       once(version);
@@ -84,7 +80,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     } else if (key == "fields") {
       once(!fields.empty());
       fields = values;
-      if (fields.empty()) Fail(where, "FIELDS names no field" + std::string(kRewrite));
+      if (fields.empty()) FailReading(where, "FIELDS names no field" + std::string(kPcdRewrite));
     } else if (key == "size") {
       once(!sizes.empty());
       sizes = values;
@@ -104,29 +100,29 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       once(points.has_value());
       points = CountOf(one(), where, "POINTS");
     } else if (key == "viewpoint") {
-      if (values.size() != 7) Fail(where, "VIEWPOINT takes 7 numbers" + std::string(kRewrite));
+      if (values.size() != 7) FailReading(where, "VIEWPOINT takes 7 numbers" + std::string(kPcdRewrite));
     } else if (key == "data") {
       header.data = AsciiLower(one());
       if (header.data != "ascii" && header.data != "binary" && header.data != "binary_compressed") {
-        Fail(where, "DATA is " + QuotedForMessage(values[0]) + ", not ascii, binary or binary_compressed" + kRewrite);
+        FailReading(where, "DATA is " + QuotedForMessage(values[0]) + ", not ascii, binary or binary_compressed" + kPcdRewrite);
       }
       header.body = start;
       header.body_line = line_number + 1;
       break;
     } else {
-      Fail(where, "unknown PCD header line " + QuotedForMessage(words[0]) + kRewrite);
+      FailReading(where, "unknown PCD header line " + QuotedForMessage(words[0]) + kPcdRewrite);
     }
   }
   const std::string where = name + ": its PCD header";
-  if (fields.empty()) Fail(where, " has no FIELDS line" + std::string(kRewrite));
+  if (fields.empty()) FailReading(where, " has no FIELDS line" + std::string(kPcdRewrite));
   if (counts.empty()) counts.assign(fields.size(), "1");  // COUNT is optional: one value per field
   if (sizes.size() != fields.size() || types.size() != fields.size() || counts.size() != fields.size()) {
-    Fail(where, " gives " + std::to_string(sizes.size()) + " SIZE, " + std::to_string(types.size()) + " TYPE and " +
+    FailReading(where, " gives " + std::to_string(sizes.size()) + " SIZE, " + std::to_string(types.size()) + " TYPE and " +
                     std::to_string(counts.size()) + " COUNT values for " + std::to_string(fields.size()) +
-                    " FIELDS; it needs one of each per field" + kRewrite);
+                    " FIELDS; it needs one of each per field" + kPcdRewrite);
   }
-  if (!width || !height) Fail(where, " has no WIDTH or no HEIGHT line" + std::string(kRewrite));
-  if (!points) Fail(where, " has no POINTS line" + std::string(kRewrite));
+  if (!width || !height) FailReading(where, " has no WIDTH or no HEIGHT line" + std::string(kPcdRewrite));
+  if (!points) FailReading(where, " has no POINTS line" + std::string(kPcdRewrite));
   for (size_t i = 0; i < fields.size(); ++i) {
     Field field;
     field.name = std::string(fields[i]);
@@ -138,44 +134,44 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
     const bool valid = integer ? (field.size == 1 || field.size == 2 || field.size == 4 || field.size == 8)
                                : field.type == 'F' && (field.size == 4 || field.size == 8);
     if (!valid) {
-      Fail(where, "'s field '" + field.name + "' has TYPE " + QuotedForMessage(types[i]) + " and SIZE " + QuotedForMessage(sizes[i]) +
-                      "; PCD knows F 4, F 8 and I or U 1, 2, 4, 8" + kRewrite);
+      FailReading(where, "'s field '" + field.name + "' has TYPE " + QuotedForMessage(types[i]) + " and SIZE " + QuotedForMessage(sizes[i]) +
+                      "; PCD knows F 4, F 8 and I or U 1, 2, 4, 8" + kPcdRewrite);
     }
     if (field.count < 1 || field.count > 1000000) {
-      Fail(where, "'s field '" + field.name + "' has COUNT " + QuotedForMessage(counts[i]) + kRewrite);
+      FailReading(where, "'s field '" + field.name + "' has COUNT " + QuotedForMessage(counts[i]) + kPcdRewrite);
     }
     header.fields.push_back(field);
   }
   if (*width > kMaxPoints || *height > kMaxPoints || *width * *height > kMaxPoints) {
-    Fail(where, " declares more points than fvm can hold" + std::string(kRewrite));
+    FailReading(where, " declares more points than fvm can hold" + std::string(kPcdRewrite));
   }
   if (*points != *width * *height) {
-    Fail(where, " declares POINTS " + std::to_string(*points) + " but WIDTH x HEIGHT " + std::to_string(*width) +
-                    " x " + std::to_string(*height) + kRewrite);
+    FailReading(where, " declares POINTS " + std::to_string(*points) + " but WIDTH x HEIGHT " + std::to_string(*width) +
+                    " x " + std::to_string(*height) + kPcdRewrite);
   }
-  if (*points == 0) Fail(name, "holds no points; export the cloud again");
+  if (*points == 0) FailReading(name, "holds no points; export the cloud again");
   header.width = *width;
   header.height = *height;
   return header;
 }
 
 // Where x, y and z are among the fields.
-std::array<size_t, 3> CoordinateFields(const Header& header, const std::string& name) {
+std::array<size_t, 3> CoordinateFields(const PcdHeader& header, const std::string& name) {
   std::array<size_t, 3> index{};
   for (int axis = 0; axis < 3; ++axis) {
     const std::string wanted(1, static_cast<char>('x' + axis));
     size_t found = header.fields.size();
     for (size_t i = 0; i < header.fields.size(); ++i) {
       if (header.fields[i].name != wanted) continue;
-      if (found != header.fields.size()) Fail(name, "names field '" + wanted + "' twice" + kRewrite);
+      if (found != header.fields.size()) FailReading(name, "names field '" + wanted + "' twice" + kPcdRewrite);
       found = i;
     }
     if (found == header.fields.size()) {
-      Fail(name, "has no '" + wanted + "' field; fvm reads clouds of x, y, z points");
+      FailReading(name, "has no '" + wanted + "' field; fvm reads clouds of x, y, z points");
     }
     if (header.fields[found].count != 1) {
-      Fail(name, "its field '" + wanted + "' has COUNT " + std::to_string(header.fields[found].count) +
-                     ": a coordinate is one value per point" + kRewrite);
+      FailReading(name, "its field '" + wanted + "' has COUNT " + std::to_string(header.fields[found].count) +
+                     ": a coordinate is one value per point" + kPcdRewrite);
     }
     index[static_cast<size_t>(axis)] = found;
   }
@@ -205,31 +201,31 @@ double Load(const unsigned char* p, const Field& field) {
 
 // liblzf's format, every read and write bounds-checked. Throws unless `in` expands to exactly `out.size()`.
 void DecompressLzf(std::string_view in, std::vector<unsigned char>& out, const std::string& name) {
-  const std::string bad = "its LZF-compressed body is damaged" + std::string(kRewrite);
+  const std::string bad = "its LZF-compressed body is damaged" + std::string(kPcdRewrite);
   size_t ip = 0, op = 0;
   while (ip < in.size()) {
     const unsigned ctrl = static_cast<unsigned char>(in[ip++]);
     if (ctrl < 32) {  // a literal run of ctrl + 1 bytes
       const size_t length = ctrl + 1;
-      if (length > in.size() - ip || length > out.size() - op) Fail(name, bad);
+      if (length > in.size() - ip || length > out.size() - op) FailReading(name, bad);
       std::memcpy(out.data() + op, in.data() + ip, length);
       ip += length;
       op += length;
     } else {  // a back reference
       size_t length = ctrl >> 5;
       size_t distance = (ctrl & 0x1fu) << 8;
-      if (ip >= in.size()) Fail(name, bad);
+      if (ip >= in.size()) FailReading(name, bad);
       if (length == 7) {
         length += static_cast<unsigned char>(in[ip++]);
-        if (ip >= in.size()) Fail(name, bad);
+        if (ip >= in.size()) FailReading(name, bad);
       }
       distance += static_cast<unsigned char>(in[ip++]) + 1u;
       length += 2;
-      if (distance > op || length > out.size() - op) Fail(name, bad);
+      if (distance > op || length > out.size() - op) FailReading(name, bad);
       for (size_t i = 0; i < length; ++i, ++op) out[op] = out[op - distance];  // may overlap: byte by byte
     }
   }
-  if (op != out.size()) Fail(name, bad);
+  if (op != out.size()) FailReading(name, bad);
 }
 
 // PCL's writer pads a binary file with zeros to a whole page after the points: zeros after the body are allowed,
@@ -244,7 +240,7 @@ std::uint32_t LoadU32(std::string_view bytes, size_t at) {
   return value;
 }
 
-std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& header, const std::array<size_t, 3>& xyz,
+std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const PcdHeader& header, const std::array<size_t, 3>& xyz,
                                        const std::string& name) {
   std::uint64_t values_per_row = 0;
   for (const Field& field : header.fields) values_per_row += field.count;
@@ -263,14 +259,14 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
     if (words.empty()) continue;
     const std::string where = name + ":" + std::to_string(line_number);
     if (points.size() == n) {
-      Fail(where, "more rows than the header's POINTS " + std::to_string(n) + kRewrite);
+      FailReading(where, "more rows than the header's POINTS " + std::to_string(n) + kPcdRewrite);
     }
     if (words.size() != values_per_row) {
-      Fail(where, std::to_string(words.size()) + " values where the header's FIELDS and COUNT declare " +
-                      std::to_string(values_per_row) + kRewrite);
+      FailReading(where, std::to_string(words.size()) + " values where the header's FIELDS and COUNT declare " +
+                      std::to_string(values_per_row) + kPcdRewrite);
     }
     for (const std::string_view word : words) {
-      if (!ParseDouble(word)) Fail(where, QuotedForMessage(word) + " is not a number" + kRewrite);
+      if (!ParseDouble(word)) FailReading(where, QuotedForMessage(word) + " is not a number" + kPcdRewrite);
     }
     Eigen::Vector3d p;
     for (int axis = 0; axis < 3; ++axis) {
@@ -287,7 +283,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
     points.push_back(p);
   }
   if (points.size() != n) {
-    Fail(name, "holds " + std::to_string(points.size()) + " data rows where the header declares POINTS " +
+    FailReading(name, "holds " + std::to_string(points.size()) + " data rows where the header declares POINTS " +
                    std::to_string(n) + "; the file is incomplete or damaged: export it again");
   }
   return points;
@@ -296,7 +292,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const Header& hea
 }  // namespace
 
 PointCloud ParsePcd(std::string_view bytes, const std::string& name, double mm_per_unit) {
-  const Header header = ReadHeader(bytes, name);
+  const PcdHeader header = ReadPcdHeader(bytes, name);
   const std::array<size_t, 3> xyz = CoordinateFields(header, name);
   const std::uint64_t n = header.width * header.height;
   std::vector<Eigen::Vector3d> points;
@@ -309,37 +305,37 @@ PointCloud ParsePcd(std::string_view bytes, const std::string& name, double mm_p
       offset.push_back(point_step);
       point_step += field.size * field.count;
     }
-    if (point_step > (std::uint64_t{1} << 32)) Fail(name, "its points are larger than fvm can hold" + std::string(kRewrite));
+    if (point_step > (std::uint64_t{1} << 32)) FailReading(name, "its points are larger than fvm can hold" + std::string(kPcdRewrite));
     const std::uint64_t needed = n * point_step;  // below 2^31 x 2^32: no overflow
     const std::string_view body = bytes.substr(header.body);
     std::string_view data = body;
     std::vector<unsigned char> expanded;
     if (header.data == "binary_compressed") {
-      if (body.size() < 8) Fail(name, "its binary_compressed body has no sizes" + std::string(kRewrite));
+      if (body.size() < 8) FailReading(name, "its binary_compressed body has no sizes" + std::string(kPcdRewrite));
       const std::uint64_t compressed = LoadU32(body, 0), uncompressed = LoadU32(body, 4);
       if (compressed > body.size() - 8 || !IsPadding(body.substr(8 + compressed))) {
-        Fail(name, "its binary_compressed body declares " + std::to_string(compressed) + " compressed bytes, but " +
-                       std::to_string(body.size() - 8) + " follow" + kRewrite);
+        FailReading(name, "its binary_compressed body declares " + std::to_string(compressed) + " compressed bytes, but " +
+                       std::to_string(body.size() - 8) + " follow" + kPcdRewrite);
       }
       if (uncompressed != needed) {
-        Fail(name, "its binary_compressed body expands to " + std::to_string(uncompressed) +
+        FailReading(name, "its binary_compressed body expands to " + std::to_string(uncompressed) +
                        " bytes, but the header's FIELDS, SIZE, COUNT and POINTS need " + std::to_string(needed) +
-                       kRewrite);
+                       kPcdRewrite);
       }
       if (uncompressed > compressed * kMaxLzfExpansion) {
-        Fail(name, "its binary_compressed body cannot expand to the " + std::to_string(uncompressed) +
-                       " bytes it declares" + kRewrite);
+        FailReading(name, "its binary_compressed body cannot expand to the " + std::to_string(uncompressed) +
+                       " bytes it declares" + kPcdRewrite);
       }
       expanded.resize(static_cast<size_t>(uncompressed));
       DecompressLzf(body.substr(8, compressed), expanded, name);
       data = std::string_view(reinterpret_cast<const char*>(expanded.data()), expanded.size());
     } else if (body.size() < needed) {
-      Fail(name, "the header declares " + std::to_string(n) + " points of " + std::to_string(point_step) +
+      FailReading(name, "the header declares " + std::to_string(n) + " points of " + std::to_string(point_step) +
                      " bytes, but the binary body holds " + std::to_string(body.size()) +
                      " bytes; the file is incomplete or damaged: export it again");
     } else if (!IsPadding(body.substr(needed))) {
-      Fail(name, "its binary body holds " + std::to_string(body.size()) + " bytes, but the header's FIELDS, SIZE, " +
-                     "COUNT and POINTS need " + std::to_string(needed) + " (and zeros after them)" + kRewrite);
+      FailReading(name, "its binary body holds " + std::to_string(body.size()) + " bytes, but the header's FIELDS, SIZE, " +
+                     "COUNT and POINTS need " + std::to_string(needed) + " (and zeros after them)" + kPcdRewrite);
     }
     const bool by_field = header.data == "binary_compressed";  // compressed bodies store field after field
     points.resize(static_cast<size_t>(n));

@@ -11,17 +11,13 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/number_text.h"
 
 namespace fvm::imaging {
 namespace {
 
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
-const char* const kRewrite = "; the file is damaged or not PLY: export it again";
-
-[[noreturn]] void Fail(const std::string& where, const std::string& problem) {
-  throw InputError(where + ": " + problem);
-}
+const char* const kPlyRewrite = "; the file is damaged or not PLY: export it again";
 
 enum class Scalar { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
 
@@ -70,7 +66,7 @@ struct Element {
 
 enum class Encoding { kAscii, kLittle, kBig };
 
-struct Header {
+struct PlyHeader {
   Encoding encoding = Encoding::kAscii;
   std::vector<Element> elements;
   std::optional<std::uint64_t> columns, rows;  // obj_info num_cols / num_rows (PCL's organised clouds)
@@ -78,23 +74,23 @@ struct Header {
   std::size_t body_line = 0;
 };
 
-Header ReadHeader(std::string_view bytes, const std::string& name) {
-  Header header;
+PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
+  PlyHeader header;
   bool format = false;
   std::size_t start = 0, line_number = 0;
   while (true) {
     const size_t newline = bytes.find('\n', start);
-    if (newline == std::string_view::npos) Fail(name, "its PLY header does not end with end_header" + std::string(kRewrite));
+    if (newline == std::string_view::npos) FailReading(name, "its PLY header does not end with end_header" + std::string(kPlyRewrite));
     const std::string_view line = bytes.substr(start, newline - start);
     start = newline + 1;
     ++line_number;
     const std::string where = name + ":" + std::to_string(line_number);
     const std::vector<std::string_view> words = SplitWords(line);
     if (line_number == 1) {
-      if (words.size() != 1 || words[0] != "ply") Fail(name, "does not start with a 'ply' line" + std::string(kRewrite));
+      if (words.size() != 1 || words[0] != "ply") FailReading(name, "does not start with a 'ply' line" + std::string(kPlyRewrite));
       continue;
     }
-    if (words.empty()) Fail(where, "a blank line in the PLY header" + std::string(kRewrite));
+    if (words.empty()) FailReading(where, "a blank line in the PLY header" + std::string(kPlyRewrite));
     const std::string_view key = words[0];
     if (key == "comment") continue;
     if (key == "obj_info") {
@@ -105,7 +101,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       continue;
     }
     if (key == "format") {
-      if (format || words.size() != 3 || words[2] != "1.0") Fail(where, "a malformed format line" + std::string(kRewrite));
+      if (format || words.size() != 3 || words[2] != "1.0") FailReading(where, "a malformed format line" + std::string(kPlyRewrite));
       if (words[1] == "ascii") {
         header.encoding = Encoding::kAscii;
       } else if (words[1] == "binary_little_endian") {
@@ -113,18 +109,18 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       } else if (words[1] == "binary_big_endian") {
         header.encoding = Encoding::kBig;
       } else {
-        Fail(where, "unknown PLY format " + QuotedForMessage(words[1]) + kRewrite);
+        FailReading(where, "unknown PLY format " + QuotedForMessage(words[1]) + kPlyRewrite);
       }
       format = true;
     } else if (key == "element") {
       const std::optional<std::int64_t> count = words.size() == 3 ? ParseInt(words[2]) : std::nullopt;
-      if (!count || *count < 0) Fail(where, "an element line needs a name and a count" + std::string(kRewrite));
+      if (!count || *count < 0) FailReading(where, "an element line needs a name and a count" + std::string(kPlyRewrite));
       for (const Element& element : header.elements) {
-        if (element.name == words[1]) Fail(where, "a second element " + QuotedForMessage(words[1]) + kRewrite);
+        if (element.name == words[1]) FailReading(where, "a second element " + QuotedForMessage(words[1]) + kPlyRewrite);
       }
       header.elements.push_back({std::string(words[1]), static_cast<std::uint64_t>(*count), {}});
     } else if (key == "property") {
-      if (header.elements.empty()) Fail(where, "a property before any element" + std::string(kRewrite));
+      if (header.elements.empty()) FailReading(where, "a property before any element" + std::string(kPlyRewrite));
       Property property;
       std::optional<Scalar> type;
       if (words.size() == 3) {
@@ -133,34 +129,34 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
       } else if (words.size() == 5 && words[1] == "list") {
         property.list_count = ScalarOf(words[2]);
         if (!property.list_count || !IsInteger(*property.list_count)) {
-          Fail(where, "a list length must be of an integer type" + std::string(kRewrite));
+          FailReading(where, "a list length must be of an integer type" + std::string(kPlyRewrite));
         }
         type = ScalarOf(words[3]);
         property.name = std::string(words[4]);
       }
-      if (!type) Fail(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kRewrite));
+      if (!type) FailReading(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kPlyRewrite));
       property.type = *type;
       for (const Property& other : header.elements.back().properties) {
-        if (other.name == property.name) Fail(where, "a second property " + QuotedForMessage(property.name) + kRewrite);
+        if (other.name == property.name) FailReading(where, "a second property " + QuotedForMessage(property.name) + kPlyRewrite);
       }
       header.elements.back().properties.push_back(property);
     } else if (key == "end_header") {
-      if (words.size() != 1) Fail(where, "a malformed end_header line" + std::string(kRewrite));
+      if (words.size() != 1) FailReading(where, "a malformed end_header line" + std::string(kPlyRewrite));
       header.body = start;
       header.body_line = line_number + 1;
       break;
     } else {
-      Fail(where, "unknown PLY header line " + QuotedForMessage(key) + kRewrite);
+      FailReading(where, "unknown PLY header line " + QuotedForMessage(key) + kPlyRewrite);
     }
   }
-  if (!format) Fail(name, "its PLY header has no format line" + std::string(kRewrite));
+  if (!format) FailReading(name, "its PLY header has no format line" + std::string(kPlyRewrite));
   for (const Element& element : header.elements) {
     if (element.properties.empty() && element.count > 0) {
-      Fail(name, "its PLY element " + QuotedForMessage(element.name) + " has rows but no properties" + kRewrite);
+      FailReading(name, "its PLY element " + QuotedForMessage(element.name) + " has rows but no properties" + kPlyRewrite);
     }
     // Every row takes at least a byte (binary) or a line (ascii).
     if (element.count > bytes.size() - header.body) {
-      Fail(name, "its PLY element " + QuotedForMessage(element.name) + " declares " + std::to_string(element.count) +
+      FailReading(name, "its PLY element " + QuotedForMessage(element.name) + " declares " + std::to_string(element.count) +
                      " rows, more than the file's " + std::to_string(bytes.size()) +
                      " bytes can hold; the file is incomplete or damaged: export it again");
     }
@@ -171,7 +167,7 @@ Header ReadHeader(std::string_view bytes, const std::string& name) {
 // Reads the body value by value, in either encoding, and says where it stopped when something is missing.
 class Body {
  public:
-  Body(std::string_view bytes, const Header& header, const std::string& name)
+  Body(std::string_view bytes, const PlyHeader& header, const std::string& name)
       : bytes_(bytes), encoding_(header.encoding), name_(name), at_(header.body), line_number_(header.body_line - 1) {}
 
   // Starts a row of `element` (ascii: the next non-blank line).
@@ -181,7 +177,7 @@ class Body {
     words_.clear();
     next_word_ = 0;
     while (words_.empty()) {
-      if (at_ >= bytes_.size()) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
+      if (at_ >= bytes_.size()) FailReading(where_, "missing: the file ends early; it is incomplete: export it again");
       const size_t end = std::min(bytes_.find('\n', at_), bytes_.size());
       words_ = SplitWords(bytes_.substr(at_, end - at_));
       at_ = end + 1;
@@ -193,25 +189,25 @@ class Body {
 
   void EndRow() {
     if (encoding_ == Encoding::kAscii && next_word_ != words_.size()) {
-      Fail(where_, std::to_string(words_.size()) + " values, more than the header's properties declare" + kRewrite);
+      FailReading(where_, std::to_string(words_.size()) + " values, more than the header's properties declare" + kPlyRewrite);
     }
   }
 
   double Next(Scalar type) {
     if (encoding_ == Encoding::kAscii) {
       if (next_word_ == words_.size()) {
-        Fail(where_, std::to_string(words_.size()) + " values, fewer than the header's properties declare" + kRewrite);
+        FailReading(where_, std::to_string(words_.size()) + " values, fewer than the header's properties declare" + kPlyRewrite);
       }
       const std::string_view word = words_[next_word_++];
       const std::optional<double> value = ParseDouble(word);
-      if (!value) Fail(where_, QuotedForMessage(word) + " is not a number" + kRewrite);
-      if (IsInteger(type) && *value != std::floor(*value)) Fail(where_, QuotedForMessage(word) + " is not an integer" + kRewrite);
+      if (!value) FailReading(where_, QuotedForMessage(word) + " is not a number" + kPlyRewrite);
+      if (IsInteger(type) && *value != std::floor(*value)) FailReading(where_, QuotedForMessage(word) + " is not an integer" + kPlyRewrite);
       // A float property holds the float nearest the text; beyond float's range the conversion would be undefined.
       const bool to_float = type == Scalar::kFloat32 && std::abs(*value) <= std::numeric_limits<float>::max();
       return to_float ? static_cast<float>(*value) : *value;
     }
     const std::size_t size = SizeOf(type);
-    if (size > bytes_.size() - at_) Fail(where_, "missing: the file ends early; it is incomplete: export it again");
+    if (size > bytes_.size() - at_) FailReading(where_, "missing: the file ends early; it is incomplete: export it again");
     unsigned char raw[8];
     std::memcpy(raw, bytes_.data() + at_, size);
     at_ += size;
@@ -245,7 +241,7 @@ class Body {
     const double length = Next(type);
     const double room = encoding_ == Encoding::kAscii ? static_cast<double>(words_.size() - next_word_)
                                                        : static_cast<double>(bytes_.size() - at_);
-    if (length < 0 || length > room) Fail(where_, "a list length of " + FormatShortest(length) + kRewrite);
+    if (length < 0 || length > room) FailReading(where_, "a list length of " + FormatShortest(length) + kPlyRewrite);
     return static_cast<std::uint64_t>(length);
   }
 
@@ -254,7 +250,7 @@ class Body {
     const bool clean = encoding_ == Encoding::kAscii ? rest.find_first_not_of(" \t\r\n") == std::string_view::npos
                                                      : rest.empty();
     if (!clean) {
-      Fail(name_, std::to_string(rest.size()) + " bytes follow the last element the header declares" + kRewrite);
+      FailReading(name_, std::to_string(rest.size()) + " bytes follow the last element the header declares" + kPlyRewrite);
     }
   }
 
@@ -272,27 +268,27 @@ class Body {
 }  // namespace
 
 PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_per_unit) {
-  const Header header = ReadHeader(bytes, name);
+  const PlyHeader header = ReadPlyHeader(bytes, name);
   const auto vertex_element =
       std::find_if(header.elements.begin(), header.elements.end(), [](const Element& e) { return e.name == "vertex"; });
-  if (vertex_element == header.elements.end()) Fail(name, "has no vertex element: it is not a point cloud");
+  if (vertex_element == header.elements.end()) FailReading(name, "has no vertex element: it is not a point cloud");
   std::array<int, 3> xyz{-1, -1, -1};
   for (size_t i = 0; i < vertex_element->properties.size(); ++i) {
     const Property& property = vertex_element->properties[i];
     for (int axis = 0; axis < 3; ++axis) {
       if (property.name != std::string(1, static_cast<char>('x' + axis))) continue;
-      if (property.list_count) Fail(name, "its vertex property '" + property.name + "' is a list, not a coordinate" + kRewrite);
+      if (property.list_count) FailReading(name, "its vertex property '" + property.name + "' is a list, not a coordinate" + kPlyRewrite);
       xyz[static_cast<size_t>(axis)] = static_cast<int>(i);
     }
   }
   for (int axis = 0; axis < 3; ++axis) {
     if (xyz[static_cast<size_t>(axis)] < 0) {
-      Fail(name, std::string("its vertices have no '") + static_cast<char>('x' + axis) +
+      FailReading(name, std::string("its vertices have no '") + static_cast<char>('x' + axis) +
                      "' property; fvm reads clouds of x, y, z points");
     }
   }
-  if (vertex_element->count == 0) Fail(name, "holds no points; export the cloud again");
-  if (vertex_element->count > kMaxPoints) Fail(name, "holds more points than fvm can hold");
+  if (vertex_element->count == 0) FailReading(name, "holds no points; export the cloud again");
+  if (vertex_element->count > kMaxPoints) FailReading(name, "holds more points than fvm can hold");
 
   std::vector<Eigen::Vector3d> vertices;
   std::optional<std::vector<std::int64_t>> grid;  // range_grid: the vertex at each grid point, -1 for none
@@ -314,8 +310,8 @@ PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_p
             const double item = body.Next(property.type);
             if (is_grid && k == 0) {
               if (!(item >= 0 && item < static_cast<double>(vertex_element->count))) {
-                Fail(name, "its range_grid row " + std::to_string(row + 1) + " names vertex " + FormatShortest(item) +
-                               ", which does not exist" + kRewrite);
+                FailReading(name, "its range_grid row " + std::to_string(row + 1) + " names vertex " + FormatShortest(item) +
+                               ", which does not exist" + kPlyRewrite);
               }
               grid_vertex = static_cast<std::int64_t>(item);
             }
@@ -337,8 +333,8 @@ PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_p
   PointCloud cloud;
   if (grid) {
     const Eigen::Vector3d missing = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    if (grid->empty()) Fail(name, "its range_grid element is empty" + std::string(kRewrite));
-    if (grid->size() > kMaxPoints) Fail(name, "holds more points than fvm can hold");
+    if (grid->empty()) FailReading(name, "its range_grid element is empty" + std::string(kPlyRewrite));
+    if (grid->size() > kMaxPoints) FailReading(name, "holds more points than fvm can hold");
     for (const std::int64_t index : *grid) cloud.points.push_back(index < 0 ? missing : vertices[static_cast<size_t>(index)]);
   } else {
     cloud.points = std::move(vertices);

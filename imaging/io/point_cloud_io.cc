@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
 #include "core/number_text.h"
 #include "imaging/io/cloud_codec.h"
@@ -21,7 +22,6 @@
 namespace fvm::imaging {
 namespace {
 
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 
 // Fields of a line: split at commas or semicolons when there are any, else at blanks.
 std::vector<std::string_view> Fields(std::string_view line) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/input_error.h"
+#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
 #include "imaging/io/md5.h"
 #include "core/number_text.h"
@@ -28,18 +29,13 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "X3P binary data is little-endian and is copied as it is; add byte swapping for this platform");
 
-constexpr double kMmPerMetre = 1000.0;
-// HeightMap sizes are ints; beyond this a map would not fit in memory anyway.
-constexpr std::uint64_t kMaxPoints = std::numeric_limits<int>::max();
 constexpr std::size_t kMaxXmlBytes = std::size_t{1} << 31;
 constexpr const char* kMainXml = "main.xml";
 constexpr const char* kChecksumFile = "md5checksum.hex";
 constexpr const char* kDataBin = "bindata/data.bin";
 constexpr const char* kValidBin = "bindata/valid.bin";
 constexpr const char* kNamespace = "http://www.opengps.eu/2008/ISO5436_2";
-constexpr const char* kReexport = "the file is damaged or was edited: export it from the instrument again";
-
-[[noreturn]] void Fail(const std::string& name, const std::string& problem) { throw InputError(name + ": " + problem); }
+constexpr const char* kX3pReexport = "the file is damaged or was edited: export it from the instrument again";
 
 // ---------------------------------------------------------------------------------------------------------------
 // Reading
@@ -62,8 +58,8 @@ pugi::xml_node Required(const std::string& name, const pugi::xml_node& parent, s
                         const std::string& where) {
   const pugi::xml_node child = Child(parent, local);
   if (!child) {
-    Fail(name, "main.xml has no <" + where + "/" + std::string(local) +
-                   ">, which every X3P surface has (ISO 25178-72); " + kReexport);
+    FailReading(name, "main.xml has no <" + where + "/" + std::string(local) +
+                   ">, which every X3P surface has (ISO 25178-72); " + kX3pReexport);
   }
   return child;
 }
@@ -75,8 +71,8 @@ double RequiredNumber(const std::string& name, const pugi::xml_node& parent, std
   const pugi::xml_node node = Required(name, parent, local, where);
   const std::optional<double> value = ParseDouble(Text(node));
   if (!value || !std::isfinite(*value)) {
-    Fail(name, "main.xml <" + where + "/" + std::string(local) + "> is '" + std::string(Text(node)) +
-                   "', not a finite number; " + kReexport);
+    FailReading(name, "main.xml <" + where + "/" + std::string(local) + "> is '" + std::string(Text(node)) +
+                   "', not a finite number; " + kX3pReexport);
   }
   return *value;
 }
@@ -85,8 +81,8 @@ std::uint64_t RequiredCount(const std::string& name, const pugi::xml_node& paren
   const pugi::xml_node node = Required(name, parent, local, "Record3/MatrixDimension");
   const std::optional<std::int64_t> value = ParseInt(Text(node));
   if (!value || *value < 1 || static_cast<std::uint64_t>(*value) > kMaxPoints) {
-    Fail(name, "main.xml <MatrixDimension/" + std::string(local) + "> is '" + std::string(Text(node)) +
-                   "', not a point count between 1 and " + std::to_string(kMaxPoints) + "; " + kReexport);
+    FailReading(name, "main.xml <MatrixDimension/" + std::string(local) + "> is '" + std::string(Text(node)) +
+                   "', not a point count between 1 and " + std::to_string(kMaxPoints) + "; " + kX3pReexport);
   }
   return static_cast<std::uint64_t>(*value);
 }
@@ -104,22 +100,22 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
   Axis axis;
   const std::string_view type = Text(Required(name, node, "AxisType", where));
   if (type != "I" && type != "A") {
-    Fail(name, "main.xml <" + where + "/AxisType> is '" + std::string(type) + "', not I or A; " + kReexport);
+    FailReading(name, "main.xml <" + where + "/AxisType> is '" + std::string(type) + "', not I or A; " + kX3pReexport);
   }
   axis.type = type.front();
   if (const pugi::xml_node data_type = Child(node, "DataType")) {
     const std::string_view code = Text(data_type);
     if (code.size() != 1 || std::string_view("ILFD").find(code.front()) == std::string_view::npos) {
-      Fail(name, "main.xml <" + where + "/DataType> is '" + std::string(code) +
-                     "', not one of I (int16), L (int32), F (float32), D (float64); " + kReexport);
+      FailReading(name, "main.xml <" + where + "/DataType> is '" + std::string(code) +
+                     "', not one of I (int16), L (int32), F (float32), D (float64); " + kX3pReexport);
     }
     axis.data_type = code.front();
   }
   if (Child(node, "Increment")) axis.increment = RequiredNumber(name, node, "Increment", where);
   if (Child(node, "Offset")) axis.offset = RequiredNumber(name, node, "Offset", where);
   if (axis.increment == 0.0 || (axis.type == 'I' && axis.increment < 0.0)) {
-    Fail(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
-                   "; a grid needs a positive spacing; " + kReexport);
+    FailReading(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
+                   "; a grid needs a positive spacing; " + kX3pReexport);
   }
   return axis;
 }
@@ -146,13 +142,13 @@ void VerifyMd5(const std::string& name, std::string_view content, std::string_vi
                const std::string& where) {
   expected = TrimBlanks(expected);
   if (!IsMd5(expected)) {
-    Fail(name, where + " holds '" + std::string(expected.substr(0, 40)) + "', not an MD5 digest of " + what + "; " +
-                   kReexport);
+    FailReading(name, where + " holds '" + std::string(expected.substr(0, 40)) + "', not an MD5 digest of " + what + "; " +
+                   kX3pReexport);
   }
   const std::string actual = Md5Hex(content);
   if (AsciiLower(expected) != actual) {
-    Fail(name, what + " does not match its MD5 checksum (" + where + " says " + AsciiLower(expected) + ", the content has " +
-                   actual + "); " + kReexport);
+    FailReading(name, what + " does not match its MD5 checksum (" + where + " says " + AsciiLower(expected) + ", the content has " +
+                   actual + "); " + kX3pReexport);
   }
 }
 
@@ -182,19 +178,12 @@ std::string Describe(const pugi::xml_node& root) {
   return source;
 }
 
-template <typename T>
-double Load(const char* p) {
-  T value;
-  std::memcpy(&value, p, sizeof value);
-  return static_cast<double>(value);
-}
-
 }  // namespace
 
 HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const ZipReader zip(std::move(bytes), name);
   if (!zip.Has(kMainXml)) {
-    Fail(name, "the archive has no main.xml: not an X3P file (ISO 25178-72); export the surface as X3P");
+    FailReading(name, "the archive has no main.xml: not an X3P file (ISO 25178-72); export the surface as X3P");
   }
   const std::string xml = zip.Read(kMainXml, kMaxXmlBytes);
   // Before parsing: a damaged main.xml is better reported as a checksum failure than as an XML error.
@@ -203,12 +192,12 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   pugi::xml_document document;
   const pugi::xml_parse_result parsed = document.load_buffer(xml.data(), xml.size());
   if (!parsed) {
-    Fail(name, std::string("main.xml is not well-formed XML (") + parsed.description() + " at byte " +
-                   std::to_string(parsed.offset) + "); " + kReexport);
+    FailReading(name, std::string("main.xml is not well-formed XML (") + parsed.description() + " at byte " +
+                   std::to_string(parsed.offset) + "); " + kX3pReexport);
   }
   const pugi::xml_node root = document.document_element();
   if (LocalName(root) != "ISO5436_2") {
-    Fail(name, "main.xml has root <" + std::string(root.name()) + ">, not <ISO5436_2>: not an X3P file");
+    FailReading(name, "main.xml has root <" + std::string(root.name()) + ">, not <ISO5436_2>: not an X3P file");
   }
   if (const pugi::xml_node record4 = Child(root, "Record4")) {
     const std::string checksum_file(Text(Child(record4, "ChecksumFile")));
@@ -220,7 +209,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const pugi::xml_node record1 = Required(name, root, "Record1", "ISO5436_2");
   const std::string feature(Text(Child(record1, "FeatureType")));
   if (!feature.empty() && feature != "SUR" && feature != "PRF") {
-    Fail(name, "holds FeatureType " + feature +
+    FailReading(name, "holds FeatureType " + feature +
                    " (a point cloud); fvm reads X3P surfaces on a grid (SUR, PRF): export the surface as a grid, "
                    "or as PLY/PCD for a point cloud");
   }
@@ -229,14 +218,14 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const Axis cy = ParseAxis(name, axes, "CY");
   const Axis cz = ParseAxis(name, axes, "CZ");
   if (cx.type != 'I' || cy.type != 'I') {
-    Fail(name,
+    FailReading(name,
          "has absolute X/Y axes (a list of x, y, z points); fvm reads X3P surfaces on a regular grid "
          "(AxisType I for CX and CY): export the surface on a grid");
   }
-  if (cz.type != 'A') Fail(name, "main.xml <Record1/Axes/CZ/AxisType> is I; heights need an absolute axis (A)");
+  if (cz.type != 'A') FailReading(name, "main.xml <Record1/Axes/CZ/AxisType> is I; heights need an absolute axis (A)");
   if (cz.data_type == 0) {
-    Fail(name, "main.xml <Record1/Axes/CZ> has no DataType (I, L, F or D), so its heights cannot be decoded; " +
-                   std::string(kReexport));
+    FailReading(name, "main.xml <Record1/Axes/CZ> has no DataType (I, L, F or D), so its heights cannot be decoded; " +
+                   std::string(kX3pReexport));
   }
 
   const pugi::xml_node record3 = Required(name, root, "Record3", "ISO5436_2");
@@ -245,10 +234,10 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const std::uint64_t size_y = RequiredCount(name, dimension, "SizeY");
   const std::uint64_t size_z = RequiredCount(name, dimension, "SizeZ");
   if (size_z != 1) {
-    Fail(name, "has SizeZ " + std::to_string(size_z) + " (several layers); fvm reads single-layer surfaces");
+    FailReading(name, "has SizeZ " + std::to_string(size_z) + " (several layers); fvm reads single-layer surfaces");
   }
   if (size_x * size_y > kMaxPoints) {
-    Fail(name, "main.xml says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
+    FailReading(name, "main.xml says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
                    " points, more than fvm can hold (" + std::to_string(kMaxPoints) + ")");
   }
   const std::size_t n = static_cast<std::size_t>(size_x * size_y);
@@ -259,13 +248,13 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   std::vector<bool> valid;
   if (const pugi::xml_node link = Child(record3, "DataLink")) {
     const std::string data_file(Text(Required(name, link, "PointDataLink", "Record3/DataLink")));
-    if (!zip.Has(data_file)) Fail(name, "main.xml links point data '" + data_file + "', which the archive lacks");
+    if (!zip.Has(data_file)) FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
     const std::size_t type_size = TypeSize(cz.data_type);
     const std::size_t expected = n * type_size;
     if (zip.DeclaredSize(data_file) != expected) {
-      Fail(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
+      FailReading(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
                      " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
-                     " bytes; " + kReexport);
+                     " bytes; " + kX3pReexport);
     }
     const std::string data = zip.Read(data_file, expected);
     if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData")) {
@@ -276,29 +265,29 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       const char* p = data.data() + i * type_size;
       switch (cz.data_type) {
         case 'I':
-          raw[i] = Load<std::int16_t>(p);
+          raw[i] = LoadBytes<std::int16_t>(p);
           break;
         case 'L':
-          raw[i] = Load<std::int32_t>(p);
+          raw[i] = LoadBytes<std::int32_t>(p);
           break;
         case 'F':
-          raw[i] = Load<float>(p);
+          raw[i] = LoadBytes<float>(p);
           break;
         default:
-          raw[i] = Load<double>(p);
+          raw[i] = LoadBytes<double>(p);
           break;
       }
     }
     if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink")) {
       const std::string valid_file(Text(valid_link));
       if (!zip.Has(valid_file))
-        Fail(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
+        FailReading(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
       const std::size_t needed = (n + 7) / 8;
       const std::size_t declared = zip.DeclaredSize(valid_file);
       // A few writers pad the bit file; more than twice the size it needs is a lie about the sizes.
       if (declared < needed || declared > 2 * needed + 64) {
-        Fail(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
-                       " holds " + std::to_string(declared) + " bytes; " + kReexport);
+        FailReading(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
+                       " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
       }
       const std::string bits = zip.Read(valid_file, declared);
       if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints")) {
@@ -314,7 +303,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       if (datum.type() == pugi::node_element && LocalName(datum) == "Datum") ++count;
     }
     if (count != n) {
-      Fail(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " + kReexport);
+      FailReading(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " + kX3pReexport);
     }
     raw.resize(n);
     std::size_t i = 0;
@@ -327,14 +316,14 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       }
       const std::optional<double> value = ParseDouble(text);
       if (!value) {
-        Fail(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
-                       "', not a number; " + kReexport);
+        FailReading(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
+                       "', not a number; " + kX3pReexport);
       }
       raw[i++] = *value;
     }
   } else {
-    Fail(name, "main.xml <Record3> has neither a DataLink nor a DataList: the file holds no heights; " +
-                   std::string(kReexport));
+    FailReading(name, "main.xml <Record3> has neither a DataLink nor a DataList: the file holds no heights; " +
+                   std::string(kX3pReexport));
   }
 
   HeightMap map;
