@@ -76,4 +76,6 @@ std::string FormatFixed(double value, int decimals) {
   return text;
 }
 
+double RoundTo(double value, double per_unit) { return std::round(value * per_unit) / per_unit; }
+
 }  // namespace fvm

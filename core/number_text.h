@@ -29,6 +29,10 @@ std::string QuotedForMessage(std::string_view text);
 std::string FormatShortest(double value);
 std::string FormatShortest(float value);
 
+// `value` rounded to the nearest multiple of 1 / per_unit (per_unit 1e4: 0.1 nm in um), so that JSON for scripts
+// does not carry the last bits of a computation.
+double RoundTo(double value, double per_unit);
+
 // Fixed notation with `decimals` digits after '.', as printf("%.*f") in the C locale, whatever the locale.
 std::string FormatFixed(double value, int decimals);
 

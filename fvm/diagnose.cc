@@ -35,7 +35,7 @@ std::string AlternativesSentence(const stage::DiagnosisStep& s) {
   return fmt::format("These data fit {} exactly as well: one cannot be told from the other here.", fmt::join(s.alternatives, ", "));
 }
 
-ReportData MakeReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis& diagnosis) {
+ReportData MakeDiagnosisReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis& diagnosis) {
   const stage::Diagnosis& d = diagnosis.diagnosis;
   const stage::MeasurementSet& identify = diagnosis.identification;
   ReportData data;
@@ -86,7 +86,7 @@ void Run(const DiagnoseArgs& args) {
   const workflows::BatchDiagnosis diagnosis =
       workflows::DiagnoseBatch(batch, {args.model, Threaded(args.settings), args.alpha});
   const stage::Diagnosis& d = diagnosis.diagnosis;
-  if (!args.report.empty()) WriteReport(args.report, MakeReport(args, diagnosis));
+  if (!args.report.empty()) WriteReport(args.report, MakeDiagnosisReport(args, diagnosis));
 
   nlohmann::json doc;
   doc["batch"] = args.batch;

@@ -91,7 +91,6 @@ std::string Fixed(double v, int decimals) {
 
 // JSON keeps 0.1 nm: finer digits are floating-point noise, coarser would throw information away. Dividing by
 // the power of ten (not multiplying by its inverse) gives the double that prints as the short decimal.
-double Round(double v, double per_unit) { return std::round(v * per_unit) / per_unit; }
 
 void PrintTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
   std::vector<size_t> width(header.size());
@@ -167,18 +166,18 @@ void RunDiff(const DiffOptions& options) {
     out["calottes"] = nlohmann::ordered_json::array();
     for (const auto& c : calotte_diffs) {
       out["calottes"].push_back({{"id", c.id},
-                                 {"dx_um", Round(c.d_um.x(), 1e4)},
-                                 {"dy_um", Round(c.d_um.y(), 1e4)},
-                                 {"dz_um", Round(c.d_um.z(), 1e4)},
-                                 {"d_um", Round(c.d_um.norm(), 1e4)}});
+                                 {"dx_um", RoundTo(c.d_um.x(), 1e4)},
+                                 {"dy_um", RoundTo(c.d_um.y(), 1e4)},
+                                 {"dz_um", RoundTo(c.d_um.z(), 1e4)},
+                                 {"d_um", RoundTo(c.d_um.norm(), 1e4)}});
     }
     out["pairs"] = nlohmann::ordered_json::array();
     for (const auto& p : pair_diffs) {
       out["pairs"].push_back({{"a", p.a},
                               {"b", p.b},
-                              {"ref_mm", Round(p.ref_mm, 1e7)},
-                              {"test_mm", Round(p.test_mm, 1e7)},
-                              {"diff_um", Round(p.diff_um(), 1e4)}});
+                              {"ref_mm", RoundTo(p.ref_mm, 1e7)},
+                              {"test_mm", RoundTo(p.test_mm, 1e7)},
+                              {"diff_um", RoundTo(p.diff_um(), 1e4)}});
     }
     fmt::print("{}\n", out.dump(2));
     return;

@@ -49,7 +49,6 @@ std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
 }
 
 // JSON keeps 0.1 nm for mm values and 0.1 nm for um values (as fvm diff): finer digits are noise.
-double Round(double v, double per_unit) { return std::round(v * per_unit) / per_unit; }
 
 void RunFit(const FitArgs& args) {
   if (!args.shape.empty()) {
@@ -94,16 +93,16 @@ void RunFit(const FitArgs& args) {
       const Eigen::Vector3d sd = c.fit.centre_covariance_mm2.diagonal().cwiseSqrt();
       doc["calottes"].push_back(
           {{"id", c.id},
-           {"x", Round(c.fit.centre_mm.x(), 1e7)},
-           {"y", Round(c.fit.centre_mm.y(), 1e7)},
-           {"z", Round(c.fit.centre_mm.z(), 1e7)},
-           {"radius", Round(c.fit.radius_mm, 1e7)},
-           {"form_rms_um", Round(c.fit.rms_deviation_mm * 1e3, 1e4)},
+           {"x", RoundTo(c.fit.centre_mm.x(), 1e7)},
+           {"y", RoundTo(c.fit.centre_mm.y(), 1e7)},
+           {"z", RoundTo(c.fit.centre_mm.z(), 1e7)},
+           {"radius", RoundTo(c.fit.radius_mm, 1e7)},
+           {"form_rms_um", RoundTo(c.fit.rms_deviation_mm * 1e3, 1e4)},
            {"points", c.fit.inliers},
-           {"u_um", {Round(sd.x() * 1e3, 1e4), Round(sd.y() * 1e3, 1e4), Round(sd.z() * 1e3, 1e4)}},
-           {"min_dev_um", Round(c.fit.min_deviation_mm * 1e3, 1e4)},
-           {"max_dev_um", Round(c.fit.max_deviation_mm * 1e3, 1e4)},
-           {"mean_dev_um", Round(c.fit.mean_deviation_mm * 1e3, 1e4)},
+           {"u_um", {RoundTo(sd.x() * 1e3, 1e4), RoundTo(sd.y() * 1e3, 1e4), RoundTo(sd.z() * 1e3, 1e4)}},
+           {"min_dev_um", RoundTo(c.fit.min_deviation_mm * 1e3, 1e4)},
+           {"max_dev_um", RoundTo(c.fit.max_deviation_mm * 1e3, 1e4)},
+           {"mean_dev_um", RoundTo(c.fit.mean_deviation_mm * 1e3, 1e4)},
            {"outliers", c.fit.points - c.fit.inliers},
            {"converged", c.fit.converged},
            {"fit_stop", c.fit.stop_reason},
@@ -114,16 +113,16 @@ void RunFit(const FitArgs& args) {
     doc["artefact"] = artefact ? nlohmann::ordered_json(artefact->name) : nlohmann::ordered_json(nullptr);
     doc["face"] = {{"slope_x", detection.face.b},
                    {"slope_y", detection.face.c},
-                   {"sigma_um", Round(detection.face.sigma_mm * 1e3, 1e4)}};
+                   {"sigma_um", RoundTo(detection.face.sigma_mm * 1e3, 1e4)}};
     if (layout) {
-      doc["layout"] = {{"rotation_deg", Round(layout->rotation_rad * 180 / M_PI, 1e6)},
-                       {"scale", Round(layout->scale, 1e9)},
-                       {"rms_um", Round(layout->rms_mm * 1e3, 1e4)}};
+      doc["layout"] = {{"rotation_deg", RoundTo(layout->rotation_rad * 180 / M_PI, 1e6)},
+                       {"scale", RoundTo(layout->scale, 1e9)},
+                       {"rms_um", RoundTo(layout->rms_mm * 1e3, 1e4)}};
     }
     doc["rejected"] = nlohmann::ordered_json::array();
     for (const auto& r : detection.rejected) {
       doc["rejected"].push_back(
-          {{"x", Round(r.centre_mm.x(), 1e4)}, {"y", Round(r.centre_mm.y(), 1e4)}, {"reason", r.reason}});
+          {{"x", RoundTo(r.centre_mm.x(), 1e4)}, {"y", RoundTo(r.centre_mm.y(), 1e4)}, {"reason", r.reason}});
     }
     if (!args.output.empty()) doc["output"] = args.output;
     fmt::print("{}\n", doc.dump(2));

@@ -29,10 +29,9 @@ std::vector<Eigen::Vector3d> ReadPoints(const ShapeFitArgs& args) {
   return valid;
 }
 
-double Round(double v, double per_unit) { return std::round(v * per_unit) / per_unit; }
 
 nlohmann::ordered_json Uncertainty(bool known, double value_um) {
-  return known ? nlohmann::ordered_json(Round(value_um, 1e4)) : nlohmann::ordered_json(nullptr);
+  return known ? nlohmann::ordered_json(RoundTo(value_um, 1e4)) : nlohmann::ordered_json(nullptr);
 }
 
 nlohmann::ordered_json Json(const ShapeFitArgs& args, const imaging::ShapeFit& fit) {
@@ -51,7 +50,7 @@ nlohmann::ordered_json Json(const ShapeFitArgs& args, const imaging::ShapeFit& f
     doc["normal"] = {fit.normal.x(), fit.normal.y(), fit.normal.z()};
     doc["u_normal_urad"] = Uncertainty(u, fit.u_normal_rad * 1e6);
   }
-  doc["rms_um"] = Round(fit.rms_mm * 1e3, 1e6);
+  doc["rms_um"] = RoundTo(fit.rms_mm * 1e3, 1e6);
   doc["outliers"] = fit.outliers;
   doc["file"] = args.file;
   doc["robust"] = args.robust;
@@ -59,7 +58,7 @@ nlohmann::ordered_json Json(const ShapeFitArgs& args, const imaging::ShapeFit& f
   return doc;
 }
 
-void PrintText(const ShapeFitArgs& args, const imaging::ShapeFit& fit) {
+void PrintShapeText(const ShapeFitArgs& args, const imaging::ShapeFit& fit) {
   fmt::print("{}: {} fitted to {} of {} points\n  {}\n", args.file, imaging::ShapeName(fit.shape),
              fit.points - fit.outliers, fit.points, fit.method);
   const auto u = [&](double mm) { return fit.has_uncertainty ? fmt::format("{:.4f}", mm * 1e3) : std::string("-"); };
@@ -97,7 +96,7 @@ void RunShapeFit(const ShapeFitArgs& args) {
   if (args.json) {
     fmt::print("{}\n", Json(args, fit).dump(2));
   } else {
-    PrintText(args, fit);
+    PrintShapeText(args, fit);
   }
 }
 

@@ -266,7 +266,7 @@ std::string RenderErrorMap(const MachineReportData& data) {
 
 // ---- the page -------------------------------------------------------------------------------------------------
 
-std::string RenderPage(const MachineReportData& data) {
+std::string RenderMachinePage(const MachineReportData& data) {
   std::string html = HtmlHead(data.title.empty() ? "fvm verify" : data.title) + HtmlKeyValueTable(data.summary);
   for (const MachineReportData::Table& t : data.tables) {
     html += "<h2>" + HtmlEscape(t.heading) + "</h2>\n";
@@ -298,7 +298,7 @@ void WriteMachineReport(const std::filesystem::path& dir, const MachineReportDat
                             {"error_functions.svg", RenderErrorFunctions(data)},
                             {"volumetric_errors.svg", RenderVolumetricErrors(data)},
                             {"error_map.svg", RenderErrorMap(data)},
-                            {"index.html", RenderPage(data)},
+                            {"index.html", RenderMachinePage(data)},
                         });
 }
 

@@ -135,7 +135,7 @@ std::string RunsCsv(const UncertaintyReportData& data) {
   return out;
 }
 
-std::string RenderPage(const UncertaintyReportData& data) {
+std::string RenderUncertaintyPage(const UncertaintyReportData& data) {
   std::string html = HtmlHead(data.title.empty() ? "fvm uncertainty" : data.title) + HtmlKeyValueTable(data.summary);
   html += HtmlFigure("distribution.svg", "Distribution over the runs", "Histograms of the runs' mean errors",
                      "Each run draws the readings again with the tracker's noise around the identified machine and "
@@ -157,7 +157,7 @@ void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyR
                             {"runs.csv", RunsCsv(data)},
                             {"distribution.svg", RenderDistribution(data)},
                             {"u95_map.svg", RenderU95Map(data)},
-                            {"index.html", RenderPage(data)},
+                            {"index.html", RenderUncertaintyPage(data)},
                         });
 }
 

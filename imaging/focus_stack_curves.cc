@@ -17,7 +17,7 @@
 namespace fvm::imaging {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kNoValue = std::numeric_limits<float>::quiet_NaN();
 constexpr double kGaussianWindowSigma = 0.3;  // per px of window: 0.9 px for 3, 1.5 px for 5
 
 // The half-width of a window's kernel: a box's own, a Gaussian's to 2.5 sigma, rounded (2 px for the 3 px window,
@@ -162,7 +162,7 @@ __attribute__((target_clones("avx2", "default"))) void FoldBatch(WindowCurves& c
   float* __restrict previous = c.previous.data() + row;
   std::int32_t* __restrict index = c.index.data() + row;
   constexpr int kLanes = int(sizeof(Floats) / sizeof(float));
-  const Floats nan = Floats{} + kNaN;
+  const Floats nan = Floats{} + kNoValue;
   int col = 0;
   for (; col + kLanes <= width; col += kLanes) {
     Floats b, l2, l1, r1, r2, s, f, p2, p1;
@@ -206,7 +206,7 @@ __attribute__((target_clones("avx2", "default"))) void FoldBatch(WindowCurves& c
       if (at == k - 2) right2[col] = v;
       if (better) {
         best[col] = v, index[col] = k, left2[col] = p2, left[col] = p1;
-        right[col] = right2[col] = kNaN;
+        right[col] = right2[col] = kNoValue;
       }
       sum[col] += v;
       floor[col] = floor[col] < v ? floor[col] : v;
@@ -286,7 +286,7 @@ void WindowCurves::Reset(int w, bool gaussian_window, std::size_t n) {
 void WindowCurves::Start(std::size_t begin, std::size_t end) {
   std::fill(best.begin() + begin, best.begin() + end, -std::numeric_limits<float>::infinity());
   for (auto* v : {&left2, &left, &right, &right2, &previous2, &previous}) {
-    std::fill(v->begin() + begin, v->begin() + end, kNaN);
+    std::fill(v->begin() + begin, v->begin() + end, kNoValue);
   }
   std::fill(sum.begin() + begin, sum.begin() + end, 0.0f);
   std::fill(floor.begin() + begin, floor.begin() + end, std::numeric_limits<float>::max());

@@ -236,14 +236,14 @@ std::string StationList(const MultilaterationProblem& p, const std::vector<int>&
   return out;
 }
 
-struct Prepared {
+struct PreparedProblem {
   Problem pr;
   State state;
 };
 
-Prepared Prepare(const MultilaterationProblem& p, const MultilaterationOptions& o, bool check_counts) {
+PreparedProblem Prepare(const MultilaterationProblem& p, const MultilaterationOptions& o, bool check_counts) {
   o.Check();
-  Prepared out;
+  PreparedProblem out;
   out.pr.problem = &p;
   out.pr.options = &o;
   out.pr.sigmas = SigmasOf(o.noise);
@@ -459,13 +459,13 @@ int MinStationsPerPoint(const MultilaterationOptions& options) { return options.
 
 std::vector<std::string> UnobservableStationParameters(const MultilaterationProblem& problem,
                                                        const MultilaterationOptions& options) {
-  const Prepared prep = Prepare(problem, options, false);
+  const PreparedProblem prep = Prepare(problem, options, false);
   return Unobservable(prep.pr, prep.state, MakeLayout(problem, options, {}));
 }
 
 MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const MultilaterationOptions& options) {
   CheckRangesSpanANetwork(problem, options);
-  Prepared prep = Prepare(problem, options, true);
+  PreparedProblem prep = Prepare(problem, options, true);
   const Problem& pr = prep.pr;
   State& st = prep.state;
   MultilaterationResult result;

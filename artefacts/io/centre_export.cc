@@ -15,7 +15,7 @@ namespace fvm::artefacts {
 namespace {
 
 // No FVM stage travels a metre: larger coordinates are micrometres written where mm belong.
-constexpr double kMaxCoordinateMm = 1000.0;
+constexpr double kMaxCentreMm = 1000.0;
 
 // A value the row may leave empty (nullopt) or must give; nan and inf are a failed sphere fit, refused with that
 // explanation rather than the generic one.
@@ -35,8 +35,8 @@ std::optional<double> Value(const CsvTable& table, const CsvRow& row, int column
   return value;
 }
 
-struct Columns {
-  explicit Columns(const CsvTable& table)
+struct CentreColumns {
+  explicit CentreColumns(const CsvTable& table)
       : id(table.Require("id")),
         axes{table.Require("x"), table.Require("y"), table.Require("z")},
         t(table.Optional("t")),
@@ -47,7 +47,7 @@ struct Columns {
   int t, radius, form_rms;  // -1 when absent
 };
 
-CentreRecord ReadRow(const CsvTable& table, const CsvRow& row, const Columns& columns) {
+CentreRecord ReadCentreRow(const CsvTable& table, const CsvRow& row, const CentreColumns& columns) {
   CentreRecord record;
   record.line = row.line;
   record.id = static_cast<int>(
@@ -55,11 +55,11 @@ CentreRecord ReadRow(const CsvTable& table, const CsvRow& row, const Columns& co
   const std::string calotte = fmt::format("calotte {}", record.id);
   for (int axis = 0; axis < 3; ++axis) {
     const double v = *Value(table, row, columns.axes[axis], calotte, true);
-    if (std::abs(v) > kMaxCoordinateMm) {
+    if (std::abs(v) > kMaxCentreMm) {
       table.Fail(row, fmt::format("{}: {} = {} is beyond {} mm and no FVM stage is a metre long; the export looks "
                                   "like micrometres: divide by 1000 (units are mm)",
                                   calotte, table.header()[static_cast<size_t>(columns.axes[axis])], v,
-                                  kMaxCoordinateMm));
+                                  kMaxCentreMm));
     }
     record.position[axis] = v;
   }
@@ -80,7 +80,7 @@ CentreExport ReadCentreExport(const std::filesystem::path& path) {
   CsvOptions options;
   options.expected_header = "id,x,y,z";
   const CsvTable table = ReadCsv(path, options);
-  const Columns columns(table);
+  const CentreColumns columns(table);
   if (table.rows().empty()) {
     throw InputError(fmt::format("{}:{}: no calotte rows after the header; export the fitted centres, one row per "
                                  "calotte",
@@ -91,7 +91,7 @@ CentreExport ReadCentreExport(const std::filesystem::path& path) {
   data.comments = table.comments();
   std::map<int, int> first_line_of_id;
   for (const CsvRow& row : table.rows()) {
-    CentreRecord record = ReadRow(table, row, columns);
+    CentreRecord record = ReadCentreRow(table, row, columns);
     const auto [it, inserted] = first_line_of_id.emplace(record.id, row.line);
     if (!inserted) {
       table.Fail(row, fmt::format("calotte {} appears again (first at line {}); an export holds each calotte once: "

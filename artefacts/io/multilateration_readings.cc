@@ -18,7 +18,6 @@ namespace {
 
 // As for single-tracker readings: beyond 100 m the file is in micrometres, or damaged.
 constexpr double kMaxMm = 100'000.0;
-constexpr double kPi = std::numbers::pi;
 // A stations file is a few lines; anything beyond 16 MB is not one.
 constexpr std::size_t kMaxStationsBytes = std::size_t{16} << 20;
 
@@ -75,10 +74,10 @@ MultilaterationReadings ReadMultilaterationReadings(const std::filesystem::path&
     if (data.angles) {
       r.azimuth_rad = table.Double(row, c_az, context);
       r.elevation_rad = table.Double(row, c_el, context);
-      if (std::abs(r.azimuth_rad) > 2.0 * kPi) {
+      if (std::abs(r.azimuth_rad) > 2.0 * std::numbers::pi) {
         table.Fail(row, fmt::format("{}: azimuth = {} is beyond 2 pi; angles are in radians (degrees?)", context, r.azimuth_rad));
       }
-      if (std::abs(r.elevation_rad) > 0.5 * kPi) {
+      if (std::abs(r.elevation_rad) > 0.5 * std::numbers::pi) {
         table.Fail(row, fmt::format("{}: elevation = {} is beyond pi/2; angles are in radians, elevation from the "
                                     "station's xy plane (degrees? a zenith angle?)",
                                     context, r.elevation_rad));
@@ -122,8 +121,8 @@ void WriteMultilaterationReadings(const std::filesystem::path& path, const Multi
       refuse("the station is empty or has blanks at its ends");
     }
     if (!(r.range_mm > 0.0) || r.range_mm > kMaxMm) refuse("the range is not in (0, 100 m]");
-    if (data.angles && (!std::isfinite(r.azimuth_rad) || std::abs(r.azimuth_rad) > 2 * kPi ||
-                        !std::isfinite(r.elevation_rad) || std::abs(r.elevation_rad) > 0.5 * kPi)) {
+    if (data.angles && (!std::isfinite(r.azimuth_rad) || std::abs(r.azimuth_rad) > 2 * std::numbers::pi ||
+                        !std::isfinite(r.elevation_rad) || std::abs(r.elevation_rad) > 0.5 * std::numbers::pi)) {
       refuse("an angle is out of range");
     }
     if (data.nominal && (!r.nominal.allFinite() || r.nominal.cwiseAbs().maxCoeff() > kMaxMm)) refuse("a nominal coordinate is out of range");

@@ -10,10 +10,10 @@
 #include <string_view>
 #include <vector>
 
-#include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
+#include "core/input_error.h"
 #include "core/number_text.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
@@ -68,16 +68,18 @@ class Header {
   }
   double RequiredNumber(const std::string& key) const {
     const std::optional<double> value = Number(key);
-    if (!value) FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
+    if (!value)
+      FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
     return *value;
   }
   std::uint64_t RequiredCount(const std::string& key, std::uint64_t max) const {
     const Tag* tag = Find(key);
-    if (!tag) FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
+    if (!tag)
+      FailReading(name_, "the header has no " + key + " tag, which every AL3D depth image has; " + kAl3dReexport);
     const std::optional<std::int64_t> value = ParseInt(tag->value);
     if (!value || *value < 0 || static_cast<std::uint64_t>(*value) > max) {
-      FailReading(name_, "header tag " + key + " is '" + tag->value + "', not a count between 0 and " + std::to_string(max) +
-                      "; " + kAl3dReexport);
+      FailReading(name_, "header tag " + key + " is '" + tag->value + "', not a count between 0 and " +
+                             std::to_string(max) + "; " + kAl3dReexport);
     }
     return static_cast<std::uint64_t>(*value);
   }
@@ -102,13 +104,14 @@ HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
   const Tag counter = ParseTag(name, view.substr(pos + kTagSize, kTagSize), 1);
   pos += 2 * kTagSize;
   if (version.key != "Version" || counter.key != "TagCount") {
-    FailReading(name, "the AL3D header does not start with the Version and TagCount tags; " + std::string(kAl3dReexport));
+    FailReading(name,
+                "the AL3D header does not start with the Version and TagCount tags; " + std::string(kAl3dReexport));
   }
   const std::optional<std::int64_t> count = ParseInt(counter.value);
   const std::size_t room = (bytes.size() - pos - kCommentSize) / kTagSize;
   if (!count || *count < 0 || static_cast<std::uint64_t>(*count) > room) {
-    FailReading(name, "TagCount is '" + counter.value + "' but the file has room for " + std::to_string(room) + " tags; " +
-                   kAl3dReexport);
+    FailReading(name, "TagCount is '" + counter.value + "' but the file has room for " + std::to_string(room) +
+                          " tags; " + kAl3dReexport);
   }
   std::vector<Tag> tags;
   for (std::int64_t i = 0; i < *count; ++i, pos += kTagSize) {
@@ -124,7 +127,7 @@ HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
   const std::uint64_t rows = header.RequiredCount("Rows", kMaxPoints);
   if (cols == 0 || rows == 0 || cols * rows > kMaxPoints) {
     FailReading(name, "Cols x Rows is " + std::to_string(cols) + " x " + std::to_string(rows) +
-                   ", not a depth image fvm can hold; " + kAl3dReexport);
+                          ", not a depth image fvm can hold; " + kAl3dReexport);
   }
   // The sign of the pixel size only says which way the image runs; Gwyddion reads it the same way.
   const double dx_m = std::fabs(header.RequiredNumber("PixelSizeXMeter"));
@@ -134,15 +137,16 @@ HeightMap ParseAl3d(const std::string& bytes, const std::string& name) {
   }
   const std::optional<double> offset = header.Number("DepthImageOffset");
   if (!offset || *offset == 0.0) {
-    FailReading(name, "holds no depth image (DepthImageOffset is missing or 0): export the measurement with its depth data");
+    FailReading(name,
+                "holds no depth image (DepthImageOffset is missing or 0): export the measurement with its depth data");
   }
   const std::uint64_t stride = (cols * sizeof(float) + 7) / 8 * 8;
   const std::uint64_t image_bytes = rows * stride;
   if (*offset < static_cast<double>(header_end) || *offset != std::floor(*offset) ||
       *offset + static_cast<double>(image_bytes) > static_cast<double>(bytes.size())) {
     FailReading(name, "the depth image (" + std::to_string(rows) + " rows of " + std::to_string(stride) + " bytes at " +
-                   "DepthImageOffset " + FormatShortest(*offset) + ") does not lie within the file's " +
-                   std::to_string(bytes.size()) + " bytes; " + kAl3dReexport);
+                          "DepthImageOffset " + FormatShortest(*offset) + ") does not lie within the file's " +
+                          std::to_string(bytes.size()) + " bytes; " + kAl3dReexport);
   }
   const auto depth_offset = static_cast<std::size_t>(*offset);
   const double invalid = header.Number("InvalidPixelValue").value_or(std::numeric_limits<double>::quiet_NaN());

@@ -13,18 +13,20 @@
 #include <string_view>
 #include <vector>
 
-#include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
+#include "core/input_error.h"
 #include "core/number_text.h"
 #include "imaging/io/image_codec.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
 
 constexpr std::string_view kDescriptionTag = "fvm height map";
 
-[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& problem) { FailReading(path.string(), problem); }
+[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& problem) {
+  FailReading(path.string(), problem);
+}
 
 // "fvm height map; dx_mm=0.001; dy_mm=0.001; ..." -> {dx_mm: 0.001, ...}; empty for other descriptions.
 std::map<std::string, double> ParseDescription(std::string_view text) {

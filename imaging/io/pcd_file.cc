@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/number_text.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
@@ -67,7 +67,8 @@ PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
       FailReading(where, "a PCD header starts with VERSION, not " + QuotedForMessage(words[0]) + kPcdRewrite);
     }
     const auto one = [&]() {
-      if (values.size() != 1) FailReading(where, key + " takes one value, not " + std::to_string(values.size()) + kPcdRewrite);
+      if (values.size() != 1)
+        FailReading(where, key + " takes one value, not " + std::to_string(values.size()) + kPcdRewrite);
       return values[0];
     };
     const auto once = [&](bool seen) {
@@ -104,7 +105,8 @@ PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
     } else if (key == "data") {
       header.data = AsciiLower(one());
       if (header.data != "ascii" && header.data != "binary" && header.data != "binary_compressed") {
-        FailReading(where, "DATA is " + QuotedForMessage(values[0]) + ", not ascii, binary or binary_compressed" + kPcdRewrite);
+        FailReading(
+            where, "DATA is " + QuotedForMessage(values[0]) + ", not ascii, binary or binary_compressed" + kPcdRewrite);
       }
       header.body = start;
       header.body_line = line_number + 1;
@@ -117,9 +119,9 @@ PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
   if (fields.empty()) FailReading(where, " has no FIELDS line" + std::string(kPcdRewrite));
   if (counts.empty()) counts.assign(fields.size(), "1");  // COUNT is optional: one value per field
   if (sizes.size() != fields.size() || types.size() != fields.size() || counts.size() != fields.size()) {
-    FailReading(where, " gives " + std::to_string(sizes.size()) + " SIZE, " + std::to_string(types.size()) + " TYPE and " +
-                    std::to_string(counts.size()) + " COUNT values for " + std::to_string(fields.size()) +
-                    " FIELDS; it needs one of each per field" + kPcdRewrite);
+    FailReading(where, " gives " + std::to_string(sizes.size()) + " SIZE, " + std::to_string(types.size()) +
+                           " TYPE and " + std::to_string(counts.size()) + " COUNT values for " +
+                           std::to_string(fields.size()) + " FIELDS; it needs one of each per field" + kPcdRewrite);
   }
   if (!width || !height) FailReading(where, " has no WIDTH or no HEIGHT line" + std::string(kPcdRewrite));
   if (!points) FailReading(where, " has no POINTS line" + std::string(kPcdRewrite));
@@ -134,8 +136,8 @@ PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
     const bool valid = integer ? (field.size == 1 || field.size == 2 || field.size == 4 || field.size == 8)
                                : field.type == 'F' && (field.size == 4 || field.size == 8);
     if (!valid) {
-      FailReading(where, "'s field '" + field.name + "' has TYPE " + QuotedForMessage(types[i]) + " and SIZE " + QuotedForMessage(sizes[i]) +
-                      "; PCD knows F 4, F 8 and I or U 1, 2, 4, 8" + kPcdRewrite);
+      FailReading(where, "'s field '" + field.name + "' has TYPE " + QuotedForMessage(types[i]) + " and SIZE " +
+                             QuotedForMessage(sizes[i]) + "; PCD knows F 4, F 8 and I or U 1, 2, 4, 8" + kPcdRewrite);
     }
     if (field.count < 1 || field.count > 1000000) {
       FailReading(where, "'s field '" + field.name + "' has COUNT " + QuotedForMessage(counts[i]) + kPcdRewrite);
@@ -147,7 +149,7 @@ PcdHeader ReadPcdHeader(std::string_view bytes, const std::string& name) {
   }
   if (*points != *width * *height) {
     FailReading(where, " declares POINTS " + std::to_string(*points) + " but WIDTH x HEIGHT " + std::to_string(*width) +
-                    " x " + std::to_string(*height) + kPcdRewrite);
+                           " x " + std::to_string(*height) + kPcdRewrite);
   }
   if (*points == 0) FailReading(name, "holds no points; export the cloud again");
   header.width = *width;
@@ -171,7 +173,7 @@ std::array<size_t, 3> CoordinateFields(const PcdHeader& header, const std::strin
     }
     if (header.fields[found].count != 1) {
       FailReading(name, "its field '" + wanted + "' has COUNT " + std::to_string(header.fields[found].count) +
-                     ": a coordinate is one value per point" + kPcdRewrite);
+                            ": a coordinate is one value per point" + kPcdRewrite);
     }
     index[static_cast<size_t>(axis)] = found;
   }
@@ -240,8 +242,8 @@ std::uint32_t LoadU32(std::string_view bytes, size_t at) {
   return value;
 }
 
-std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const PcdHeader& header, const std::array<size_t, 3>& xyz,
-                                       const std::string& name) {
+std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const PcdHeader& header,
+                                       const std::array<size_t, 3>& xyz, const std::string& name) {
   std::uint64_t values_per_row = 0;
   for (const Field& field : header.fields) values_per_row += field.count;
   // The first value of each field in a row.
@@ -263,7 +265,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const PcdHeader& 
     }
     if (words.size() != values_per_row) {
       FailReading(where, std::to_string(words.size()) + " values where the header's FIELDS and COUNT declare " +
-                      std::to_string(values_per_row) + kPcdRewrite);
+                             std::to_string(values_per_row) + kPcdRewrite);
     }
     for (const std::string_view word : words) {
       if (!ParseDouble(word)) FailReading(where, QuotedForMessage(word) + " is not a number" + kPcdRewrite);
@@ -284,7 +286,7 @@ std::vector<Eigen::Vector3d> ReadAscii(std::string_view bytes, const PcdHeader& 
   }
   if (points.size() != n) {
     FailReading(name, "holds " + std::to_string(points.size()) + " data rows where the header declares POINTS " +
-                   std::to_string(n) + "; the file is incomplete or damaged: export it again");
+                          std::to_string(n) + "; the file is incomplete or damaged: export it again");
   }
   return points;
 }
@@ -305,7 +307,8 @@ PointCloud ParsePcd(std::string_view bytes, const std::string& name, double mm_p
       offset.push_back(point_step);
       point_step += field.size * field.count;
     }
-    if (point_step > (std::uint64_t{1} << 32)) FailReading(name, "its points are larger than fvm can hold" + std::string(kPcdRewrite));
+    if (point_step > (std::uint64_t{1} << 32))
+      FailReading(name, "its points are larger than fvm can hold" + std::string(kPcdRewrite));
     const std::uint64_t needed = n * point_step;  // below 2^31 x 2^32: no overflow
     const std::string_view body = bytes.substr(header.body);
     std::string_view data = body;
@@ -314,28 +317,29 @@ PointCloud ParsePcd(std::string_view bytes, const std::string& name, double mm_p
       if (body.size() < 8) FailReading(name, "its binary_compressed body has no sizes" + std::string(kPcdRewrite));
       const std::uint64_t compressed = LoadU32(body, 0), uncompressed = LoadU32(body, 4);
       if (compressed > body.size() - 8 || !IsPadding(body.substr(8 + compressed))) {
-        FailReading(name, "its binary_compressed body declares " + std::to_string(compressed) + " compressed bytes, but " +
-                       std::to_string(body.size() - 8) + " follow" + kPcdRewrite);
+        FailReading(name, "its binary_compressed body declares " + std::to_string(compressed) +
+                              " compressed bytes, but " + std::to_string(body.size() - 8) + " follow" + kPcdRewrite);
       }
       if (uncompressed != needed) {
         FailReading(name, "its binary_compressed body expands to " + std::to_string(uncompressed) +
-                       " bytes, but the header's FIELDS, SIZE, COUNT and POINTS need " + std::to_string(needed) +
-                       kPcdRewrite);
+                              " bytes, but the header's FIELDS, SIZE, COUNT and POINTS need " + std::to_string(needed) +
+                              kPcdRewrite);
       }
       if (uncompressed > compressed * kMaxLzfExpansion) {
         FailReading(name, "its binary_compressed body cannot expand to the " + std::to_string(uncompressed) +
-                       " bytes it declares" + kPcdRewrite);
+                              " bytes it declares" + kPcdRewrite);
       }
       expanded.resize(static_cast<size_t>(uncompressed));
       DecompressLzf(body.substr(8, compressed), expanded, name);
       data = std::string_view(reinterpret_cast<const char*>(expanded.data()), expanded.size());
     } else if (body.size() < needed) {
       FailReading(name, "the header declares " + std::to_string(n) + " points of " + std::to_string(point_step) +
-                     " bytes, but the binary body holds " + std::to_string(body.size()) +
-                     " bytes; the file is incomplete or damaged: export it again");
+                            " bytes, but the binary body holds " + std::to_string(body.size()) +
+                            " bytes; the file is incomplete or damaged: export it again");
     } else if (!IsPadding(body.substr(needed))) {
-      FailReading(name, "its binary body holds " + std::to_string(body.size()) + " bytes, but the header's FIELDS, SIZE, " +
-                     "COUNT and POINTS need " + std::to_string(needed) + " (and zeros after them)" + kPcdRewrite);
+      FailReading(name, "its binary body holds " + std::to_string(body.size()) +
+                            " bytes, but the header's FIELDS, SIZE, " + "COUNT and POINTS need " +
+                            std::to_string(needed) + " (and zeros after them)" + kPcdRewrite);
     }
     const bool by_field = header.data == "binary_compressed";  // compressed bodies store field after field
     points.resize(static_cast<size_t>(n));

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/number_text.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
@@ -80,14 +80,16 @@ PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
   std::size_t start = 0, line_number = 0;
   while (true) {
     const size_t newline = bytes.find('\n', start);
-    if (newline == std::string_view::npos) FailReading(name, "its PLY header does not end with end_header" + std::string(kPlyRewrite));
+    if (newline == std::string_view::npos)
+      FailReading(name, "its PLY header does not end with end_header" + std::string(kPlyRewrite));
     const std::string_view line = bytes.substr(start, newline - start);
     start = newline + 1;
     ++line_number;
     const std::string where = name + ":" + std::to_string(line_number);
     const std::vector<std::string_view> words = SplitWords(line);
     if (line_number == 1) {
-      if (words.size() != 1 || words[0] != "ply") FailReading(name, "does not start with a 'ply' line" + std::string(kPlyRewrite));
+      if (words.size() != 1 || words[0] != "ply")
+        FailReading(name, "does not start with a 'ply' line" + std::string(kPlyRewrite));
       continue;
     }
     if (words.empty()) FailReading(where, "a blank line in the PLY header" + std::string(kPlyRewrite));
@@ -101,7 +103,8 @@ PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
       continue;
     }
     if (key == "format") {
-      if (format || words.size() != 3 || words[2] != "1.0") FailReading(where, "a malformed format line" + std::string(kPlyRewrite));
+      if (format || words.size() != 3 || words[2] != "1.0")
+        FailReading(where, "a malformed format line" + std::string(kPlyRewrite));
       if (words[1] == "ascii") {
         header.encoding = Encoding::kAscii;
       } else if (words[1] == "binary_little_endian") {
@@ -114,9 +117,11 @@ PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
       format = true;
     } else if (key == "element") {
       const std::optional<std::int64_t> count = words.size() == 3 ? ParseInt(words[2]) : std::nullopt;
-      if (!count || *count < 0) FailReading(where, "an element line needs a name and a count" + std::string(kPlyRewrite));
+      if (!count || *count < 0)
+        FailReading(where, "an element line needs a name and a count" + std::string(kPlyRewrite));
       for (const Element& element : header.elements) {
-        if (element.name == words[1]) FailReading(where, "a second element " + QuotedForMessage(words[1]) + kPlyRewrite);
+        if (element.name == words[1])
+          FailReading(where, "a second element " + QuotedForMessage(words[1]) + kPlyRewrite);
       }
       header.elements.push_back({std::string(words[1]), static_cast<std::uint64_t>(*count), {}});
     } else if (key == "property") {
@@ -134,10 +139,12 @@ PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
         type = ScalarOf(words[3]);
         property.name = std::string(words[4]);
       }
-      if (!type) FailReading(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kPlyRewrite));
+      if (!type)
+        FailReading(where, "a malformed property line; PLY has 'property TYPE NAME'" + std::string(kPlyRewrite));
       property.type = *type;
       for (const Property& other : header.elements.back().properties) {
-        if (other.name == property.name) FailReading(where, "a second property " + QuotedForMessage(property.name) + kPlyRewrite);
+        if (other.name == property.name)
+          FailReading(where, "a second property " + QuotedForMessage(property.name) + kPlyRewrite);
       }
       header.elements.back().properties.push_back(property);
     } else if (key == "end_header") {
@@ -152,13 +159,15 @@ PlyHeader ReadPlyHeader(std::string_view bytes, const std::string& name) {
   if (!format) FailReading(name, "its PLY header has no format line" + std::string(kPlyRewrite));
   for (const Element& element : header.elements) {
     if (element.properties.empty() && element.count > 0) {
-      FailReading(name, "its PLY element " + QuotedForMessage(element.name) + " has rows but no properties" + kPlyRewrite);
+      FailReading(name,
+                  "its PLY element " + QuotedForMessage(element.name) + " has rows but no properties" + kPlyRewrite);
     }
     // Every row takes at least a byte (binary) or a line (ascii).
     if (element.count > bytes.size() - header.body) {
-      FailReading(name, "its PLY element " + QuotedForMessage(element.name) + " declares " + std::to_string(element.count) +
-                     " rows, more than the file's " + std::to_string(bytes.size()) +
-                     " bytes can hold; the file is incomplete or damaged: export it again");
+      FailReading(name, "its PLY element " + QuotedForMessage(element.name) + " declares " +
+                            std::to_string(element.count) + " rows, more than the file's " +
+                            std::to_string(bytes.size()) +
+                            " bytes can hold; the file is incomplete or damaged: export it again");
     }
   }
   return header;
@@ -189,25 +198,29 @@ class Body {
 
   void EndRow() {
     if (encoding_ == Encoding::kAscii && next_word_ != words_.size()) {
-      FailReading(where_, std::to_string(words_.size()) + " values, more than the header's properties declare" + kPlyRewrite);
+      FailReading(where_,
+                  std::to_string(words_.size()) + " values, more than the header's properties declare" + kPlyRewrite);
     }
   }
 
   double Next(Scalar type) {
     if (encoding_ == Encoding::kAscii) {
       if (next_word_ == words_.size()) {
-        FailReading(where_, std::to_string(words_.size()) + " values, fewer than the header's properties declare" + kPlyRewrite);
+        FailReading(where_, std::to_string(words_.size()) + " values, fewer than the header's properties declare" +
+                                kPlyRewrite);
       }
       const std::string_view word = words_[next_word_++];
       const std::optional<double> value = ParseDouble(word);
       if (!value) FailReading(where_, QuotedForMessage(word) + " is not a number" + kPlyRewrite);
-      if (IsInteger(type) && *value != std::floor(*value)) FailReading(where_, QuotedForMessage(word) + " is not an integer" + kPlyRewrite);
+      if (IsInteger(type) && *value != std::floor(*value))
+        FailReading(where_, QuotedForMessage(word) + " is not an integer" + kPlyRewrite);
       // A float property holds the float nearest the text; beyond float's range the conversion would be undefined.
       const bool to_float = type == Scalar::kFloat32 && std::abs(*value) <= std::numeric_limits<float>::max();
       return to_float ? static_cast<float>(*value) : *value;
     }
     const std::size_t size = SizeOf(type);
-    if (size > bytes_.size() - at_) FailReading(where_, "missing: the file ends early; it is incomplete: export it again");
+    if (size > bytes_.size() - at_)
+      FailReading(where_, "missing: the file ends early; it is incomplete: export it again");
     unsigned char raw[8];
     std::memcpy(raw, bytes_.data() + at_, size);
     at_ += size;
@@ -250,7 +263,8 @@ class Body {
     const bool clean = encoding_ == Encoding::kAscii ? rest.find_first_not_of(" \t\r\n") == std::string_view::npos
                                                      : rest.empty();
     if (!clean) {
-      FailReading(name_, std::to_string(rest.size()) + " bytes follow the last element the header declares" + kPlyRewrite);
+      FailReading(name_,
+                  std::to_string(rest.size()) + " bytes follow the last element the header declares" + kPlyRewrite);
     }
   }
 
@@ -277,14 +291,15 @@ PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_p
     const Property& property = vertex_element->properties[i];
     for (int axis = 0; axis < 3; ++axis) {
       if (property.name != std::string(1, static_cast<char>('x' + axis))) continue;
-      if (property.list_count) FailReading(name, "its vertex property '" + property.name + "' is a list, not a coordinate" + kPlyRewrite);
+      if (property.list_count)
+        FailReading(name, "its vertex property '" + property.name + "' is a list, not a coordinate" + kPlyRewrite);
       xyz[static_cast<size_t>(axis)] = static_cast<int>(i);
     }
   }
   for (int axis = 0; axis < 3; ++axis) {
     if (xyz[static_cast<size_t>(axis)] < 0) {
       FailReading(name, std::string("its vertices have no '") + static_cast<char>('x' + axis) +
-                     "' property; fvm reads clouds of x, y, z points");
+                            "' property; fvm reads clouds of x, y, z points");
     }
   }
   if (vertex_element->count == 0) FailReading(name, "holds no points; export the cloud again");
@@ -310,8 +325,8 @@ PointCloud ParsePly(std::string_view bytes, const std::string& name, double mm_p
             const double item = body.Next(property.type);
             if (is_grid && k == 0) {
               if (!(item >= 0 && item < static_cast<double>(vertex_element->count))) {
-                FailReading(name, "its range_grid row " + std::to_string(row + 1) + " names vertex " + FormatShortest(item) +
-                               ", which does not exist" + kPlyRewrite);
+                FailReading(name, "its range_grid row " + std::to_string(row + 1) + " names vertex " +
+                                      FormatShortest(item) + ", which does not exist" + kPlyRewrite);
               }
               grid_vertex = static_cast<std::int64_t>(item);
             }

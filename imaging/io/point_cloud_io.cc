@@ -11,17 +11,16 @@
 #include <utility>
 #include <vector>
 
-#include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
+#include "core/input_error.h"
 #include "core/number_text.h"
 #include "imaging/io/cloud_codec.h"
 #include "imaging/io/pcd_file.h"
 #include "imaging/io/ply_file.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
-
 
 // Fields of a line: split at commas or semicolons when there are any, else at blanks.
 std::vector<std::string_view> Fields(std::string_view line) {

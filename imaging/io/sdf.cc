@@ -11,8 +11,8 @@
 
 #include "core/file_io.h"
 #include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/number_text.h"
+#include "imaging/io/reader_support.h"
 
 namespace fvm::imaging {
 namespace {
@@ -37,9 +37,11 @@ HeightMap MakeMap(const std::string& name, const SdfHeader& h, const std::string
   if (!(h.x_scale > 0) || !(h.y_scale > 0) || !std::isfinite(h.x_scale) || !std::isfinite(h.y_scale)) {
     FailReading(name, "Xscale and Yscale (the point spacing in metres) must be positive");
   }
-  if (!std::isfinite(h.z_scale) || h.z_scale == 0) FailReading(name, "Zscale (metres per unit of height) must be finite and non-zero");
+  if (!std::isfinite(h.z_scale) || h.z_scale == 0)
+    FailReading(name, "Zscale (metres per unit of height) must be finite and non-zero");
   if (h.compression != 0) {
-    FailReading(name, "Compression = " + std::to_string(h.compression) + ": compressed SDF is not read; save it uncompressed");
+    FailReading(
+        name, "Compression = " + std::to_string(h.compression) + ": compressed SDF is not read; save it uncompressed");
   }
   HeightMap map;
   map.size_x = static_cast<int>(h.points);
@@ -54,7 +56,9 @@ HeightMap MakeMap(const std::string& name, const SdfHeader& h, const std::string
 double Height(const std::string& name, double value, double z_scale) {
   if (std::isnan(value)) return value;
   const double mm = value * z_scale * kMmPerMetre;
-  if (!std::isfinite(mm)) FailReading(name, "a height of " + FormatShortest(value) + " x Zscale " + FormatShortest(z_scale) + " m is not a finite number");
+  if (!std::isfinite(mm))
+    FailReading(name, "a height of " + FormatShortest(value) + " x Zscale " + FormatShortest(z_scale) +
+                          " m is not a finite number");
   return mm;
 }
 
@@ -76,7 +80,9 @@ HeightMap ParseAscii(std::string_view text, const std::string& name) {
     }
     if (line.empty()) continue;
     const std::size_t eq = line.find('=');
-    if (eq == std::string_view::npos) FailReading(name, where + ": '" + QuotedForMessage(line) + "' is not 'Key = value' (the header ends at a line '*')");
+    if (eq == std::string_view::npos)
+      FailReading(name,
+                  where + ": '" + QuotedForMessage(line) + "' is not 'Key = value' (the header ends at a line '*')");
     const std::string key(TrimBlanks(line.substr(0, eq)));
     const std::string_view value = TrimBlanks(line.substr(eq + 1));
     const auto number = [&]() {
@@ -122,21 +128,24 @@ HeightMap ParseAscii(std::string_view text, const std::string& name) {
       const std::optional<double> v = ParseDouble(word);
       if (!v) {
         FailReading(name, "line " + std::to_string(line_number) + ": " + QuotedForMessage(word) +
-                       " is not a number; the data are numbers separated by blanks, ended by a line '*'");
+                              " is not a number; the data are numbers separated by blanks, ended by a line '*'");
       }
-      if (map.z_mm.size() == wanted) FailReading(name, "line " + std::to_string(line_number) + ": more values than NumPoints x NumProfiles");
+      if (map.z_mm.size() == wanted)
+        FailReading(name, "line " + std::to_string(line_number) + ": more values than NumPoints x NumProfiles");
       map.z_mm.push_back(Height(name, *v, h.z_scale));
     }
   }
   if (map.z_mm.size() != wanted) {
-    FailReading(name, std::to_string(map.z_mm.size()) + " values where NumPoints x NumProfiles = " + std::to_string(h.points) +
-                   " x " + std::to_string(h.profiles) + " need " + std::to_string(wanted) + "; the file is cut short");
+    FailReading(name, std::to_string(map.z_mm.size()) +
+                          " values where NumPoints x NumProfiles = " + std::to_string(h.points) + " x " +
+                          std::to_string(h.profiles) + " need " + std::to_string(wanted) + "; the file is cut short");
   }
   return map;
 }
 
 HeightMap ParseBinary(const std::string& bytes, const std::string& name) {
-  if (bytes.size() < kBinaryHeaderSize) FailReading(name, "shorter than the 81-byte binary SDF header; the file is cut short");
+  if (bytes.size() < kBinaryHeaderSize)
+    FailReading(name, "shorter than the 81-byte binary SDF header; the file is cut short");
   const char* p = bytes.data();
   SdfHeader h;
   const std::string_view id(p + 8, 10);
@@ -150,28 +159,46 @@ HeightMap ParseBinary(const std::string& bytes, const std::string& name) {
   h.data_type = static_cast<unsigned char>(p[79]);
   static constexpr std::size_t kSizes[8] = {1, 2, 4, 4, 1, 2, 4, 8};
   if (h.data_type > 7) {
-    FailReading(name, "DataType " + std::to_string(h.data_type) + " is not one of SDF's 0-7 (integers, float32, float64)");
+    FailReading(name,
+                "DataType " + std::to_string(h.data_type) + " is not one of SDF's 0-7 (integers, float32, float64)");
   }
   HeightMap map = MakeMap(name, h, "bISO-1.0");
   const std::size_t size = kSizes[h.data_type];
   const std::size_t count = h.points * h.profiles;
   if (bytes.size() - kBinaryHeaderSize < count * size) {
     FailReading(name, "the data hold " + std::to_string((bytes.size() - kBinaryHeaderSize) / size) + " values where " +
-                   std::to_string(h.points) + " x " + std::to_string(h.profiles) + " are declared; the file is cut short");
+                          std::to_string(h.points) + " x " + std::to_string(h.profiles) +
+                          " are declared; the file is cut short");
   }
   map.z_mm.reserve(count);  // the bytes are there (checked above)
   for (std::size_t i = 0; i < count; ++i) {
     const char* v = p + kBinaryHeaderSize + i * size;
     double value = 0;
     switch (h.data_type) {
-      case 0: value = LoadBytes<std::uint8_t>(v); break;
-      case 1: value = LoadBytes<std::uint16_t>(v); break;
-      case 2: value = LoadBytes<std::uint32_t>(v); break;
-      case 3: value = LoadBytes<float>(v); break;
-      case 4: value = LoadBytes<std::int8_t>(v); break;
-      case 5: value = LoadBytes<std::int16_t>(v); break;
-      case 6: value = LoadBytes<std::int32_t>(v); break;
-      default: value = LoadBytes<double>(v); break;
+      case 0:
+        value = LoadBytes<std::uint8_t>(v);
+        break;
+      case 1:
+        value = LoadBytes<std::uint16_t>(v);
+        break;
+      case 2:
+        value = LoadBytes<std::uint32_t>(v);
+        break;
+      case 3:
+        value = LoadBytes<float>(v);
+        break;
+      case 4:
+        value = LoadBytes<std::int8_t>(v);
+        break;
+      case 5:
+        value = LoadBytes<std::int16_t>(v);
+        break;
+      case 6:
+        value = LoadBytes<std::int32_t>(v);
+        break;
+      default:
+        value = LoadBytes<double>(v);
+        break;
     }
     map.z_mm.push_back(Height(name, value, h.z_scale));
   }

@@ -16,11 +16,11 @@
 #include <utility>
 #include <vector>
 
-#include "core/input_error.h"
-#include "imaging/io/reader_support.h"
 #include "core/file_io.h"
-#include "imaging/io/md5.h"
+#include "core/input_error.h"
 #include "core/number_text.h"
+#include "imaging/io/md5.h"
+#include "imaging/io/reader_support.h"
 #include "imaging/io/zip_archive.h"
 
 namespace fvm::imaging {
@@ -59,7 +59,7 @@ pugi::xml_node Required(const std::string& name, const pugi::xml_node& parent, s
   const pugi::xml_node child = Child(parent, local);
   if (!child) {
     FailReading(name, "main.xml has no <" + where + "/" + std::string(local) +
-                   ">, which every X3P surface has (ISO 25178-72); " + kX3pReexport);
+                          ">, which every X3P surface has (ISO 25178-72); " + kX3pReexport);
   }
   return child;
 }
@@ -72,7 +72,7 @@ double RequiredNumber(const std::string& name, const pugi::xml_node& parent, std
   const std::optional<double> value = ParseDouble(Text(node));
   if (!value || !std::isfinite(*value)) {
     FailReading(name, "main.xml <" + where + "/" + std::string(local) + "> is '" + std::string(Text(node)) +
-                   "', not a finite number; " + kX3pReexport);
+                          "', not a finite number; " + kX3pReexport);
   }
   return *value;
 }
@@ -82,7 +82,7 @@ std::uint64_t RequiredCount(const std::string& name, const pugi::xml_node& paren
   const std::optional<std::int64_t> value = ParseInt(Text(node));
   if (!value || *value < 1 || static_cast<std::uint64_t>(*value) > kMaxPoints) {
     FailReading(name, "main.xml <MatrixDimension/" + std::string(local) + "> is '" + std::string(Text(node)) +
-                   "', not a point count between 1 and " + std::to_string(kMaxPoints) + "; " + kX3pReexport);
+                          "', not a point count between 1 and " + std::to_string(kMaxPoints) + "; " + kX3pReexport);
   }
   return static_cast<std::uint64_t>(*value);
 }
@@ -107,7 +107,7 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
     const std::string_view code = Text(data_type);
     if (code.size() != 1 || std::string_view("ILFD").find(code.front()) == std::string_view::npos) {
       FailReading(name, "main.xml <" + where + "/DataType> is '" + std::string(code) +
-                     "', not one of I (int16), L (int32), F (float32), D (float64); " + kX3pReexport);
+                            "', not one of I (int16), L (int32), F (float32), D (float64); " + kX3pReexport);
     }
     axis.data_type = code.front();
   }
@@ -115,7 +115,7 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
   if (Child(node, "Offset")) axis.offset = RequiredNumber(name, node, "Offset", where);
   if (axis.increment == 0.0 || (axis.type == 'I' && axis.increment < 0.0)) {
     FailReading(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
-                   "; a grid needs a positive spacing; " + kX3pReexport);
+                          "; a grid needs a positive spacing; " + kX3pReexport);
   }
   return axis;
 }
@@ -142,13 +142,13 @@ void VerifyMd5(const std::string& name, std::string_view content, std::string_vi
                const std::string& where) {
   expected = TrimBlanks(expected);
   if (!IsMd5(expected)) {
-    FailReading(name, where + " holds '" + std::string(expected.substr(0, 40)) + "', not an MD5 digest of " + what + "; " +
-                   kX3pReexport);
+    FailReading(name, where + " holds '" + std::string(expected.substr(0, 40)) + "', not an MD5 digest of " + what +
+                          "; " + kX3pReexport);
   }
   const std::string actual = Md5Hex(content);
   if (AsciiLower(expected) != actual) {
-    FailReading(name, what + " does not match its MD5 checksum (" + where + " says " + AsciiLower(expected) + ", the content has " +
-                   actual + "); " + kX3pReexport);
+    FailReading(name, what + " does not match its MD5 checksum (" + where + " says " + AsciiLower(expected) +
+                          ", the content has " + actual + "); " + kX3pReexport);
   }
 }
 
@@ -193,7 +193,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const pugi::xml_parse_result parsed = document.load_buffer(xml.data(), xml.size());
   if (!parsed) {
     FailReading(name, std::string("main.xml is not well-formed XML (") + parsed.description() + " at byte " +
-                   std::to_string(parsed.offset) + "); " + kX3pReexport);
+                          std::to_string(parsed.offset) + "); " + kX3pReexport);
   }
   const pugi::xml_node root = document.document_element();
   if (LocalName(root) != "ISO5436_2") {
@@ -209,9 +209,10 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const pugi::xml_node record1 = Required(name, root, "Record1", "ISO5436_2");
   const std::string feature(Text(Child(record1, "FeatureType")));
   if (!feature.empty() && feature != "SUR" && feature != "PRF") {
-    FailReading(name, "holds FeatureType " + feature +
-                   " (a point cloud); fvm reads X3P surfaces on a grid (SUR, PRF): export the surface as a grid, "
-                   "or as PLY/PCD for a point cloud");
+    FailReading(name,
+                "holds FeatureType " + feature +
+                    " (a point cloud); fvm reads X3P surfaces on a grid (SUR, PRF): export the surface as a grid, "
+                    "or as PLY/PCD for a point cloud");
   }
   const pugi::xml_node axes = Required(name, record1, "Axes", "Record1");
   const Axis cx = ParseAxis(name, axes, "CX");
@@ -219,13 +220,13 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const Axis cz = ParseAxis(name, axes, "CZ");
   if (cx.type != 'I' || cy.type != 'I') {
     FailReading(name,
-         "has absolute X/Y axes (a list of x, y, z points); fvm reads X3P surfaces on a regular grid "
-         "(AxisType I for CX and CY): export the surface on a grid");
+                "has absolute X/Y axes (a list of x, y, z points); fvm reads X3P surfaces on a regular grid "
+                "(AxisType I for CX and CY): export the surface on a grid");
   }
   if (cz.type != 'A') FailReading(name, "main.xml <Record1/Axes/CZ/AxisType> is I; heights need an absolute axis (A)");
   if (cz.data_type == 0) {
     FailReading(name, "main.xml <Record1/Axes/CZ> has no DataType (I, L, F or D), so its heights cannot be decoded; " +
-                   std::string(kX3pReexport));
+                          std::string(kX3pReexport));
   }
 
   const pugi::xml_node record3 = Required(name, root, "Record3", "ISO5436_2");
@@ -238,7 +239,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   }
   if (size_x * size_y > kMaxPoints) {
     FailReading(name, "main.xml says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
-                   " points, more than fvm can hold (" + std::to_string(kMaxPoints) + ")");
+                          " points, more than fvm can hold (" + std::to_string(kMaxPoints) + ")");
   }
   const std::size_t n = static_cast<std::size_t>(size_x * size_y);
   const std::string points_said = "MatrixDimension says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
@@ -248,13 +249,14 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   std::vector<bool> valid;
   if (const pugi::xml_node link = Child(record3, "DataLink")) {
     const std::string data_file(Text(Required(name, link, "PointDataLink", "Record3/DataLink")));
-    if (!zip.Has(data_file)) FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
+    if (!zip.Has(data_file))
+      FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
     const std::size_t type_size = TypeSize(cz.data_type);
     const std::size_t expected = n * type_size;
     if (zip.DeclaredSize(data_file) != expected) {
       FailReading(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
-                     " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
-                     " bytes; " + kX3pReexport);
+                            " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
+                            " bytes; " + kX3pReexport);
     }
     const std::string data = zip.Read(data_file, expected);
     if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData")) {
@@ -287,7 +289,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       // A few writers pad the bit file; more than twice the size it needs is a lie about the sizes.
       if (declared < needed || declared > 2 * needed + 64) {
         FailReading(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
-                       " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
+                              " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
       }
       const std::string bits = zip.Read(valid_file, declared);
       if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints")) {
@@ -303,7 +305,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       if (datum.type() == pugi::node_element && LocalName(datum) == "Datum") ++count;
     }
     if (count != n) {
-      FailReading(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " + kX3pReexport);
+      FailReading(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " +
+                            kX3pReexport);
     }
     raw.resize(n);
     std::size_t i = 0;
@@ -317,13 +320,13 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
       const std::optional<double> value = ParseDouble(text);
       if (!value) {
         FailReading(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
-                       "', not a number; " + kX3pReexport);
+                              "', not a number; " + kX3pReexport);
       }
       raw[i++] = *value;
     }
   } else {
     FailReading(name, "main.xml <Record3> has neither a DataLink nor a DataList: the file holds no heights; " +
-                   std::string(kX3pReexport));
+                          std::string(kX3pReexport));
   }
 
   HeightMap map;
