@@ -10,6 +10,11 @@
 
 namespace fvm {
 
+// Wall-clock seconds since `start`: how long a job took, for its summary.
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // True when stderr is a terminal: the only place a redrawn line makes sense.
 bool StderrIsTerminal();
 

@@ -7,16 +7,10 @@
 
 #include "artefacts/tracker_sight.h"
 #include "core/input_error.h"
+#include "core/progress.h"
 #include "stage/monte_carlo.h"
 
 namespace fvm::workflows {
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 int PlacementPositions(const TrackerPlacementOptions& options) { return options.steps * options.steps * options.steps + 1; }
 
@@ -82,7 +76,7 @@ TrackerPlacement PlaceTracker(const MachineProblem& problem, const MachineRefere
   std::stable_sort(out.ranked.begin(), out.ranked.end(), [](const PlacementCandidate& a, const PlacementCandidate& b) {
     return a.predicted_max_um < b.predicted_max_um;
   });
-  out.propagation_seconds = Seconds(start);
+  out.propagation_seconds = SecondsSince(start);
 
   // The Monte Carlo confirms the best few and the current position.
   stage::MonteCarloOptions mc;
@@ -104,7 +98,7 @@ TrackerPlacement PlaceTracker(const MachineProblem& problem, const MachineRefere
     c.monte_carlo_max_um = 0;
     for (const stage::PointSpread& s : stage::PointSpreads(runs)) c.monte_carlo_max_um = std::max(c.monte_carlo_max_um, s.u95_mm * 1e3);
   }
-  out.seconds = Seconds(start);
+  out.seconds = SecondsSince(start);
   return out;
 }
 

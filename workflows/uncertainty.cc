@@ -8,6 +8,7 @@
 #include "artefacts/tracker_observations.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
+#include "core/progress.h"
 
 namespace fvm::workflows {
 namespace {
@@ -28,10 +29,6 @@ double ReadingSd(const std::vector<stage::Observation>& readings, bool own, cons
   double trace = 0;
   for (const stage::Observation& o : readings) trace += o.covariance.trace();
   return std::sqrt(trace / static_cast<double>(readings.size()));
-}
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace
@@ -69,7 +66,7 @@ MachineUncertainty RunMachineMonteCarlo(const MachineProblem& problem, const Mac
   }
   u.runs = stage::MachineMonteCarlo(reference.layout, reference.verification, readings, validation, problem.noise,
                                     problem.options, options);
-  u.seconds = Seconds(start);
+  u.seconds = SecondsSince(start);
   for (const stage::MachineMonteCarloRun& r : u.runs) {
     u.final_mean_um.push_back(r.final.mean_um());
     if (problem.validation) u.validation_mean_um.push_back(r.validation.mean_um());
@@ -108,7 +105,7 @@ StageUncertainty RunStageMonteCarlo(const StageUncertaintyOptions& options, cons
   u.runs = stage::StageMonteCarlo(options.model.Layout(), reference.identified, reference.identify,
                                   validate ? &*validate : nullptr, reference.sigma_mm,
                                   options.settings.ToOptions(reference.identify), OptionsOf(settings, false));
-  u.seconds = Seconds(start);
+  u.seconds = SecondsSince(start);
   for (const stage::StageMonteCarloRun& r : u.runs) {
     u.final_mean_um.push_back(r.fit_mean_mm * 1e3);
     if (validate) u.validation_mean_um.push_back(r.validation.mean_mm * 1e3), u.validation_rms_um.push_back(r.validation.rms_mm * 1e3);
