@@ -9,13 +9,13 @@
 #include <cstdio>
 
 #include "stage/fvm_stage_models.h"
+#include "tests/support/published_grid_row.h"
 
 namespace fvm::artefacts {
 namespace {
 
-// The published row: calottes 1 and 6 of the grid, 20 mm apart along x ([Pérez 2019] Table 1, case a).
-const Eigen::Vector3d kFirst(-154.5487, -115.4767, -50.3624);
-const Eigen::Vector3d kLast(-134.5409, -115.4371, -50.4457);
+using testing::kPublishedRowFirst;
+using testing::kPublishedRowLast;
 
 TEST(RenderedStitchingStrategy, AgreesWithTheCoordinateModelWithinRegistrationNoise) {
   // xTx1 = 0.075 mm per 100 mm of travel: 15 um over the row, the size of Table 1's cases b, e, f.
@@ -26,7 +26,7 @@ TEST(RenderedStitchingStrategy, AgreesWithTheCoordinateModelWithinRegistrationNo
   options.tile_px = 256;  // 6.3 um pixels: the 15 um error is 2.4 px, the registration noise a few hundredths
   for (const std::uint64_t seed : {1u, 2u}) {
     options.seed = seed;
-    const RenderedStrategies r = SimulateRenderedStrategies(layout, values, kFirst, kLast, options);
+    const RenderedStrategies r = SimulateRenderedStrategies(layout, values, kPublishedRowFirst, kPublishedRowLast, options);
     ASSERT_EQ(r.cases.size(), 6u);
     EXPECT_EQ(r.row_tiles, 17);
     EXPECT_EQ(r.rejected_pairs, 0);
@@ -61,7 +61,7 @@ TEST(RenderedStitchingStrategy, UnregistrableTilesFallBackToTheEncoders) {
   options.tile_px = 128;
   options.camera.contrast = 1.0;
   options.camera.noise = 100.0;  // a fraction of the contrast
-  const RenderedStrategies r = SimulateRenderedStrategies(layout, values, kFirst, kLast, options);
+  const RenderedStrategies r = SimulateRenderedStrategies(layout, values, kPublishedRowFirst, kPublishedRowLast, options);
   EXPECT_EQ(r.rejected_pairs, r.row_tiles - 1);
   const RenderedStrategyResult& a = r.cases[0];
   EXPECT_EQ(a.accepted_pairs, 0);
@@ -74,7 +74,7 @@ TEST(RenderedStitchingStrategy, RejectsACalotteLargerThanTheField) {
   const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
   RenderedStrategyOptions options;
   options.calotte_radius_mm = 1.0;  // 2 mm across, the 10x field is 1.62 mm
-  EXPECT_THROW(SimulateRenderedStrategies(layout, zeros, kFirst, kLast, options), std::invalid_argument);
+  EXPECT_THROW(SimulateRenderedStrategies(layout, zeros, kPublishedRowFirst, kPublishedRowLast, options), std::invalid_argument);
 }
 
 }  // namespace

@@ -3,19 +3,19 @@
 #include <gtest/gtest.h>
 
 #include "stage/fvm_stage_models.h"
+#include "tests/support/published_grid_row.h"
 
 namespace fvm::artefacts {
 namespace {
 
-// The published row: calottes 1 and 6 of the grid, 20 mm apart along x ([Pérez 2019] Table 1, case a).
-const Eigen::Vector3d kFirst(-154.5487, -115.4767, -50.3624);
-const Eigen::Vector3d kLast(-134.5409, -115.4371, -50.4457);
+using testing::kPublishedRowFirst;
+using testing::kPublishedRowLast;
 
 std::vector<StrategyResult> WithScaleError(double xtx1_mm) {
   stage::ParameterLayout layout = stage::FvmModelLayout("9");
   std::vector<double> values(static_cast<size_t>(layout.NumFree()), 0.0);
   values[static_cast<size_t>(layout.FreeIndexOf("xTx1"))] = xtx1_mm;  // positioning error of X, linear in x
-  return SimulateStitchingStrategies(layout, values, kFirst, kLast);
+  return SimulateStitchingStrategies(layout, values, kPublishedRowFirst, kPublishedRowLast);
 }
 
 TEST(StitchingStrategy, ReproducesThePublishedPattern) {
@@ -44,8 +44,8 @@ TEST(StitchingStrategy, ErrorScalesWithTheStageError) {
 TEST(StitchingStrategy, RejectsImpossibleOptions) {
   stage::ParameterLayout layout = stage::FvmModelLayout("9");
   const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
-  EXPECT_THROW(SimulateStitchingStrategies(layout, zeros, kFirst, kFirst), std::invalid_argument);
-  EXPECT_THROW(SimulateStitchingStrategies(layout, zeros, kFirst, kLast, StrategyOptions{1.62, 1.0}), std::invalid_argument);
+  EXPECT_THROW(SimulateStitchingStrategies(layout, zeros, kPublishedRowFirst, kPublishedRowFirst), std::invalid_argument);
+  EXPECT_THROW(SimulateStitchingStrategies(layout, zeros, kPublishedRowFirst, kPublishedRowLast, StrategyOptions{1.62, 1.0}), std::invalid_argument);
 }
 
 }  // namespace

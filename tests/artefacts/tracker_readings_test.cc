@@ -112,7 +112,7 @@ TEST(TrackerReadings, ApproachAndExtraColumnsAndSemicolons) {
 }
 
 // Every refusal names the file and line, and the point when a row is at fault.
-struct BadCase {
+struct BadReadingsCase {
   const char* name;
   const char* text;
   int line;
@@ -120,11 +120,11 @@ struct BadCase {
   const char* says;
 };
 
-class TrackerReadingsBadInput : public ::testing::TestWithParam<BadCase> {};
+class TrackerReadingsBadInput : public ::testing::TestWithParam<BadReadingsCase> {};
 
 TEST_P(TrackerReadingsBadInput, NamesFileLineAndPoint) {
   testing::TempDir dir;
-  const BadCase& c = GetParam();
+  const BadReadingsCase& c = GetParam();
   const auto path = dir.Write("bad.csv", c.text);
   const std::string message = InputErrorOf([&] { ReadTrackerReadings(path); });
   EXPECT_THAT(message, HasSubstr(path.string() + ":" + std::to_string(c.line) + ":"));
@@ -139,30 +139,30 @@ constexpr const char* kHeader = "id,x,y,z,xt,yt,zt\n";
 INSTANTIATE_TEST_SUITE_P(
     All, TrackerReadingsBadInput,
     ::testing::Values(
-        BadCase{"mixed", "# c\nid,x,y,z,xt,yt,zt,range\nP1,0,0,0,1,2,3,4\n", 2, "", "both Cartesian"},
-        BadCase{"neither", "id,x,y,z\nP1,0,0,0\n", 1, "", "no tracker coordinates"},
-        BadCase{"half_a_set", "id,x,y,z,range,azimuth\nP1,0,0,0,1,0\n", 1, "", "'elevation'"},
-        BadCase{"no_z", "id,x,y,xt,yt,zt\nP1,0,0,1,2,3\n", 1, "", "'z'"},
-        BadCase{"no_rows", "# only\nid,x,y,z,xt,yt,zt\n", 2, "", "no point rows"},
-        BadCase{"text", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,abc,0,1,2,3\n", 3, "P2", "not a number"},
-        BadCase{"nan", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP7,0,0,0,nan,2,3\n", 3, "P7", "xt"},
-        BadCase{"inf", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP8,0,0,0,1,inf,3\n", 3, "P8", "yt"},
-        BadCase{"empty_cell", "id,x,y,z,xt,yt,zt\nP9,0,0,0,1,2,\n", 2, "P9", "zt"},
-        BadCase{"duplicate", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,0,0,1,2,3\nP1,1,1,1,1,2,3\n", 4, "P1",
+        BadReadingsCase{"mixed", "# c\nid,x,y,z,xt,yt,zt,range\nP1,0,0,0,1,2,3,4\n", 2, "", "both Cartesian"},
+        BadReadingsCase{"neither", "id,x,y,z\nP1,0,0,0\n", 1, "", "no tracker coordinates"},
+        BadReadingsCase{"half_a_set", "id,x,y,z,range,azimuth\nP1,0,0,0,1,0\n", 1, "", "'elevation'"},
+        BadReadingsCase{"no_z", "id,x,y,xt,yt,zt\nP1,0,0,1,2,3\n", 1, "", "'z'"},
+        BadReadingsCase{"no_rows", "# only\nid,x,y,z,xt,yt,zt\n", 2, "", "no point rows"},
+        BadReadingsCase{"text", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,abc,0,1,2,3\n", 3, "P2", "not a number"},
+        BadReadingsCase{"nan", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP7,0,0,0,nan,2,3\n", 3, "P7", "xt"},
+        BadReadingsCase{"inf", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP8,0,0,0,1,inf,3\n", 3, "P8", "yt"},
+        BadReadingsCase{"empty_cell", "id,x,y,z,xt,yt,zt\nP9,0,0,0,1,2,\n", 2, "P9", "zt"},
+        BadReadingsCase{"duplicate", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP2,0,0,0,1,2,3\nP1,1,1,1,1,2,3\n", 4, "P1",
                 "first at line 2"},
-        BadCase{"empty_id", "id,x,y,z,xt,yt,zt\n,0,0,0,1,2,3\n", 2, "", "id is empty"},
-        BadCase{"negative_range", "id,x,y,z,range,azimuth,elevation\nP1,0,0,0,1000,0,0\nP2,0,0,0,-5,0,0\n", 3, "P2",
+        BadReadingsCase{"empty_id", "id,x,y,z,xt,yt,zt\n,0,0,0,1,2,3\n", 2, "", "id is empty"},
+        BadReadingsCase{"negative_range", "id,x,y,z,range,azimuth,elevation\nP1,0,0,0,1000,0,0\nP2,0,0,0,-5,0,0\n", 3, "P2",
                 "negative"},
-        BadCase{"elevation", "id,x,y,z,range,azimuth,elevation\nP3,0,0,0,1000,0,1.5708\n", 2, "P3", "pi/2"},
-        BadCase{"azimuth_degrees", "id,x,y,z,range,azimuth,elevation\nP4,0,0,0,1000,45,0.1\n", 2, "P4", "2 pi"},
-        BadCase{"range_um", "id,x,y,z,range,azimuth,elevation\nP5,0,0,0,1.5e8,0,0\n", 2, "P5", "100 m"},
-        BadCase{"nominal_um", "id,x,y,z,xt,yt,zt\nP6,2500000,0,0,1,2,3\n", 2, "P6", "100 m"},
-        BadCase{"measured_um", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP6,0,0,0,1,-100001,3\n", 3, "P6", "100 m"},
-        BadCase{"half_a_covariance", "id,x,y,z,xt,yt,zt,cxx,cyy,czz\nP1,0,0,0,1,2,3,1,1,1\n", 1, "",
+        BadReadingsCase{"elevation", "id,x,y,z,range,azimuth,elevation\nP3,0,0,0,1000,0,1.5708\n", 2, "P3", "pi/2"},
+        BadReadingsCase{"azimuth_degrees", "id,x,y,z,range,azimuth,elevation\nP4,0,0,0,1000,45,0.1\n", 2, "P4", "2 pi"},
+        BadReadingsCase{"range_um", "id,x,y,z,range,azimuth,elevation\nP5,0,0,0,1.5e8,0,0\n", 2, "P5", "100 m"},
+        BadReadingsCase{"nominal_um", "id,x,y,z,xt,yt,zt\nP6,2500000,0,0,1,2,3\n", 2, "P6", "100 m"},
+        BadReadingsCase{"measured_um", "id,x,y,z,xt,yt,zt\nP1,0,0,0,1,2,3\nP6,0,0,0,1,-100001,3\n", 3, "P6", "100 m"},
+        BadReadingsCase{"half_a_covariance", "id,x,y,z,xt,yt,zt,cxx,cyy,czz\nP1,0,0,0,1,2,3,1,1,1\n", 1, "",
                 "but not cxy,cxz,cyz"},
-        BadCase{"correlation_above_one", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP1,0,0,0,1,2,3,1e-4,2e-4,0,1e-4,0,1e-4\n",
+        BadReadingsCase{"correlation_above_one", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP1,0,0,0,1,2,3,1e-4,2e-4,0,1e-4,0,1e-4\n",
                 2, "P1", "not positive definite"},
-        BadCase{"negative_variance", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP2,0,0,0,1,2,3,-1e-4,0,0,1e-4,0,1e-4\n",
+        BadReadingsCase{"negative_variance", "id,x,y,z,xt,yt,zt,cxx,cxy,cxz,cyy,cyz,czz\nP2,0,0,0,1,2,3,-1e-4,0,0,1e-4,0,1e-4\n",
                 2, "P2", "not positive definite"}),
     [](const auto& info) { return std::string(info.param.name); });
 

@@ -14,8 +14,8 @@
 namespace fvm::imaging {
 namespace {
 
-const Eigen::Vector3d kCentre(412.345, -87.654, 231.5);
-constexpr double kRadius = 12.5;
+const Eigen::Vector3d kBallCentre(412.345, -87.654, 231.5);
+constexpr double kBallRadius = 12.5;
 
 // A 60-degree cap of 1 million points with 2 um noise along the normal, at random directions (fixed seed).
 const std::vector<Eigen::Vector3d>& MillionPoints(bool plane) {
@@ -29,8 +29,8 @@ const std::vector<Eigen::Vector3d>& MillionPoints(bool plane) {
       const double cos_t = 1 - (1 - min_cos) * uniform(rng), phi = 2 * M_PI * uniform(rng);
       const double sin_t = std::sqrt(1 - cos_t * cos_t);
       const Eigen::Vector3d u(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
-      p.push_back(flat ? Eigen::Vector3d(kCentre + 20 * u.cwiseProduct(Eigen::Vector3d(1, 1, 0)) + noise(rng) * Eigen::Vector3d::UnitZ())
-                       : Eigen::Vector3d(kCentre + (kRadius + noise(rng)) * u));
+      p.push_back(flat ? Eigen::Vector3d(kBallCentre + 20 * u.cwiseProduct(Eigen::Vector3d(1, 1, 0)) + noise(rng) * Eigen::Vector3d::UnitZ())
+                       : Eigen::Vector3d(kBallCentre + (kBallRadius + noise(rng)) * u));
     }
     return p;
   };
@@ -45,7 +45,7 @@ void BM_ShapeFitSphere1M(benchmark::State& state) {
     fit = FitShape(points);
     benchmark::DoNotOptimize(fit.centre_mm);
   }
-  state.counters["radius_err_nm"] = std::abs(fit.radius_mm - kRadius) * 1e6;
+  state.counters["radius_err_nm"] = std::abs(fit.radius_mm - kBallRadius) * 1e6;
   state.counters["u_radius_nm"] = fit.u_radius_mm * 1e6;
 }
 BENCHMARK(BM_ShapeFitSphere1M)->Unit(benchmark::kMillisecond);
@@ -71,7 +71,7 @@ void BM_AlgebraicSphere1M(benchmark::State& state) {
     sphere = FitSphereAlgebraic(points);
     benchmark::DoNotOptimize(sphere.centre_mm);
   }
-  state.counters["radius_err_nm"] = std::abs(sphere.radius_mm - kRadius) * 1e6;
+  state.counters["radius_err_nm"] = std::abs(sphere.radius_mm - kBallRadius) * 1e6;
 }
 BENCHMARK(BM_AlgebraicSphere1M)->Unit(benchmark::kMillisecond);
 

@@ -19,9 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Read(const fs::path& path) { return ReadFileBytes(path); }
-
-MachineReportData Sample() {
+MachineReportData SampleMachineReport() {
   MachineReportData data;
   data.title = "fvm verify: XFYZ order 2 <test>";
   data.summary = {{"points", "4"}};
@@ -56,24 +54,24 @@ class WriteMachineReportTest : public ::testing::Test {
 };
 
 TEST_F(WriteMachineReportTest, WritesThePageAndThreePlots) {
-  WriteMachineReport(root_ / "r", Sample());
+  WriteMachineReport(root_ / "r", SampleMachineReport());
   std::set<std::string> names;
   for (const auto& entry : fs::directory_iterator(root_ / "r")) names.insert(entry.path().filename().string());
   EXPECT_EQ(names, (std::set<std::string>{"index.html", "error_functions.svg", "volumetric_errors.svg", "error_map.svg"}));
-  const std::string page = Read(root_ / "r" / "index.html");
+  const std::string page = ReadFileBytes(root_ / "r" / "index.html");
   EXPECT_NE(page.find("XFYZ order 2 &lt;test&gt;"), std::string::npos);
   EXPECT_NE(page.find("<th scope=\"col\">coefficient</th>"), std::string::npos);
   EXPECT_NE(page.find("<td>same effect as 1 * pose_tx</td>"), std::string::npos);
-  const std::string functions = Read(root_ / "r" / "error_functions.svg");
+  const std::string functions = ReadFileBytes(root_ / "r" / "error_functions.svg");
   for (const char* label : {"xTx", "yRy", "zTz", "X translations", "Z rotations"}) {
     EXPECT_NE(functions.find(label), std::string::npos) << label;
   }
-  EXPECT_NE(Read(root_ / "r" / "volumetric_errors.svg").find("validation, after: n = 1"), std::string::npos);
+  EXPECT_NE(ReadFileBytes(root_ / "r" / "volumetric_errors.svg").find("validation, after: n = 1"), std::string::npos);
   for (const char* label : {"X position (mm)", ">error (µm)<", ">error (µrad)<"}) {
     EXPECT_NE(functions.find(label), std::string::npos) << label;
   }
   // Before and after side by side, each with its own disc scale under its heading.
-  const std::string map = Read(root_ / "r" / "error_map.svg");
+  const std::string map = ReadFileBytes(root_ / "r" / "error_map.svg");
   for (const char* label : {"XZ view, from the front", "XY view, from above", "Before: the ideal machine",
                             "After: the identified model"}) {
     EXPECT_NE(map.find(label), std::string::npos) << label;
@@ -85,7 +83,7 @@ TEST_F(WriteMachineReportTest, WritesThePageAndThreePlots) {
 
 TEST_F(WriteMachineReportTest, RefusesADirectoryItCannotWriteAndLeavesNothing) {
   std::ofstream(root_ / "file") << "x";
-  EXPECT_THROW(WriteMachineReport(root_ / "file" / "r", Sample()), InputError);
+  EXPECT_THROW(WriteMachineReport(root_ / "file" / "r", SampleMachineReport()), InputError);
   EXPECT_EQ(std::distance(fs::directory_iterator(root_), fs::directory_iterator()), 1);
 }
 

@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <sstream>
 #include <string>
 
+#include "core/file_io.h"
 #include "core/input_error.h"
 
 namespace fvm::cli {
@@ -19,14 +19,7 @@ namespace fs = std::filesystem;
 
 constexpr const char* kPlots[] = {"distance_errors.svg", "error_vectors.svg", "parameters.svg"};
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-ReportData Sample() {
+ReportData SampleReport() {
   ReportData data;
   data.title = "fvm calibrate: model 9 on samples/bar17";
   data.summary = {{"model", "9"}, {"placements", "4 identify, 2 validate"}, {"RMS after", "0.41 um"}};
@@ -56,21 +49,21 @@ class WriteReportTest : public ::testing::Test {
 
 TEST_F(WriteReportTest, WritesThePageAndThreeSvgPlotsAndNothingElse) {
   const fs::path dir = root_ / "report";
-  WriteReport(dir, Sample());
+  WriteReport(dir, SampleReport());
   std::set<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) names.insert(entry.path().filename().string());
   EXPECT_EQ(names, (std::set<std::string>{"index.html", kPlots[0], kPlots[1], kPlots[2]}));  // no temporaries
   for (const char* plot : kPlots) {
-    const std::string svg = Read(dir / plot);
+    const std::string svg = ReadFileBytes(dir / plot);
     EXPECT_TRUE(svg.starts_with("<?xml") || svg.find("<svg") != std::string::npos) << plot;
     EXPECT_NE(svg.find("</svg>"), std::string::npos) << plot << " is not a complete SVG document";
   }
 }
 
 TEST_F(WriteReportTest, PageShowsTitleSummaryAndEveryPlotWithoutExternalResources) {
-  const ReportData data = Sample();
+  const ReportData data = SampleReport();
   WriteReport(root_, data);
-  const std::string html = Read(root_ / "index.html");
+  const std::string html = ReadFileBytes(root_ / "index.html");
   EXPECT_NE(html.find("<title>" + data.title + "</title>"), std::string::npos);
   EXPECT_NE(html.find("<h1>" + data.title + "</h1>"), std::string::npos);
   for (const auto& [key, value] : data.summary) {
@@ -90,7 +83,7 @@ TEST_F(WriteReportTest, PageEscapesMarkupInTitleAndSummary) {
   data.title = "bar <17> & \"grid\"";
   data.summary = {{"a<b", "c&d"}};
   WriteReport(root_, data);
-  const std::string html = Read(root_ / "index.html");
+  const std::string html = ReadFileBytes(root_ / "index.html");
   EXPECT_NE(html.find("bar &lt;17&gt; &amp; &quot;grid&quot;"), std::string::npos);
   EXPECT_NE(html.find(">a&lt;b<"), std::string::npos);
   EXPECT_NE(html.find(">c&amp;d<"), std::string::npos);
@@ -100,8 +93,8 @@ TEST_F(WriteReportTest, PageEscapesMarkupInTitleAndSummary) {
 // Before and after on their own panels and bins: before spans 12 um (30 bins across 24 um round up to 1 um wide),
 // after 0.5 um (0.05 um bins); RMS 5.86 and 0.303 um by hand.
 TEST_F(WriteReportTest, HistogramsOfKnownDataEachOnTheirOwnBinsWithUnits) {
-  WriteReport(root_, Sample());
-  const std::string svg = Read(root_ / "distance_errors.svg");
+  WriteReport(root_, SampleReport());
+  const std::string svg = ReadFileBytes(root_ / "distance_errors.svg");
   EXPECT_NE(svg.find("distance error (µm)"), std::string::npos);
   EXPECT_NE(svg.find(">count<"), std::string::npos);
   EXPECT_NE(svg.find("Distance errors before compensation"), std::string::npos);
@@ -113,8 +106,8 @@ TEST_F(WriteReportTest, HistogramsOfKnownDataEachOnTheirOwnBinsWithUnits) {
 // Each panel its own magnification: before, 12 um longest over a 200 mm span (x 1000, a 10 um scale arrow); after,
 // 0.316 um longest (x 50000, a 0.2 um scale arrow), which at x 1000 would be a third of a millimetre.
 TEST_F(WriteReportTest, ErrorVectorPanelsShowStageAxesTravelAndTheirOwnScales) {
-  WriteReport(root_, Sample());
-  const std::string svg = Read(root_ / "error_vectors.svg");
+  WriteReport(root_, SampleReport());
+  const std::string svg = ReadFileBytes(root_ / "error_vectors.svg");
   EXPECT_NE(svg.find("stage x (mm)"), std::string::npos);
   EXPECT_NE(svg.find("stage y (mm)"), std::string::npos);
   EXPECT_NE(svg.find("dashed: stage travel 200 × 200 mm"), std::string::npos);
@@ -125,34 +118,34 @@ TEST_F(WriteReportTest, ErrorVectorPanelsShowStageAxesTravelAndTheirOwnScales) {
 }
 
 TEST_F(WriteReportTest, ParameterPlotHasOnePanelPerUnitAndEveryName) {
-  WriteReport(root_, Sample());
-  const std::string svg = Read(root_ / "parameters.svg");
+  WriteReport(root_, SampleReport());
+  const std::string svg = ReadFileBytes(root_ / "parameters.svg");
   EXPECT_NE(svg.find("value (µm)"), std::string::npos);
   EXPECT_NE(svg.find("value (µrad)"), std::string::npos);
   EXPECT_NE(svg.find("Parameters in µrad: value with ± 2u error bars (k = 2)"), std::string::npos);
-  for (const auto& p : Sample().parameters) EXPECT_NE(svg.find(">" + p.name + "<"), std::string::npos) << p.name;
+  for (const auto& p : SampleReport().parameters) EXPECT_NE(svg.find(">" + p.name + "<"), std::string::npos) << p.name;
 }
 
 TEST_F(WriteReportTest, EmptyDataStillGivesAReadablePage) {
   ReportData data;
   data.title = "nothing yet";
   ASSERT_NO_THROW(WriteReport(root_, data));
-  EXPECT_NE(Read(root_ / "distance_errors.svg").find("no distance errors"), std::string::npos);
-  EXPECT_NE(Read(root_ / "error_vectors.svg").find("no lateral errors"), std::string::npos);
-  EXPECT_NE(Read(root_ / "parameters.svg").find("no parameters"), std::string::npos);
+  EXPECT_NE(ReadFileBytes(root_ / "distance_errors.svg").find("no distance errors"), std::string::npos);
+  EXPECT_NE(ReadFileBytes(root_ / "error_vectors.svg").find("no lateral errors"), std::string::npos);
+  EXPECT_NE(ReadFileBytes(root_ / "parameters.svg").find("no parameters"), std::string::npos);
 }
 
 TEST_F(WriteReportTest, SameDataGivesSameBytes) {
-  WriteReport(root_ / "a", Sample());
-  WriteReport(root_ / "b", Sample());
+  WriteReport(root_ / "a", SampleReport());
+  WriteReport(root_ / "b", SampleReport());
   for (const char* name : {"index.html", kPlots[0], kPlots[1], kPlots[2]}) {
-    EXPECT_EQ(Read(root_ / "a" / name), Read(root_ / "b" / name)) << name;
+    EXPECT_EQ(ReadFileBytes(root_ / "a" / name), ReadFileBytes(root_ / "b" / name)) << name;
   }
 }
 
 TEST_F(WriteReportTest, CreatesMissingParentDirectories) {
   const fs::path dir = root_ / "x" / "y" / "report";
-  WriteReport(dir, Sample());
+  WriteReport(dir, SampleReport());
   EXPECT_TRUE(fs::is_regular_file(dir / "index.html"));
 }
 
@@ -161,13 +154,13 @@ TEST_F(WriteReportTest, UnwritableDirThrowsInputErrorNamingItAndLeavesNothing) {
   std::ofstream(file) << "not a directory\n";
   const fs::path dir = file / "report";
   try {
-    WriteReport(dir, Sample());
+    WriteReport(dir, SampleReport());
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(dir.string()), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir));
-  EXPECT_EQ(Read(file), "not a directory\n");
+  EXPECT_EQ(ReadFileBytes(file), "not a directory\n");
   std::set<std::string> names;
   for (const auto& entry : fs::directory_iterator(root_)) names.insert(entry.path().filename().string());
   EXPECT_EQ(names, std::set<std::string>{"plain-file"});
@@ -176,8 +169,8 @@ TEST_F(WriteReportTest, UnwritableDirThrowsInputErrorNamingItAndLeavesNothing) {
 TEST_F(WriteReportTest, DirThatIsAFileThrowsInputError) {
   const fs::path file = root_ / "report";
   std::ofstream(file) << "x";
-  EXPECT_THROW(WriteReport(file, Sample()), InputError);
-  EXPECT_EQ(Read(file), "x");
+  EXPECT_THROW(WriteReport(file, SampleReport()), InputError);
+  EXPECT_EQ(ReadFileBytes(file), "x");
 }
 
 TEST_F(WriteReportTest, KeepsTheCallersPlplotStreamCurrentAndUsable) {
@@ -188,13 +181,13 @@ TEST_F(WriteReportTest, KeepsTheCallersPlplotStreamCurrentAndUsable) {
   plsfnam((root_ / "mine.svg").c_str());
   plinit();
   plenv(0, 1, 0, 1, 0, 0);
-  WriteReport(root_ / "report", Sample());
+  WriteReport(root_ / "report", SampleReport());
   PLINT current = -1;
   plgstrm(&current);
   EXPECT_EQ(current, mine);
   pllab("x", "y", "Mine");
   plend1();
-  const std::string svg = Read(root_ / "mine.svg");
+  const std::string svg = ReadFileBytes(root_ / "mine.svg");
   EXPECT_NE(svg.find("&#x4d;&#x69;&#x6e;&#x65;"), std::string::npos) << "the caller's title went to its own file";
 }
 

@@ -25,11 +25,7 @@ void ExpectError(const std::filesystem::path& list, const std::string& part) {
   EXPECT_NE(message.find(part), std::string::npos) << message;
 }
 
-template <typename F>
-void ExpectInputError(F f, const std::string& part) {
-  const std::string message = testing::InputErrorOf(f);
-  EXPECT_NE(message.find(part), std::string::npos) << message;
-}
+using testing::ExpectInputError;
 
 TEST(FocusStackIo, ListResolvesRelativePathsAndRefusesBadStacks) {
   testing::TempDir dir;

@@ -20,10 +20,7 @@ namespace {
 
 using imaging::FocusMeasure;
 
-template <typename F>
-void ExpectInputError(F f, const std::string& part) {
-  EXPECT_NE(testing::InputErrorOf(f).find(part), std::string::npos) << testing::InputErrorOf(f);
-}
+using testing::ExpectInputError;
 
 struct HeightError {
   double rms_mm = 0.0, max_mm = 0.0;

@@ -17,6 +17,7 @@
 #include "stage/discrepancy.h"
 #include "stage/fvm_stage_models.h"
 #include "tests/stage/published_model.h"
+#include "tests/support/named_effects.h"
 
 namespace fvm::stage {
 namespace {
@@ -37,11 +38,7 @@ PublishedStage Stage(unsigned seed, bool linear, double bend_mm = 0.0) {
   return stage;
 }
 
-std::vector<std::string> Named(const Diagnosis& d) {
-  std::vector<std::string> out;
-  for (const DiagnosisStep& s : d.steps) out.push_back(s.effect);
-  return out;
-}
+using testing::Named;
 
 Diagnosis DiagnosePublished(const std::string& model, const PublishedMeasurements& m) {
   return Diagnose(FvmModelLayout(model), m.identify, m.validate);

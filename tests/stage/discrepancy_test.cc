@@ -12,6 +12,7 @@
 #include "artefacts/batch_observations.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "stage/fvm_stage_models.h"
+#include "tests/support/named_effects.h"
 #include "tests/support/test_models.h"
 
 namespace fvm::stage {
@@ -120,11 +121,7 @@ TEST(Discrepancy, NamesTheTurnOfTheStitchedFrame) {
   }
 }
 
-std::vector<std::string> Named(const Diagnosis& d) {
-  std::vector<std::string> out;
-  for (const DiagnosisStep& s : d.steps) out.push_back(s.effect);
-  return out;
-}
+using testing::Named;
 
 // The design a pair of hidden effects needs, as in tests/bench/discrepancy_pairs.sh: the 27 model; the 15 model
 // where a scale is hidden (27's linear terms take a scale about a shared start exactly, and no data of one

@@ -5,16 +5,13 @@
 #include <Eigen/LU>
 
 #include "stage/parameter_layout.h"
+#include "tests/stage/written_out_machine.h"
 #include "tests/support/test_models.h"
 
 namespace fvm::stage {
 namespace {
 
-Eigen::Matrix3d SmallRotation(const Eigen::Vector3d& e) {
-  Eigen::Matrix3d r;
-  r << 1, -e.z(), e.y(), e.z(), 1, -e.x(), -e.y(), e.x(), 1;
-  return r;
-}
+using testing::SmallRotation;
 
 struct TrackedMachine {
   ParameterLayout layout;

@@ -75,4 +75,11 @@ std::string InputErrorOf(F read) {
   return "";
 }
 
+// `f` throws an InputError whose message contains `part`.
+template <typename F>
+void ExpectInputError(F f, const std::string& part) {
+  const std::string message = InputErrorOf(f);
+  EXPECT_NE(message.find(part), std::string::npos) << message;
+}
+
 }  // namespace fvm::testing

@@ -17,7 +17,7 @@ namespace {
 // both agree with the plane within 0.2 step rms (the goal for walls is 0.1 step; the small 96 px stack
 // has fewer texture grains per window).
 TEST(ReconstructFocus, ImagesGivenAsFilesGiveSliceUnitsOrMillimetres) {
-  const testing::TempDir dir;
+  const fvm::testing::TempDir dir;
   const imaging::HeightMap plane = artefacts::TiltedPlane(96, 96, 0.001, 0.0105, 1e-3 / 0.096, 0.0);
   artefacts::FocusStackRenderOptions render;
   render.z_mm = artefacts::EvenZSteps(0.001, 0.001, 20);
