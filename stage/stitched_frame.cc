@@ -81,8 +81,11 @@ TurnFit FitTurn(const std::vector<Eigen::Vector3d>& residuals, const std::vector
   }
   // Directions with less than a percent of the measurement's lever arm (a flat bar's turn about its own length,
   // seen only through its tilt) are left out rather than amplified.
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a);
+  // The threshold must be set before the decomposition: the orthogonal factor Z is built for the rank found
+  // then, and a threshold lowered afterwards makes the solve read Z coefficients that were never computed.
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a.rows(), a.cols());
   cod.setThreshold(1e-2);
+  cod.compute(a);
   TurnFit fit;
   fit.solve = cod.pseudoInverse();
   fit.rotation = fit.solve * b;
