@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "artefacts/subpixel_bias.h"
+
 namespace fvm::artefacts {
 namespace {
 
@@ -178,6 +180,8 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
+  // What every pair shares and no residual shows: the registrations' pull towards whole pixels (subpixel_bias.h).
+  cal.covariance += SubpixelBiasCovariance(cal, set, pixel_mm);
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

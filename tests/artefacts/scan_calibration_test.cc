@@ -8,9 +8,13 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
 #include <random>
 #include <string>
 
+#include "artefacts/subpixel_bias.h"
 #include "artefacts/scan_observations.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "artefacts/simulation/scan_simulation.h"
@@ -230,6 +234,141 @@ TEST(ScanCalibration, ResidualsSplitIntoWhiteNoiseAndMisfit) {
   const ScanResidualSplit cycle = SplitScanResiduals(set, smooth);
   EXPECT_NEAR(cycle.misfit_mm, 3e-4 / std::sqrt(2.0), 0.1 * 3e-4);
   EXPECT_LT(cycle.white_ratio, 0.5 * 3e-4 / 1e-4);
+}
+
+
+// TEMPORARY experiment (issue 31): each pair's registration error against the truth, per scan.
+namespace experiment31 {
+
+Eigen::MatrixXd RigidFreeBasis(const std::vector<Eigen::Vector3d>& q) {
+  const auto m = static_cast<Eigen::Index>(q.size());
+  Eigen::MatrixXd rigid(2 * m, 3);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    rigid.row(2 * i) << 1, 0, -q[i].y();
+    rigid.row(2 * i + 1) << 0, 1, q[i].x();
+  }
+  return Eigen::HouseholderQR<Eigen::MatrixXd>(rigid).householderQ() * Eigen::MatrixXd::Identity(2 * m, 3);
+}
+
+std::vector<Eigen::Vector3d> BoxGrid(const std::vector<RegisteredScan>& scans) {
+  Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
+  for (const auto& scan : scans) for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
+  std::vector<Eigen::Vector3d> q;
+  for (int i = 0; i <= 10; ++i)
+    for (int j = 0; j <= 10; ++j)
+      q.emplace_back(lo.x() + (hi.x() - lo.x()) * i / 10.0, lo.y() + (hi.y() - lo.y()) * j / 10.0, scans.front().encoder_mm.front().z());
+  return q;
+}
+
+// rms over the grid of (truth - model) in xy less the rigid motion, um
+double ObservedRigidFree(const stage::Calibration& cal, const StageTruth& truth, const std::vector<Eigen::Vector3d>& q) {
+  const auto m = static_cast<Eigen::Index>(q.size());
+  Eigen::VectorXd b(2 * m);
+  for (Eigen::Index i = 0; i < m; ++i) b.segment<2>(2 * i) = (truth.Forward(q[i]) - stage::Forward(cal.layout, cal.values, q[i])).head<2>();
+  const Eigen::MatrixXd basis = RigidFreeBasis(q);
+  const Eigen::VectorXd r = b - basis * (basis.transpose() * b);
+  return std::sqrt(r.squaredNorm() / m) * 1e3;
+}
+
+double PredictedRigidFree(const stage::Calibration& cal, const Eigen::MatrixXd& covariance, const std::vector<Eigen::Vector3d>& q) {
+  const auto m = static_cast<Eigen::Index>(q.size());
+  Eigen::MatrixXd j(2 * m, covariance.rows());
+  for (Eigen::Index i = 0; i < m; ++i) j.middleRows(2 * i, 2) = stage::ForwardJacobian(cal.layout, cal.values.data(), q[i]).topRows(2);
+  const Eigen::MatrixXd basis = RigidFreeBasis(q);
+  const Eigen::MatrixXd seen = j - basis * (basis.transpose() * j);
+  return std::sqrt(std::max(0.0, (seen * covariance * seen.transpose()).trace()) / m) * 1e3;
+}
+
+}  // namespace experiment31
+
+TEST(ScanCalibration, DISABLED_RegistrationBiasExperiment) {
+  using namespace experiment31;
+  const char* px_env = std::getenv("FVM_EXP_PX");
+  const int px = px_env ? std::atoi(px_env) : 256;
+  const char* seeds_env = std::getenv("FVM_EXP_SEEDS");
+  const int seeds = seeds_env ? std::atoi(seeds_env) : 4;
+  for (unsigned seed = 1; seed <= static_cast<unsigned>(seeds); ++seed) {
+    StageTruth truth = PublishedSizeStage(seed);
+    if (const char* p = std::getenv("FVM_EXP_PERIODIC")) truth.periodic_um = std::atof(p);
+    const Scanned s = ScanAndRegister(truth, {-50.0}, px);
+    const stage::ParameterLayout layout = stage::FvmModelLayout("27");
+    const ScanCalibration fit = IdentifyFromScans(layout, s.scans, s.pixel_mm, 0.0, RotatedFrame());
+    std::vector<Eigen::Vector2d> error_mm;  // per observation, in the order of ScanDisplacements
+    std::vector<int> scan_of;
+    for (size_t si = 0; si < s.scans.size(); ++si) {
+      const RegisteredScan& scan = s.scans[si];
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero(), sum2 = Eigen::Vector2d::Zero(), frac = Eigen::Vector2d::Zero();
+      double u2 = 0;
+      int n = 0;
+      for (const imaging::PairRegistration& p : scan.registration.pairs) {
+        if (!p.accepted) continue;
+        const Eigen::Vector3d a = scan.encoder_mm[static_cast<size_t>(p.a)], b = scan.encoder_mm[static_cast<size_t>(p.b)];
+        const Eigen::Vector3d seen = 0.5 * (truth.Camera(a).inverse() + truth.Camera(b).inverse()) * (truth.Forward(b) - truth.Forward(a));
+        const Eigen::Vector2d seen_px(seen.x() / s.pixel_mm, -seen.y() / s.pixel_mm);
+        const Eigen::Vector2d e = p.offset_px - seen_px;
+        error_mm.emplace_back(e.x() * s.pixel_mm, -e.y() * s.pixel_mm);
+        scan_of.push_back(static_cast<int>(si));
+        sum += e, sum2 += e.cwiseProduct(e), ++n;
+        frac += seen_px - seen_px.array().round().matrix();
+        u2 += p.information.inverse().trace() / 2;
+      }
+      const Eigen::Vector2d mean = sum / n, sd = (sum2 / n - mean.cwiseProduct(mean)).cwiseSqrt();
+      std::printf("seed %u %s: n %d mean err %+.4f %+.4f px (se %.4f %.4f) sd %.4f %.4f px, own sd %.4f px, mean frac %+.3f %+.3f\n",
+                  seed, scan.name.c_str(), n, mean.x(), mean.y(), sd.x() / std::sqrt(n), sd.y() / std::sqrt(n), sd.x(), sd.y(),
+                  std::sqrt(u2 / n), frac.x() / n, frac.y() / n);
+    }
+    {
+      // The registrations' error against their fractional shift, pooled over the scans: e = -k f and e = -k sin(2 pi f) / (2 pi).
+      for (int c = 0; c < 2; ++c) {
+        double ef = 0, ff = 0, es = 0, ss = 0;
+        for (const RegisteredScan& scan : s.scans) {
+          for (const imaging::PairRegistration& p : scan.registration.pairs) {
+            if (!p.accepted) continue;
+            const Eigen::Vector3d a = scan.encoder_mm[static_cast<size_t>(p.a)], b = scan.encoder_mm[static_cast<size_t>(p.b)];
+            const Eigen::Vector3d seen = 0.5 * (truth.Camera(a).inverse() + truth.Camera(b).inverse()) * (truth.Forward(b) - truth.Forward(a));
+            const Eigen::Vector2d seen_px(seen.x() / s.pixel_mm, -seen.y() / s.pixel_mm);
+            const double e = (p.offset_px - seen_px)(c), f = seen_px(c) - std::round(seen_px(c)), sn = std::sin(2 * M_PI * f) / (2 * M_PI);
+            ef += e * f, ff += f * f, es += e * sn, ss += sn * sn;
+          }
+        }
+        std::printf("seed %u coordinate %d: gain on f %.4f, on sin %.4f\n", seed, c, -ef / ff, -es / ss);
+      }
+    }
+    const auto refit = [&](const std::function<Eigen::Vector2d(size_t)>& measured) {
+      stage::MeasurementSet set = fit.set;
+      for (size_t i = 0; i < set.observations.size(); ++i) set.observations[i].measured.head<2>() = measured(i);
+      stage::IdentificationOptions options = RotatedFrame();
+      options.anchors = set.anchors;
+      return stage::Identify(layout, set.observations, options).calibration;
+    };
+    std::vector<Eigen::Vector2d> scan_mean(s.scans.size(), Eigen::Vector2d::Zero());
+    std::vector<int> scan_n(s.scans.size(), 0);
+    for (size_t i = 0; i < error_mm.size(); ++i) scan_mean[scan_of[i]] += error_mm[i], ++scan_n[scan_of[i]];
+    for (size_t k = 0; k < scan_mean.size(); ++k) scan_mean[k] /= scan_n[k];
+    const stage::Calibration exact = refit([&](size_t i) { return Eigen::Vector2d(fit.set.observations[i].measured.head<2>() - error_mm[i]); });
+    const stage::Calibration debiased = refit([&](size_t i) { return Eigen::Vector2d(fit.set.observations[i].measured.head<2>() - scan_mean[scan_of[i]]); });
+    const stage::Calibration bias_only = refit([&](size_t i) { return Eigen::Vector2d(fit.set.observations[i].measured.head<2>() - error_mm[i] + scan_mean[scan_of[i]]); });
+    StageTruth poly = truth;
+    poly.periodic_um = 0.0;
+    const std::vector<Eigen::Vector3d> grid = BoxGrid(s.scans);
+    const stage::Calibration& cal = fit.result.calibration;
+    std::printf("seed %u: observed rigid-free %.3f um (poly %.3f) | errors removed %.3f (poly %.3f) | scan means removed %.3f (poly %.3f) | "
+                "only scan means %.3f (poly %.3f)\n",
+                seed, ObservedRigidFree(cal, truth, grid), ObservedRigidFree(cal, poly, grid), ObservedRigidFree(exact, truth, grid),
+                ObservedRigidFree(exact, poly, grid), ObservedRigidFree(debiased, truth, grid), ObservedRigidFree(debiased, poly, grid),
+                ObservedRigidFree(bias_only, truth, grid), ObservedRigidFree(bias_only, poly, grid));
+    const Eigen::MatrixXd gain = SubpixelBiasCovariance(cal, fit.set, s.pixel_mm);
+    const double coef_white = PredictedRigidFree(cal, cal.covariance, grid);
+    const double coef_all = PredictedRigidFree(cal, cal.covariance + gain, grid);
+    const double total = std::hypot(coef_all, fit.split.misfit_mm * 1e3);
+    const double observed = ObservedRigidFree(cal, truth, grid);
+    std::printf("seed %u: predicted coef white %.3f, gain alone %.3f, both %.3f, with misfit %.3f | observed %.3f (poly %.3f) ratio %.2f\n", seed,
+                coef_white, PredictedRigidFree(cal, gain, grid), coef_all, total, observed, ObservedRigidFree(cal, poly, grid), observed / total);
+    std::printf("seed %u: predicted rigid-free coef %.3f um, misfit %.3f um, white %.3f, weighted rms %.3f, CompareInXy %.3f\n", seed,
+                PredictedRigidFree(cal, cal.covariance, grid), fit.split.misfit_mm * 1e3, fit.split.white_ratio, fit.result.weighted_rms,
+                CompareInXy(cal, truth, -50.0).rms_um);
+    std::fflush(stdout);
+  }
 }
 
 }  // namespace
