@@ -18,10 +18,10 @@
 
 namespace fvm::artefacts {
 
-// k's standard uncertainty: the gain fitted to the registrations' errors against the truth of rendered scans
-// (ground texture to 0.25 cycles/px, 256 px tiles, Lanczos-4 matching; seeds 1-4 of the scan simulator) is
-// 0.005-0.009 in x and 0.014-0.018 in y; their rms.
-constexpr double kSubpixelGainU = 0.013;
+// k's standard uncertainty, a Type B figure of the registration (imaging/subpixel_refinement.h): the gain fitted
+// to the registrations' errors against the truth of rendered scans (ground texture to 0.25 cycles/px, 256 px tiles,
+// seeds 1-8 of the scan simulator) is 0.002-0.022 in x and 0.013-0.020 in y, 0.014 rms over the 16.
+constexpr double kSubpixelGainU = 0.014;
 
 // The coefficients' covariance from the sub-pixel gain's uncertainty `gain_u`, for displacement observations
 // (ScanDisplacements: measured (o_x p, -o_y p) from the registered offset o px and the pixel size p).
