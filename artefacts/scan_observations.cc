@@ -7,7 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "artefacts/subpixel_bias.h"
+#include "artefacts/scan_correlated_errors.h"
 
 namespace fvm::artefacts {
 namespace {
@@ -180,8 +180,10 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
-  // What every pair shares and no residual shows: the registrations' pull towards whole pixels (subpixel_bias.h).
-  cal.covariance += SubpixelBiasCovariance(cal, set, pixel_mm);
+  // What the pairs of a scan share and the white part does not model: the registrations' pull towards whole
+  // pixels, and what of the misfit the coefficients took up (scan_correlated_errors.h).
+  const ScanCorrelatedErrors correlated = ScanCorrelatedErrorCovariances(cal, set, result.residuals, pixel_mm);
+  cal.covariance += correlated.subpixel_bias + correlated.misfit;
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

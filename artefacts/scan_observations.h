@@ -64,9 +64,10 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
 
 // The stage model from the scans' displacements, one estimator with the artefact batch's (stage::Identify with
 // `options`, whose frame and first anchor the scans' set supplies): the coefficients' covariance scaled by the
-// residuals' white part instead of all of them, widened by the registrations' sub-pixel bias that every pair
-// shares (subpixel_bias.h), and, with a pixel size uncertainty, by the fit's sensitivity to the pixel size (one
-// refit at p + u: the fit is linear in the scale of its data).
+// residuals' white part instead of all of them, widened by what the pairs of a scan share (the registrations'
+// sub-pixel bias, the misfit the coefficients took up: scan_correlated_errors.h), and, with a pixel size
+// uncertainty, by the fit's sensitivity to the pixel size (one refit at p + u: the fit is linear in the scale of its
+// data).
 struct ScanCalibration {
   stage::IdentificationResult result;
   ScanResidualSplit split;

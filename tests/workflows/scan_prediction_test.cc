@@ -66,7 +66,7 @@ double ObservedRigidFreeXyUm(const stage::Calibration& cal, const artefacts::Sta
 
 // The figure `fvm calibrate --scan` prints (the coefficients' share with the misfit along the scans) against the
 // error seen, on seeds 1-4. One calibration draws the registrations' sub-pixel gain once per coordinate
-// (subpixel_bias.h), so its error scatters about the prediction like a chi-square of a few degrees of freedom
+// (scan_correlated_errors.h), so its error scatters about the prediction like a chi-square of a few degrees of freedom
 // (observed / predicted on seeds 1-4: 1.28, 0.97, 1.25, 0.83; pooled 1.05; seeds 5-8 pooled 1.16): the ratio is
 // judged on the mean squares pooled over the four, within 0.8-1.25 as issue 31 asks, and each seed within a
 // factor of two.
