@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "artefacts/scan_observations.h"
 #include "stage/parameter_layout.h"
 
 namespace fvm::artefacts {
@@ -35,8 +36,7 @@ ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& ca
     }
     bias(1, 1) = -bias(1, 1);
     pulled += weighted.back() * bias;
-    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-    if (!continues) runs.emplace_back();
+    if (!ContinuesRun(set, i)) runs.emplace_back();
     runs.back().push_back(i);
   }
   const Eigen::LDLT<Eigen::MatrixXd> solve(normal);

@@ -127,6 +127,11 @@ stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, do
   return set;
 }
 
+bool ContinuesRun(const stage::MeasurementSet& set, size_t i) {
+  const stage::Observation& o = set.observations[i];
+  return i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
+}
+
 ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
   ScanResidualSplit out;
   double white = 0.0, misfit = 0.0;
@@ -146,8 +151,7 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   std::vector<Eigen::Vector2d> run;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const stage::Observation& o = set.observations[i];
-    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-    if (!continues) {
+    if (!ContinuesRun(set, i)) {
       close_run();
       chained.push_back(Eigen::Vector2d::Zero());
       run.clear();

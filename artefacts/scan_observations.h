@@ -47,6 +47,10 @@ stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans
 // correlation along the chain. Only to show what the correlation changes.
 stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, double pixel_mm);
 
+// Whether displacement i continues the run of consecutive pairs of displacement i - 1: the same scan, starting
+// where that one ended (a rejected pair ends a run).
+bool ContinuesRun(const stage::MeasurementSet& set, size_t i);
+
 // What a fit to ScanDisplacements leaves, told apart by how it behaves along each chain. Registration noise is
 // independent pair to pair; what the model cannot take (a lead screw's cycle, a higher order) changes smoothly from
 // pair to pair and does not random-walk when the displacements are chained. Scaling the coefficients' covariance by
