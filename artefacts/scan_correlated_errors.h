@@ -15,9 +15,9 @@
 //   character its residuals show: each scan's residuals shifted circularly by every lag stand for misfits that
 //   could as well have been, and the spread of the coefficients' response to them is the misfit's share.
 //
-// Both propagate through the fit linearised in xy: the coefficients move by (J^T W J)^-1 J^T W e for displacement
-// errors e, J the displacements' Jacobian (their turn, tens of microradians, left out), W the registrations'
-// information.
+// Both propagate through the fit linearised: the coefficients move by (J^T W J)^-1 J^T W e for displacement errors
+// e, J the displacements' Jacobian (their turn, tens of microradians, left out), W the registrations' information
+// (z only where height-map tiles gave a pair its height step).
 
 #include <Eigen/Core>
 #include <vector>
