@@ -2,7 +2,7 @@
 # The one entry script: installs what is missing (Debian packages, as root), configures and builds fvm, then
 #   bash run.sh sample     calibrates the bundled sample batch and prints the result
 #   bash run.sh test       what CI runs: the Release suite, then the sanitizer suite, then 2000 fuzzing executions
-#                          per reader (about an hour from scratch on 2 cores)
+#                          per reader (about 30 minutes from scratch on 2 cores)
 #   bash run.sh quick      the Release suite only (build/), with the fuzzers' regression inputs through the CLI, then
 #                          the Python module's tests (pytest)
 #   bash run.sh sanitize   the same tests built with AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)

@@ -29,8 +29,9 @@ std::string QuotedForMessage(std::string_view text);
 std::string FormatShortest(double value);
 std::string FormatShortest(float value);
 
-// `value` rounded to the nearest multiple of 1 / per_unit (per_unit 1e4: 0.1 nm in um), so that JSON for scripts
-// does not carry the last bits of a computation.
+// `value` rounded to the nearest multiple of 1 / per_unit (per_unit 1e4: 0.1 nm in um; 1e7: 0.1 nm in mm), so that
+// JSON for scripts keeps 0.1 nm: finer digits are floating-point noise, coarser would throw information away.
+// Dividing by the power of ten (not multiplying by its inverse) gives the double that prints as the short decimal.
 double RoundTo(double value, double per_unit);
 
 // Fixed notation with `decimals` digits after '.', as printf("%.*f") in the C locale, whatever the locale.

@@ -89,9 +89,6 @@ std::string Fixed(double v, int decimals) {
   return s;
 }
 
-// JSON keeps 0.1 nm: finer digits are floating-point noise, coarser would throw information away. Dividing by
-// the power of ten (not multiplying by its inverse) gives the double that prints as the short decimal.
-
 void PrintTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
   std::vector<size_t> width(header.size());
   for (size_t c = 0; c < header.size(); ++c) {

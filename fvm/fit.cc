@@ -16,6 +16,7 @@
 #include "artefacts/geometry/artefact.h"
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "fvm/commands.h"
 #include "fvm/fit_shape.h"
 #include "fvm/surface_read_args.h"
@@ -47,8 +48,6 @@ std::optional<artefacts::Artefact> NamedArtefact(const std::string& name) {
   if (name.empty()) return std::nullopt;
   return artefacts::KnownArtefact(name);
 }
-
-// JSON keeps 0.1 nm for mm values and 0.1 nm for um values (as fvm diff): finer digits are noise.
 
 void RunFit(const FitArgs& args) {
   if (!args.shape.empty()) {

@@ -8,6 +8,7 @@
 
 #include "core/exit_codes.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "imaging/io/surface_file.h"
 #include "imaging/point_cloud.h"
 #include "imaging/shape_fit.h"
@@ -28,7 +29,6 @@ std::vector<Eigen::Vector3d> ReadPoints(const ShapeFitArgs& args) {
   }
   return valid;
 }
-
 
 nlohmann::ordered_json Uncertainty(bool known, double value_um) {
   return known ? nlohmann::ordered_json(RoundTo(value_um, 1e4)) : nlohmann::ordered_json(nullptr);

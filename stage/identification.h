@@ -43,7 +43,7 @@ struct Observation {
   // how far the instrument saw the part move from stage position `from` to `command`, in its camera's frame; the
   // model predicts T (F(command) - F(from)) with T the mean of the two positions' turns relative to the frame
   // reference (stitched_frame.h; identity in the translated frame). It needs no anchor: a displacement has none.
-  std::optional<Eigen::Vector3d> from;
+  std::optional<Eigen::Vector3d> from = std::nullopt;
 };
 
 // Observations with what identification, validation and diagnosis need to know about them.

@@ -6,11 +6,12 @@
 // Numbering. The stitched surface is numbered by the artefact's nominal layout (imaging/calotte_numbering.h). A bar
 // measured along y fits turned by +90 and -90 degrees equally; then the numbering expecting a turn 45 degrees on
 // is taken: which of the two labels the calottes get is immaterial, as ids only pair the two exports of one
-// placement (the bar is uncalibrated: no id is compared across placements). The stitching-free surface is then numbered expecting the stitched surface's rotation (both see the
-// part through the same stage within tens of microradians), so the two numberings agree or fail visibly. They
-// must then hold the same calottes, and no calotte may lie further from its partner than a quarter of the
-// artefact's smallest spacing: the stitched export lies at its first tile's stage reading (ARCHITECTURE.md
-// section 3), so the two differ by the stage error, a fraction of that. Otherwise the batch is refused with the
+// placement (the bar is uncalibrated: no id is compared across placements). The stitching-free surface is then
+// numbered expecting the stitched surface's rotation (both see the part through the same stage within tens of
+// microradians), so the two numberings agree or fail visibly. They must then hold the same calottes, and no
+// calotte may lie further from its partner than a quarter of the artefact's smallest spacing: the stitched
+// export lies at its first tile's stage reading (README, "The stitched frame"), so the two differ by the stage
+// error, a fraction of that. Otherwise the batch is refused with the
 // calotte ids named. Both surfaces must therefore carry their stage position (X3P axes' offsets).
 //
 // Folders of stitching-free tiles (one file per calotte with its stage position) are not read yet: one surface per

@@ -72,7 +72,7 @@ struct SimulatedFvmBatch {
   FvmBatchTruth truth;
   // The same placements without centre noise (and without the hidden outliers, failed fits of centre exports):
   // where the calottes of each export really are, for rendering the exports' surfaces (raw_export_simulation.h).
-  Batch exact;
+  Batch exact = {};
 };
 
 SimulatedFvmBatch SimulateFvmBatch(const FvmBatchOptions& options);

@@ -183,13 +183,13 @@ void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud,
     }
     if (!extra.empty()) {
       text += "x y z";
-      for (const PointField& field : extra) text += " " + field.name;
+      for (const PointField& field : extra) (text += ' ') += field.name;
       text += "\n";
     }
     for (std::size_t i = 0; i < cloud.points.size(); ++i) {
       const Eigen::Vector3d& p = cloud.points[i];
       text += FormatShortest(p.x()) + " " + FormatShortest(p.y()) + " " + FormatShortest(p.z());
-      for (const PointField& field : extra) text += " " + FormatShortest(field.values[i]);
+      for (const PointField& field : extra) (text += ' ') += FormatShortest(field.values[i]);
       text += "\n";
     }
     WriteFileAtomically(path, text);

@@ -86,7 +86,7 @@ TEST(MultilaterationSimulation, SeededReadingsWithThePresetNoise) {
   const std::vector<Station> stations = {{"A", Eigen::Vector3d(0, 0, 0)}, {"B", Eigen::Vector3d(3000, 0, 0)},
                                          {"C", Eigen::Vector3d(0, 3000, 500)}};
   std::vector<std::pair<std::string, Eigen::Vector3d>> targets;
-  for (int j = 0; j < 200; ++j) targets.emplace_back("P" + std::to_string(j), Eigen::Vector3d(1000 + j, 800, 600 + j));
+  for (int j = 0; j < 200; ++j) targets.emplace_back(std::string("P").append(std::to_string(j)), Eigen::Vector3d(1000 + j, 800, 600 + j));
   const stage::TrackerNoise noise = stage::TrackerNoise::Preset("published");
   const auto a = SimulateMultilaterationReadings(stations, targets, {}, noise, 7);
   const auto b = SimulateMultilaterationReadings(stations, targets, {}, noise, 7);

@@ -23,7 +23,7 @@ struct Case {
   std::string model;  // base model = the truth's model (the effect is what it lacks)
   double height_step_mm = 0.0;
   bool serpentine = false;
-  std::string terms;  // a base model of one's own (stage::ComposeLayout) instead of `model`
+  std::string terms = {};  // a base model of one's own (stage::ComposeLayout) instead of `model`
 };
 
 // One effect hidden at a time: the exports keep the translated frame, since the turn of a stitched frame is itself
@@ -153,7 +153,9 @@ TEST(Discrepancy, NamesTwoEffectsHiddenTogether) {
         ++cases;
         passed += ok;
         if (!ok) failed += " " + effects[a] + "," + effects[b] + "/" + std::to_string(seed);
-        if (!d.steps.empty()) EXPECT_EQ(*d.effect, d.steps.front().effect);  // the first effect stays where scripts read it
+        if (!d.steps.empty()) {
+          EXPECT_EQ(*d.effect, d.steps.front().effect);  // the first effect stays where scripts read it
+        }
       }
     }
   }

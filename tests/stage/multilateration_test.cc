@@ -44,7 +44,7 @@ MultilaterationProblem Readings(const std::vector<Vec>& stations, const std::vec
   for (size_t i = 0; i < stations.size(); ++i) p.station_names.push_back(std::string(1, static_cast<char>('A' + i)));
   p.stations = stations;
   for (size_t j = 0; j < points.size(); ++j) {
-    p.point_ids.push_back("P" + std::to_string(j + 1));
+    p.point_ids.push_back(std::string("P").append(std::to_string(j + 1)));
     for (size_t i = 0; i < stations.size(); ++i) {
       const Vec d = points[j] - stations[i];
       const double r = d.norm();
