@@ -308,8 +308,8 @@ void RunScans(const CalibrateArgs& args) {
                               {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover, "
                                        "less the offset and the turn about z no registered image can tell: from the "
                                        "coefficients' covariance (pair weights, the white part of the residuals, the "
-                                       "registrations' sub-pixel bias), and what the model leaves along the scans "
-                                       "(misfit), combined"}};
+                                       "registrations' sub-pixel bias, the misfit the coefficients took up), and what "
+                                       "the model leaves along the scans (misfit), combined"}};
   const std::optional<stage::MeasurementSet>& validate = scan_result.validation;
   const std::optional<BeforeAfter>& judged = scan_result.judged;
   if (judged) {
