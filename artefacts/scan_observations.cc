@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "artefacts/scan_correlated_errors.h"
+
 namespace fvm::artefacts {
 namespace {
 
@@ -125,6 +127,11 @@ stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, do
   return set;
 }
 
+bool ContinuesRun(const stage::MeasurementSet& set, size_t i) {
+  const stage::Observation& o = set.observations[i];
+  return i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
+}
+
 ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
   ScanResidualSplit out;
   double white = 0.0, misfit = 0.0;
@@ -144,8 +151,7 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   std::vector<Eigen::Vector2d> run;
   for (size_t i = 0; i < set.observations.size(); ++i) {
     const stage::Observation& o = set.observations[i];
-    const bool continues = i > 0 && o.from && set.observations[i - 1].group == o.group && *o.from == set.observations[i - 1].command;
-    if (!continues) {
+    if (!ContinuesRun(set, i)) {
       close_run();
       chained.push_back(Eigen::Vector2d::Zero());
       run.clear();
@@ -178,6 +184,10 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
+  // What the pairs of a scan share and the white part does not model: the registrations' pull towards whole
+  // pixels, and what of the misfit the coefficients took up (scan_correlated_errors.h).
+  const ScanCorrelatedErrors correlated = ScanCorrelatedErrorCovariances(cal, set, result.residuals, pixel_mm);
+  cal.covariance += correlated.subpixel_bias + correlated.misfit;
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

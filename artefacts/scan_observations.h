@@ -47,6 +47,10 @@ stage::MeasurementSet ScanDisplacements(const std::vector<RegisteredScan>& scans
 // correlation along the chain. Only to show what the correlation changes.
 stage::MeasurementSet ScanPositions(const std::vector<RegisteredScan>& scans, double pixel_mm);
 
+// Whether displacement i continues the run of consecutive pairs of displacement i - 1: the same scan, starting
+// where that one ended (a rejected pair ends a run).
+bool ContinuesRun(const stage::MeasurementSet& set, size_t i);
+
 // What a fit to ScanDisplacements leaves, told apart by how it behaves along each chain. Registration noise is
 // independent pair to pair; what the model cannot take (a lead screw's cycle, a higher order) changes smoothly from
 // pair to pair and does not random-walk when the displacements are chained. Scaling the coefficients' covariance by
@@ -64,8 +68,10 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
 
 // The stage model from the scans' displacements, one estimator with the artefact batch's (stage::Identify with
 // `options`, whose frame and first anchor the scans' set supplies): the coefficients' covariance scaled by the
-// residuals' white part instead of all of them, and, with a pixel size uncertainty, widened by the fit's
-// sensitivity to the pixel size (one refit at p + u: the fit is linear in the scale of its data).
+// residuals' white part instead of all of them, widened by what the pairs of a scan share (the registrations'
+// sub-pixel bias, the misfit the coefficients took up: scan_correlated_errors.h), and, with a pixel size
+// uncertainty, by the fit's sensitivity to the pixel size (one refit at p + u: the fit is linear in the scale of its
+// data).
 struct ScanCalibration {
   stage::IdentificationResult result;
   ScanResidualSplit split;

@@ -305,9 +305,11 @@ void RunScans(const CalibrateArgs& args) {
                               {"model_misfit_along_scans", misfit_um},
                               {"combined", std::hypot(predicted_um, misfit_um)},
                               {"white_residual_ratio", split.white_ratio},
-                              {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover: "
-                                       "from the coefficients' covariance (pair weights, the white part of the "
-                                       "residuals), and what the model leaves along the scans (misfit), combined"}};
+                              {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover, "
+                                       "less the offset and the turn about z no registered image can tell: from the "
+                                       "coefficients' covariance (pair weights, the white part of the residuals, the "
+                                       "registrations' sub-pixel bias, the misfit the coefficients took up), and what "
+                                       "the model leaves along the scans (misfit), combined"}};
   const std::optional<stage::MeasurementSet>& validate = scan_result.validation;
   const std::optional<BeforeAfter>& judged = scan_result.judged;
   if (judged) {
@@ -348,8 +350,8 @@ void RunScans(const CalibrateArgs& args) {
              "covariances say)\n", result.residual_summary.rms_um(), result.weighted_rms);
   fmt::print("  the residuals' white part is {:.2f} x the registrations' covariance; chained along the scans they leave "
              "{:.3f} um rms that the model cannot take\n", split.white_ratio, misfit_um);
-  fmt::print("  predicted xy stage-error uncertainty over the scanned box (k=1): {:.3f} um rms from the coefficients",
-             predicted_um);
+  fmt::print("  predicted xy stage-error uncertainty over the scanned box, less its offset and turn about z (k=1): {:.3f} um rms "
+             "from the coefficients", predicted_um);
   if (args.pixel_u_mm > 0.0) fmt::print(" ({:.3f} um without the pixel size's)", without_pixel_um);
   fmt::print(", {:.3f} um with the misfit\n", std::hypot(predicted_um, misfit_um));
   fmt::print("  the same positions as independent points of equal weight: {:.3f} um (the chain's correlation ignored)\n",

@@ -1,5 +1,7 @@
 #include "workflows/calibrate.h"
 
+#include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -7,6 +9,7 @@
 #include "artefacts/batch_observations.h"
 #include "core/input_error.h"
 #include "stage/calibration.h"
+#include "stage/parameter_layout.h"
 
 namespace fvm::workflows {
 
@@ -37,23 +40,30 @@ BatchCalibration CalibrateBatch(const artefacts::Batch& batch, const CalibrateOp
 namespace {
 
 // The standard uncertainty (k = 1) of the xy stage error a calibration predicts, rms over an 11 x 11 grid of the
-// box the scans cover, um: the figure that compares weightings and the pixel size's share.
+// box the scans cover (at the first tile's height), um, less the rigid motion in xy (an offset and a turn about z)
+// that no registered image can tell: the result's frame fixes it by convention (the first tile's), and any
+// comparison with another calibration or a truth removes it. It is what the coefficients' covariance says of the
+// error field once that motion is projected out of the field's Jacobian.
 double PredictedXyUm(const stage::Calibration& calibration, const std::vector<artefacts::RegisteredScan>& scans) {
   Eigen::Vector3d lo = scans.front().encoder_mm.front(), hi = lo;
   for (const auto& scan : scans) {
     for (const Eigen::Vector3d& e : scan.encoder_mm) lo = lo.cwiseMin(e), hi = hi.cwiseMax(e);
   }
-  double sum = 0.0;
-  int count = 0;
-  for (int i = 0; i <= 10; ++i) {
-    for (int j = 0; j <= 10; ++j) {
-      const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * i / 10.0, lo.y() + (hi.y() - lo.y()) * j / 10.0, lo.z());
-      const Eigen::Matrix3d c = stage::Correct(calibration, q).covariance;
-      sum += c(0, 0) + c(1, 1);
-      ++count;
-    }
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+  constexpr int kSide = 11, kPoints = kSide * kSide;
+  const auto n = static_cast<Eigen::Index>(calibration.values.size());
+  if (n == 0 || calibration.covariance.rows() != n) return 0.0;
+  Eigen::MatrixXd field(2 * kPoints, n), rigid(2 * kPoints, 3);
+  for (int i = 0; i < kPoints; ++i) {
+    const Eigen::Vector3d q(lo.x() + (hi.x() - lo.x()) * (i % kSide) / (kSide - 1.0),
+                            lo.y() + (hi.y() - lo.y()) * (i / kSide) / (kSide - 1.0), scans.front().encoder_mm.front().z());
+    field.middleRows(2 * i, 2) = stage::ForwardJacobian(calibration.layout, calibration.values.data(), q).topRows(2);
+    rigid.row(2 * i) << 1.0, 0.0, -(q.y() - centre.y());  // a small turn w about z moves (x, y) by w (-y, x)
+    rigid.row(2 * i + 1) << 0.0, 1.0, q.x() - centre.x();
   }
-  return std::sqrt(sum / count) * 1e3;
+  const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(rigid).householderQ() * Eigen::MatrixXd::Identity(2 * kPoints, 3);
+  const Eigen::MatrixXd seen = field - basis * (basis.transpose() * field);
+  return std::sqrt(std::max(0.0, (seen * calibration.covariance * seen.transpose()).trace()) / kPoints) * 1e3;
 }
 
 }  // namespace

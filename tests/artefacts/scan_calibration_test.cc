@@ -170,6 +170,8 @@ TEST(ScanCalibration, HeightMapTilesCalibrateZ) {
     return (b - a * a.colPivHouseholderQr().solve(b)).norm() / std::sqrt(200.0) * 1e3;
   };
   const double before = z_error_um(nullptr), after = z_error_um(&fit.result.calibration);
+  // The covariance carries what the pairs of a scan share (scan_correlated_errors.h) through the z steps too.
+  EXPECT_TRUE(fit.result.calibration.covariance.allFinite());
   EXPECT_GT(before, 3.0);  // the stage's z error beyond a plane: 5 um rms on seed 1
   EXPECT_LT(after, 1.0) << "before " << before;
   // The 27 model carries the axes' linear z straightness in the squareness terms (xTz1 and yTz1 are dropped: they

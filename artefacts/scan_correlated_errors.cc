@@ -1,0 +1,61 @@
+#include "artefacts/scan_correlated_errors.h"
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+#include <cmath>
+#include <numbers>
+
+#include "artefacts/scan_observations.h"
+#include "stage/parameter_layout.h"
+
+namespace fvm::artefacts {
+
+ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& calibration, const stage::MeasurementSet& set,
+                                                    const std::vector<Eigen::Vector3d>& residuals, double pixel_mm,
+                                                    double gain_u) {
+  const auto n = static_cast<Eigen::Index>(calibration.values.size());
+  const size_t m = set.observations.size();
+  ScanCorrelatedErrors out{Eigen::MatrixXd::Zero(n, n), Eigen::MatrixXd::Zero(n, n)};
+  if (n == 0 || m == 0 || residuals.size() != m || !(pixel_mm > 0.0)) return out;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n), pulled = Eigen::MatrixXd::Zero(n, 2);
+  std::vector<Eigen::MatrixXd> weighted;  // J_i^T W_i, n x 3
+  std::vector<std::vector<size_t>> runs;  // runs of consecutive pairs: where a scan's residuals may be shifted
+  for (size_t i = 0; i < m; ++i) {
+    const stage::Observation& o = set.observations[i];
+    const Eigen::Vector3d from = o.from.value_or(o.command);
+    const Eigen::MatrixXd j = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
+                              stage::ForwardJacobian(calibration.layout, calibration.values.data(), from);
+    // The registrations' information: xy always, z where height-map tiles gave the pair a height step.
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+    information.topLeftCorner<2, 2>() = o.covariance.topLeftCorner<2, 2>().inverse();
+    if (std::isfinite(o.covariance(2, 2)) && o.covariance(2, 2) > 0.0) information(2, 2) = 1.0 / o.covariance(2, 2);
+    weighted.push_back(j.transpose() * information);
+    normal += weighted.back() * j;
+    // The bias of a unit gain in each coordinate, in the displacement's millimetres (y up, the pixels' y down).
+    const Eigen::Vector2d offset_px(o.measured.x() / pixel_mm, -o.measured.y() / pixel_mm);
+    Eigen::Matrix<double, 3, 2> bias = Eigen::Matrix<double, 3, 2>::Zero();
+    for (int c = 0; c < 2; ++c) {
+      const double f = offset_px(c) - std::round(offset_px(c));
+      bias(c, c) = -std::sin(2.0 * std::numbers::pi * f) / (2.0 * std::numbers::pi) * pixel_mm;
+    }
+    bias(1, 1) = -bias(1, 1);
+    pulled += weighted.back() * bias;
+    if (!ContinuesRun(set, i)) runs.emplace_back();
+    runs.back().push_back(i);
+  }
+  // A coefficient these displacements do not see (none, once the rank treatment fixed them) gets no response.
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> solve(normal);
+  const Eigen::MatrixXd gain_response = solve.solve(pulled);  // to k_x and k_y
+  out.subpixel_bias = gain_u * gain_u * gain_response * gain_response.transpose();
+  for (const std::vector<size_t>& run : runs) {
+    for (size_t lag = 1; lag < run.size(); ++lag) {
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+      for (size_t k = 0; k < run.size(); ++k) g += weighted[run[k]] * residuals[run[(k + lag) % run.size()]];
+      const Eigen::VectorXd response = solve.solve(g);
+      out.misfit += response * response.transpose() / static_cast<double>(run.size());
+    }
+  }
+  return out;
+}
+
+}  // namespace fvm::artefacts
