@@ -1,6 +1,5 @@
 #include "artefacts/scan_correlated_errors.h"
 
-#include <Eigen/LU>
 #include <Eigen/QR>
 #include <cmath>
 #include <numbers>
@@ -25,11 +24,9 @@ ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& ca
     const Eigen::Vector3d from = o.from.value_or(o.command);
     const Eigen::MatrixXd j = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
                               stage::ForwardJacobian(calibration.layout, calibration.values.data(), from);
-    // The registrations' information: xy always, z where height-map tiles gave the pair a height step.
-    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-    information.topLeftCorner<2, 2>() = o.covariance.topLeftCorner<2, 2>().inverse();
-    if (std::isfinite(o.covariance(2, 2)) && o.covariance(2, 2) > 0.0) information(2, 2) = 1.0 / o.covariance(2, 2);
-    weighted.push_back(j.transpose() * information);
+    // The registrations' information as the fit weighs it: xy always, z where height-map tiles gave the pair a
+    // height step.
+    weighted.push_back(j.transpose() * stage::ObservedInformation(o.covariance, static_cast<int>(i)));
     normal += weighted.back() * j;
     // The bias of a unit gain in each coordinate, in the displacement's millimetres (y up, the pixels' y down).
     const Eigen::Vector2d offset_px(o.measured.x() / pixel_mm, -o.measured.y() / pixel_mm);

@@ -46,6 +46,11 @@ struct Observation {
   std::optional<Eigen::Vector3d> from = std::nullopt;
 };
 
+// The weight a weighted fit gives observation `index` (0-based, for the message): the inverse of its covariance over
+// the coordinates it observes, zero in the rows and columns of an unobserved one (infinite variance), as Identify
+// reads it. Throws std::invalid_argument, naming the observation, where that covariance is not positive definite.
+Eigen::Matrix3d ObservedInformation(const Eigen::Matrix3d& covariance, int index);
+
 // Observations with what identification, validation and diagnosis need to know about them.
 struct MeasurementSet {
   std::vector<Observation> observations;

@@ -49,6 +49,11 @@ Whitened Whitening(const Eigen::Matrix3d& covariance, int index) {
 
 }  // namespace
 
+Eigen::Matrix3d ObservedInformation(const Eigen::Matrix3d& covariance, int index) {
+  const Whitened w = Whitening(covariance, index);
+  return w.whiten.transpose() * w.whiten;
+}
+
 Eigen::Matrix<double, 3, kPoseParameters> InstrumentMap::PoseJacobian(const Eigen::Vector3d& p) const {
   using Jet = ceres::Jet<double, kPoseParameters>;
   Jet pose[kPoseParameters];
