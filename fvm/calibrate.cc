@@ -303,7 +303,7 @@ void RunScans(const CalibrateArgs& args) {
                               {"pair_weights_without_pixel_size", without_pixel_um},
                               {"independent_positions", scan_result.predicted_independent_um},
                               {"model_misfit_along_scans", misfit_um},
-                              {"combined", std::hypot(predicted_um, misfit_um)},
+                              {"combined", scan_result.predicted_xy_with_misfit_um},
                               {"white_residual_ratio", split.white_ratio},
                               {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover, "
                                        "less the offset and the turn about z no registered image can tell: from the "
@@ -353,7 +353,7 @@ void RunScans(const CalibrateArgs& args) {
   fmt::print("  predicted xy stage-error uncertainty over the scanned box, less its offset and turn about z (k=1): {:.3f} um rms "
              "from the coefficients", predicted_um);
   if (args.pixel_u_mm > 0.0) fmt::print(" ({:.3f} um without the pixel size's)", without_pixel_um);
-  fmt::print(", {:.3f} um with the misfit\n", std::hypot(predicted_um, misfit_um));
+  fmt::print(", {:.3f} um with the misfit\n", scan_result.predicted_xy_with_misfit_um);
   fmt::print("  the same positions as independent points of equal weight: {:.3f} um (the chain's correlation ignored)\n",
              doc["predicted_xy_u_um"]["independent_positions"].get<double>());
   if (validate) {

@@ -91,10 +91,11 @@ ScanCalibrationResult CalibrateScans(const std::vector<artefacts::RegisteredScan
       throw InputError("model " + options.model.Name() + ": " + e.what());
     }
   };
-  ScanCalibrationResult r{identify(options.pixel_u_mm), 0.0, 0.0, 0.0, {}, {}, {}};
+  ScanCalibrationResult r{identify(options.pixel_u_mm), 0.0, 0.0, 0.0, 0.0, {}, {}, {}};
   const stage::Calibration& cal = r.fitted.result.calibration;
   r.predicted_without_pixel_um = options.pixel_u_mm > 0.0 ? PredictedXyUm(identify(0.0).result.calibration, scans) : 0.0;
   r.predicted_xy_um = PredictedXyUm(cal, scans);
+  r.predicted_xy_with_misfit_um = std::hypot(r.predicted_xy_um, r.fitted.split.misfit_mm * 1e3);
   // What treating the chained positions as independent points of equal weight would have predicted.
   const stage::MeasurementSet positions = artefacts::ScanPositions(scans, options.pixel_mm);
   stage::IdentificationOptions chained_options = options.settings.ToOptions(positions);

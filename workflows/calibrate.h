@@ -63,9 +63,11 @@ struct ScanCalibrationResult {
   // The standard uncertainty (k = 1) of the xy stage error, rms over the box the scans cover less the offset and
   // the turn about z no registered image can tell (um): from the coefficients' covariance, the same without the
   // pixel size's share (0 when pixel_u_mm is 0), and what treating the chained positions as independent points of
-  // equal weight would have predicted. What `fvm calibrate --scan` prints adds the misfit along the scans
-  // (fitted.split.misfit_mm) in quadrature.
+  // equal weight would have predicted.
   double predicted_xy_um = 0.0, predicted_without_pixel_um = 0.0, predicted_independent_um = 0.0;
+  // The figure `fvm calibrate --scan` prints: predicted_xy_um and the misfit along the scans (fitted.split.misfit_mm)
+  // in quadrature (um).
+  double predicted_xy_with_misfit_um = 0.0;
   std::vector<std::string> validation_placements;
   std::optional<stage::MeasurementSet> validation;
   std::optional<BeforeAfter> judged;  // on the validation placements

@@ -82,7 +82,7 @@ TEST(CalibrateScans, PredictedXyErrorMatchesTheObservedPooledOverSeeds) {
     options.settings.stitched_frame = "rotated";
     const ScanCalibrationResult r = CalibrateScans(scans, options);
     ASSERT_TRUE(r.fitted.result.converged) << "seed " << seed;
-    const double predicted = std::hypot(r.predicted_xy_um, r.fitted.split.misfit_mm * 1e3);
+    const double predicted = r.predicted_xy_with_misfit_um;
     const double observed = ObservedRigidFreeXyUm(r.fitted.result.calibration, truth, scans);
     EXPECT_GT(observed / predicted, 0.5) << "seed " << seed << ": predicted " << predicted << " um, observed " << observed;
     EXPECT_LT(observed / predicted, 2.0) << "seed " << seed << ": predicted " << predicted << " um, observed " << observed;
