@@ -103,16 +103,24 @@ def render(words, parsed):
     for section, entries in parsed["sections"].items():
         if not entries:
             continue
+        # A table in the HTML guide; in the man pages a list, as man pages list options (tbl squeezes a
+        # three-column table into a terminal's width).
         if section == "Subcommands":
-            out.append("| command | does |\n|---|---|")
-            out += [f"| {code(' '.join(['fvm', *words, name]))} | {escape(text)} |" for name, text in entries]
+            rows = [(code(" ".join(["fvm", *words, name])), "", escape(text)) for name, text in entries]
+            header = "| command | does |\n|---|---|"
         else:
-            first = "positional" if section == "Positionals" else "option"
-            out.append(f"| {first} | value | description |\n|---|---|---|")
-            for name, text in entries:
-                flags, value = split_option(name)
-                out.append(f"| {code(flags)} | {code(value) if value else ''} | {escape(text)} |")
-        out.append("")
+            rows = [(code(flags), code(value) if value else "", escape(text))
+                    for name, text in entries for flags, value in [split_option(name)]]
+            header = f"| {'positional' if section == 'Positionals' else 'option'} | value | description |\n|---|---|---|"
+        out.append("```{only} html")
+        out.append(header)
+        for name, value, text in rows:
+            out.append(f"| {name} | {text} |" if section == "Subcommands" else f"| {name} | {value} | {text} |")
+        out.append("```\n")
+        out.append("```{only} man")
+        for name, value, text in rows:
+            out.append(f"{name} {value}".rstrip() + f"\n: {text or '(no description)'}\n")
+        out.append("```\n")
     if parsed["footer"]:
         out.append("```text\n" + "\n".join(parsed["footer"]) + "\n```\n")
     return out

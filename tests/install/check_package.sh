@@ -28,9 +28,9 @@ echo "check_package: $version"
 fvm calibrate /usr/share/fvm/samples/bar17 --model 27 -o c.json --json > calibrate.json
 [[ -s c.json ]] || fail "fvm calibrate wrote no c.json"
 # An image needs the OpenImageIO plugin: found in /usr/lib/fvm from /usr/bin/fvm.
-fvm simulate fvm-batch -o raw --seed 3 --surfaces tif --placements 2 --validation 0 > /dev/null 2>&1 ||
-  fvm simulate fvm-batch -o raw --seed 3 --surfaces tif > /dev/null
-fvm info "$(ls raw/*.tif | head -n 1)" --pixel-mm 0.05 --json > info.json || fail "fvm info on a TIFF (the image plugin)"
+fvm simulate fvm-batch -o raw --seed 3 --surfaces tif --validation-placements 0 --surface-pixel-mm 0.2 > /dev/null ||
+  fail "fvm simulate fvm-batch --surfaces tif (writes TIFF through the image plugin)"
+fvm info raw/id-x.free.tif --pixel-mm 0.2 --json > info.json || fail "fvm info on a TIFF (the image plugin)"
 /usr/bin/python3 -c "import fvm, sys; print('check_package: import fvm', fvm.__version__, fvm.__file__)"
 [[ "$(/usr/bin/python3 -c 'import fvm; print(fvm.__file__)')" == /usr/lib/python3/dist-packages/* ]] ||
   fail "import fvm did not take the installed module"
