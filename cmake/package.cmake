@@ -7,7 +7,7 @@ set(CPACK_PACKAGE_VENDOR "the fvm authors")
 set(CPACK_PACKAGE_CONTACT "the fvm authors <fvm@users.noreply.github.com>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
     "stage calibration for focus-variation microscopes and laser-tracked machine tools")
-set(CPACK_PACKAGE_DESCRIPTION
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
     "fvm identifies the motion-stage error of a focus-variation microscope from two measurements of an\n"
     "uncalibrated artefact, one stitched and one stitching-free, and compensates later stitching-free scans.\n"
     "The same kinematics engine verifies machine tools measured with laser trackers. Includes the fvm command,\n"
