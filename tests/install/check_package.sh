@@ -30,10 +30,16 @@ fvm calibrate /usr/share/fvm/samples/bar17 --model 27 -o c.json --json > calibra
 # An image needs the OpenImageIO plugin: found in /usr/lib/fvm from /usr/bin/fvm.
 fvm simulate fvm-batch -o raw --seed 3 --surfaces tif --validation-placements 0 --surface-pixel-mm 0.2 > /dev/null ||
   fail "fvm simulate fvm-batch --surfaces tif (writes TIFF through the image plugin)"
-fvm info raw/id-x.free.tif --pixel-mm 0.2 --json > info.json || fail "fvm info on a TIFF (the image plugin)"
+# The plugin both front ends load is the installed one, even with a build tree on the disk (the dynamic linker
+# names every file it opens under LD_DEBUG=files).
+plugin_loaded() { LD_DEBUG=files "$@" 2>&1 >/dev/null | grep -o "file=[^ ]*libfvm_image_oiio.so" | head -n 1; }
+loaded="$(plugin_loaded fvm info raw/id-x.free.tif --pixel-mm 0.2 --json)"
+[[ "$loaded" == "file=/usr/lib/fvm/libfvm_image_oiio.so" ]] || fail "fvm info on a TIFF loaded '$loaded'"
 /usr/bin/python3 -c "import fvm, sys; print('check_package: import fvm', fvm.__version__, fvm.__file__)"
 [[ "$(/usr/bin/python3 -c 'import fvm; print(fvm.__file__)')" == /usr/lib/python3/dist-packages/* ]] ||
   fail "import fvm did not take the installed module"
+loaded="$(plugin_loaded /usr/bin/python3 -c "import fvm; fvm.read_surface('raw/id-x.free.tif', dx_mm=0.2)")"
+[[ "$loaded" == "file=/usr/lib/fvm/libfvm_image_oiio.so" ]] || fail "fvm.read_surface on a TIFF loaded '$loaded'"
 man -w fvm > /dev/null || fail "man -w fvm"
 man -w fvm-calibrate > /dev/null || fail "man -w fvm-calibrate"
 
@@ -62,4 +68,4 @@ while IFS= read -r path; do
   fi
 done < "$files"
 ((${#left[@]} == 0)) || fail "apt-get remove left ${#left[@]} paths behind: ${left[*]:0:10}"
-echo "check_package: $(grep -c . "$files") paths installed and removed; 6 checks passed"
+echo "check_package: $(grep -c . "$files") paths installed and removed; 8 checks passed"
