@@ -1,7 +1,7 @@
 # `cmake --install build [--prefix P]`: what a user and another CMake project get.
 #   bin/fvm, lib/fvm/ (plugins), lib/python3/dist-packages/fvm*.so, share/man/man1/ (docs/), share/fvm/samples,
-#   share/doc/fvm/ (licence, changelog), include/fvm/<module>/*.h, lib/<arch>/libfvm_*.a and their CMake package
-#   lib/<arch>/cmake/fvm, so that a project writes find_package(fvm) and links fvm::workflows (or any lower layer:
+#   share/doc/fvm/ (licence, changelog), include/fvm/<module>/*.h, lib/libfvm_*.a (GNUInstallDirs' libdir) and
+#   their CMake package lib/cmake/fvm, so that a project writes find_package(fvm) and links fvm::workflows (or any lower layer:
 #   fvm::artefacts, fvm::stage, fvm::imaging, fvm::core). tests/install/consumer is such a project.
 include(CMakePackageConfigHelpers)
 
