@@ -1,8 +1,8 @@
 # `cmake --install build [--prefix P]`: what a user and another CMake project get.
 #   bin/fvm, lib/fvm/ (plugins), lib/python3/dist-packages/fvm*.so, share/man/man1/ (docs/), share/fvm/samples,
 #   share/doc/fvm/ (licence, changelog), include/fvm/<module>/*.h, lib/libfvm_*.a (GNUInstallDirs' libdir) and
-#   their CMake package lib/cmake/fvm, so that a project writes find_package(fvm) and links fvm::workflows (or any lower layer:
-#   fvm::artefacts, fvm::stage, fvm::imaging, fvm::core). tests/install/consumer is such a project.
+#   their CMake package lib/cmake/fvm, so that a project writes find_package(fvm) and links fvm::workflows (or
+#   any lower layer: fvm::artefacts, fvm::stage, fvm::imaging, fvm::core). tests/install/consumer is such a project.
 include(CMakePackageConfigHelpers)
 
 set(fvm_libraries fvm_core fvm_stage fvm_imaging fvm_artefacts fvm_workflows)
