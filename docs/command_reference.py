@@ -6,8 +6,9 @@ itself): the command's description, usage, a table of its positionals and option
 own table) and its footer (examples, exit codes). The pages docs/commands/<command>.md include them, so the guide
 and the man pages say what --help says.
 
-    python3 docs/command_reference.py --fvm build/fvm/fvm           # rewrite them (or: cmake --build build --target docs_reference)
-    python3 docs/command_reference.py --fvm build/fvm/fvm --check   # exit 1 naming every stale or missing page (CTest fvm_docs_reference)
+    cmake --build build --target docs_reference                   # rewrite them, that is:
+    python3 docs/command_reference.py --fvm build/fvm/fvm
+    python3 docs/command_reference.py --fvm build/fvm/fvm --check   # exit 1 naming every stale or missing page
 
 Reads CLI11's help layout (fvm/main.cc): the description, "Usage: ...", then the sections "Positionals:",
 "Options:" and "Subcommands:" whose entries start two spaces in with their description at column 30 (on the next
@@ -90,7 +91,8 @@ def paragraphs(lines):
 
 
 def split_option(name):
-    """'--model TEXT:{9,15,27,42}=27' -> ('--model', 'TEXT:{9,15,27,42}=27'); '-o,--output TEXT' -> ('-o, --output', 'TEXT')."""
+    """'--model TEXT:{9,15,27,42}=27' -> ('--model', 'TEXT:{9,15,27,42}=27'); '-o,--output TEXT' -> ('-o, --output',
+    'TEXT')."""
     flags, _, value = name.partition(" ")
     return flags.replace(",", ", "), value
 
@@ -111,7 +113,8 @@ def render(words, parsed):
         else:
             rows = [(code(flags), code(value) if value else "", escape(text))
                     for name, text in entries for flags, value in [split_option(name)]]
-            header = f"| {'positional' if section == 'Positionals' else 'option'} | value | description |\n|---|---|---|"
+            first = "positional" if section == "Positionals" else "option"
+            header = f"| {first} | value | description |\n|---|---|---|"
         out.append("```{only} html")
         out.append(header)
         for name, value, text in rows:

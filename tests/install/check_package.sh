@@ -24,7 +24,8 @@ export FVM_PLUGIN_DIR=
 [[ "$(command -v fvm)" == /usr/bin/fvm ]] || fail "fvm on PATH is $(command -v fvm), not /usr/bin/fvm"
 version="$(fvm --version)"
 echo "check_package: $version"
-[[ "$version" =~ ^fvm\ [0-9]+\.[0-9]+\.[0-9]+\ \(commit\ [0-9a-f]{12}(-dirty)?\)$ ]] || fail "fvm --version printed '$version'"
+[[ "$version" =~ ^fvm\ [0-9]+\.[0-9]+\.[0-9]+\ \(commit\ [0-9a-f]{12}(-dirty)?\)$ ]] ||
+  fail "fvm --version printed '$version'"
 fvm calibrate /usr/share/fvm/samples/bar17 --model 27 -o c.json --json > calibrate.json
 [[ -s c.json ]] || fail "fvm calibrate wrote no c.json"
 # An image needs the OpenImageIO plugin: found in /usr/lib/fvm from /usr/bin/fvm.
