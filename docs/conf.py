@@ -22,6 +22,8 @@ html_theme = "alabaster"
 html_theme_options = {"description": "stage calibration for focus-variation microscopes", "fixed_sidebar": True}
 html_static_path = []
 autodoc_member_order = "bysource"
+# Options are written as typed: "--help" must not become an en dash, nor quotes curly.
+smartquotes = False
 
 # One man page per command (fvm-calibrate(1), ...) and fvm(1) for the program as a whole, from the same pages.
 _commands = {
