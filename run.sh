@@ -2,11 +2,13 @@
 # The one entry script: installs what is missing (Debian packages, as root), configures and builds fvm, then
 #   bash run.sh sample     calibrates the bundled sample batch and prints the result
 #   bash run.sh test       what CI runs: the Release suite, then the sanitizer suite, then 2000 fuzzing executions
-#                          per reader (about 30 minutes from scratch on 2 cores)
+#                          per reader, then the Debian package installed, used from outside the tree and removed
+#                          (about 35 minutes from scratch on 2 cores)
 #   bash run.sh quick      the Release suite only (build/), with the fuzzers' regression inputs through the CLI, then
 #                          the Python module's tests (pytest)
 #   bash run.sh sanitize   the same tests built with AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)
 #   bash run.sh fuzz [N]   every reader's libFuzzer target, N executions each (build-fuzz/, clang)
+#   bash run.sh package    builds everything (man pages included) and packs build/fvm_<version>_<arch>.deb (CPack)
 #   bash run.sh build      only builds
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -16,7 +18,8 @@ packages=(cmake ninja-build ccache g++ pkg-config clang libclang-rt-14-dev
   libeigen3-dev libceres-dev libopencv-dev libpcl-dev libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libfmt-dev libboost-dev libplplot-dev
   libzip-dev libpugixml-dev libssl-dev libtbb-dev librsvg2-bin
-  python3-dev python3-numpy python3-pytest python3-pybind11 pybind11-dev)
+  python3-dev python3-numpy python3-pytest python3-pybind11 pybind11-dev
+  python3-sphinx python3-myst-parser dpkg-dev man-db)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -69,6 +72,13 @@ sanitize() {
     ctest --test-dir build-asan --output-on-failure -j2 -E '^fvm_cli_numeric_options$'
 }
 
+# The Debian package (cmake/package.cmake): build/fvm_<version>_<arch>.deb.
+package() {
+  build_release
+  (cd build && cpack -G DEB >/dev/null)
+  ls build/fvm_*.deb
+}
+
 fuzz() {
   if [[ -f tests/fuzz/run.sh ]]; then bash tests/fuzz/run.sh "$@"; fi
 }
@@ -82,6 +92,7 @@ case "$what" in
     build/fvm/fvm calibrate samples/bar17 --model 27 -o build/sample-calibration.json --report build/sample-report
     ;;
   sanitize) sanitize ;;
+  package) package ;;
   fuzz) shift; fuzz "$@" ;;
   quick)
     build_release
@@ -100,7 +111,10 @@ case "$what" in
     sanitize
     step "fuzzing every reader, 2000 executions each"
     fuzz 2000
+    step "the Debian package: built, installed, used from outside the tree, removed"
+    package
+    bash tests/install/check_package.sh
     step "all suites passed"
     ;;
-  *) echo "run.sh: unknown target '$what' (use sample, test, quick, sanitize, fuzz or build)" >&2; exit 2 ;;
+  *) echo "run.sh: unknown target '$what' (use sample, test, quick, sanitize, fuzz, package or build)" >&2; exit 2 ;;
 esac

@@ -12,6 +12,7 @@
 
 #include "core/exit_codes.h"
 #include "core/input_error.h"
+#include "core/version.h"
 #include "fvm/commands.h"
 #include "fvm/option_ranges.h"
 
@@ -84,7 +85,7 @@ int main(int argc, char** argv) {
                "urad in reports.",
                "fvm"};
   app.formatter(std::make_shared<fvm::cli::SummaryFormatter>());
-  app.set_version_flag("--version", std::string("fvm ") + FVM_VERSION);
+  app.set_version_flag("--version", fmt::format("fvm {} (commit {})", fvm::Version(), fvm::GitCommit()));
   app.require_subcommand(1);
   // Global options may follow the command (fvm stitch ... --threads 2): subcommands inherit this.
   app.fallthrough();

@@ -377,7 +377,7 @@ void RegisterSimulateTracker(CLI::App* simulate) {
                   "[IJSIMM 2016] Table I position 4")
       ->check(PoseCheck("--pose"))
       ->capture_default_str();
-  CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: README, Machine tools)")
+  CLI::Option* errors = sub->add_option("--errors", args->errors, "machine truth as JSON (format: docs/tutorials/machine-tool.md)")
                             ->check(CLI::ExistingFile);
   CLI::Option* seed = sub->add_option("--seed", args->seed,
                                       "random machine, cloud and tracker noise (same seed, same bytes); with --errors: "
@@ -388,7 +388,7 @@ void RegisterSimulateTracker(CLI::App* simulate) {
       ->check(Within(1e-3, 1e5, "um"))
       ->capture_default_str()
       ->excludes(errors);
-  sub->add_option("--tracker", args->tracker, "tracker noise preset (README, Machine tools)")
+  sub->add_option("--tracker", args->tracker, "tracker noise preset (docs/tutorials/machine-tool.md)")
       ->check(CLI::IsMember(stage::TrackerNoise::PresetNames()))
       ->capture_default_str();
   sub->add_option("--dwell-s", args->dwell_s, "dwell at each point in the program (s)")

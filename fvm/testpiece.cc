@@ -325,7 +325,7 @@ void RegisterTestPiece(CLI::App& app) {
   AddDetails(d,
              "Writes NOMINAL.csv id,x,y,z,series: machine coordinates (mm) of every probe point, `series` naming X1..X3, "
              "Y1..Y3, Z1..Z3 (the geometric verification's series) or else the feature. A PIECE.json describes the envelope "
-             "and features as boxes with probe points (format: README, The machined test piece); features that collide "
+             "and features as boxes with probe points (format: docs/commands/testpiece.md); features that collide "
              "or leave the envelope are refused, each named.");
   AddPieceArgument(d, design->piece);
   d->add_option("-o,--output", design->output, "NOMINAL.csv to write");

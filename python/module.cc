@@ -4,6 +4,7 @@
 
 #include <glog/logging.h>
 
+#include "core/version.h"
 #include "python/bindings.h"
 
 PYBIND11_MODULE(fvm, m) {
@@ -18,7 +19,8 @@ PYBIND11_MODULE(fvm, m) {
       "trackers).\n\nThe command line's jobs as functions, numpy arrays in and out. Units: mm and rad (keys and "
       "attributes ending in _um say micrometres).\n\nExample:\n    >>> import fvm\n"
       "    >>> cal = fvm.calibrate('samples/bar17', model=27)\n    >>> cal.parameters['names'][:3]";
-  m.attr("__version__") = FVM_VERSION;
+  m.attr("__version__") = fvm::Version();
+  m.attr("__git_commit__") = fvm::GitCommit();  // as `fvm --version` names it
   fvm::python::BindErrors(m);
   fvm::python::BindSurfaces(m);
   fvm::python::BindFits(m);

@@ -91,7 +91,7 @@ MachineTruth ParseMachineTruth(std::string_view json_text, const std::string& na
   }
   if (!root.is_object() || !root.contains("terms") || !root.at("terms").is_object()) {
     throw InputError(fmt::format("{}: expected an object with \"terms\": {{\"xTx\": {{\"poly\": [...]}}, ...}} "
-                                 "(README, Machine tools)",
+                                 "(format: docs/tutorials/machine-tool.md)",
                                  name));
   }
   MachineTruth truth;

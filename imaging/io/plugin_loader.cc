@@ -18,20 +18,28 @@ namespace {
 std::vector<std::filesystem::path> SearchDirectories() {
   if (const char* dir = std::getenv("FVM_PLUGIN_DIR"); dir != nullptr && *dir != '\0') return {dir};
   std::vector<std::filesystem::path> dirs;
-#ifdef FVM_BUILD_PLUGIN_DIR
-  dirs.emplace_back(FVM_BUILD_PLUGIN_DIR);
-#endif
+  // Beside the executable first: an installed fvm (<prefix>/bin/fvm) takes its own <prefix>/lib/fvm even where a
+  // build tree is still on the disk; for build/fvm/fvm this is the build tree's plugin directory.
   std::error_code error;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
   if (!error) dirs.push_back(exe.parent_path().parent_path() / "lib" / "fvm");
   // The shared object this code is linked into, when it is not the executable (the Python module: the process is
-  // python3, whose directory says nothing about fvm's).
+  // python3, whose directory says nothing about fvm's): build/python/../lib/fvm in the build tree, and the
+  // installed module's path to <prefix>/lib/fvm (from <prefix>/lib/python3/dist-packages, CMake computes it).
   Dl_info self{};
   if (dladdr(reinterpret_cast<const void*>(&SearchDirectories), &self) != 0 && self.dli_fname != nullptr &&
       *self.dli_fname != '\0') {
     const std::filesystem::path object = std::filesystem::weakly_canonical(self.dli_fname, error);
-    if (!error && object != exe) dirs.push_back(object.parent_path().parent_path() / "lib" / "fvm");
+    if (!error && object != exe) {
+      dirs.push_back(object.parent_path().parent_path() / "lib" / "fvm");
+#ifdef FVM_PLUGIN_DIR_FROM_PYTHON_MODULE
+      dirs.push_back((object.parent_path() / FVM_PLUGIN_DIR_FROM_PYTHON_MODULE).lexically_normal());
+#endif
+    }
   }
+#ifdef FVM_BUILD_PLUGIN_DIR
+  dirs.emplace_back(FVM_BUILD_PLUGIN_DIR);  // the test executables, which live elsewhere in the build tree
+#endif
   return dirs;
 }
 

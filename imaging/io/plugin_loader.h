@@ -3,8 +3,9 @@
 // format needs them, so that commands which never meet that format do not pay for the library behind it.
 //
 // Where a plugin is looked for: $FVM_PLUGIN_DIR when set (and only there, so that a test can hide the plugins);
-// else the build tree's plugin directory, fixed at configure time; else <directory of the executable>/../lib/fvm;
-// else <directory of the shared object holding the loader>/../lib/fvm (the Python module, build/python/fvm*.so).
+// else <directory of the executable>/../lib/fvm (build/fvm/fvm and an installed <prefix>/bin/fvm alike); else, from
+// the shared object holding the loader (the Python module), ../lib/fvm in the build tree and <prefix>/lib/fvm once
+// installed in <prefix>/lib/python3/dist-packages; else the build tree's plugin directory, fixed at configure time.
 
 #include <string_view>
 

@@ -1,5 +1,8 @@
 # The module's promises that are not numbers: an example in every docstring, the exceptions' places.
+import re
+
 import fvm
+from conftest import run_cli
 
 FUNCTIONS = ["read_surface", "write_surface", "find_calottes", "fit_sphere", "fit_plane", "calibrate",
              "read_calibration", "verify", "stitch", "focus"]
@@ -19,3 +22,11 @@ def test_exceptions_are_what_scripts_catch():
     assert issubclass(fvm.NotConvergedError, RuntimeError)
     assert not issubclass(fvm.NotConvergedError, ValueError)
     assert fvm.__version__.count(".") == 2
+
+
+def test_version_names_the_release_and_commit_as_the_command_line_does():
+    # fvm --version prints "fvm <release> (commit <commit>)" from the same generated source (core/version.h).
+    assert re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+", fvm.__version__)
+    assert re.fullmatch(r"[0-9a-f]{12}(-dirty)?|unknown", fvm.__git_commit__)
+    shown, _ = run_cli("--version")
+    assert shown.strip() == f"fvm {fvm.__version__} (commit {fvm.__git_commit__})"

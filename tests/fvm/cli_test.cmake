@@ -10,7 +10,8 @@ foreach(cmd ${COMMANDS})
 endforeach()
 
 run(0 --version)
-if(NOT "${OUT}${ERR}" MATCHES "^fvm [0-9]+\\.[0-9]+\\.[0-9]+")
+# The release and the commit it was built from ("unknown" outside a git checkout).
+if(NOT "${OUT}${ERR}" MATCHES "^fvm [0-9]+\\.[0-9]+\\.[0-9]+ \\(commit ([0-9a-f]+(-dirty)?|unknown)\\)\n?$")
   message(FATAL_ERROR "fvm --version printed: ${OUT}")
 endif()
 
