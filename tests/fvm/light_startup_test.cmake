@@ -1,15 +1,16 @@
 # Commands that never meet an image or a PCD/PLY file must not load OpenImageIO, PCL or VTK (half a second and
 # 130 MB at start-up, issue 15), nor OpenCV and what its video module drags in (dnn, calib3d, protobuf, X11, GL:
-# 25 ms before main, issue 47): the dynamic loader's own log (LD_DEBUG=libs) lists every library a process loads.
-# The positive controls show the log does name them when a TIFF is read and when tiles are registered, and that
-# without the plugins a TIFF or a focus stack fails with a clear message while an X3P still reads.
+# 25 ms before main, issue 47), nor PLplot without a report: the dynamic loader's own log (LD_DEBUG=libs) lists
+# every library a process loads. The positive controls show the log does name them when a TIFF is read, tiles are
+# registered and a report is written, and that without the plugins a TIFF or a focus stack fails with a clear
+# message while an X3P still reads.
 # Variables: FVM, SAMPLES, WORK.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK}/ld ${WORK}/x3p ${WORK}/no-plugins)
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
 # The libraries, and the plugins that load them on demand.
-set(heavy "libOpenImageIO|libpcl_|libvtk|libopencv_|libprotobuf|libX11|libGL|libfvm_image_oiio|libfvm_cloud_pcl|libfvm_imaging_opencv")
+set(heavy "libOpenImageIO|libpcl_|libvtk|libopencv_|libprotobuf|libX11|libGL|libplplot|libfvm_image_oiio|libfvm_cloud_pcl|libfvm_imaging_opencv|libfvm_report")
 
 # Runs fvm with the loader's log in ${WORK}/ld/<tag>.<pid>; sets LOADED to the log's text.
 function(run_logged tag expected_code)
@@ -80,6 +81,14 @@ heavy_in("${LOADED}" found)
 if(NOT found MATCHES "libfvm_imaging_opencv.so" OR NOT found MATCHES "libopencv_core")
   message(FATAL_ERROR "fvm stitch: the loader log names neither the OpenCV plugin nor OpenCV (found: ${found}); "
                       "the check for light commands would pass whatever they load")
+endif()
+
+# Positive control: a report loads the report plugin and PLplot behind it.
+run_logged(report 0 calibrate ${SAMPLES}/bar17 --model 27 -o ${WORK}/cal_report.json --report ${WORK}/report)
+heavy_in("${LOADED}" found)
+if(NOT found MATCHES "libfvm_report.so" OR NOT found MATCHES "libplplot" OR NOT EXISTS ${WORK}/report/index.html)
+  message(FATAL_ERROR "fvm calibrate --report: no report, or the loader log names neither the report plugin nor "
+                      "PLplot (found: ${found})")
 endif()
 
 # Without the plugin: the TIFF fails naming what is missing and what to install; an X3P still reads.
