@@ -8,11 +8,13 @@
 // - `fvm verify` of 5408 readings (trackergen.py --step 100,100,100 --noise), order 3 + pose, against
 //   peer_verify.py's fit alone (goal >= 20x).
 // The peers are independent code (../shared/bench/README.md); without ../shared or python3 with scipy those two
-// benchmarks are skipped. Counters: the subject's and the baseline's median milliseconds and their ratio.
+// benchmarks are skipped. Counters: the subject's and the baseline's median milliseconds, wall and CPU (the
+// process's user + system time: what it costs whatever else the machine runs), and their ratios.
 
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -31,8 +33,14 @@ namespace fs = std::filesystem;
 
 const fs::path kShared = fs::path(FVM_SOURCE_DIR) / ".." / "shared" / "bench";
 
-// Runs `argv` with stdout and stderr to /dev/null; returns its wall seconds, or a negative number when it failed.
-double RunSeconds(const std::vector<std::string>& argv) {
+// One finished process: its wall seconds and its CPU seconds (user + system, from the kernel's accounting: on a
+// machine shared with other jobs the wall time says how busy the machine was, the CPU time what the process cost).
+struct Run {
+  double wall = -1.0, cpu = -1.0;
+};
+
+// Runs `argv` with stdout and stderr to /dev/null; wall and cpu negative when it failed.
+Run RunProcess(const std::vector<std::string>& argv) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -43,11 +51,13 @@ double RunSeconds(const std::vector<std::string>& argv) {
   const auto start = std::chrono::steady_clock::now();
   pid_t pid = 0;
   int status = -1;
+  rusage usage{};
   const bool spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ) == 0;
   posix_spawn_file_actions_destroy(&actions);
-  if (!spawned || waitpid(pid, &status, 0) != pid) return -1.0;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0 ? seconds : -1.0;
+  if (!spawned || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) return {};
+  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+          seconds(usage.ru_utime) + seconds(usage.ru_stime)};
 }
 
 // What a shell command prints on stdout; empty when it failed.
@@ -86,23 +96,26 @@ const fs::path& Scratch() {
   return directory.path;
 }
 
-// Subject and baseline in turn; counters in ms and the ratio of medians.
+// Subject and baseline in turn; counters: medians in ms (wall and CPU) and their ratios.
 void Paired(benchmark::State& state, const std::vector<std::string>& subject, const std::vector<std::string>& baseline) {
-  std::vector<double> a, b;
+  std::vector<double> wall, cpu, base_wall, base_cpu;
   for (auto _ : state) {
-    const double s = RunSeconds(subject);
+    const Run s = RunProcess(subject);
     state.PauseTiming();
-    const double t = RunSeconds(baseline);
+    const Run t = RunProcess(baseline);
     state.ResumeTiming();
-    if (s < 0 || t < 0) {
-      state.SkipWithError(("failed: " + (s < 0 ? subject : baseline).front()).c_str());
+    if (s.wall < 0 || t.wall < 0) {
+      state.SkipWithError(("failed: " + (s.wall < 0 ? subject : baseline).front()).c_str());
       return;
     }
-    a.push_back(s), b.push_back(t);
+    wall.push_back(s.wall), cpu.push_back(s.cpu), base_wall.push_back(t.wall), base_cpu.push_back(t.cpu);
   }
-  state.counters["ms"] = 1e3 * Median(a);
-  state.counters["baseline_ms"] = 1e3 * Median(b);
-  state.counters["ratio"] = Median(a) / Median(b);
+  state.counters["ms"] = 1e3 * Median(wall);
+  state.counters["cpu_ms"] = 1e3 * Median(cpu);
+  state.counters["baseline_ms"] = 1e3 * Median(base_wall);
+  state.counters["baseline_cpu_ms"] = 1e3 * Median(base_cpu);
+  state.counters["ratio"] = Median(wall) / Median(base_wall);
+  state.counters["cpu_ratio"] = Median(cpu) / Median(base_cpu);
 }
 
 void BM_VersionVsBareProcess(benchmark::State& state) {
@@ -127,9 +140,11 @@ bool PeersAvailable(benchmark::State& state) {
   return true;
 }
 
-// The whole fvm process, each run, against the peer's solve alone (its median over `peer_runs`).
+// The whole fvm process, each run, against the peer's solve alone (its median over `peer_runs`, its own wall
+// clock). Counters: fvm's medians in ms (wall and CPU), the peer's, and how many times faster fvm is (wall against
+// wall: both stretch alike when the machine is busy).
 void AgainstPeer(benchmark::State& state, const std::vector<std::string>& fvm, const std::string& peer, int peer_runs) {
-  std::vector<double> ours, theirs;
+  std::vector<double> wall, cpu, theirs;
   for (int k = 0; k < peer_runs; ++k) {
     const double s = PeerSeconds(peer);
     if (s <= 0) {
@@ -139,16 +154,17 @@ void AgainstPeer(benchmark::State& state, const std::vector<std::string>& fvm, c
     theirs.push_back(s);
   }
   for (auto _ : state) {
-    const double s = RunSeconds(fvm);
-    if (s < 0) {
+    const Run r = RunProcess(fvm);
+    if (r.wall < 0) {
       state.SkipWithError("fvm failed");
       return;
     }
-    ours.push_back(s);
+    wall.push_back(r.wall), cpu.push_back(r.cpu);
   }
-  state.counters["ms"] = 1e3 * Median(ours);
+  state.counters["ms"] = 1e3 * Median(wall);
+  state.counters["cpu_ms"] = 1e3 * Median(cpu);
   state.counters["peer_ms"] = 1e3 * Median(theirs);
-  state.counters["times_faster"] = Median(theirs) / Median(ours);
+  state.counters["times_faster"] = Median(theirs) / Median(wall);
 }
 
 void BM_CalibrateVsScipyPeer(benchmark::State& state) {
