@@ -5,10 +5,13 @@
 #include <glog/logging.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <exception>
 #include <memory>
+#include <span>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 #include "core/exit_codes.h"
 #include "core/input_error.h"
@@ -59,6 +62,39 @@ std::string CommandPath(const CLI::App& app) {
   return path;
 }
 
+// The commands, in the order `fvm --help` lists them.
+struct Command {
+  std::string_view name;
+  void (*add)(CLI::App&);
+};
+constexpr Command kCommands[] = {
+    {"calibrate", RegisterCalibrate}, {"correct", RegisterCorrect},   {"compare", RegisterCompare},
+    {"diff", RegisterDiff},           {"diagnose", RegisterDiagnose}, {"simulate", RegisterSimulate},
+    {"info", RegisterInfo},           {"fit", RegisterFit},           {"focus", RegisterFocus},
+    {"tiles", RegisterTiles},         {"stitch", RegisterStitch},     {"verify", RegisterVerify},
+    {"multilaterate", RegisterMultilaterate}, {"uncertainty", RegisterUncertainty},
+    {"testpiece", RegisterTestPiece},
+};
+
+// Building every command's options (thousands of strings, names and checks) took more CPU than anything else in
+// `fvm --version` (issue 47), so a run builds only the command it names: the first argument that is a command's
+// name (the global options before it take numbers). Without one, all of them (`fvm --help` and a mistyped command
+// see the whole list), or none for `fvm --version`; all for --list-numeric-options.
+std::span<const Command> CommandsToRegister(int argc, char** argv) {
+  const std::span<const Command> all(kCommands);
+  const auto given = [&](std::string_view option) {
+    return std::any_of(argv + 1, argv + argc, [&](const char* arg) { return option == arg; });
+  };
+  if (given("--list-numeric-options")) return all;
+  for (int i = 1; i < argc; ++i) {
+    for (const Command& command : all) {
+      if (command.name == argv[i]) return all.subspan(static_cast<size_t>(&command - kCommands), 1);
+    }
+  }
+  if (given("--version") && !given("-h") && !given("--help") && !given("--help-all")) return {};
+  return all;
+}
+
 constexpr const char* kExitCodeFooter =
     "Options --threads N and --quiet apply to every command and may follow it.\n"
     "Run 'fvm <command> --help' for the options of a command.\n"
@@ -96,21 +132,7 @@ int main(int argc, char** argv) {
       ->check(fvm::cli::Count(0, 1024));
   app.add_flag("-q,--quiet", common.quiet, "no progress lines on stderr (they appear only on a terminal anyway)");
 
-  fvm::cli::RegisterCalibrate(app);
-  fvm::cli::RegisterCorrect(app);
-  fvm::cli::RegisterCompare(app);
-  fvm::cli::RegisterDiff(app);
-  fvm::cli::RegisterDiagnose(app);
-  fvm::cli::RegisterSimulate(app);
-  fvm::cli::RegisterInfo(app);
-  fvm::cli::RegisterFit(app);
-  fvm::cli::RegisterFocus(app);
-  fvm::cli::RegisterTiles(app);
-  fvm::cli::RegisterStitch(app);
-  fvm::cli::RegisterVerify(app);
-  fvm::cli::RegisterMultilaterate(app);
-  fvm::cli::RegisterUncertainty(app);
-  fvm::cli::RegisterTestPiece(app);
+  for (const fvm::cli::Command& command : fvm::cli::CommandsToRegister(argc, argv)) command.add(app);
   // Every numeric option, whatever command declared it, refuses nan and inf; --list-numeric-options (hidden)
   // prints each with its span for the test that tries them all (tests/fvm/numeric_options_cli_test.cmake).
   fvm::cli::RefuseNonFinite(app);

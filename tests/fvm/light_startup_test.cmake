@@ -1,12 +1,16 @@
 # Commands that never meet an image or a PCD/PLY file must not load OpenImageIO, PCL or VTK (half a second and
-# 130 MB at start-up, issue 15): the dynamic loader's own log (LD_DEBUG=libs) lists every library a process
-# loads. The positive control shows the log does name them when a TIFF is read, and that without the plugin a
-# TIFF fails with a clear message while an X3P still reads. Variables: FVM, SAMPLES, WORK.
+# 130 MB at start-up, issue 15), nor OpenCV and what its video module drags in (dnn, calib3d, protobuf, X11, GL:
+# 25 ms before main, issue 47), nor PLplot without a report: the dynamic loader's own log (LD_DEBUG=libs) lists
+# every library a process loads. The positive controls show the log does name them when a TIFF is read, tiles are
+# registered and a report is written, and that without the plugins a TIFF or a focus stack fails with a clear
+# message while an X3P still reads.
+# Variables: FVM, SAMPLES, WORK.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK}/ld ${WORK}/x3p ${WORK}/no-plugins)
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
-set(heavy "libOpenImageIO|libpcl_|libvtk")
+# The libraries, and the plugins that load them on demand.
+set(heavy "libOpenImageIO|libpcl_|libvtk|libopencv_|libprotobuf|libX11|libGL|libplplot|libfvm_image_oiio|libfvm_cloud_pcl|libfvm_imaging_opencv|libfvm_report")
 
 # Runs fvm with the loader's log in ${WORK}/ld/<tag>.<pid>; sets LOADED to the log's text.
 function(run_logged tag expected_code)
@@ -28,9 +32,11 @@ function(run_logged tag expected_code)
   set(ERR "${err}" PARENT_SCOPE)
 endfunction()
 
-# The heavy libraries a log names (the loader writes "file=<name> [0];  needed by ..." for each).
+# The heavy libraries a log names: the loader writes "file=<name> [0];  needed by ..." for each library it looks
+# for, and "calling init: <path>" for every object it initialises (a plugin dlopened by its path has only this).
 function(heavy_in text result)
-  string(REGEX MATCHALL "file=[^ \n]*(${heavy})[^ \n]*" found "${text}")
+  string(REGEX MATCHALL "(file=|calling init: )[^ \n]*(${heavy})[^ \n]*" found "${text}")
+  list(TRANSFORM found REPLACE "^(file=|calling init: )" "")
   list(REMOVE_DUPLICATES found)
   set(${result} "${found}" PARENT_SCOPE)
 endfunction()
@@ -68,6 +74,23 @@ if(NOT LOADED MATCHES "libfvm_image_oiio.so" OR NOT found MATCHES "libOpenImageI
                       "the check for light commands would pass whatever they load")
 endif()
 
+# Positive control: registering tiles loads the OpenCV plugin and OpenCV behind it.
+run(0 tiles synthesize -o ${WORK}/pair --rows 1 --cols 2 --size 64 --bits 8 --seed 1)
+run_logged(stitch 0 stitch --layout ${WORK}/pair/layout.csv --overlap 20 -o ${WORK}/pair/positions.csv)
+heavy_in("${LOADED}" found)
+if(NOT found MATCHES "libfvm_imaging_opencv.so" OR NOT found MATCHES "libopencv_core")
+  message(FATAL_ERROR "fvm stitch: the loader log names neither the OpenCV plugin nor OpenCV (found: ${found}); "
+                      "the check for light commands would pass whatever they load")
+endif()
+
+# Positive control: a report loads the report plugin and PLplot behind it.
+run_logged(report 0 calibrate ${SAMPLES}/bar17 --model 27 -o ${WORK}/cal_report.json --report ${WORK}/report)
+heavy_in("${LOADED}" found)
+if(NOT found MATCHES "libfvm_report.so" OR NOT found MATCHES "libplplot" OR NOT EXISTS ${WORK}/report/index.html)
+  message(FATAL_ERROR "fvm calibrate --report: no report, or the loader log names neither the report plugin nor "
+                      "PLplot (found: ${found})")
+endif()
+
 # Without the plugin: the TIFF fails naming what is missing and what to install; an X3P still reads.
 set(xml [=[<?xml version="1.0" encoding="UTF-8"?>
 <p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2">
@@ -100,6 +123,14 @@ if(NOT code EQUAL 1 OR NOT err MATCHES "reading [^\n]*\\.tif needs OpenImageIO: 
    OR NOT err MATCHES "install the Debian package libopenimageio")
   message(FATAL_ERROR "fvm info on a TIFF without the plugin: exit ${code}, expected 1 and a message naming the "
                       "plugin and the package to install, got:\n${err}")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} focus ${WORK}/pair
+                        -o ${WORK}/focus.x3p --pixel-mm 0.001
+                RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT code EQUAL 1 OR NOT err MATCHES "needs OpenCV: libfvm_imaging_opencv\\.so could not be loaded"
+   OR NOT err MATCHES "install the Debian package libopencv" OR EXISTS ${WORK}/focus.x3p)
+  message(FATAL_ERROR "fvm focus without the OpenCV plugin: exit ${code}, expected 1, no output and a message "
+                      "naming the plugin and the package to install, got:\n${err}")
 endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${WORK}/surface.x3p --json
                 RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)

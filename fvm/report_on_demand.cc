@@ -1,0 +1,28 @@
+// The report writers as the fvm executable links them: each forwards to the plugin libfvm_report.so, loaded on the
+// first report (fvm/report_plugin.h says why and how).
+
+#include <string>
+
+#include "fvm/report_plugin.h"
+#include "imaging/io/plugin_loader.h"
+
+namespace fvm::cli {
+
+const ReportWriters& LoadReportWriters(std::string_view action) {
+  static constexpr imaging::PluginSpec kPlugin{"libfvm_report.so", "fvm_report_v1", "PLplot", "libplplot17"};
+  return *static_cast<const ReportWriters*>(imaging::LoadPlugin(kPlugin, action));
+}
+
+void WriteReport(const std::filesystem::path& dir, const ReportData& data) {
+  LoadReportWriters("writing the report " + dir.string()).write_report(dir, data);
+}
+
+void WriteMachineReport(const std::filesystem::path& dir, const MachineReportData& data) {
+  LoadReportWriters("writing the report " + dir.string()).write_machine_report(dir, data);
+}
+
+void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyReportData& data) {
+  LoadReportWriters("writing the report " + dir.string()).write_uncertainty_report(dir, data);
+}
+
+}  // namespace fvm::cli
