@@ -72,7 +72,7 @@ struct FocusResult {
   std::vector<float> quality;  // peak over mean measure per pixel (row-major, same grid); 0 where flat
   std::vector<std::int32_t> peak_index;  // the image with the largest measure per pixel
   std::vector<float> window_px;  // the window each height comes from (px)
-  // The all-in-focus image: each pixel as it is in the image where its neighbourhood is sharpest (the smallest
+  // The all-in-focus image: each pixel as it is in the image where its neighbourhood is sharpest (the 3 px
   // window's peak), texture_channels values per pixel (1 grey or 3 colour, interleaved), in the images' scale.
   std::vector<float> texture;
   int texture_channels = 1;
