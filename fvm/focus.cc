@@ -145,7 +145,7 @@ void RunFocus(const FocusArgs& args) {
   fmt::print("  stack          {} images, z {:.6f} .. {:.6f} {}{}\n", entries.size(), entries.front().z_mm,
              entries.back().z_mm, unit, args.align ? ", aligned to the first" : "");
   fmt::print("  measure        {}, window {}, min quality {:g}\n", imaging::FocusMeasureName(options.measure),
-             options.adaptive_window ? std::string("adaptive 3/5/9 px") : fmt::format("{} px", options.window),
+             options.adaptive_window ? std::string("adaptive 5/9 px") : fmt::format("{} px", options.window),
              options.min_quality);
   if (read.unregistered > 0) {
     fmt::print("  alignment      {} image(s) shared no sharp texture with their neighbour: kept its place\n",

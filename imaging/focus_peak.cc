@@ -73,10 +73,11 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2) 
 // the vertex when one measure moves by sigma, linearised in the transform (dP = power P sigma / f), summed in
 // quadrature over the points.
 double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
-                   double sigma, double* u_noise) {
+                   double sigma, double* u_noise, double* u_shape) {
   for (double& v : f) v -= floor;
   const double z1 = z[std::size_t(k)];
   if (u_noise) *u_noise = 0.0;
+  if (u_shape) *u_shape = 0.0;
   if (!(f[2] > 0.0)) return z1;
   const double scale = std::abs(z[std::size_t(k) + 1] - z[std::size_t(k) - 1]) / 2.0;
   const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
@@ -133,6 +134,23 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
       variance += (vertex - z0) * (vertex - z0);
     }
     *u_noise = std::sqrt(variance) * MisfitRatio(s, t, det, weight, u, p, inverse_variance, f[2] / (power * sigma));
+  }
+  if (u_shape) {
+    // Each measure off the model by a share of itself (dP = power P share), by a small share, scaled to 1.
+    constexpr double kShare = 1e-3;
+    double variance = 0.0;
+    for (int j = 0; j < 5; ++j) {
+      if (!(weight[j] > 0.0)) continue;
+      const double d0 = weight[j] * power * p[j] * kShare;
+      const double dt[3] = {d0, d0 * u[j], d0 * u[j] * u[j]};
+      double vertex = z1;
+      if (!solve(det1 + a1[0] * dt[0] + a1[1] * dt[1] + a1[2] * dt[2],
+                 det2 + a2[0] * dt[0] + a2[1] * dt[1] + a2[2] * dt[2], vertex)) {
+        vertex = z1;
+      }
+      variance += (vertex - z0) * (vertex - z0);
+    }
+    *u_shape = std::sqrt(variance) / kShare;
   }
   return z0;
 }

@@ -77,22 +77,20 @@ void ModifiedLaplacian(const cv::Mat& image, int b0, int b1, cv::Mat& out) {
   }
 }
 
-// The measure per pixel of rows b0..b1 before it is averaged over a window: the modified Laplacian or the
-// gradient energy; for the variance the grey levels themselves (shifted by the band's mean: E[I^2] - E[I]^2 in
-// float loses everything to cancellation when the grey level is large against the contrast, as in 16-bit images).
+// The measure per pixel of rows b0..b1 before it is averaged over a window: the modified Laplacian (of the image
+// smoothed by the pre-filter, see focus_stack_curves.h) or the gradient energy; for the variance the grey levels
+// themselves (shifted by the band's mean: E[I^2] - E[I]^2 in float loses everything to cancellation when the grey
+// level is large against the contrast, as in 16-bit images).
 const cv::Mat& PixelMeasure(const cv::Mat& image, int b0, int b1, FocusMeasure measure, Scratch& b) {
   if (measure == FocusMeasure::kModifiedLaplacian) {
-    switch (image.depth()) {
-      case CV_8U:
-        ModifiedLaplacian<std::uint8_t>(image, b0, b1, b.per_pixel);
-        break;
-      case CV_16U:
-        ModifiedLaplacian<std::uint16_t>(image, b0, b1, b.per_pixel);
-        break;
-      default:
-        ModifiedLaplacian<float>(image, b0, b1, b.per_pixel);
-        break;
-    }
+    // The rows the Laplacian reads (one beyond the band) and the pre-filter's reach beyond them, smoothed apart
+    // from the rest of the image: rows within its reach of a cut that is not the image's edge are not read.
+    const int reach = kPrefilterHalfWidth + 1;
+    const int p0 = std::max(0, b0 - reach), p1 = std::min(image.rows, b1 + reach);
+    image.rowRange(p0, p1).convertTo(b.grey, CV_32F);
+    const int side = 2 * kPrefilterHalfWidth + 1;
+    cv::GaussianBlur(b.grey, b.dx, cv::Size(side, side), kPrefilterSigmaPx, kPrefilterSigmaPx, cv::BORDER_REFLECT);
+    ModifiedLaplacian<float>(b.dx, b0 - p0, b1 - p0, b.per_pixel);
     return b.per_pixel;
   }
   image.rowRange(b0, b1).convertTo(b.grey, CV_32F);

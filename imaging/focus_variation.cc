@@ -29,10 +29,21 @@ std::size_t PixelCount(const StackImageView& image) {
   return std::visit([](auto span) { return span.size(); }, image.pixels);
 }
 
-// The windows of the adaptive mode: the smallest two average on walls, the largest on flats.
+// The windows of the adaptive mode (Gaussian-weighted, sigma 1.5 and 2.7 px): the large one wherever the heights
+// it spans allow, the small one on steep walls. Once each window's height is moved to the centroid of its
+// pixels' sharpness (focus_window_centroid.h), the large window's errors on a 24 deg wall are smaller than the
+// small one's (0.08 against 0.11 step on the stacks of ../shared/bench/focusgen.py, 0.04 on either on this
+// project's renderer): its noise is lower and the centroid takes up what its span of heights would bias. Windows
+// smaller than 5 px leave the noise of a texture no sharper than the optics' diffraction floor (0.4-0.8 um in
+// focus, about a pixel) several times the step's tenth.
+// The 3 px window (sigma 0.9 px) gives no height: its best image per pixel makes the all-in-focus image, whose
+// sharpness the larger windows would blur (focus-stack's own image on the real stack of focus_realdata_test.cc:
+// 1.15 times as sharp from the 3 px window, 1.06 from the 5 px one).
 constexpr int kAdaptiveWindows[] = {3, 5, 9};
-// The large window is taken where the surface's height changes by at most this many steps over its half-width.
-constexpr double kSpreadLimitSteps = 0.5;
+// The large window is taken where the surface's height changes by at most this many steps over its half-width
+// (4 px): beyond, the second-order bias of the heights it mixes grows faster than its noise falls (on 40 deg walls
+// the small window errs 0.2-0.3 step, the large one 0.3-0.55).
+constexpr double kSpreadLimitSteps = 2.4;
 constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
 // Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeak).
 constexpr double kNarrowShare = 0.05;
@@ -40,19 +51,24 @@ constexpr double kNarrowShare = 0.05;
 // peak above the floor samples the curve more coarsely than its width (steps longer than the depth of field):
 // every peak is then fitted as a narrow one (see CoarselySampled).
 constexpr double kCoarseShoulder = 0.6;
-// The uncertainty model (see Finish and FitPeak), calibrated on the rendered stacks of focus_accuracy_test.cc
-// (z steps 0.5 to 2 um, NA 0.5 to 0.9) for 95 % coverage of 1.96 u_z: the measure's noise per pixel over its
-// floor (scaled by the power fit's misfit, focus_peak.cc), the share of the step the interpolation leaves, the
-// share of the heights' local scatter, for a curve too narrow for the power fit (the 3-point log fit's error
-// between images) a share of the step, and on a slope what the window's centroid correction leaves (a share of
-// a pixel times the slope: 0.08 px, a third of the error it removes).
-constexpr double kNoiseScale = 0.12;
+// The uncertainty model (see Finish and FitPeak), calibrated for 95 % coverage of 1.96 u_z on the rendered stacks
+// of focus_accuracy_test.cc (z steps 0.5 to 2 um, NA 0.5 to 0.9) and on the independent stacks of
+// ../shared/bench/focusgen.py (NA 0.3 to 0.9, diffraction floor 0.3 to 0.8 um, texture correlation 0.7 to 1.5 px):
+// the measure's noise per pixel over its floor (scaled by the power fit's misfit, focus_peak.cc); a share of each
+// measure by which a real focus curve departs from the model (a random texture's own curve, a PSF with a floor:
+// 1 %), which counts most where the curve is flat over the images fitted (small apertures, coarse texture); the
+// share of the step the interpolation leaves; the share of the heights' local scatter; for a curve too narrow for
+// the power fit (the 3-point log fit's error between images) a share of the step; and on a slope what the
+// window's centroid correction leaves (a share of a pixel times the slope: 0.08 px, a third of the error it
+// removes).
+constexpr double kNoiseScale = 0.128;
 constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.025;
-constexpr double kScatterScale = 0.9;
-constexpr double kNarrowStepFraction = 0.14;
+constexpr double kStepFraction = 0.027;
+constexpr double kScatterScale = 1.16;
+constexpr double kShapeShare = 0.0107;
+constexpr double kNarrowStepFraction = 0.12;
 constexpr int kScatterWindowPx = 9;
-constexpr double kSlopePx = 0.08;
+constexpr double kSlopePx = 0.085;
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -182,7 +198,7 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
     curves.parallel = s.options.parallel;
     if (s.options.adaptive_window) {
       for (int w : kAdaptiveWindows) {
-        curves.windows.emplace_back().Reset(w, w < kAdaptiveWindows[std::size(kAdaptiveWindows) - 1], n);
+        curves.windows.emplace_back().Reset(w, true, n);
       }
     } else {
       curves.windows.emplace_back().Reset(s.options.window, false, n);
@@ -247,7 +263,9 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
   const bool narrow = coarse || std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
   if (options.peak_fit == PeakFit::kPower && !narrow) {
     const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
-    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u);
+    double u_shape = 0.0;
+    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u, &u_shape);
+    out.u = std::hypot(out.u, kShapeShare * u_shape);
     return out;
   }
   // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
@@ -259,18 +277,24 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
     return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
   };
   out.z = vertex(f);
-  double variance = 0.0;
+  double variance = 0.0, shape = 0.0;
+  constexpr double kShare = 1e-3;
   for (std::size_t j = 1; j < 4; ++j) {
     if (!std::isfinite(f[j])) continue;
     std::array<double, 5> g = f;
     g[j] += sigma;
     const double d = vertex(g) - out.z;
     variance += d * d;
+    g[j] = f[j] + kShare * std::max(f[j] - floor_i, 0.0);
+    const double e = (vertex(g) - out.z) / kShare;
+    shape += e * e;
   }
+
   // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
-  out.u = narrow ? std::hypot(std::sqrt(variance),
-                              kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
-                 : std::sqrt(variance);
+  out.u = std::hypot(narrow ? std::hypot(std::sqrt(variance),
+                                         kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
+                            : std::sqrt(variance),
+                     kShapeShare * std::sqrt(shape));
   return out;
 }
 
@@ -415,13 +439,13 @@ FocusResult FocusAccumulator::Finish() const {
   map.dx_mm = s.options.dx_mm;
   map.dy_mm = s.options.dy_mm > 0.0 ? s.options.dy_mm : s.options.dx_mm;
   const std::string windows =
-      s.options.adaptive_window ? "adaptive window 3/5/9 px" : "window " + std::to_string(s.options.window) + " px";
+      s.options.adaptive_window ? "adaptive window 5/9 px" : "window " + std::to_string(s.options.window) + " px";
   map.source = "focus variation (" + FocusMeasureName(s.options.measure) + ", " + windows + ", " +
                std::to_string(n) + " images)";
   const std::size_t size = std::size_t(s.width) * std::size_t(s.height);
   const std::vector<WindowCurves>& curves = s.curves.windows;
   const WindowCurves& large = curves.back();
-  const HugeVector<std::int32_t>& peak_index = curves.size() > 1 ? curves[1].index : large.index;
+  const HugeVector<std::int32_t>& peak_index = large.index;
   // The result's maps, each filled (and its fresh pages faulted in, which on a virtual machine costs more than
   // the filling) by its own thread: one after the other they were the reconstruction's longest serial part.
   const std::function<void()> allocations[] = {
@@ -475,20 +499,11 @@ FocusResult FocusAccumulator::Finish() const {
         double z = map.z_mm[i], u_noise = result.u_z_mm[i], window = large.window;
         const float g = slope.Magnitude(r, col);  // mm per px
         const auto fits = [&](const WindowCurves& c) { return g * (c.window / 2) <= spread_limit; };
-        // The largest window whose half-width spans at most half a step of height; else the mean of the
-        // smaller two (their errors on a wall are partly independent textures' weights).
+        // The large window where the heights over its half-width fit the limit, else the small one.
         if (curves.size() > 1 && !(fits(large) && std::isfinite(z))) {
-          const Peak middle = FitPeak(curves[1], i, s.z, s.options, coarse);
-          const Peak small = fits(curves[1]) ? Peak{} : FitPeak(curves[0], i, s.z, s.options, coarse);
-          if (fits(curves[1]) || !std::isfinite(small.z)) {
-            z = middle.z, u_noise = middle.u, window = curves[1].window;
-          } else if (!std::isfinite(middle.z)) {
-            z = small.z, u_noise = small.u, window = curves[0].window;
-          } else {
-            z = 0.5 * (small.z + middle.z);
-            u_noise = 0.5 * std::hypot(small.u, middle.u);
-            window = 0.5 * (curves[0].window + curves[1].window);
-          }
+          const WindowCurves& smaller = curves[curves.size() - 2];
+          const Peak small = FitPeak(smaller, i, s.z, s.options, coarse);
+          if (std::isfinite(small.z)) z = small.z, u_noise = small.u, window = smaller.window;
         }
         map.z_mm[i] = z;
         result.u_z_mm[i] = std::isfinite(z) ? static_cast<float>(u_noise) : kNaN;

@@ -43,9 +43,10 @@ enum class PeakFit {
 struct FocusVariationOptions {
   FocusMeasure measure = FocusMeasure::kModifiedLaplacian;
   int window = 5;  // odd, 3 to 51 px: the measure is summed (averaged) over window x window pixels
-  // The window per pixel, from the local slope: a large window (9 px) averages the noise down where the surface
-  // is flat, but on a wall it mixes heights a step apart and blurs the focus curve, so there the 3 and 5 px
-  // windows' heights (averaged) are taken. `window` is then unused.
+  // The window per pixel, from the local slope: a large window (9 px, Gaussian-weighted) averages the noise down
+  // wherever the heights it spans allow (walls to about 30 deg at 1 um pixels and steps, once its height is moved
+  // to the centroid of its pixels' sharpness); on steeper walls it mixes heights too far apart and the 5 px
+  // window's height is taken. `window` is then unused.
   bool adaptive_window = true;
   PeakFit peak_fit = PeakFit::kPower;
   // Peak over mean measure below this: invalid. An unfocused pixel of pure noise has a peak of about 1.2-1.5
@@ -70,11 +71,11 @@ struct FocusResult {
   std::vector<float> u_z_mm;
   std::vector<float> quality;  // peak over mean measure per pixel (row-major, same grid); 0 where flat
   std::vector<std::int32_t> peak_index;  // the image with the largest measure per pixel
-  std::vector<float> window_px;
+  std::vector<float> window_px;  // the window each height comes from (px)
   // The all-in-focus image: each pixel as it is in the image where its neighbourhood is sharpest (the 3 px
   // window's peak), texture_channels values per pixel (1 grey or 3 colour, interleaved), in the images' scale.
   std::vector<float> texture;
-  int texture_channels = 1;  // the window each height comes from (the mean of two where two are averaged)
+  int texture_channels = 1;
 };
 
 // Takes the images of a stack in order. Not thread-safe itself; it copies them into a batch of a few images and

@@ -19,9 +19,10 @@ constexpr double kWeightPower = 1.5;
 
 void CorrectWindowCentroids(const CentroidCorrectionInput& in, std::vector<double>& z_mm) {
   const std::size_t size = std::size_t(in.width) * std::size_t(in.height);
-  // The all-in-focus image in grey (the mean of its channels), then each pixel's sharpness: the modified
-  // Laplacian |2I - I_left - I_right| + |2I - I_up - I_down| (reflected at the edges), to the power 1.5.
-  HugeVector<float> grey_storage, weight_storage(size);
+  // The all-in-focus image in grey (the mean of its channels), smoothed by the focus measure's pre-filter
+  // (focus_stack_curves.h), then each pixel's sharpness: the modified Laplacian |2I - I_left - I_right| +
+  // |2I - I_up - I_down| (reflected at the edges), to the power 1.5.
+  HugeVector<float> grey_storage, smooth_storage(size), weight_storage(size);
   cv::Mat grey(in.height, in.width, CV_32F, const_cast<float*>(in.texture->data()));
   if (in.channels != 1) {
     grey_storage.resize(size);
@@ -36,9 +37,16 @@ void CorrectWindowCentroids(const CentroidCorrectionInput& in, std::vector<doubl
     cv::Mat g = grey.rowRange(r0, r1);
     cv::transform(colour.rowRange(r0, r1), g, cv::Mat(1, in.channels, CV_32F, cv::Scalar(1.0 / in.channels)));
   });
+  cv::Mat smooth(in.height, in.width, CV_32F, smooth_storage.data());
+  ForStripes(in.height, in.parallel, [&](int r0, int r1) {
+    cv::Mat s = smooth.rowRange(r0, r1);  // the filter reads the rows beyond the stripe from the image
+    const int side = 2 * kPrefilterHalfWidth + 1;
+    cv::GaussianBlur(grey.rowRange(r0, r1), s, cv::Size(side, side), kPrefilterSigmaPx, kPrefilterSigmaPx,
+                     cv::BORDER_REFLECT);
+  });
   ForStripes(in.height, in.parallel, [&](int r0, int r1) {
     cv::Mat dx, dy, w = weight.rowRange(r0, r1);
-    const cv::Mat rows = grey.rowRange(r0, r1);  // the filters read the rows beyond the stripe from the image
+    const cv::Mat rows = smooth.rowRange(r0, r1);  // the filters read the rows beyond the stripe from the image
     cv::sepFilter2D(rows, dx, CV_32F, second, one, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
     cv::sepFilter2D(rows, dy, CV_32F, one, second, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
     cv::add(cv::abs(dx), cv::abs(dy), dx);

@@ -30,8 +30,10 @@ void FocusStackRenderOptions::Check() const {
   for (double z : z_mm) {
     if (!std::isfinite(z)) throw std::invalid_argument("focus stack: z positions must be finite");
   }
-  if (!(sigma_px_per_mm > 0.0) || !(max_sigma_px > 0.0) || blur_levels < 2 || !(texture_sigma_px >= 0.0)) {
-    throw std::invalid_argument("focus stack: blur rate and maximum > 0, at least 2 levels, texture sigma >= 0");
+  if (!(sigma_px_per_mm > 0.0) || !(max_sigma_px > 0.0) || blur_levels < 2 || !(texture_sigma_px >= 0.0) ||
+      !(focus_sigma_px >= 0.0) || !(focus_sigma_px < max_sigma_px)) {
+    throw std::invalid_argument("focus stack: blur rate and maximum > 0, at least 2 levels, texture sigma >= 0, "
+                                "focus sigma from 0 to below the maximum");
   }
   if (!(contrast > 0.0) || !(noise >= 0.0) || !std::isfinite(level) || !(electrons_per_count >= 0.0)) {
     throw std::invalid_argument("focus stack: contrast > 0, noise >= 0, electrons per count >= 0, finite level");
@@ -93,8 +95,9 @@ RenderedFocusStack RenderFocusStack(const imaging::HeightMap& surface, const Foc
       for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
           const float height = surface.at(x, y);
-          const double sigma = std::isfinite(height) ? std::abs(z - height) * options.sigma_px_per_mm
-                                                     : options.max_sigma_px;
+          const double sigma = std::isfinite(height)
+                                   ? std::hypot(options.focus_sigma_px, (z - height) * options.sigma_px_per_mm)
+                                   : options.max_sigma_px;
           const double position = std::min(sigma / level_step, double(levels - 1));
           const int l = std::min(static_cast<int>(position), levels - 2);
           const float t = static_cast<float>(position - l);

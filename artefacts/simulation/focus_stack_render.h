@@ -3,8 +3,9 @@
 // the surface, seen through optics whose blur grows with the distance between the focal plane and the surface
 // under each pixel, plus sensor noise. The surface is the truth the reconstructed height map is compared with.
 //
-// The blur is a Gaussian whose sigma is proportional to the defocus |z - surface(x, y)|; per pixel the image
-// blends linearly between a few precomputed blur levels of the texture (exact at the levels, close between).
+// The blur is a Gaussian whose sigma grows in proportion to the defocus |z - surface(x, y)| from a floor in focus
+// (the waist of a Gaussian beam: sigma^2 = sigma0^2 + (rate dz)^2 [Siegman 1986]); per pixel the image blends
+// linearly between a few precomputed blur levels of the texture (exact at the levels, close between).
 
 #include <cstdint>
 #include <vector>
@@ -20,6 +21,9 @@ struct FocusStackRenderOptions {
   std::vector<double> z_mm;         // the focal plane of each image (see EvenZSteps)
   double sigma_px_per_mm = 1000.0;  // blur sigma in px per mm of defocus (here 1 px per um)
   double max_sigma_px = 8.0;        // the blur saturates beyond this: far out of focus is just grey
+  // The PSF's sigma in focus, px: diffraction (about 0.21 lambda / NA) and the pixel's own integration. Real
+  // optics never image sharper; 0 renders the texture itself in focus.
+  double focus_sigma_px = 0.0;
   int blur_levels = 17;             // precomputed blurs from 0 to max_sigma_px
   double texture_sigma_px = 0.7;    // grain of the texture: white noise smoothed by this Gaussian
   // Grey levels in counts (8-bit: 0..255, 16-bit: 0..65535; float: as given): mean, standard deviation of the

@@ -1,5 +1,5 @@
 // Focus variation on a 2048 x 2048 x 99 stack of 8-bit images (a plane rising 80 um through a 99 um stack, 1 um
-// steps, 1 um pixels): the default reconstruction (adaptive 3/5/9 px window, 5-point power-law fit, u_z) on
+// steps, 1 um pixels): the default reconstruction (adaptive 5/9 px window, 5-point power-law fit, u_z) on
 // OpenCV's thread pool, against baselines measured in the same run: the previous default (one 5 px window, a
 // 3-point Gaussian fit) in parallel and on one thread. Counters: megapixel-images per second of wall time and per
 // CPU second, cores busy (process CPU time over wall time: on a machine shared with other jobs, read it when

@@ -1,6 +1,7 @@
 // The window centroid correction (imaging/focus_window_centroid.h) against the centroids computed here directly:
-// each pixel's sharpness (the modified Laplacian of the all-in-focus image, to the power 1.5) weighted by the
-// window's taps written from their formula, their centroid times the slope taken off the height.
+// each pixel's sharpness (the modified Laplacian of the all-in-focus image smoothed by the focus measure's
+// pre-filter, to the power 1.5) weighted by the window's taps written from their formula, their centroid times the
+// slope taken off the height.
 
 #include <gtest/gtest.h>
 
@@ -36,9 +37,21 @@ TEST(FocusWindowCentroid, ShiftsEachHeightByTheSlopeTimesItsWindowsCentroid) {
   in.windows = &windows, in.window_px = &window_px, in.slope_x = slope_x.data(), in.slope_y = slope_y.data();
   imaging::CorrectWindowCentroids(in, z);
 
-  const auto mean = [&](int x, int y) {
-    const float* p = &texture[(std::size_t(y) * kWidth + std::size_t(x)) * 3];
+  const auto raw = [&](int x, int y) {
+    const auto reflect = [](int i, int n) { return i < 0 ? -i - 1 : i >= n ? 2 * n - i - 1 : i; };
+    const float* p = &texture[(std::size_t(reflect(y, kHeight)) * kWidth + std::size_t(reflect(x, kWidth))) * 3];
     return (double(p[0]) + p[1] + p[2]) / 3.0;
+  };
+  // The focus measure's pre-filter: a Gaussian of sigma kPrefilterSigmaPx over 5 x 5 taps.
+  const auto mean = [&](int x, int y) {
+    double sum = 0.0, taps = 0.0;
+    for (int v = -imaging::kPrefilterHalfWidth; v <= imaging::kPrefilterHalfWidth; ++v) {
+      for (int u = -imaging::kPrefilterHalfWidth; u <= imaging::kPrefilterHalfWidth; ++u) {
+        const double tap = std::exp(-(u * u + v * v) / (2.0 * imaging::kPrefilterSigmaPx * imaging::kPrefilterSigmaPx));
+        sum += tap * raw(x + u, y + v), taps += tap;
+      }
+    }
+    return sum / taps;
   };
   const auto weight = [&](int x, int y) {
     const double c = 2.0 * mean(x, y);

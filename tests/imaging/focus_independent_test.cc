@@ -1,0 +1,132 @@
+// Focus variation on stacks this project did not render: ../shared/bench/focusgen.py, written from optics apart
+// from the project, renders each object point spread by its own defocus (scatter) with a diffraction floor sigma0
+// in focus and a band-limited texture, and writes the true heights beside the images. The scene is the bench's:
+// a tilted textured face with a 35 um calotte whose walls reach 24 deg, 1 um pixels and steps. Heights are judged
+// per region as ../shared/bench/check judges them (the flat beyond the rim, the wall from half the footprint
+// radius to the rim, the bottom inside it) against the step, and u_z by the share of errors within 1.96 u_z.
+// Skips where ../shared or Debian's python3-numpy, python3-scipy, python3-tifffile are absent.
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "imaging/io/focus_stack_files.h"
+#include "imaging/io/height_map_image.h"
+#include "tests/support/test_support.h"
+
+namespace fvm {
+namespace {
+
+const std::filesystem::path kBench = FVM_BENCH_DIR;
+constexpr const char* kPython = "/usr/bin/python3";
+
+bool BenchUsable() {
+  if (!std::filesystem::exists(kBench / "focusgen.py") || !std::filesystem::exists(kPython)) return false;
+  const std::string probe = std::string(kPython) + " -c 'import numpy, scipy, tifffile' >/dev/null 2>&1";
+  return std::system(probe.c_str()) == 0;
+}
+
+struct RegionFigures {
+  double rms_steps[3] = {0, 0, 0};  // flat, wall, bottom
+  double coverage[3] = {0, 0, 0};
+  std::size_t count[3] = {0, 0, 0};
+  double valid_share = 0.0;
+};
+
+// Renders the stack with focusgen.py's `arguments` in `dir`, reconstructs it as `fvm focus` does, and compares.
+RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::string& arguments) {
+  const std::string command = std::string(kPython) + " " + (kBench / "focusgen.py").string() + " " +
+                              dir.string() + " " + arguments + " >/dev/null";
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  nlohmann::json truth;
+  std::ifstream(dir / "truth.json") >> truth;
+  imaging::HeightMapImageOptions read;
+  read.dx_mm = truth["pixel_mm"].get<double>();
+  const imaging::HeightMap surface = imaging::ReadHeightMapImage(dir / "truth.tif", read);
+  imaging::FocusStackFilesOptions o;
+  o.focus.dx_mm = read.dx_mm;
+  const imaging::FocusResult r =
+      imaging::ReconstructFocusStackFiles(imaging::ResolveFocusStack({dir / "stack.csv"}, std::nullopt), o).focus;
+  EXPECT_EQ(r.height.size_x, surface.size_x);
+  EXPECT_EQ(r.height.size_y, surface.size_y);
+
+  const double step_mm = truth["step_mm"].get<double>();
+  const double cx = truth["surface_info"]["centre_px"][0].get<double>();
+  const double cy = truth["surface_info"]["centre_px"][1].get<double>();
+  const double a = truth["surface_info"]["footprint_radius_px"].get<double>();
+  RegionFigures f;
+  double sum[3] = {0, 0, 0};
+  std::size_t covered[3] = {0, 0, 0}, compared = 0, valid = 0;
+  constexpr int kBorder = 5;
+  for (int y = kBorder; y < surface.size_y - kBorder; ++y) {
+    for (int x = kBorder; x < surface.size_x - kBorder; ++x) {
+      ++compared;
+      const std::size_t i = std::size_t(y) * std::size_t(surface.size_x) + std::size_t(x);
+      const double z = r.height.z_mm[i];
+      if (!std::isfinite(z)) continue;
+      ++valid;
+      const double radius = std::hypot(x - cx, y - cy);
+      const int region = radius > a + 3 ? 0 : radius > a / 2 && radius < a - 3 ? 1 : radius < a / 2 ? 2 : -1;
+      if (region < 0) continue;  // the rim's 3 px either side, as the bench leaves them out
+      const double d = z - surface.z_mm[i];
+      sum[region] += d * d;
+      covered[region] += std::abs(d) <= 1.96 * r.u_z_mm[i];
+      ++f.count[region];
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    f.rms_steps[k] = std::sqrt(sum[k] / double(f.count[k])) / step_mm;
+    f.coverage[k] = double(covered[k]) / double(f.count[k]);
+  }
+  f.valid_share = double(valid) / double(compared);
+  std::printf("focusgen.py %s: rms flat %.3f, wall %.3f, bottom %.3f step; coverage %.3f, %.3f, %.3f; valid %.4f\n",
+              arguments.c_str(), f.rms_steps[0], f.rms_steps[1], f.rms_steps[2], f.coverage[0], f.coverage[1],
+              f.coverage[2], f.valid_share);
+  return f;
+}
+
+struct Condition {
+  const char* name;
+  std::string arguments;
+  double max_rms_steps;  // per region
+};
+
+class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
+
+// Tolerances. Both scenes are held at the goal, 0.1 step rms in every region: the bench's own (NA 0.4,
+// sigma0 0.6 um, texture correlation 1 px; measured 0.053-0.057 flat, 0.081-0.082 wall, 0.054-0.057 bottom on
+// seeds 1-3) and a coarser texture under a wider aperture (NA 0.6, sigma0 0.45 um, 1.5 px; 0.056 / 0.082 /
+// 0.055 on seed 6; 0.070 / 0.079 / 0.058 on seed 8). u_z: 95 % coverage measured at 91-97 % per region on these;
+// a region here holds a few hundred independent patches (errors correlate over the 9 px window), so one seed's
+// coverage scatters by about 1.5 %: held at 90-98.5 %. Outside these conditions (a 2 px texture, or NA 0.9 with
+// an 0.8 um floor) the errors reach 0.1-0.2 step and u_z covers only 75-90 % (README's table).
+TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
+  if (!BenchUsable()) GTEST_SKIP() << kBench << " or python3 with numpy, scipy and tifffile is absent";
+  const Condition& c = GetParam();
+  const testing::TempDir dir;
+  const RegionFigures f = RenderAndMeasure(dir.path() / "stack", c.arguments);
+  EXPECT_GT(f.valid_share, 0.99);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_GT(f.count[k], 3000u) << "region " << k;
+    EXPECT_LT(f.rms_steps[k], c.max_rms_steps) << "region " << k;
+    EXPECT_GE(f.coverage[k], 0.90) << "region " << k;
+    EXPECT_LE(f.coverage[k], 0.985) << "region " << k;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Focusgen, FocusIndependentStacks,
+    ::testing::Values(Condition{"bench_scene", "--seed 7", 0.1},
+                      Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace fvm
