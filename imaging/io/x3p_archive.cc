@@ -32,6 +32,7 @@ X3pArchiveLayout LocateX3pMainXml(const ZipReader& zip, const std::string& name)
   int clutter = 0;
   std::vector<std::string> folders;  // top folders that hold a main.xml
   for (const std::string& entry : zip.Entries()) {
+    if (entry.ends_with('/')) continue;  // a folder: nothing to read
     if (IsArchiveClutter(entry)) {
       ++clutter;
       continue;
@@ -55,7 +56,7 @@ X3pArchiveLayout LocateX3pMainXml(const ZipReader& zip, const std::string& name)
   }
   if (clutter > 0) {
     layout.notes.push_back("the archive holds " + std::to_string(clutter) +
-                           " entries a desktop archiver adds (__MACOSX/, .DS_Store); ignored");
+                           " files a desktop archiver adds (__MACOSX/, .DS_Store); ignored");
   }
   return layout;
 }
