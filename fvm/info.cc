@@ -54,7 +54,7 @@ Summary SummariseMap(const imaging::HeightMap& map) {
   s.y0_mm = map.y0_mm;
   s.points = map.z_mm.size();
   s.organised = true;
-  s.intensity = !map.intensity.empty();
+  s.intensity = !map.intensity.empty() && map.intensity.size() == map.z_mm.size();
   s.notes = map.notes;
   const imaging::HeightMapStats stats = imaging::ComputeStats(map);
   s.valid_points = stats.valid_points;

@@ -146,7 +146,7 @@ void BindSurfaces(py::module_& m) {
       .def_property_readonly(
           "intensity",
           [](const Surface& s) -> py::object {
-            if (!s.height_map || s.height_map->intensity.empty()) return py::none();
+            if (!s.height_map || s.height_map->intensity.size() != s.height_map->z_mm.size()) return py::none();
             const imaging::HeightMap& h = *s.height_map;
             const std::vector<double> grey(h.intensity.begin(), h.intensity.end());
             return GridArray(grey, h.size_y, h.size_x);

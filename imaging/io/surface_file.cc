@@ -13,6 +13,7 @@
 #include "imaging/io/nms_file.h"
 #include "imaging/io/sdf.h"
 #include "imaging/io/sensofar_plu.h"
+#include "imaging/io/sensofar_plux.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/x3p.h"
 
@@ -84,6 +85,7 @@ std::optional<SurfaceFormat> ReadOnlyFromExtension(const std::filesystem::path& 
   if (extension == ".sur") return SurfaceFormat::kSur;
   if (extension == ".nms") return SurfaceFormat::kNms;
   if (extension == ".tmd") return SurfaceFormat::kTmd;
+  if (extension == ".plux") return SurfaceFormat::kPlux;
   return std::nullopt;
 }
 
@@ -123,6 +125,8 @@ std::string FormatName(SurfaceFormat format) {
       return "nms";
     case SurfaceFormat::kTmd:
       return "tmd";
+    case SurfaceFormat::kPlux:
+      return "plux";
     default:
       return "xyz";
   }
@@ -150,13 +154,17 @@ void WriteHeightMap(const std::filesystem::path& path, const HeightMap& map) {
 SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   const std::string head = ReadFileHead(path, 64);
   if (head.empty()) throw InputError(path.string() + ": the file is empty; export or copy it again");
-  if (const std::optional<SurfaceFormat> format = FromContent(head)) return *format;
+  if (const std::optional<SurfaceFormat> by_content = FromContent(head)) {
+    // A zip archive is an X3P, unless it is named as Sensofar's PLUx (index.xml and layers, no main.xml).
+    const bool plux = *by_content == SurfaceFormat::kX3p && ReadOnlyFromExtension(path) == SurfaceFormat::kPlux;
+    return plux ? SurfaceFormat::kPlux : *by_content;
+  }
   if (const std::optional<SurfaceFormat> format = FromExtension(path)) return *format;
   if (const std::optional<SurfaceFormat> format = ReadOnlyFromExtension(path)) return *format;
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
                    ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU, Zygo MetroPro "
-                   "DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, height-map images (TIFF, EXR, PNG), PCD, PLY and "
+                   "DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Sensofar PLUx, height-map images (TIFF, EXR, PNG), PCD, PLY and "
                    "XYZ/CSV text");
 }
 
@@ -196,6 +204,9 @@ Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions&
       break;
     case SurfaceFormat::kTmd:
       surface.height_map = ReadGelSightTmd(path);
+      break;
+    case SurfaceFormat::kPlux:
+      surface.height_map = ReadSensofarPlux(path);
       break;
     case SurfaceFormat::kImage:
       surface.height_map = ReadHeightMapImage(path, options.image);

@@ -18,11 +18,12 @@ namespace fvm::imaging {
 
 enum class SurfaceFormat {
   kX3p, kAl3d, kImage, kPcd, kPly, kXyz, kSdf,
-  // Other instruments' exports, read only: Sensofar PLU, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD.
-  kPlu, kMetroPro, kOpd, kSur, kNms, kTmd
+  // Other instruments' exports, read only: Sensofar PLU, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS,
+  // GelSight TMD, Sensofar PLUx.
+  kPlu, kMetroPro, kOpd, kSur, kNms, kTmd, kPlux
 };
 
-// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf", "plu", "metropro", "opd", "sur", "nms", "tmd".
+// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf", "plu", "metropro", "opd", "sur", "nms", "tmd", "plux".
 std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 

@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   // Other instruments' exports, laid out as the instruments write them (tests/support/instrument_files.h).
   namespace instrument = fvm::imaging::testing;
   WriteBytes(out / "plu" / "topography.plu", instrument::BuildPlu(map));
+  WriteBytes(out / "plux" / "layer.plux", instrument::BuildPlux(map));
   WriteBytes(out / "metropro" / "format1.dat", instrument::BuildMetroPro(map));
   WriteBytes(out / "opd" / "int16.opd", instrument::BuildOpd(map));
   WriteBytes(out / "sur" / "int32.sur", instrument::BuildSur(map));

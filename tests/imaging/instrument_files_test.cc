@@ -21,6 +21,7 @@
 #include "imaging/io/nms_file.h"
 #include "imaging/io/reader_support.h"
 #include "imaging/io/sensofar_plu.h"
+#include "imaging/io/sensofar_plux.h"
 #include "imaging/io/surface_file.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/x3p.h"
@@ -67,6 +68,16 @@ TEST(SensofarPlu, ReadsHeightsInvalidPointsAndTheColourImage) {
   const HeightMap read = ParseSensofarPlu(testing::BuildPlu(map), "a.plu");
   ExpectReadBack(map, read, 2e-9);  // float32 micrometres: about 1e-9 mm at 0.01 mm
   ExpectGreyIntensity(read);
+}
+
+TEST(SensofarPlux, ReadsTheFirstLayerNamedInItsIndex) {
+  HeightMap map = SampleMap(7, 5);
+  map.dx_mm = 0.00125, map.dy_mm = 0.0025;  // six decimals of micrometres in index.xml
+  const HeightMap read = ParseSensofarPlux(testing::BuildPlux(map), "a.plux");
+  ExpectReadBack(map, read, 2e-9);
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "a.plux", testing::BuildPlux(map));
+  EXPECT_EQ(ReadSurface(dir.path() / "a.plux").format, SurfaceFormat::kPlux);
 }
 
 TEST(MetroProDat, ReadsPhaseAsHeightsWithItsIntensity) {
@@ -153,7 +164,9 @@ std::vector<Format> Formats() {
           {"cut.sur", ParseDigitalSurfSur, testing::BuildSur(map)},
           {"zip.sur", ParseDigitalSurfSur, testing::BuildSur(map, true)},
           {"cut.nms", ParseNms, testing::BuildNms(map, -20, 20)},
-          {"cut.tmd", ParseGelSightTmd, BuildGelSightTmd(map)}};
+          {"cut.tmd", ParseGelSightTmd, BuildGelSightTmd(map)},
+          {"cut.plux", [](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); },
+           testing::BuildPlux(map)}};
 }
 
 // Cut anywhere, a file is refused with its name; never read as a smaller map, never a crash. (The PLU's colour

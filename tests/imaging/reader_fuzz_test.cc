@@ -19,6 +19,7 @@
 #include "imaging/io/metropro_dat.h"
 #include "imaging/io/nms_file.h"
 #include "imaging/io/sensofar_plu.h"
+#include "imaging/io/sensofar_plux.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/md5.h"
@@ -141,7 +142,8 @@ TEST(ReaderFuzz, InstrumentExports) {
       {ParseSensofarPlu, testing::BuildPlu(map)},        {ParseMetroProDat, testing::BuildMetroPro(map)},
       {ParseWykoOpd, testing::BuildOpd(map)},            {ParseDigitalSurfSur, testing::BuildSur(map)},
       {ParseDigitalSurfSur, testing::BuildSur(map, true)}, {ParseNms, testing::BuildNms(all_valid, -20, 20)},
-      {ParseGelSightTmd, BuildGelSightTmd(map)}};
+      {ParseGelSightTmd, BuildGelSightTmd(map)},
+      {[](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); }, testing::BuildPlux(map)}};
   std::mt19937 random(11);
   for (const auto& [parse, valid] : formats) {
     for (int round = 0; round < kRounds; ++round) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "imaging/height_map.h"
+#include "imaging/io/zip_archive.h"
 
 namespace fvm::imaging::testing {
 
@@ -203,6 +204,21 @@ inline std::string BuildSur(const HeightMap& map, bool compressed = false) {
   block += zipped;
   PutLe<std::uint32_t>(b, 324, static_cast<std::uint32_t>(block.size()));
   return b + block;
+}
+
+// Sensofar PLUx: index.xml with the grid and the pixel sizes (FOV_X, FOV_Y, micrometres), LAYER_0.raw with float32
+// micrometres (NaN where not measured).
+inline std::string BuildPlux(const HeightMap& map) {
+  const std::string index = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<xml>\n  <GENERAL>\n    <IMAGE_SIZE_X>" +
+                            std::to_string(map.size_x) + "</IMAGE_SIZE_X>\n    <IMAGE_SIZE_Y>" +
+                            std::to_string(map.size_y) + "</IMAGE_SIZE_Y>\n    <FOV_X>" + std::to_string(map.dx_mm * 1000.0) +
+                            "</FOV_X>\n    <FOV_Y>" + std::to_string(map.dy_mm * 1000.0) +
+                            "</FOV_Y>\n  </GENERAL>\n  <LAYER_0>\n    <FILENAME_Z>LAYER_0.raw</FILENAME_Z>\n  </LAYER_0>\n</xml>\n";
+  std::string heights;
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    PutLe<float>(heights, 4 * i, static_cast<float>(map.z_mm[i] * 1000.0));  // NaN stays NaN
+  }
+  return BuildZip({{"LAYER_0.raw", heights}, {"index.xml", index}});
 }
 
 // NMS height image: uint16 counts over the map's height range, then an 8-bit intensity per point.
