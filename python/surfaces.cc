@@ -124,7 +124,8 @@ void BindSurfaces(py::module_& m) {
           "An unorganised point cloud from an N x 3 array (mm).\n\nExample:\n"
           "    >>> s = fvm.Surface.from_points(np.random.default_rng(1).random((500, 3)))")
       .def_property_readonly("format", [](const Surface& s) { return imaging::FormatName(s.format); },
-                             "the file format read: x3p, al3d, sdf, plu, metropro, opd, sur, nms, tmd, image, pcd, ply, xyz")
+                             "the file format read: x3p, al3d, sdf, plu, plux, metropro, opd, sur, nms, tmd, image, pcd, ply, "
+                             "xyz")
       .def_property_readonly("is_cloud", [](const Surface& s) { return s.cloud.has_value(); })
       .def_property_readonly("heights", &HeightsOf, "rows x cols float64 heights, mm, NaN where invalid (None for a cloud)")
       .def_property_readonly("mask", &MaskOf, "rows x cols bool, True where a height is valid (None for a cloud)")

@@ -73,7 +73,8 @@ std::string InflateSurStreams(const std::string& bytes, std::size_t at, std::uin
                                   reinterpret_cast<const Bytef*>(p + zipped_at), static_cast<uLong>(zipped));
     if (status != Z_OK || inflated != raw) {
       FailReading(name, "compressed stream " + std::to_string(s + 1) + " does not inflate to its " +
-                            std::to_string(raw) + " bytes (zlib status " + std::to_string(status) + "); " + kSurReexport);
+                            std::to_string(raw) + " bytes (zlib status " + std::to_string(status) + "); " +
+                            kSurReexport);
     }
     zipped_at += zipped;
   }
@@ -89,8 +90,8 @@ HeightMap ParseDigitalSurfSur(const std::string& bytes, const std::string& name)
     FailReading(name, "does not start with 'DIGITAL SURF' or 'DSCOMPRESSED': not a Digital Surf SUR file");
   }
   if (bytes.size() < kSurHeaderSize) {
-    FailReading(name, "holds " + std::to_string(bytes.size()) + " bytes, fewer than the 512 of a SUR header; " +
-                          kSurReexport);
+    FailReading(
+        name, "holds " + std::to_string(bytes.size()) + " bytes, fewer than the 512 of a SUR header; " + kSurReexport);
   }
   const char* p = bytes.data();
   const int format = LoadBytes<std::int16_t>(p + 12);
@@ -111,8 +112,9 @@ HeightMap ParseDigitalSurfSur(const std::string& bytes, const std::string& name)
   const double z_offset = LoadBytes<float>(p + 474);
 
   if (format != 0) {
-    FailReading(name, "is in SUR format " + std::to_string(format) +
-                          " (0 is the PC format fvm reads; 257 is the old Macintosh one): save it from MountainsMap again");
+    FailReading(name,
+                "is in SUR format " + std::to_string(format) +
+                    " (0 is the PC format fvm reads; 257 is the old Macintosh one): save it from MountainsMap again");
   }
   if (studiable != kSurSurface) {
     FailReading(name, "holds a studiable of type " + std::to_string(studiable) +
@@ -169,15 +171,17 @@ HeightMap ParseDigitalSurfSur(const std::string& bytes, const std::string& name)
   const std::string object = FixedText(p + 20, 30);
   map.source = std::string(compressed ? "Digital Surf SUR (compressed)" : "Digital Surf SUR") +
                (object.empty() ? "" : ", " + object);
-  if (objects > 1) map.notes.push_back("it holds " + std::to_string(objects) + " objects; the first, a surface, is read");
+  if (objects > 1)
+    map.notes.push_back("it holds " + std::to_string(objects) + " objects; the first, a surface, is read");
   const double mm_per_count = dz * mm_z;
   const double offset_mm = z_offset * mm_z;
   const std::int64_t invalid = static_cast<std::int64_t>(declared_min) - 2;
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::int64_t count = bits == 16 ? LoadBytes<std::int16_t>(counts + 2 * i) : LoadBytes<std::int32_t>(counts + 4 * i);
+    const std::int64_t count =
+        bits == 16 ? LoadBytes<std::int16_t>(counts + 2 * i) : LoadBytes<std::int32_t>(counts + 4 * i);
     map.z_mm[i] = (non_measured && count == invalid) ? std::numeric_limits<double>::quiet_NaN()
-                                                      : static_cast<double>(count) * mm_per_count + offset_mm;
+                                                     : static_cast<double>(count) * mm_per_count + offset_mm;
   }
   return map;
 }

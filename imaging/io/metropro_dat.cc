@@ -64,8 +64,9 @@ bool HasMetroProMagic(const std::string& head) {
 
 HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
   if (!HasMetroProMagic(bytes)) {
-    FailReading(name, "does not start with the MetroPro magic 0x881B036F, 0x881B0370 or 0x881B0371: not a Zygo "
-                      "MetroPro DAT file");
+    FailReading(name,
+                "does not start with the MetroPro magic 0x881B036F, 0x881B0370 or 0x881B0371: not a Zygo "
+                "MetroPro DAT file");
   }
   constexpr std::size_t kSmallestHeader = 834;
   if (bytes.size() < kSmallestHeader) {
@@ -87,8 +88,9 @@ HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
                                         static_cast<std::uint64_t>(h.ac_height) *
                                         static_cast<std::uint64_t>(h.ac_buckets);
   if (h.ac_bytes != intensity_bytes) {
-    FailReading(name, "ac_n_bytes is " + std::to_string(h.ac_bytes) + " but ac_width x ac_height x ac_n_buckets x 2 is " +
-                          std::to_string(intensity_bytes) + "; " + kDatReexport);
+    FailReading(name, "ac_n_bytes is " + std::to_string(h.ac_bytes) +
+                          " but ac_width x ac_height x ac_n_buckets x 2 is " + std::to_string(intensity_bytes) + "; " +
+                          kDatReexport);
   }
   if (h.cn_bytes != 4 * n) {
     FailReading(name, "cn_n_bytes is " + std::to_string(h.cn_bytes) + " but cn_width x cn_height x 4 is " +
@@ -96,8 +98,9 @@ HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
   }
   const std::uint64_t phase_at = h.header_size + intensity_bytes;
   if (bytes.size() < phase_at + 4 * n) {
-    FailReading(name, "the header announces " + std::to_string(phase_at + 4 * n) + " bytes (header, intensity, phase) " +
-                          "but the file holds " + std::to_string(bytes.size()) + "; " + kDatReexport);
+    FailReading(name, "the header announces " + std::to_string(phase_at + 4 * n) +
+                          " bytes (header, intensity, phase) " + "but the file holds " + std::to_string(bytes.size()) +
+                          "; " + kDatReexport);
   }
   if (h.phase_res < 0 || h.phase_res > 2) {
     FailReading(name, "phase_res is " + std::to_string(h.phase_res) + ", not 0, 1 or 2; " + kDatReexport);
@@ -108,10 +111,11 @@ HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
                           "MetroPro and save again");
   }
   const double resolution = h.phase_res == 0 ? 4096.0 : h.phase_res == 1 ? 32768.0 : 131072.0;
-  const double metres_per_count = (h.inverted ? -1.0 : 1.0) * h.scale_factor * h.obliquity * h.wavelength_m / resolution;
+  const double metres_per_count =
+      (h.inverted ? -1.0 : 1.0) * h.scale_factor * h.obliquity * h.wavelength_m / resolution;
   if (!std::isfinite(metres_per_count) || metres_per_count == 0.0) {
-    FailReading(name, "intf_scale_factor x obliquity_factor x wavelength_in (" + FormatShortest(h.scale_factor) + " x " +
-                          FormatShortest(h.obliquity) + " x " + FormatShortest(h.wavelength_m) +
+    FailReading(name, "intf_scale_factor x obliquity_factor x wavelength_in (" + FormatShortest(h.scale_factor) +
+                          " x " + FormatShortest(h.obliquity) + " x " + FormatShortest(h.wavelength_m) +
                           " m) gives no height scale; " + kDatReexport);
   }
 
@@ -126,7 +130,7 @@ HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t count = LoadBigEndian<std::int32_t>(phase + 4 * i);
     map.z_mm[i] = count >= kMetroProInvalidPhase ? std::numeric_limits<double>::quiet_NaN()
-                                         : metres_per_count * static_cast<double>(count) * kMmPerMetre;
+                                                 : metres_per_count * static_cast<double>(count) * kMmPerMetre;
   }
   // The intensity image belongs to the heights' grid only where the camera windows coincide.
   if (h.ac_buckets >= 1 && h.ac_width == h.cn_width && h.ac_height == h.cn_height && h.ac_org_x == h.cn_org_x &&
@@ -135,7 +139,8 @@ HeightMap ParseMetroProDat(const std::string& bytes, const std::string& name) {
     const char* counts = bytes.data() + h.header_size;
     for (std::size_t i = 0; i < n; ++i) {
       const std::uint16_t v = LoadBigEndian<std::uint16_t>(counts + 2 * i);
-      map.intensity[i] = v >= kMetroProInvalidIntensity ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v);
+      map.intensity[i] =
+          v >= kMetroProInvalidIntensity ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v);
     }
   } else if (h.ac_buckets >= 1) {
     map.notes.push_back("its intensity image (" + std::to_string(h.ac_width) + " x " + std::to_string(h.ac_height) +

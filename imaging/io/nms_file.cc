@@ -53,8 +53,8 @@ HeightMap ParseNms(const std::string& bytes, const std::string& name) {
     FailReading(name, "the count range at bytes 8 and 12 (" + std::to_string(count_low) + " .. " +
                           std::to_string(count_high) + ") is not an increasing range of uint16; " + kNmsReexport);
   }
-  if (!std::isfinite(z_low_um) || !std::isfinite(z_high_um) || !(z_high_um >= z_low_um) ||
-      !(dx_nm > 0.0) || !(dy_nm > 0.0) || !std::isfinite(dx_nm) || !std::isfinite(dy_nm)) {
+  if (!std::isfinite(z_low_um) || !std::isfinite(z_high_um) || !(z_high_um >= z_low_um) || !(dx_nm > 0.0) ||
+      !(dy_nm > 0.0) || !std::isfinite(dx_nm) || !std::isfinite(dy_nm)) {
     FailReading(name, "the height range (" + FormatShortest(z_low_um) + " .. " + FormatShortest(z_high_um) +
                           " um) or the pixel sizes (" + FormatShortest(dx_nm) + ", " + FormatShortest(dy_nm) +
                           " nm) are not usable numbers; " + kNmsReexport);

@@ -70,7 +70,7 @@ HeightMap ParseSensofarPlu(const std::string& bytes, const std::string& name) {
   for (std::size_t i = 0; i < n; ++i) {
     const float z_um = LoadBytes<float>(p + heights_at + i * sizeof(float));
     map.z_mm[i] = (z_um == kPluNotMeasured || !std::isfinite(z_um)) ? std::numeric_limits<double>::quiet_NaN()
-                                                                  : static_cast<double>(z_um) / kMmPerMetre;
+                                                                    : static_cast<double>(z_um) / kMmPerMetre;
   }
   const std::uint64_t colour_at = heights_at + n * sizeof(float) + kPluColourGap;
   if (bytes.size() >= colour_at && bytes.size() - colour_at >= 3 * n) {

@@ -60,14 +60,17 @@ HeightMap ParseSensofarPlux(std::string bytes, const std::string& name) {
   const double dx_um = std::fabs(PluxNumber(name, general, "FOV_X"));
   const double dy_um = std::fabs(PluxNumber(name, general, "FOV_Y"));
   if (!(dx_um > 0.0) || !(dy_um > 0.0)) {
-    FailReading(name, "index.xml <GENERAL/FOV_X>, <FOV_Y> (the pixel sizes) are not positive; " + std::string(kPluxReexport));
+    FailReading(name,
+                "index.xml <GENERAL/FOV_X>, <FOV_Y> (the pixel sizes) are not positive; " + std::string(kPluxReexport));
   }
   std::string height_file;
   for (pugi::xml_node layer = root.first_child(); layer && height_file.empty(); layer = layer.next_sibling()) {
     if (std::string_view(layer.name()).starts_with("LAYER_")) height_file = PluxText(layer, "FILENAME_Z");
   }
-  if (height_file.empty()) FailReading(name, "index.xml names no height layer (<LAYER_n>/<FILENAME_Z>); " + std::string(kPluxReexport));
-  if (!zip.Has(height_file)) FailReading(name, "index.xml names the heights '" + height_file + "', which the archive lacks");
+  if (height_file.empty())
+    FailReading(name, "index.xml names no height layer (<LAYER_n>/<FILENAME_Z>); " + std::string(kPluxReexport));
+  if (!zip.Has(height_file))
+    FailReading(name, "index.xml names the heights '" + height_file + "', which the archive lacks");
   const std::size_t n = static_cast<std::size_t>(*cols) * static_cast<std::size_t>(*rows);
   if (zip.DeclaredSize(height_file) != 4 * n) {
     FailReading(name, std::to_string(*cols) + " x " + std::to_string(*rows) + " float32 heights need " +
@@ -85,7 +88,8 @@ HeightMap ParseSensofarPlux(std::string bytes, const std::string& name) {
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const float z_um = LoadBytes<float>(heights.data() + 4 * i);
-    map.z_mm[i] = std::isfinite(z_um) ? static_cast<double>(z_um) / kMmPerMetre : std::numeric_limits<double>::quiet_NaN();
+    map.z_mm[i] =
+        std::isfinite(z_um) ? static_cast<double>(z_um) / kMmPerMetre : std::numeric_limits<double>::quiet_NaN();
   }
   return map;
 }

@@ -163,9 +163,9 @@ SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   if (const std::optional<SurfaceFormat> format = ReadOnlyFromExtension(path)) return *format;
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
-                   ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU, Zygo MetroPro "
-                   "DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Sensofar PLUx, height-map images (TIFF, EXR, PNG), PCD, PLY and "
-                   "XYZ/CSV text");
+                   ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU and "
+                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, height-map images (TIFF, "
+                   "EXR, PNG), PCD, PLY and XYZ/CSV text");
 }
 
 void SurfaceReadOptions::Check() const {

@@ -37,7 +37,8 @@ class OpdBlocks {
     if (!HasWykoOpdDirectory(bytes)) {
       FailReading(name, "does not start with a Wyko OPD directory (the entry 'Directory' at byte 2): not an OPD file");
     }
-    if (bytes.size() < kOpdDirectoryAt + kOpdEntrySize) FailReading(name, "the OPD directory is cut short; " + std::string(kOpdReexport));
+    if (bytes.size() < kOpdDirectoryAt + kOpdEntrySize)
+      FailReading(name, "the OPD directory is cut short; " + std::string(kOpdReexport));
     const std::int32_t directory_length = LoadBytes<std::int32_t>(bytes.data() + kOpdDirectoryAt + kOpdNameSize + 2);
     if (directory_length < static_cast<std::int32_t>(kOpdEntrySize) || directory_length % kOpdEntrySize != 0 ||
         static_cast<std::size_t>(directory_length) > bytes.size() - kOpdDirectoryAt) {
@@ -89,7 +90,8 @@ struct OpdArray {
   const char* values = nullptr;
 };
 
-OpdArray ReadOpdArray(const std::string& bytes, const std::string& name, const OpdBlock& block, const std::string& what) {
+OpdArray ReadOpdArray(const std::string& bytes, const std::string& name, const OpdBlock& block,
+                      const std::string& what) {
   if (block.type != kOpdArrayType || block.length < 6) {
     FailReading(name, "block '" + what + "' is not an array (type " + std::to_string(block.type) + ", " +
                           std::to_string(block.length) + " bytes); " + kOpdReexport);
@@ -100,8 +102,8 @@ OpdArray ReadOpdArray(const std::string& bytes, const std::string& name, const O
   a.rows = LoadBytes<std::uint16_t>(p + 2);
   a.size = LoadBytes<std::uint16_t>(p + 4);
   a.values = p + 6;
-  const std::uint64_t needed = static_cast<std::uint64_t>(a.cols) * static_cast<std::uint64_t>(a.rows) *
-                               static_cast<std::uint64_t>(a.size);
+  const std::uint64_t needed =
+      static_cast<std::uint64_t>(a.cols) * static_cast<std::uint64_t>(a.rows) * static_cast<std::uint64_t>(a.size);
   if (a.cols < 1 || a.rows < 1 || needed != block.length - 6) {
     FailReading(name, "block '" + what + "' says " + std::to_string(a.cols) + " x " + std::to_string(a.rows) +
                           " values of " + std::to_string(a.size) + " bytes but holds " +
@@ -118,7 +120,8 @@ std::size_t OpdArrayIndex(const OpdArray& a, int ix, int iy) {
 }  // namespace
 
 bool HasWykoOpdDirectory(const std::string& head) {
-  return head.size() >= kOpdDirectoryAt + 10 && std::string_view(head).substr(kOpdDirectoryAt, 10) == std::string_view("Directory\0", 10);
+  return head.size() >= kOpdDirectoryAt + 10 &&
+         std::string_view(head).substr(kOpdDirectoryAt, 10) == std::string_view("Directory\0", 10);
 }
 
 HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
@@ -135,7 +138,8 @@ HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
     FailReading(name, "has no positive Wavelength block, the height scale; " + std::string(kOpdReexport));
   }
   const double mult = blocks.Number("Mult").value_or(1.0);
-  if (!(mult > 0.0) || !std::isfinite(mult)) FailReading(name, "block Mult is " + FormatShortest(mult) + ", not positive");
+  if (!(mult > 0.0) || !std::isfinite(mult))
+    FailReading(name, "block Mult is " + FormatShortest(mult) + ", not positive");
   const std::optional<double> pixel_mm = blocks.Number("Pixel_size");
   const double aspect = blocks.Number("Aspect").value_or(1.0);
   if (!pixel_mm || !(*pixel_mm > 0.0) || !std::isfinite(*pixel_mm) || !(aspect > 0.0) || !std::isfinite(aspect)) {
@@ -168,7 +172,8 @@ HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
   }
   if (const OpdBlock* image = blocks.Find("Image")) {
     const OpdArray intensity = ReadOpdArray(bytes, name, *image, "Image");
-    if (intensity.cols == heights.cols && intensity.rows == heights.rows && (intensity.size == 1 || intensity.size == 2)) {
+    if (intensity.cols == heights.cols && intensity.rows == heights.rows &&
+        (intensity.size == 1 || intensity.size == 2)) {
       map.intensity.resize(n);
       for (int iy = 0; iy < heights.rows; ++iy) {
         for (int ix = 0; ix < heights.cols; ++ix) {
@@ -179,8 +184,8 @@ HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
         }
       }
     } else {
-      map.notes.push_back("its Image block (" + std::to_string(intensity.cols) + " x " + std::to_string(intensity.rows) +
-                          ") is not on the heights' grid; it is not attached to them");
+      map.notes.push_back("its Image block (" + std::to_string(intensity.cols) + " x " +
+                          std::to_string(intensity.rows) + ") is not on the heights' grid; it is not attached to them");
     }
   }
   return map;

@@ -121,7 +121,9 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
     }
     axis.data_type = code.front();
   }
-  if (X3pElementGiven(Child(node, "Increment"), where, notes)) axis.increment = RequiredNumber(name, node, "Increment", where);
+  if (X3pElementGiven(Child(node, "Increment"), where, notes)) {
+    axis.increment = RequiredNumber(name, node, "Increment", where);
+  }
   if (X3pElementGiven(Child(node, "Offset"), where, notes)) axis.offset = RequiredNumber(name, node, "Offset", where);
   if (axis.increment == 0.0 || (axis.type == 'I' && axis.increment < 0.0)) {
     FailReading(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
@@ -258,7 +260,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   std::vector<double> raw;  // the file's values, before Offset and Increment
   std::vector<bool> valid;
   if (const pugi::xml_node link = Child(record3, "DataLink")) {
-    const std::string data_file = layout.Entry(zip, std::string(Text(Required(name, link, "PointDataLink", "Record3/DataLink"))));
+    const std::string data_file =
+        layout.Entry(zip, std::string(Text(Required(name, link, "PointDataLink", "Record3/DataLink"))));
     if (!zip.Has(data_file))
       FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
     const std::size_t type_size = TypeSize(cz.data_type);
@@ -269,7 +272,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
                             " bytes; " + kX3pReexport);
     }
     const std::string data = zip.Read(data_file, expected);
-    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData"); X3pElementGiven(md5, "Record3/DataLink", notes)) {
+    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData");
+        X3pElementGiven(md5, "Record3/DataLink", notes)) {
       VerifyMd5(name, data, Text(md5), data_file, "main.xml <MD5ChecksumPointData>");
     }
     raw.resize(n);
@@ -290,7 +294,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
           break;
       }
     }
-    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink"); X3pElementGiven(valid_link, "Record3/DataLink", notes)) {
+    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink");
+        X3pElementGiven(valid_link, "Record3/DataLink", notes)) {
       const std::string valid_file = layout.Entry(zip, std::string(Text(valid_link)));
       if (!zip.Has(valid_file))
         FailReading(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
@@ -302,7 +307,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
                               " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
       }
       const std::string bits = zip.Read(valid_file, declared);
-      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints"); X3pElementGiven(md5, "Record3/DataLink", notes)) {
+      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints");
+          X3pElementGiven(md5, "Record3/DataLink", notes)) {
         VerifyMd5(name, bits, Text(md5), valid_file, "main.xml <MD5ChecksumValidPoints>");
       }
       valid.resize(n);

@@ -81,8 +81,9 @@ std::vector<std::string> X3pDocumentNotes(const pugi::xml_node& root, const ZipR
     }
   }
   if (mask || zip.Has(layout.Entry(zip, "bindata/mask.png"))) {
-    notes.push_back("it holds an annotation mask (bindata/mask.png, <Mask>): the heights are read, the mask's colours "
-                    "are not applied to them");
+    notes.push_back(
+        "it holds an annotation mask (bindata/mask.png, <Mask>): the heights are read, the mask's colours "
+        "are not applied to them");
   }
   return notes;
 }

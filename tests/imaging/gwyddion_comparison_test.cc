@@ -38,7 +38,8 @@ struct GwyddionChannel {
 // What Gwyddion reads from `file`: its channels in order, empty when it cannot read the file.
 std::vector<GwyddionChannel> ReadWithGwyddion(const std::filesystem::path& file, const std::filesystem::path& home) {
   // HOME: Gwyddion looks for user plugins there; a scratch directory keeps the user's own out of the test.
-  const std::string command = "HOME='" + home.string() + "' '" + kGwyddionDump + "' '" + file.string() + "' 2>/dev/null";
+  const std::string command =
+      "HOME='" + home.string() + "' '" + kGwyddionDump + "' '" + file.string() + "' 2>/dev/null";
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
   std::string text;
   char buffer[1 << 16];
@@ -52,8 +53,8 @@ std::vector<GwyddionChannel> ReadWithGwyddion(const std::filesystem::path& file,
     int id = 0;
     in >> id;
     std::getline(in, c.title);
-    in >> word >> c.xres >> c.yres >> word >> c.dx_m >> c.dy_m >> word >> word >> word >> word >> c.unit_xy >> c.unit_z >>
-        word >> c.masked >> word;
+    in >> word >> c.xres >> c.yres >> word >> c.dx_m >> c.dy_m >> word >> word >> word >> word >> c.unit_xy >>
+        c.unit_z >> word >> c.masked >> word;
     c.values.resize(static_cast<std::size_t>(c.xres) * static_cast<std::size_t>(c.yres));
     for (double& v : c.values) {
       in >> word;

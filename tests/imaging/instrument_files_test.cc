@@ -5,6 +5,8 @@
 // are checked against what they state themselves here (the .nms header's height range, the .tmd against its X3P
 // conversion) and against Gwyddion in gwyddion_comparison_test.cc.
 
+#include "tests/support/instrument_files.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -25,7 +27,6 @@
 #include "imaging/io/surface_file.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/x3p.h"
-#include "tests/support/instrument_files.h"
 #include "tests/support/surface_samples.h"
 #include "tests/support/test_support.h"
 
@@ -173,7 +174,9 @@ std::vector<Format> Formats() {
 // image and the NMS intensity are optional: cut inside them, the heights still read.)
 TEST(InstrumentFiles, TruncatedFilesAreRefusedNamingTheFile) {
   for (const Format& f : Formats()) {
-    const std::size_t heights_end = f.name == "cut.plu" ? 508 + 4 * 24 : f.name == "cut.nms" ? 3468 + 2 * 24 : f.bytes.size();
+    const std::size_t heights_end = f.name == "cut.plu"   ? 508 + 4 * 24
+                                    : f.name == "cut.nms" ? 3468 + 2 * 24
+                                                          : f.bytes.size();
     for (std::size_t size = 0; size < heights_end; size += 1 + size / 7) {
       const std::string message = Refusal(f.parse, f.bytes.substr(0, size), f.name);
       EXPECT_NE(message.find(f.name), std::string::npos) << f.name << " cut at " << size << ": " << message;

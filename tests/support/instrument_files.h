@@ -66,7 +66,8 @@ inline std::string BuildPlu(const HeightMap& map) {
   PutLe<float>(b, at, 1000001.0f);
   PutLe<float>(b, at + 4, 1000001.0f);
   at += 8;
-  for (std::size_t i = 0; i < map.z_mm.size(); ++i, at += 3) PutText(b, at, std::string(3, static_cast<char>(GreyOf(i))));
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i, at += 3)
+    PutText(b, at, std::string(3, static_cast<char>(GreyOf(i))));
   return b;
 }
 
@@ -128,13 +129,16 @@ inline std::string BuildOpd(const HeightMap& map) {
   const float wavelength = 632.8f;
   const double step_nm = static_cast<double>(wavelength) / 64.0;
   std::vector<Entry> entries = {
-      {"RAW_DATA", 3, array(2, [&](std::string& d, std::size_t at, int ix, int iy) {
-         const double z = map.at(ix, iy);
-         PutLe<std::int16_t>(d, at, std::isfinite(z) ? static_cast<std::int16_t>(std::lround(z * 1e6 / step_nm)) : 32767);
-       })},
-      {"Image", 3, array(1, [&](std::string& d, std::size_t at, int ix, int iy) {
-         PutLe<unsigned char>(d, at, GreyOf(static_cast<std::size_t>(iy) * map.size_x + ix));
-       })},
+      {"RAW_DATA", 3,
+       array(2,
+             [&](std::string& d, std::size_t at, int ix, int iy) {
+               const double z = map.at(ix, iy);
+               PutLe<std::int16_t>(
+                   d, at, std::isfinite(z) ? static_cast<std::int16_t>(std::lround(z * 1e6 / step_nm)) : 32767);
+             })},
+      {"Image", 3,
+       array(1, [&](std::string& d, std::size_t at, int ix,
+                    int iy) { PutLe<unsigned char>(d, at, GreyOf(static_cast<std::size_t>(iy) * map.size_x + ix)); })},
       {"Wavelength", 7, number(wavelength)},
       {"Mult", 6, number(std::int16_t{64})},
       {"Pixel_size", 7, number(static_cast<float>(map.dx_mm))},
@@ -209,11 +213,12 @@ inline std::string BuildSur(const HeightMap& map, bool compressed = false) {
 // Sensofar PLUx: index.xml with the grid and the pixel sizes (FOV_X, FOV_Y, micrometres), LAYER_0.raw with float32
 // micrometres (NaN where not measured).
 inline std::string BuildPlux(const HeightMap& map) {
-  const std::string index = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<xml>\n  <GENERAL>\n    <IMAGE_SIZE_X>" +
-                            std::to_string(map.size_x) + "</IMAGE_SIZE_X>\n    <IMAGE_SIZE_Y>" +
-                            std::to_string(map.size_y) + "</IMAGE_SIZE_Y>\n    <FOV_X>" + std::to_string(map.dx_mm * 1000.0) +
-                            "</FOV_X>\n    <FOV_Y>" + std::to_string(map.dy_mm * 1000.0) +
-                            "</FOV_Y>\n  </GENERAL>\n  <LAYER_0>\n    <FILENAME_Z>LAYER_0.raw</FILENAME_Z>\n  </LAYER_0>\n</xml>\n";
+  const std::string index =
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<xml>\n  <GENERAL>\n    <IMAGE_SIZE_X>" +
+      std::to_string(map.size_x) + "</IMAGE_SIZE_X>\n    <IMAGE_SIZE_Y>" + std::to_string(map.size_y) +
+      "</IMAGE_SIZE_Y>\n    <FOV_X>" + std::to_string(map.dx_mm * 1000.0) + "</FOV_X>\n    <FOV_Y>" +
+      std::to_string(map.dy_mm * 1000.0) +
+      "</FOV_Y>\n  </GENERAL>\n  <LAYER_0>\n    <FILENAME_Z>LAYER_0.raw</FILENAME_Z>\n  </LAYER_0>\n</xml>\n";
   std::string heights;
   for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
     PutLe<float>(heights, 4 * i, static_cast<float>(map.z_mm[i] * 1000.0));  // NaN stays NaN
