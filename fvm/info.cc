@@ -174,8 +174,8 @@ void RegisterInfo(CLI::App& app) {
       "Reads a measurement file and tells what it holds: its format, grid (points, pixel size, origin), how many "
       "points are valid and the range of heights. Reads X3P (ISO 25178-72), Alicona AL3D, ISO 25178-71 SDF, the "
       "exports of other instruments (Sensofar PLU and PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, "
-      "GelSight TMD), height-map images (TIFF, EXR, PNG through OpenImageIO), PCD and PLY point clouds, and XYZ/CSV text "
-      "(x y z in mm per line). Checksums in X3P files are verified. What was unusual about a file and read anyway "
+      "GelSight TMD), height-map images (TIFF, EXR, PNG through OpenImageIO), PCD and PLY point clouds, and XYZ/CSV "
+      "text (x y z in mm per line). Checksums in X3P files are verified. What was unusual about a file and read anyway "
       "(an X3P zipped around its folder, archive clutter, empty optional elements) is listed as notes.");
   sub->add_option("FILE", args->file, "the surface or point-cloud file")->required();
   sub->add_flag("--json", args->json,
