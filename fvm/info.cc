@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/input_error.h"
 #include "fvm/commands.h"
@@ -37,6 +38,8 @@ struct Summary {
   std::optional<double> x_min, x_max, y_min, y_max, z_min, z_max;  // over valid points
   std::optional<double> sq_mm;  // height maps: RMS height about the mean
   bool organised = false;
+  bool intensity = false;          // the file holds an intensity image on the heights' grid
+  std::vector<std::string> notes;  // what the reader found unusual and read anyway
 };
 
 Summary SummariseMap(const imaging::HeightMap& map) {
@@ -51,6 +54,8 @@ Summary SummariseMap(const imaging::HeightMap& map) {
   s.y0_mm = map.y0_mm;
   s.points = map.z_mm.size();
   s.organised = true;
+  s.intensity = !map.intensity.empty() && map.intensity.size() == map.z_mm.size();
+  s.notes = map.notes;
   const imaging::HeightMapStats stats = imaging::ComputeStats(map);
   s.valid_points = stats.valid_points;
   if (stats.valid_points > 0) {
@@ -111,6 +116,8 @@ void PrintText(const std::string& file, const std::string& format, const Summary
     fmt::print("  grid          {} x {} points, {} x {} pixels, origin ({:.6f}, {:.6f}) mm\n", s.size_x, s.size_y,
                Um(*s.dx_mm), Um(*s.dy_mm), *s.x0_mm, *s.y0_mm);
   }
+  if (s.intensity) fmt::print("  intensity     an intensity image on the same grid\n");
+  for (const std::string& note : s.notes) fmt::print("  note          {}\n", note);
   const double percent = s.points > 0 ? 100.0 * static_cast<double>(s.valid_points) / static_cast<double>(s.points) : 0;
   fmt::print("  valid points  {} of {} ({:.2f} %)\n", s.valid_points, s.points, percent);
   if (s.valid_points == 0) {
@@ -153,6 +160,8 @@ void RunInfo(const InfoArgs& args) {
   out["y_min_mm"] = Optional(s.y_min);
   out["y_max_mm"] = Optional(s.y_max);
   out["sq_um"] = s.sq_mm ? nlohmann::ordered_json(*s.sq_mm * 1e3) : nlohmann::ordered_json(nullptr);
+  out["intensity"] = s.intensity;
+  out["notes"] = s.notes;
   fmt::print("{}\n", out.dump(2));
 }
 
@@ -163,13 +172,15 @@ void RegisterInfo(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("info", "what a surface or point-cloud file holds");
   AddDetails(sub,
       "Reads a measurement file and tells what it holds: its format, grid (points, pixel size, origin), how many "
-      "points are valid and the range of heights. Reads X3P (ISO 25178-72), Alicona AL3D, height-map images "
-      "(TIFF, EXR, PNG through OpenImageIO), PCD and PLY point clouds, and XYZ/CSV text (x y z in mm per line). "
-      "Checksums in X3P files are verified.");
+      "points are valid and the range of heights. Reads X3P (ISO 25178-72), Alicona AL3D, ISO 25178-71 SDF, the "
+      "exports of other instruments (Sensofar PLU and PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, "
+      "GelSight TMD), height-map images (TIFF, EXR, PNG through OpenImageIO), PCD and PLY point clouds, and XYZ/CSV "
+      "text (x y z in mm per line). Checksums in X3P files are verified. What was unusual about a file and read anyway "
+      "(an X3P zipped around its folder, archive clutter, empty optional elements) is listed as notes.");
   sub->add_option("FILE", args->file, "the surface or point-cloud file")->required();
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"size_x\", \"size_y\", \"dx_mm\", \"dy_mm\", \"valid_points\", "
-                "\"z_min_mm\", \"z_max_mm\", ...}; values the file does not have are null");
+                "\"z_min_mm\", \"z_max_mm\", ..., \"intensity\", \"notes\"}; values the file does not have are null");
   args->read.AddOptions(*sub);
   sub->footer("Example: fvm info scan.x3p --json");
   sub->callback([args] { RunInfo(*args); });

@@ -20,6 +20,11 @@ struct HeightMap {
   double x0_mm = 0.0;
   double y0_mm = 0.0;
   std::string source{};  // what the reader found about the origin (format, instrument, date); may be empty
+  // The instrument's intensity (grey-level) image on the same grid, row-major, when the file holds one; empty
+  // otherwise. Its unit is the instrument's (counts, 8-bit grey): for looking at, never for measuring.
+  std::vector<float> intensity{};
+  // What the reader found unusual about the file and read anyway, one sentence each (fvm info prints them).
+  std::vector<std::string> notes{};
 
   double& at(int ix, int iy) { return z_mm[static_cast<size_t>(iy) * static_cast<size_t>(size_x) + static_cast<size_t>(ix)]; }
   double at(int ix, int iy) const { return z_mm[static_cast<size_t>(iy) * static_cast<size_t>(size_x) + static_cast<size_t>(ix)]; }

@@ -124,7 +124,8 @@ void BindSurfaces(py::module_& m) {
           "An unorganised point cloud from an N x 3 array (mm).\n\nExample:\n"
           "    >>> s = fvm.Surface.from_points(np.random.default_rng(1).random((500, 3)))")
       .def_property_readonly("format", [](const Surface& s) { return imaging::FormatName(s.format); },
-                             "the file format read: x3p, al3d, sdf, image, pcd, ply, xyz")
+                             "the file format read: x3p, al3d, sdf, plu, plux, metropro, opd, sur, nms, tmd, image, pcd, ply, "
+                             "xyz")
       .def_property_readonly("is_cloud", [](const Surface& s) { return s.cloud.has_value(); })
       .def_property_readonly("heights", &HeightsOf, "rows x cols float64 heights, mm, NaN where invalid (None for a cloud)")
       .def_property_readonly("mask", &MaskOf, "rows x cols bool, True where a height is valid (None for a cloud)")
@@ -143,6 +144,19 @@ void BindSurfaces(py::module_& m) {
           "N x 3 points, mm: the cloud's, or every grid point of a height map (NaN z where invalid)")
       .def_property_readonly("source", [](const Surface& s) { return s.height_map ? s.height_map->source : s.cloud->source; },
                              "what the reader found about the origin (format, instrument, date)")
+      .def_property_readonly(
+          "intensity",
+          [](const Surface& s) -> py::object {
+            if (!s.height_map || s.height_map->intensity.size() != s.height_map->z_mm.size()) return py::none();
+            const imaging::HeightMap& h = *s.height_map;
+            const std::vector<double> grey(h.intensity.begin(), h.intensity.end());
+            return GridArray(grey, h.size_y, h.size_x);
+          },
+          "rows x cols float64 intensity (grey-level) image the instrument recorded with the heights, in its own "
+          "units, NaN where it has none (None when the file holds none)")
+      .def_property_readonly(
+          "notes", [](const Surface& s) { return s.height_map ? s.height_map->notes : std::vector<std::string>{}; },
+          "what the reader found unusual about the file and read anyway (an X3P zipped around its folder, ...)")
       .def("__repr__", [](const Surface& s) {
         if (s.cloud) return fmt::format("<fvm.Surface cloud of {} points>", s.cloud->points.size());
         const imaging::HeightMap& h = *s.height_map;

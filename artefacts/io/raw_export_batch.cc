@@ -159,7 +159,8 @@ void CheckSameNumbering(const RawExportFit& stitched, const RawExportFit& free, 
 }  // namespace
 
 const std::vector<std::string>& RawExportExtensions() {
-  static const std::vector<std::string> extensions = {".x3p", ".al3d", ".sdf", ".tif", ".tiff"};
+  static const std::vector<std::string> extensions = {".x3p", ".al3d", ".sdf", ".tif",  ".tiff", ".plu",
+                                                      ".dat", ".opd", ".sur",  ".nms", ".tmd"};
   return extensions;
 }
 

@@ -47,7 +47,8 @@ struct RawExportBatch {
   std::vector<RawExportFit> fits;   // stitched then free, placement by placement
 };
 
-// The surface extensions a raw batch may hold, with the dot: .x3p .al3d .sdf .tif .tiff
+// The surface extensions a raw batch may hold, with the dot: .x3p .al3d .sdf .tif .tiff and the instruments' exports
+// .plu .dat (Zygo MetroPro) .opd .sur .nms .tmd
 const std::vector<std::string>& RawExportExtensions();
 
 // True when `dir` holds no <placement>.stitched.csv but at least one <placement>.stitched.<surface>: the batch is

@@ -28,4 +28,22 @@ T LoadBytes(const char* p) {
   return value;
 }
 
+// A T stored big-endian at p (Zygo MetroPro headers and data).
+template <typename T>
+T LoadBigEndian(const char* p) {
+  char swapped[sizeof(T)];
+  for (std::size_t i = 0; i < sizeof(T); ++i) swapped[i] = p[sizeof(T) - 1 - i];
+  return LoadBytes<T>(swapped);
+}
+
+// A fixed-size text field: up to its first NUL, blanks trimmed.
+inline std::string FixedText(const char* p, std::size_t size) {
+  std::size_t n = 0;
+  while (n < size && p[n] != '\0') ++n;
+  std::size_t begin = 0;
+  while (begin < n && (p[begin] == ' ' || p[begin] == '\t')) ++begin;
+  while (n > begin && (p[n - 1] == ' ' || p[n - 1] == '\t' || p[n - 1] == '\r' || p[n - 1] == '\n')) --n;
+  return std::string(p + begin, n - begin);
+}
+
 }  // namespace fvm::imaging

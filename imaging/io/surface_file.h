@@ -1,7 +1,9 @@
 #pragma once
 // Any surface or point-cloud file fvm reads, recognised by its content first (zip for X3P, the AL3D
-// signature, ISO 25178-71 SDF's aISO-1.0 / bISO-1.0, TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read into a height map or a
-// point cloud. The one entry point for commands that take "a measurement file" (fvm info, fvm fit).
+// signature, ISO 25178-71 SDF's aISO-1.0 / bISO-1.0, the instrument signatures of Zygo MetroPro, Wyko OPD, Digital
+// Surf SUR, GelSight TMD and Sensofar PLU, TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read
+// into a height map or a point cloud. The one entry point for commands that take "a measurement file" (fvm info,
+// fvm fit, fvm correct, fvm calibrate RAW, Python's read_surface).
 
 #include <filesystem>
 #include <optional>
@@ -14,9 +16,14 @@
 
 namespace fvm::imaging {
 
-enum class SurfaceFormat { kX3p, kAl3d, kImage, kPcd, kPly, kXyz, kSdf };
+enum class SurfaceFormat {
+  kX3p, kAl3d, kImage, kPcd, kPly, kXyz, kSdf,
+  // Other instruments' exports, read only: Sensofar PLU, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS,
+  // GelSight TMD, Sensofar PLUx.
+  kPlu, kMetroPro, kOpd, kSur, kNms, kTmd, kPlux
+};
 
-// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf".
+// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf", "plu", "metropro", "opd", "sur", "nms", "tmd", "plux".
 std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 
@@ -34,8 +41,8 @@ struct SurfaceReadOptions {
   void Check() const;
 };
 
-// Exactly one of height_map and cloud is set: a height map for X3P, AL3D, SDF and images, a cloud for PCD, PLY
-// and XYZ.
+// Exactly one of height_map and cloud is set: a height map for X3P, AL3D, SDF, images and the instruments' exports,
+// a cloud for PCD, PLY and XYZ.
 struct Surface {
   SurfaceFormat format = SurfaceFormat::kX3p;
   std::optional<HeightMap> height_map;

@@ -21,6 +21,7 @@
 #include "core/number_text.h"
 #include "imaging/io/md5.h"
 #include "imaging/io/reader_support.h"
+#include "imaging/io/x3p_archive.h"
 #include "imaging/io/zip_archive.h"
 
 namespace fvm::imaging {
@@ -94,7 +95,16 @@ struct Axis {
   double offset = 0.0;
 };
 
-Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_view local) {
+// An optional element present but empty (<Offset/>) is read as absent, with a note.
+bool X3pElementGiven(const pugi::xml_node& node, const std::string& where, std::vector<std::string>& notes) {
+  if (!node) return false;
+  if (!Text(node).empty()) return true;
+  notes.push_back("main.xml <" + where + "/" + node.name() + "> is empty; read as absent (its default)");
+  return false;
+}
+
+Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_view local,
+               std::vector<std::string>& notes) {
   const std::string where = "Record1/Axes/" + std::string(local);
   const pugi::xml_node node = Required(name, axes, local, "Record1/Axes");
   Axis axis;
@@ -103,7 +113,7 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
     FailReading(name, "main.xml <" + where + "/AxisType> is '" + std::string(type) + "', not I or A; " + kX3pReexport);
   }
   axis.type = type.front();
-  if (const pugi::xml_node data_type = Child(node, "DataType")) {
+  if (const pugi::xml_node data_type = Child(node, "DataType"); X3pElementGiven(data_type, where, notes)) {
     const std::string_view code = Text(data_type);
     if (code.size() != 1 || std::string_view("ILFD").find(code.front()) == std::string_view::npos) {
       FailReading(name, "main.xml <" + where + "/DataType> is '" + std::string(code) +
@@ -111,8 +121,10 @@ Axis ParseAxis(const std::string& name, const pugi::xml_node& axes, std::string_
     }
     axis.data_type = code.front();
   }
-  if (Child(node, "Increment")) axis.increment = RequiredNumber(name, node, "Increment", where);
-  if (Child(node, "Offset")) axis.offset = RequiredNumber(name, node, "Offset", where);
+  if (X3pElementGiven(Child(node, "Increment"), where, notes)) {
+    axis.increment = RequiredNumber(name, node, "Increment", where);
+  }
+  if (X3pElementGiven(Child(node, "Offset"), where, notes)) axis.offset = RequiredNumber(name, node, "Offset", where);
   if (axis.increment == 0.0 || (axis.type == 'I' && axis.increment < 0.0)) {
     FailReading(name, "main.xml <" + where + "/Increment> is " + FormatShortest(axis.increment) +
                           "; a grid needs a positive spacing; " + kX3pReexport);
@@ -182,12 +194,11 @@ std::string Describe(const pugi::xml_node& root) {
 
 HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const ZipReader zip(std::move(bytes), name);
-  if (!zip.Has(kMainXml)) {
-    FailReading(name, "the archive has no main.xml: not an X3P file (ISO 25178-72); export the surface as X3P");
-  }
-  const std::string xml = zip.Read(kMainXml, kMaxXmlBytes);
+  const X3pArchiveLayout layout = LocateX3pMainXml(zip, name);
+  std::vector<std::string> notes = layout.notes;
+  const std::string xml = zip.Read(layout.folder + kMainXml, kMaxXmlBytes);
   // Before parsing: a damaged main.xml is better reported as a checksum failure than as an XML error.
-  if (zip.Has(kChecksumFile)) VerifyChecksumFile(name, zip, kChecksumFile, xml);
+  if (zip.Has(layout.Entry(zip, kChecksumFile))) VerifyChecksumFile(name, zip, layout.Entry(zip, kChecksumFile), xml);
 
   pugi::xml_document document;
   const pugi::xml_parse_result parsed = document.load_buffer(xml.data(), xml.size());
@@ -201,10 +212,11 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   }
   if (const pugi::xml_node record4 = Child(root, "Record4")) {
     const std::string checksum_file(Text(Child(record4, "ChecksumFile")));
-    if (!checksum_file.empty() && checksum_file != kChecksumFile && zip.Has(checksum_file)) {
-      VerifyChecksumFile(name, zip, checksum_file, xml);
+    if (!checksum_file.empty() && checksum_file != kChecksumFile && zip.Has(layout.Entry(zip, checksum_file))) {
+      VerifyChecksumFile(name, zip, layout.Entry(zip, checksum_file), xml);
     }
   }
+  for (std::string& note : X3pDocumentNotes(root, zip, layout)) notes.push_back(std::move(note));
 
   const pugi::xml_node record1 = Required(name, root, "Record1", "ISO5436_2");
   const std::string feature(Text(Child(record1, "FeatureType")));
@@ -215,9 +227,9 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
                     "or as PLY/PCD for a point cloud");
   }
   const pugi::xml_node axes = Required(name, record1, "Axes", "Record1");
-  const Axis cx = ParseAxis(name, axes, "CX");
-  const Axis cy = ParseAxis(name, axes, "CY");
-  const Axis cz = ParseAxis(name, axes, "CZ");
+  const Axis cx = ParseAxis(name, axes, "CX", notes);
+  const Axis cy = ParseAxis(name, axes, "CY", notes);
+  const Axis cz = ParseAxis(name, axes, "CZ", notes);
   if (cx.type != 'I' || cy.type != 'I') {
     FailReading(name,
                 "has absolute X/Y axes (a list of x, y, z points); fvm reads X3P surfaces on a regular grid "
@@ -248,7 +260,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   std::vector<double> raw;  // the file's values, before Offset and Increment
   std::vector<bool> valid;
   if (const pugi::xml_node link = Child(record3, "DataLink")) {
-    const std::string data_file(Text(Required(name, link, "PointDataLink", "Record3/DataLink")));
+    const std::string data_file =
+        layout.Entry(zip, std::string(Text(Required(name, link, "PointDataLink", "Record3/DataLink"))));
     if (!zip.Has(data_file))
       FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
     const std::size_t type_size = TypeSize(cz.data_type);
@@ -259,7 +272,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
                             " bytes; " + kX3pReexport);
     }
     const std::string data = zip.Read(data_file, expected);
-    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData")) {
+    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData");
+        X3pElementGiven(md5, "Record3/DataLink", notes)) {
       VerifyMd5(name, data, Text(md5), data_file, "main.xml <MD5ChecksumPointData>");
     }
     raw.resize(n);
@@ -280,8 +294,9 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
           break;
       }
     }
-    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink")) {
-      const std::string valid_file(Text(valid_link));
+    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink");
+        X3pElementGiven(valid_link, "Record3/DataLink", notes)) {
+      const std::string valid_file = layout.Entry(zip, std::string(Text(valid_link)));
       if (!zip.Has(valid_file))
         FailReading(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
       const std::size_t needed = (n + 7) / 8;
@@ -292,7 +307,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
                               " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
       }
       const std::string bits = zip.Read(valid_file, declared);
-      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints")) {
+      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints");
+          X3pElementGiven(md5, "Record3/DataLink", notes)) {
         VerifyMd5(name, bits, Text(md5), valid_file, "main.xml <MD5ChecksumValidPoints>");
       }
       valid.resize(n);
@@ -337,6 +353,7 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   map.x0_mm = cx.offset * kMmPerMetre;
   map.y0_mm = cy.offset * kMmPerMetre;
   map.source = Describe(root);
+  map.notes = std::move(notes);
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     // [ISO 5436-2] scales every type the same way; floats usually carry increment 1 and offset 0.

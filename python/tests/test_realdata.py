@@ -54,6 +54,23 @@ def test_real_al3d_reads_with_its_pixel_size():
     assert np.sqrt(np.mean((h - h.mean()) ** 2)) * 1e-3 == pytest.approx(7.688266102603082e-6, rel=1e-6)
 
 
+@pytest.mark.parametrize("name,fmt,shape,valid,intensity", [
+    ("test_1.plu", "plu", (576, 768), 442368, True),
+    ("test_1.dat", "metropro", (480, 640), 307200, True),
+    ("test_1.opd", "opd", (480, 736), 352471, True),  # Gwyddion masks the same 809 points
+    ("test_uncompressed.sur", "sur", (512, 512), 262144, False),
+    ("test_1.nms", "nms", (512, 512), 262144, True),
+    ("testing.tmd", "tmd", (20, 30), 600, False),
+])
+def test_other_instruments_exports_read_as_gwyddion_reads_them(name, fmt, shape, valid, intensity):
+    s = fvm.read_surface(REAL / "surfaces" / "vendors" / name)
+    assert s.format == fmt and s.heights.shape == shape and int(s.mask.sum()) == valid
+    assert (s.intensity is not None) == intensity
+    if intensity:
+        assert s.intensity.shape == shape
+    assert s.notes == []
+
+
 def overlap_ncc(a, b, offset):
     """Normalised cross-correlation of a and b where b, its top-left at the whole-pixel offset in a's frame,
     overlaps a: computed here, independently of fvm."""

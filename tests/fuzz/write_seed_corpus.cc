@@ -3,17 +3,22 @@
 //   write_seed_corpus tests/fuzz/corpus
 // Heights and clouds come from tests/imaging/surface_samples.h: invalid points, negative and tiny values.
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "imaging/io/al3d.h"
+#include "imaging/io/gelsight_tmd.h"
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/point_cloud_io.h"
 #include "imaging/io/tile_image.h"
 #include "imaging/io/x3p.h"
+#include "imaging/io/zip_archive.h"
 #include "imaging/point_cloud.h"
+#include "tests/support/instrument_files.h"
 #include "tests/support/surface_samples.h"
 
 namespace {
@@ -44,6 +49,28 @@ int main(int argc, char** argv) {
   x3p.z_increment_mm = 1e-5;
   WriteBytes(out / "x3p" / "binary-i.x3p", fvm::imaging::BuildX3p(map, x3p));
   WriteBytes(out / "al3d" / "sample.al3d", fvm::imaging::BuildAl3d(map));
+  // An X3P as a desktop archiver leaves it: zipped around its folder, with macOS clutter beside it.
+  {
+    x3p.z_type = fvm::imaging::X3pDataType::kFloat64;
+    const fvm::imaging::ZipReader zip(fvm::imaging::BuildX3p(map, x3p), "seed.x3p");
+    std::vector<fvm::imaging::ZipEntry> entries;
+    for (const std::string& name : zip.Entries()) entries.push_back({"scan/" + name, zip.Read(name, 1 << 20)});
+    entries.push_back({"__MACOSX/scan/._main.xml", std::string(82, '\x01')});
+    entries.push_back({"scan/.DS_Store", std::string(16, '\0')});
+    WriteBytes(out / "x3p" / "desktop-zipped.x3p", fvm::imaging::BuildZip(entries));
+  }
+  // Other instruments' exports, laid out as the instruments write them (tests/support/instrument_files.h).
+  namespace instrument = fvm::imaging::testing;
+  WriteBytes(out / "plu" / "topography.plu", instrument::BuildPlu(map));
+  WriteBytes(out / "plux" / "layer.plux", instrument::BuildPlux(map));
+  WriteBytes(out / "metropro" / "format1.dat", instrument::BuildMetroPro(map));
+  WriteBytes(out / "opd" / "int16.opd", instrument::BuildOpd(map));
+  WriteBytes(out / "sur" / "int32.sur", instrument::BuildSur(map));
+  WriteBytes(out / "sur" / "compressed.sur", instrument::BuildSur(map, true));
+  fvm::imaging::HeightMap all_valid = map;
+  for (double& z : all_valid.z_mm) z = std::isfinite(z) ? z : 0.0;
+  WriteBytes(out / "nms" / "height.nms", instrument::BuildNms(all_valid, -20.0, 20.0));
+  WriteBytes(out / "tmd" / "v2.tmd", fvm::imaging::BuildGelSightTmd(map));
   std::filesystem::create_directories(out / "height_map_image");
   fvm::imaging::WriteHeightMapImage(out / "height_map_image" / "sample.tif", map);
   std::filesystem::create_directories(out / "tile_image");

@@ -4,19 +4,30 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <exception>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/input_error.h"
 #include "imaging/io/al3d.h"
+#include "imaging/io/digital_surf_sur.h"
+#include "imaging/io/gelsight_tmd.h"
+#include "imaging/io/metropro_dat.h"
+#include "imaging/io/nms_file.h"
+#include "imaging/io/sensofar_plu.h"
+#include "imaging/io/sensofar_plux.h"
+#include "imaging/io/wyko_opd.h"
 #include "imaging/io/height_map_image.h"
 #include "imaging/io/md5.h"
 #include "imaging/io/point_cloud_io.h"
 #include "imaging/io/sdf.h"
 #include "imaging/io/x3p.h"
 #include "imaging/io/zip_archive.h"
+#include "tests/support/instrument_files.h"
 #include "tests/support/test_support.h"
 #include "tests/support/surface_samples.h"
 
@@ -63,6 +74,7 @@ std::string Outcome(F read) {
 
 void ExpectWellFormed(const HeightMap& map) {
   ASSERT_EQ(map.z_mm.size(), static_cast<size_t>(map.size_x) * static_cast<size_t>(map.size_y));
+  ASSERT_TRUE(map.intensity.empty() || map.intensity.size() == map.z_mm.size());
 }
 
 TEST(ReaderFuzz, X3pBytes) {
@@ -117,6 +129,32 @@ TEST(ReaderFuzz, Sdf) {
   for (int round = 0; round < kRounds; ++round) {
     const std::string bytes = Mutate(round % 2 == 0 ? binary : ascii, random);
     EXPECT_EQ(Outcome([&] { ExpectWellFormed(ParseSdf(bytes, "fuzz.sdf")); }), "") << "round " << round;
+  }
+}
+
+// Other instruments' exports: half the rounds aim at the header, where the sizes and offsets are.
+TEST(ReaderFuzz, InstrumentExports) {
+  const HeightMap map = SampleMap(6, 4);
+  HeightMap all_valid = map;
+  for (double& z : all_valid.z_mm) z = std::isfinite(z) ? z : 0.0;
+  using Parse = HeightMap (*)(const std::string&, const std::string&);
+  const std::vector<std::pair<Parse, std::string>> formats = {
+      {ParseSensofarPlu, testing::BuildPlu(map)},        {ParseMetroProDat, testing::BuildMetroPro(map)},
+      {ParseWykoOpd, testing::BuildOpd(map)},            {ParseDigitalSurfSur, testing::BuildSur(map)},
+      {ParseDigitalSurfSur, testing::BuildSur(map, true)}, {ParseNms, testing::BuildNms(all_valid, -20, 20)},
+      {ParseGelSightTmd, BuildGelSightTmd(map)},
+      {[](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); }, testing::BuildPlux(map)}};
+  std::mt19937 random(11);
+  for (const auto& [parse, valid] : formats) {
+    for (int round = 0; round < kRounds; ++round) {
+      std::string bytes = Mutate(valid, random);
+      if (round % 2 == 0) {
+        bytes = valid;
+        const std::size_t header = std::min<std::size_t>(valid.size(), 600);
+        for (int i = 0; i < 3; ++i) bytes[random() % header] = static_cast<char>(random() % 256);
+      }
+      EXPECT_EQ(Outcome([&] { ExpectWellFormed(parse(bytes, "fuzz")); }), "") << "round " << round;
+    }
   }
 }
 
