@@ -66,13 +66,18 @@ ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals
     }
     u = (u.colwise() - u.rowwise().mean()) / std::sqrt(static_cast<double>(runs - 1));
     estimation = u.squaredNorm();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(u.transpose() * u);  // ascending
-    const Eigen::Index m = std::min<Eigen::Index>(dimension, runs);
+    // The directions from the first runs only, enough for the few dozen a model has: a Gram matrix of 1000 runs
+    // would cost more than the runs themselves.
+    const Eigen::Index used = std::min<Eigen::Index>(runs, std::max(200, 4 * dimension));
+    const double rescale = std::sqrt(static_cast<double>(runs - 1) / static_cast<double>(std::max<Eigen::Index>(used - 1, 1)));
+    const Eigen::MatrixXd first = u.leftCols(used) * rescale;  // their covariance from those runs
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(first.transpose() * first);  // ascending
+    const Eigen::Index m = std::min<Eigen::Index>(dimension, used);
     Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
-    for (Eigen::Index j = runs - 1; j >= runs - m; --j) {
+    for (Eigen::Index j = used - 1; j >= used - m; --j) {
       const double l = gram.eigenvalues()[j];
-      if (!(l > 1e-12 * gram.eigenvalues()[runs - 1]) || !(l > 0)) break;
-      const Eigen::VectorXd axis = u * gram.eigenvectors().col(j) / std::sqrt(l);  // unit
+      if (!(l > 1e-12 * gram.eigenvalues()[used - 1]) || !(l > 0)) break;
+      const Eigen::VectorXd axis = first * gram.eigenvectors().col(j) / std::sqrt(l);  // unit
       double axis_noise = 0;  // the readings' noise along it
       for (size_t p = 0; p < n; ++p) {
         const Eigen::Index at = 3 * static_cast<Eigen::Index>(p);
