@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cstddef>
 #include <map>
 #include <tuple>
 #include <cmath>
@@ -135,14 +136,13 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
   if (validation.empty()) return runs;
 
   // The validation readings' truth: the model plus what it leaves there, less the expected share of their noise and
-  // of the model's own estimation error, which the runs' spread at those points gives.
+  // of the model's own estimation error (stage/residual_field.h: HeldOutResidualField), whose covariance over the
+  // points the runs' deviations there give.
   const std::vector<PointSpread> spreads = PointSpreads(runs);
   std::vector<Eigen::Vector3d> held_out_left(validation.size());
-  std::vector<Eigen::Matrix3d> held_out_covariances(validation.size());
   for (size_t p = 0; p < validation.size(); ++p) {
     held_out_left[p] = options.truth_keeps_residuals ? Eigen::Vector3d(validation[p].measured - true_evaluation[n_readings + p])
                                                      : Eigen::Vector3d::Zero();
-    held_out_covariances[p] = validation_covariances[p] + spreads[n_readings + p].covariance;
   }
   // Validation readings whose residuals are far smaller than their noise would make them (beyond three standard
   // deviations of sum |r|^2: 2 sum tr C^2) do not carry it: noise-free simulated ones. Their residuals are then all
@@ -150,14 +150,19 @@ std::vector<MachineMonteCarloRun> MachineMonteCarlo(const ParameterLayout& layou
   double power = 0, expected = 0, variance = 0;
   for (size_t p = 0; p < validation.size(); ++p) {
     power += held_out_left[p].squaredNorm();
-    expected += held_out_covariances[p].trace();
+    expected += validation_covariances[p].trace() + spreads[n_readings + p].covariance.trace();
     variance += 2.0 * (validation_covariances[p] * validation_covariances[p]).trace();
   }
   const bool noise_free = options.truth_keeps_residuals && power < expected - 3.0 * std::sqrt(variance);
-  if (noise_free) {
-    for (size_t p = 0; p < validation.size(); ++p) held_out_covariances[p] -= validation_covariances[p];
+  const std::vector<Eigen::Matrix3d> held_out_noise =
+      noise_free ? std::vector<Eigen::Matrix3d>(validation.size(), Eigen::Matrix3d::Zero()) : validation_covariances;
+  std::vector<std::vector<Eigen::Vector3d>> estimation_errors;
+  for (const MachineMonteCarloRun& r : runs) {
+    estimation_errors.emplace_back(r.deviation_mm.begin() + static_cast<std::ptrdiff_t>(n_readings), r.deviation_mm.end());
   }
-  const ResidualField validation_field = ShrunkResidualField(held_out_left, held_out_covariances);
+  // The estimation error lives in the span of the coefficients the reference identified and its pose.
+  const ResidualField validation_field =
+      HeldOutResidualField(held_out_left, held_out_noise, estimation_errors, truth.layout.NumFree() + pose_count);
   const double noise_scale = noise_free ? 0.0 : 1.0;
   for (size_t k = 0; k < runs.size(); ++k) {
     // Run's model - its drawn validation reading = (model - reference model) - field - noise.

@@ -7,6 +7,17 @@
 
 namespace fvm::stage {
 
+namespace {
+
+// The component of `residual` along each principal axis of `covariance` (variance l) scaled by sqrt(s^2 / (s^2 + l)).
+Eigen::Vector3d ShrunkForNoise(const Eigen::Vector3d& residual, const Eigen::Matrix3d& covariance, double variance) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+  const Eigen::Vector3d gain = (variance / (variance + eig.eigenvalues().cwiseMax(0.0).array())).sqrt().matrix();
+  return eig.eigenvectors() * gain.asDiagonal() * eig.eigenvectors().transpose() * residual;
+}
+
+}  // namespace
+
 ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_mm,
                                   const std::vector<Eigen::Matrix3d>& covariances) {
   if (residuals_mm.size() != covariances.size()) {
@@ -20,10 +31,69 @@ ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_
   const double variance = std::max(0.0, excess / (3.0 * static_cast<double>(residuals_mm.size())));
   field.sigma_mm = std::sqrt(variance);
   if (!(variance > 0)) return field;
-  for (size_t i = 0; i < residuals_mm.size(); ++i) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariances[i]);
-    const Eigen::Vector3d gain = (variance / (variance + eig.eigenvalues().cwiseMax(0.0).array())).sqrt().matrix();
-    field.offsets_mm[i] = eig.eigenvectors() * gain.asDiagonal() * eig.eigenvectors().transpose() * residuals_mm[i];
+  for (size_t i = 0; i < residuals_mm.size(); ++i) field.offsets_mm[i] = ShrunkForNoise(residuals_mm[i], covariances[i], variance);
+  return field;
+}
+
+ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals_mm,
+                                   const std::vector<Eigen::Matrix3d>& noise_covariances,
+                                   const std::vector<std::vector<Eigen::Vector3d>>& estimation_errors_mm, int dimension) {
+  const size_t n = residuals_mm.size();
+  if (noise_covariances.size() != n) throw std::invalid_argument("a residual field needs one covariance per residual");
+  for (const std::vector<Eigen::Vector3d>& e : estimation_errors_mm) {
+    if (e.size() != n) throw std::invalid_argument("a residual field needs each run's error at every residual");
+  }
+  ResidualField field;
+  field.offsets_mm.assign(n, Eigen::Vector3d::Zero());
+  if (n == 0) return field;
+  const Eigen::Index rows = 3 * static_cast<Eigen::Index>(n);
+  const Eigen::Index runs = static_cast<Eigen::Index>(estimation_errors_mm.size());
+  Eigen::VectorXd r(rows);
+  double power = 0, noise = 0;
+  for (size_t p = 0; p < n; ++p) {
+    r.segment<3>(3 * static_cast<Eigen::Index>(p)) = residuals_mm[p];
+    power += residuals_mm[p].squaredNorm();
+    noise += noise_covariances[p].trace();
+  }
+  double estimation = 0;  // tr Cov d
+  if (runs > 1 && dimension > 0) {
+    // The runs' deviations about their mean, scaled so that U U^T is their covariance; its principal directions
+    // from the runs' Gram matrix U^T U (runs x runs, however many points).
+    Eigen::MatrixXd u(rows, runs);
+    for (Eigen::Index k = 0; k < runs; ++k) {
+      const std::vector<Eigen::Vector3d>& run = estimation_errors_mm[static_cast<size_t>(k)];
+      for (size_t p = 0; p < n; ++p) u.block<3, 1>(3 * static_cast<Eigen::Index>(p), k) = run[p];
+    }
+    u = (u.colwise() - u.rowwise().mean()) / std::sqrt(static_cast<double>(runs - 1));
+    estimation = u.squaredNorm();
+    // The directions from the first runs only, enough for the few dozen a model has: a Gram matrix of 1000 runs
+    // would cost more than the runs themselves.
+    const Eigen::Index used = std::min<Eigen::Index>(runs, std::max(200, 4 * dimension));
+    const double rescale = std::sqrt(static_cast<double>(runs - 1) / static_cast<double>(std::max<Eigen::Index>(used - 1, 1)));
+    const Eigen::MatrixXd first = u.leftCols(used) * rescale;  // their covariance from those runs
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(first.transpose() * first);  // ascending
+    const Eigen::Index m = std::min<Eigen::Index>(dimension, used);
+    Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
+    for (Eigen::Index j = used - 1; j >= used - m; --j) {
+      const double l = gram.eigenvalues()[j];
+      if (!(l > 1e-12 * gram.eigenvalues()[used - 1]) || !(l > 0)) break;
+      const Eigen::VectorXd axis = first * gram.eigenvectors().col(j) / std::sqrt(l);  // unit
+      double axis_noise = 0;  // the readings' noise along it
+      for (size_t p = 0; p < n; ++p) {
+        const Eigen::Index at = 3 * static_cast<Eigen::Index>(p);
+        axis_noise += axis.segment<3>(at).dot(noise_covariances[p] * axis.segment<3>(at));
+      }
+      const double a = axis.dot(r);
+      const double field_there = std::max(0.0, a * a - l - axis_noise);
+      removed += axis * (l / (l + field_there + axis_noise) * a);
+    }
+    r -= removed;
+  }
+  const double variance = std::max(0.0, (power - noise - estimation) / static_cast<double>(rows));
+  field.sigma_mm = std::sqrt(variance);
+  if (!(variance > 0)) return field;
+  for (size_t p = 0; p < n; ++p) {
+    field.offsets_mm[p] = ShrunkForNoise(r.segment<3>(3 * static_cast<Eigen::Index>(p)), noise_covariances[p], variance);
   }
   return field;
 }

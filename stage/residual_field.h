@@ -27,4 +27,22 @@ struct ResidualField {
 ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_mm,
                                   const std::vector<Eigen::Matrix3d>& covariances);
 
+// The field at held-out readings (validation readings, never fitted). Their residual is r = u + d + n: the field u,
+// the reference model's own estimation error d and the readings' noise n (covariance N_p; zero for noise-free
+// readings). d is no per-point noise: it is the error of the model's few coefficients and pose, smooth and
+// correlated over every point, and a field that keeps it gives each run's error a share along the reference's own
+// that no repeat has (the runs' validation mean errors then scatter up to 1.5x wider than 200 repeats of
+// trackergen's machines do). d's covariance is the runs' (`estimation_errors_mm`: each run's
+// deviation at every point): along each of its leading `dimension` principal directions (variance l_i), the
+// residual's component a_i is reduced by its expected share of estimation error, l_i / (l_i + f_i + n_i), with the
+// field's power there f_i = max(0, a_i^2 - l_i - n_i) estimated from that component alone (positive-part shrinkage,
+// empirical Bayes [Efron 1973]): a component no larger than the estimation error is taken out whole, a component
+// of the field far above it is kept. A smooth field has a share of its power in the model's directions, so a
+// shrinkage with one power for every direction would take the field out there too (and predict too narrow a
+// spread). The rest is then shrunk for the readings' noise as ShrunkResidualField does, with the field's power per
+// coordinate by moments, (sum |r|^2 - tr N - tr Cov d) / 3n. Throws std::invalid_argument when the sizes differ.
+ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals_mm,
+                                   const std::vector<Eigen::Matrix3d>& noise_covariances,
+                                   const std::vector<std::vector<Eigen::Vector3d>>& estimation_errors_mm, int dimension);
+
 }  // namespace fvm::stage

@@ -203,5 +203,32 @@ TEST(ResidualField, KeepsThePowerAboveTheNoiseAlikeInEveryDirection) {
   EXPECT_THROW(ShrunkResidualField(residuals, one), std::invalid_argument);
 }
 
+// Held-out residuals: a component along the estimation error's direction no larger than that error is taken out
+// whole; one far above it (the field's own) is kept less its expected share, l / a; the rest is the field, kept
+// whole where the readings are noise-free.
+TEST(ResidualField, HeldOutTakesOutTheEstimationErrorAndKeepsTheFieldAlongIt) {
+  const double s = 0.002;  // mm: the estimation error's standard deviation along its one direction w
+  std::vector<Eigen::Vector3d> w(4, Eigen::Vector3d(0.5, 0, 0)), u;  // |w| = 1 over the four points
+  for (int p = 0; p < 4; ++p) u.emplace_back(0, p % 2 == 0 ? 0.01 : -0.01, 0.004 * p);  // orthogonal to w
+  std::vector<std::vector<Eigen::Vector3d>> runs;
+  for (double t : {-s, 0.0, s}) {  // variance along w: (s^2 + s^2) / 2
+    std::vector<Eigen::Vector3d> run;
+    for (const Eigen::Vector3d& v : w) run.push_back(t * v);
+    runs.push_back(run);
+  }
+  const std::vector<Eigen::Matrix3d> noise_free(4, Eigen::Matrix3d::Zero());
+  for (double along : {0.5 * s, 10 * s}) {
+    std::vector<Eigen::Vector3d> residuals;
+    for (int p = 0; p < 4; ++p) residuals.push_back(u[static_cast<size_t>(p)] + along * w[static_cast<size_t>(p)]);
+    const ResidualField field = HeldOutResidualField(residuals, noise_free, runs, 3);
+    const double kept = along > s ? along - s * s / along : 0.0;
+    for (int p = 0; p < 4; ++p) {
+      const Eigen::Vector3d expected = u[static_cast<size_t>(p)] + kept * w[static_cast<size_t>(p)];
+      EXPECT_NEAR((field.offsets_mm[static_cast<size_t>(p)] - expected).norm(), 0.0, 1e-12) << "along " << along << ", point " << p;
+    }
+  }
+  EXPECT_THROW(HeldOutResidualField(std::vector<Eigen::Vector3d>(3), noise_free, runs, 3), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace fvm::stage
