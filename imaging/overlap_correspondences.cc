@@ -1,6 +1,7 @@
 #include "imaging/overlap_correspondences.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -19,9 +20,14 @@ void CorrespondenceOptions::Check() const {
 
 namespace {
 
-// The tile high-passed (shading and offsets out) and stretched to 8 bits, as the tracker takes it: 128 +- 4 of the
-// texture's standard deviations. Invalid pixels (NaN) read as the mean.
-cv::Mat TrackableImage(const TileImage& tile, double sigma) {
+// A tile as the matching takes it: high-passed (shading and offsets out) in float, with its gradient, for the
+// sub-pixel refinement; and stretched to 8 bits (128 +- 4 of the texture's standard deviations) for the tracker.
+struct TrackableTile {
+  cv::Mat u8, value, gx, gy;
+};
+
+// Invalid pixels (NaN) read as the mean.
+TrackableTile TrackableImage(const TileImage& tile, double sigma) {
   cv::Mat f(static_cast<int>(tile.rows()), static_cast<int>(tile.cols()), CV_32F);
   for (int y = 0; y < f.rows; ++y) {
     for (int x = 0; x < f.cols; ++x) f.at<float>(y, x) = tile(y, x);
@@ -29,6 +35,14 @@ cv::Mat TrackableImage(const TileImage& tile, double sigma) {
   const cv::Mat invalid = f != f;
   const double mean = cv::mean(f, ~invalid)[0];
   f.setTo(mean, invalid);
+  TrackableTile out;
+  // The refinement's copy: the values as stored, smoothed (sigma 1 px, the same for both tiles: no shift), not
+  // high-passed, since a high-pass reflects the tile at its edges, where the overlaps are, and so shifts what it
+  // shows there. Interpolation errs most near the Nyquist frequency, at the fraction every point of a regular scan
+  // shares: smoothed, that error would not pass for field.
+  cv::GaussianBlur(f, out.value, cv::Size(), 1.0, 1.0, cv::BORDER_REFLECT);
+  cv::Sobel(out.value, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT);  // central differences
+  cv::Sobel(out.value, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT);
   if (sigma > 0.0) {
     cv::Mat low;
     cv::GaussianBlur(f, low, cv::Size(), sigma, sigma, cv::BORDER_REFLECT);
@@ -39,16 +53,94 @@ cv::Mat TrackableImage(const TileImage& tile, double sigma) {
   cv::Scalar m, sd;
   cv::meanStdDev(f, m, sd);
   const double scale = sd[0] > 0.0 ? 32.0 / sd[0] : 1.0;
-  cv::Mat out;
-  f.convertTo(out, CV_8U, scale, 128.0 - scale * m[0]);
+  f.convertTo(out.u8, CV_8U, scale, 128.0 - scale * m[0]);
   return out;
 }
 
-PairCorrespondences MatchPrepared(const cv::Mat& ia, const cv::Mat& ib, int a_index, int b_index,
+// Keys' cubic convolution weights (a = -0.5) of the samples at -1, 0, 1, 2 for a point `f` past sample 0.
+std::array<double, 4> CubicWeights(double f) {
+  const auto w = [](double t) {
+    t = std::abs(t);
+    return t <= 1.0 ? (1.5 * t - 2.5) * t * t + 1.0 : ((-0.5 * t + 2.5) * t - 4.0) * t + 2.0;
+  };
+  return {w(1.0 + f), w(f), w(1.0 - f), w(2.0 - f)};
+}
+
+// The n x n patch of `image` whose first sample lies at `corner` (any sub-pixel point): one fraction for the whole
+// patch, so the cubic is two separable passes. (cv::remap rounds a fraction to 1/32 px: too coarse to settle on.)
+// False when the patch and its cubic's reach do not fit in the image.
+bool CubicPatch(const cv::Mat& image, const Eigen::Vector2d& corner, int n, cv::Mat& patch) {
+  const int ix = static_cast<int>(std::floor(corner.x())), iy = static_cast<int>(std::floor(corner.y()));
+  if (ix < 1 || iy < 1 || ix + n + 2 > image.cols || iy + n + 2 > image.rows) return false;
+  const std::array<double, 4> wx = CubicWeights(corner.x() - ix), wy = CubicWeights(corner.y() - iy);
+  cv::Mat rows(n + 3, n, CV_64F);
+  for (int r = 0; r < n + 3; ++r) {
+    const float* line = image.ptr<float>(iy - 1 + r);
+    for (int x = 0; x < n; ++x) {
+      const float* at = line + ix + x - 1;
+      rows.at<double>(r, x) = wx[0] * at[0] + wx[1] * at[1] + wx[2] * at[2] + wx[3] * at[3];
+    }
+  }
+  patch.create(n, n, CV_64F);
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      patch.at<double>(y, x) = wy[0] * rows.at<double>(y, x) + wy[1] * rows.at<double>(y + 1, x) +
+                               wy[2] * rows.at<double>(y + 2, x) + wy[3] * rows.at<double>(y + 3, x);
+    }
+  }
+  return true;
+}
+
+// The tracker interpolates bilinearly, which pulls a sub-pixel shift towards whole pixels by up to a few
+// hundredths of a pixel on fine speckle, the same way at every point of a regular scan (whose steps share their
+// fraction): a bias that would pass for field. So each point is refined by inverse-compositional Gauss-Newton
+// on sum (B(e + v) - A(u_a + v))^2 over the window (Baker, Matthews 2004), B resampled bicubically: A's template
+// at whole pixels, its gradient computed once. Returns false when the refinement does not settle.
+bool RefinePoint(const TrackableTile& a, const TrackableTile& b, const cv::Point& ua, int half, Eigen::Vector2d& e) {
+  const int n = 2 * half + 1;
+  const cv::Rect box(ua.x - half, ua.y - half, n, n);
+  if ((box & cv::Rect(0, 0, a.value.cols, a.value.rows)) != box) return false;
+  const cv::Mat t = a.value(box), gx = a.gx(box), gy = a.gy(box);
+  // Each window about its own mean and scaled to a's spread: shading and gain differ from tile to tile.
+  cv::Scalar t_mean, t_sd;
+  cv::meanStdDev(t, t_mean, t_sd);
+  Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const Eigen::Vector2d g(gx.at<float>(y, x), gy.at<float>(y, x));
+      h += g * g.transpose();
+    }
+  }
+  if (!(h.determinant() > 1e-12 * h.trace() * h.trace())) return false;
+  const Eigen::Matrix2d h_inverse = h.inverse();
+  cv::Mat sampled;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    if (!CubicPatch(b.value, e - Eigen::Vector2d::Constant(half), n, sampled)) return false;
+    cv::Scalar s_mean, s_sd;
+    cv::meanStdDev(sampled, s_mean, s_sd);
+    if (!(s_sd[0] > 0.0)) return false;
+    const double gain = t_sd[0] / s_sd[0];
+    Eigen::Vector2d r = Eigen::Vector2d::Zero();
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        const double d = gain * (sampled.at<double>(y, x) - s_mean[0]) - (t.at<float>(y, x) - t_mean[0]);
+        r += d * Eigen::Vector2d(gx.at<float>(y, x), gy.at<float>(y, x));
+      }
+    }
+    const Eigen::Vector2d step = h_inverse * r;
+    e -= step;
+    if (step.norm() < 1e-3) return true;
+    if (step.norm() > 2.0) return false;
+  }
+  return false;
+}
+
+PairCorrespondences MatchPrepared(const TrackableTile& ta, const TrackableTile& tb, int a_index, int b_index,
                                   const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
                                   const CorrespondenceOptions& options) {
   PairCorrespondences out;
   out.a = a_index, out.b = b_index;
+  const cv::Mat &ia = ta.u8, &ib = tb.u8;
   const double half = options.window_px / 2 + 1.0;
   const double wa = ia.cols, ha = ia.rows, wb = ib.cols, hb = ib.rows;
   const double x0 = std::max(0.0, offset_px.x()) + half, x1 = std::min(wa, offset_px.x() + wb) - 1.0 - half;
@@ -65,7 +157,8 @@ PairCorrespondences MatchPrepared(const cv::Mat& ia, const cv::Mat& ib, int a_in
   const double sy = 0.5 * ((y1 - y0) - (ny - 1) * options.grid_step_px);
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
-      const Eigen::Vector2d ua(x0 + sx + i * options.grid_step_px, y0 + sy + j * options.grid_step_px);
+      // Whole pixels of a: its window is read as stored, only b's is resampled.
+      const Eigen::Vector2d ua(std::round(x0 + sx + i * options.grid_step_px), std::round(y0 + sy + j * options.grid_step_px));
       const Eigen::Vector2d ub = guess.RawPixel(ua + guess.Displacement(ua) - offset_px);
       const cv::Point2f pb(static_cast<float>(ub.x()), static_cast<float>(ub.y()));
       ++out.tried;
@@ -88,8 +181,14 @@ PairCorrespondences MatchPrepared(const cv::Mat& ia, const cv::Mat& ib, int a_in
     if (!status[k] || !back_status[k] || !inside(to[k], wb, hb)) continue;
     const double dx = back[k].x - from[k].x, dy = back[k].y - from[k].y;
     if (std::hypot(dx, dy) > options.max_round_trip_px) continue;
-    out.a_px.emplace_back(from[k].x, from[k].y);
-    out.b_px.emplace_back(to[k].x, to[k].y);
+    Eigen::Vector2d e(to[k].x, to[k].y);
+    const cv::Point ua(static_cast<int>(std::lround(from[k].x)), static_cast<int>(std::lround(from[k].y)));
+    if (!RefinePoint(ta, tb, ua, options.window_px / 2, e) || (e - Eigen::Vector2d(to[k].x, to[k].y)).norm() > 0.5 ||
+        !inside(cv::Point2f(static_cast<float>(e.x()), static_cast<float>(e.y())), wb, hb)) {
+      continue;
+    }
+    out.a_px.emplace_back(ua.x, ua.y);
+    out.b_px.push_back(e);
   }
   return out;
 }
@@ -113,7 +212,7 @@ std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& ima
       throw std::invalid_argument("MatchOverlaps: a tile index outside the images");
     }
   }
-  std::vector<cv::Mat> prepared(images.size());
+  std::vector<TrackableTile> prepared(images.size());
   cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       prepared[static_cast<size_t>(i)] = TrackableImage(images[static_cast<size_t>(i)], options.highpass_sigma_px);
