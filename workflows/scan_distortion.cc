@@ -1,8 +1,6 @@
 #include "workflows/scan_distortion.h"
 
 #include <fmt/core.h>
-#include <cstdio>
-#include <cstdlib>
 
 #include "core/input_error.h"
 #include "workflows/calibration_scans.h"
@@ -64,10 +62,8 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     }
     for (imaging::PairRegistration& pair : scan.registration.pairs) {
       if (pair.accepted) {
-        const Eigen::Vector2d before = pair.offset_px;
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
-        if (std::getenv("FVM_DEBUG_PAIRS")) fprintf(stderr, "PAIR %s %d %d %.5f %.5f %.5f %.5f\n", scan.name.c_str(), pair.a, pair.b, before.x(), before.y(), pair.offset_px.x(), pair.offset_px.y());
       }
     }
     base += static_cast<int>(positions.positions_px.size());
