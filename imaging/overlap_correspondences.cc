@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <Eigen/QR>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -26,6 +27,40 @@ struct TrackableTile {
   cv::Mat u8, value, gx, gy;
 };
 
+// The image less the least-squares polynomial of degree 4 in x and y (vignetting, uneven illumination), fitted on
+// every 4th pixel: a window's mean and gain are taken out in the refinement, not a slope across it.
+cv::Mat LessShading(const cv::Mat& f) {
+  const auto basis = [&](double x, double y, Eigen::Ref<Eigen::RowVectorXd> row) {
+    int k = 0;
+    for (int degree = 0; degree <= 4; ++degree) {
+      for (int j = 0; j <= degree; ++j) row(k++) = std::pow(x, degree - j) * std::pow(y, j);
+    }
+  };
+  const double sx = 2.0 / f.cols, sy = 2.0 / f.rows;
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> values;
+  for (int y = 0; y < f.rows; y += 4) {
+    for (int x = 0; x < f.cols; x += 4) {
+      Eigen::RowVectorXd row(15);
+      basis(x * sx - 1.0, y * sy - 1.0, row);
+      rows.push_back(row), values.push_back(f.at<float>(y, x));
+    }
+  }
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(rows.size()), 15);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(rows.size()));
+  for (size_t i = 0; i < rows.size(); ++i) a.row(static_cast<Eigen::Index>(i)) = rows[i], b(static_cast<Eigen::Index>(i)) = values[i];
+  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
+  cv::Mat out(f.size(), CV_32F);
+  Eigen::RowVectorXd row(15);
+  for (int y = 0; y < f.rows; ++y) {
+    for (int x = 0; x < f.cols; ++x) {
+      basis(x * sx - 1.0, y * sy - 1.0, row);
+      out.at<float>(y, x) = static_cast<float>(f.at<float>(y, x) - row.dot(c));
+    }
+  }
+  return out;
+}
+
 // Invalid pixels (NaN) read as the mean.
 TrackableTile TrackableImage(const TileImage& tile, double sigma) {
   cv::Mat f(static_cast<int>(tile.rows()), static_cast<int>(tile.cols()), CV_32F);
@@ -36,11 +71,11 @@ TrackableTile TrackableImage(const TileImage& tile, double sigma) {
   const double mean = cv::mean(f, ~invalid)[0];
   f.setTo(mean, invalid);
   TrackableTile out;
-  // The refinement's copy: the values as stored, smoothed (sigma 1 px, the same for both tiles: no shift), not
-  // high-passed, since a high-pass reflects the tile at its edges, where the overlaps are, and so shifts what it
-  // shows there. Interpolation errs most near the Nyquist frequency, at the fraction every point of a regular scan
-  // shares: smoothed, that error would not pass for field.
-  cv::GaussianBlur(f, out.value, cv::Size(), 1.0, 1.0, cv::BORDER_REFLECT);
+  // The refinement's copy: the values less the shading's quartic over the whole tile, smoothed (sigma 1 px, the
+  // same for both tiles: no shift); not high-passed, since a high-pass reflects the tile at its edges, where the
+  // overlaps are, and so shifts what it shows there. Interpolation errs most near the Nyquist frequency, at the
+  // fraction every point of a regular scan shares: smoothed, that error would not pass for field.
+  cv::GaussianBlur(LessShading(f), out.value, cv::Size(), 1.0, 1.0, cv::BORDER_REFLECT);
   cv::Sobel(out.value, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT);  // central differences
   cv::Sobel(out.value, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT);
   if (sigma > 0.0) {
