@@ -31,9 +31,10 @@ struct TrackableTile {
 // every 4th pixel: a window's mean and gain are taken out in the refinement, not a slope across it.
 cv::Mat LessShading(const cv::Mat& f) {
   const auto basis = [&](double x, double y, Eigen::Ref<Eigen::RowVectorXd> row) {
+    const double xp[5] = {1.0, x, x * x, x * x * x, x * x * x * x}, yp[5] = {1.0, y, y * y, y * y * y, y * y * y * y};
     int k = 0;
     for (int degree = 0; degree <= 4; ++degree) {
-      for (int j = 0; j <= degree; ++j) row(k++) = std::pow(x, degree - j) * std::pow(y, j);
+      for (int j = 0; j <= degree; ++j) row(k++) = xp[degree - j] * yp[j];
     }
   };
   const double sx = 2.0 / f.cols, sy = 2.0 / f.rows;

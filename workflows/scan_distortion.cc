@@ -44,7 +44,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
       });
   try {
     imaging::FieldDistortionFitOptions fit_options = options.fit;
-    fit_options.order = options.order;
+    fit_options.order = options.known ? options.known->order : options.order;
     field->fit = imaging::FitFieldDistortion(matched, initial, fixed, width, height, fit_options,
                                              options.known ? &*options.known : nullptr);
   } catch (const imaging::FieldDistortionUndeterminable& e) {

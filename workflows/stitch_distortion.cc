@@ -47,7 +47,7 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   if (options.known) guess = *options.known;
   std::vector<Eigen::Vector2d> start = positions.positions_px;
   imaging::FieldDistortionFitOptions fit_options = options.fit;
-  fit_options.order = options.order;
+  fit_options.order = options.known ? options.known->order : options.order;
   // Twice: the first field starts the second round's correspondences where it puts them, so that the tracker
   // no longer has to reach across the field's whole pull.
   for (int round = 0; round < 2; ++round) {
