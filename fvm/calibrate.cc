@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "core/file_io.h"
 #include "artefacts/io/batch.h"
@@ -17,6 +18,9 @@
 #include "artefacts/scan_observations.h"
 #include "stage/calibration.h"
 #include "fvm/commands.h"
+#include "fvm/distortion_options.h"
+#include "workflows/field_distortion_file.h"
+#include "workflows/scan_distortion.h"
 #include "fvm/report.h"
 #include "stage/validation.h"
 
@@ -35,6 +39,7 @@ struct CalibrateArgs {
   std::string centres_dir;         // ... and where the centre exports found go
   bool json = false;
   workflows::IdentifySettings settings;
+  DistortionArgs distortion;  // --scan: the objective's field distortion
 };
 
 nlohmann::json StatsJson(const stage::ValidationStats& s) {
@@ -202,6 +207,9 @@ void Run(const CalibrateArgs& args) {
   }
   if (!args.scans.empty()) return RunScans(args);
   if (!args.validate.empty()) throw CLI::ValidationError("--validate", "is for --scan: a batch validates on its own placements");
+  if (args.distortion.Requested() || !args.distortion.save.empty()) {
+    throw CLI::ValidationError("--distortion", "is for --scan: a batch of centre exports holds no tiles to see a field in");
+  }
   nlohmann::json raw;
   const artefacts::Batch batch = ReadBatchArgument(args, raw);
   const workflows::BatchCalibration c =
@@ -257,8 +265,20 @@ void RunScans(const CalibrateArgs& args) {
                      "lens's 2.82 mm field on 1024 px; it sets the scale of every registered offset");
   }
   if (!(args.pixel_u_mm >= 0.0) || !std::isfinite(args.pixel_u_mm)) throw InputError("--pixel-u-mm: give a standard uncertainty >= 0 (mm)");
-  const std::vector<artefacts::RegisteredScan> scans =
-      workflows::ReadAndRegisterScans(args.scans, args.pixel_mm, ThreadCount(), ShowProgress());
+  args.distortion.Check();
+  std::optional<workflows::ScanDistortion> field;
+  std::vector<artefacts::RegisteredScan> scans;
+  if (args.distortion.Requested()) {
+    workflows::ScanDistortionOptions distortion_options;
+    distortion_options.order = args.distortion.Order();
+    distortion_options.known = args.distortion.Known();
+    field.emplace();
+    scans = workflows::ReadAndRegisterUndistortedScans(args.scans, args.pixel_mm, ThreadCount(), ShowProgress(),
+                                                       distortion_options, &*field);
+    if (!args.distortion.save.empty()) workflows::WriteFieldDistortion(args.distortion.save, field->fit.field, args.pixel_mm);
+  } else {
+    scans = workflows::ReadAndRegisterScans(args.scans, args.pixel_mm, ThreadCount(), ShowProgress());
+  }
   std::optional<artefacts::Batch> validation_batch;
   if (!args.validate.empty()) validation_batch = artefacts::ReadBatch(args.validate);
   workflows::ScanCalibrationResult scan_result = workflows::CalibrateScans(
@@ -273,6 +293,7 @@ void RunScans(const CalibrateArgs& args) {
   doc["stitched_frame"] = args.settings.stitched_frame;
   doc["pixel_mm"] = args.pixel_mm;
   doc["pixel_u_mm"] = args.pixel_u_mm;
+  if (field) doc["distortion"] = DistortionJson(field->fit, field->identified, args.pixel_mm);
   int tiles = 0, pairs = 0, registered = 0;
   for (const auto& scan : scans) {
     nlohmann::json j = {{"name", scan.name}, {"tiles", scan.encoder_mm.size()}, {"pairs", scan.registration.pairs.size()},
@@ -341,6 +362,7 @@ void RunScans(const CalibrateArgs& args) {
   }
   fmt::print("  {} tiles, {} of {} pairs registered; pixel {:.6g} mm (u {:.2g} mm); frame: the first tile of {}, {}\n", tiles,
              registered, pairs, args.pixel_mm, args.pixel_u_mm, scans.front().name, args.settings.stitched_frame);
+  if (field) fmt::print("{}", DistortionText(field->fit, field->identified, args.pixel_mm));
   fmt::print("  solver: {} in {} iterations; condition number {:.3g}\n", result.converged ? "converged" : "NOT converged",
              result.iterations, result.condition_number);
   PrintParameters(result);
@@ -385,6 +407,7 @@ void RegisterCalibrate(CLI::App& app) {
       ->check(Within(kPixelMm));
   sub->add_option("--pixel-u-mm", args->pixel_u_mm, "--scan: its standard uncertainty (mm), propagated into the result")
       ->check(Within(0.0, 0.1, "mm"));
+  AddDistortionOptions(sub, &args->distortion, false);
   sub->add_option("--validate", args->validate,
                   "--scan: an artefact batch of the same stage; its validation placements (all, without batch.json) "
                   "judge the scan calibration as they judge a batch's");

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -43,6 +44,7 @@ struct SimulateScanArgs {
   double periodic_um = -1.0;  // < 0: the truth file's, else kDefaultPeriodicUm
   double period_mm = 25.0;
   int validation = 200;
+  double distortion_px = 0.0;  // radial field distortion k1 (px at the middle of each tile edge)
 };
 
 // A truth.json of `fvm simulate fvm-batch` (model + parameters) or a calibration file (fvm calibrate -o).
@@ -123,6 +125,13 @@ void Run(const SimulateScanArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("--texture: ") + e.what());
   }
+  if (args.distortion_px != 0.0) {
+    options.distortion.width_px = options.distortion.height_px = args.tile_px;
+    options.distortion.order = 3;
+    const std::vector<std::string>& terms = imaging::FieldDistortionTermNames(3);
+    options.distortion.coefficients = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(terms.size()));
+    options.distortion.coefficients(std::find(terms.begin(), terms.end(), "k1") - terms.begin()) = args.distortion_px;
+  }
   const std::filesystem::path dir(args.output);
   std::filesystem::create_directories(dir);
   int tiles = 0;
@@ -186,6 +195,8 @@ void Run(const SimulateScanArgs& args) {
   j["texture"] = args.texture;
   j["tiles"] = args.tiles;
   j["seed"] = args.seed;
+  j["distortion"] = {{"model", "radial k1: d = k1 (x, y) r^2, x, y about the tile centre in half tile widths"},
+                     {"k1_px", args.distortion_px}};
   for (const auto& p : paths) j["scans"].push_back({{"name", p.name}, {"tiles", p.tiles.size()}, {"z_mm", p.z_mm}});
   WriteFileAtomically(dir / "truth.json", j.dump(2) + "\n");
 
@@ -237,6 +248,10 @@ void RegisterSimulateScan(CLI::App* simulate) {
                   "else 0.3")
       ->check(Within(0.0, 1e3, "um"));
   sub->add_option("--period-mm", args->period_mm, "its period")->check(Within(kStepMm))->capture_default_str();
+  sub->add_option("--distortion", args->distortion_px,
+                  "radial field distortion of the objective, the same in every tile: px at the middle of each tile "
+                  "edge (k1; barrel > 0, pincushion < 0); the truth is the stage's alone")
+      ->check(Within(-50.0, 50.0, "px"));
   sub->add_option("--validation", args->validation, "validation positions to write")->check(Count(1, 1e6))->capture_default_str();
   sub->footer("Example:\n  fvm simulate scan -o scans --seed 1 --tile-px 256\n"
               "  fvm calibrate --scan scans/row.csv --scan scans/column.csv --scan scans/diagonal.csv --pixel-mm 0.01101563 "

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -17,6 +18,7 @@
 #include "core/input_error.h"
 #include "core/progress.h"
 #include "fvm/commands.h"
+#include "fvm/distortion_options.h"
 #include "imaging/io/tile_image.h"
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_mosaic.h"
@@ -24,7 +26,9 @@
 #include "imaging/overlap_correlation.h"
 #include "imaging/tile_plan.h"
 #include "imaging/tile_registration.h"
+#include "workflows/field_distortion_file.h"
 #include "workflows/stitch.h"
+#include "workflows/stitch_distortion.h"
 
 namespace fvm::cli {
 namespace {
@@ -38,6 +42,7 @@ struct StitchArgs {
   double min_quality = imaging::RegistrationOptions{}.min_quality;
   double stage_sigma_px = imaging::RegistrationOptions{}.stage_sigma_px;
   bool json = false;
+  DistortionArgs distortion;
 };
 
 void RunStitch(const StitchArgs& args) {
@@ -58,6 +63,8 @@ void RunStitch(const StitchArgs& args) {
   if (height_map && !(args.pixel_mm > 0.0)) {
     throw InputError("--mosaic " + args.mosaic + ": an X3P height map needs the pixel size; give --pixel-mm");
   }
+  args.distortion.Check();
+  const std::optional<imaging::FieldDistortion> known_field = args.distortion.Known();
   const imaging::TileLayout layout = imaging::ReadTileLayout(args.layout);
   imaging::CheckLayoutComplete(layout);
   const std::filesystem::path dir = std::filesystem::path(args.layout).parent_path();
@@ -82,22 +89,48 @@ void RunStitch(const StitchArgs& args) {
   pair_progress.Finish();
   const imaging::RegistrationResult& result = stitched.registration;
   const Eigen::Vector2d& origin = stitched.origin_mm;
+  // With a field: the undistorted tiles' positions, their u with the field's, and the mosaic of undistorted tiles.
+  std::optional<workflows::StitchDistortionResult> field;
+  if (args.distortion.Requested()) {
+    workflows::StitchDistortionOptions distortion_options;
+    distortion_options.order = args.distortion.Order();
+    distortion_options.known = known_field;
+    try {
+      field = workflows::StitchWithoutDistortion(stitched, images, distortion_options);
+    } catch (const imaging::FieldDistortionUndeterminable& e) {
+      throw InputError(fmt::format("--distortion, {}: {}", args.layout, e.what()));
+    }
+    if (!args.distortion.save.empty()) workflows::WriteFieldDistortion(args.distortion.save, field->fit.field, args.pixel_mm);
+    if (!args.distortion.undistorted_dir.empty()) {
+      // Integer tiles have no NaN: where the raw tile does not reach, the nearest edge pixel.
+      const std::vector<imaging::TileImage> written =
+          pixel_type == imaging::TilePixelType::kFloat ? field->undistorted
+                                                       : imaging::UndistortTiles(images, field->fit.field, false);
+      for (size_t i = 0; i < layout.tiles.size(); ++i) {
+        const std::filesystem::path out = std::filesystem::path(args.distortion.undistorted_dir) / layout.tiles[i].file;
+        std::filesystem::create_directories(out.parent_path());
+        imaging::WriteTileImage(out, written[i], pixel_type);
+      }
+    }
+  }
+  const std::vector<Eigen::Vector2d>& positions = field ? field->fit.positions_px : result.positions.positions_px;
+  const std::vector<Eigen::Vector2d>& sigmas = field ? field->sigma_px : result.positions.sigma_px;
 
   std::string csv = args.pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered,u_x,u_y\n" : "file,x,y,registered,u_x,u_y\n";
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    const Eigen::Vector2d& p = result.positions.positions_px[i];
+    const Eigen::Vector2d& p = positions[i];
     csv += fmt::format("{},{:.4f},{:.4f}", layout.tiles[i].file, p.x(), p.y());
     if (args.pixel_mm > 0.0) {
       csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * args.pixel_mm, origin.y() - p.y() * args.pixel_mm);
     }
-    const Eigen::Vector2d& u = result.positions.sigma_px[i];
+    const Eigen::Vector2d& u = sigmas[i];
     csv += fmt::format(",{},{:.4f},{:.4f}\n", result.positions.registered[i] ? 1 : 0, u.x(), u.y());
   }
   WriteFileAtomically(args.output, csv);
   if (!args.mosaic.empty()) {
     Progress tile_progress("fusing tiles", static_cast<int>(images.size()), ShowProgress());
     imaging::Mosaic mosaic =
-        imaging::FuseTiles(images, result.positions.positions_px, [&](int, int) { tile_progress.Advance(); });
+        imaging::FuseTiles(field ? field->undistorted : images, positions, [&](int, int) { tile_progress.Advance(); });
     tile_progress.Finish();
     if (height_map) {
       imaging::WriteX3p(args.mosaic, imaging::MosaicToHeightMap(mosaic, static_cast<int>(width),
@@ -127,6 +160,11 @@ void RunStitch(const StitchArgs& args) {
     out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(stitched.mean_overlap_ncc) : nlohmann::ordered_json(nullptr);
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
+    if (field) {
+      out["distortion"] = DistortionJson(field->fit, field->identified, args.pixel_mm);
+      out["distortion"]["overlap_ncc_before"] = ncc_json(field->mean_overlap_ncc_before);
+      out["distortion"]["overlap_ncc_after"] = ncc_json(field->mean_overlap_ncc_after);
+    }
     const imaging::TileGridSteps& model = result.stage;
     const auto component = [&](const Eigen::Vector2d& v, int k, int index) {
       return model.estimated[static_cast<size_t>(index)] ? nlohmann::ordered_json(v(k)) : nlohmann::ordered_json(nullptr);
@@ -219,6 +257,12 @@ void RunStitch(const StitchArgs& args) {
                  layout.tiles[static_cast<size_t>(pair.b)].file, pair.rejection);
     }
   }
+  if (field) {
+    fmt::print("{}", DistortionText(field->fit, field->identified, args.pixel_mm));
+    fmt::print("  mean overlap correlation of the undistorted tiles at their positions: {:.3f} (raw tiles, rigid: "
+               "{:.3f})\n",
+               field->mean_overlap_ncc_after, field->mean_overlap_ncc_before);
+  }
   if (accepted == 0) {
     fmt::print("  no pair registered: every tile stays at its nominal position\n");
   }
@@ -231,7 +275,7 @@ void RunStitch(const StitchArgs& args) {
   }
   double worst = 0.0, worst_any = 0.0;
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    const double u = result.positions.sigma_px[i].maxCoeff();
+    const double u = sigmas[i].maxCoeff();
     if (result.positions.anchor[i] == 0) worst = std::max(worst, u);
     worst_any = std::max(worst_any, u);
   }
@@ -291,6 +335,7 @@ void RegisterStitch(CLI::App& app) {
       ->check(Within(1e-3, 1e4, "px"))
       ->capture_default_str();
   AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
+  AddDistortionOptions(sub, &args->distortion, true);
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "

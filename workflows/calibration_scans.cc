@@ -29,8 +29,9 @@ void RefuseRepeatedFiles(const std::vector<std::string>& paths, const std::strin
   }
 }
 
-std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<std::string>& layouts, double pixel_mm,
-                                                            int threads, bool progress) {
+std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(
+    const std::vector<std::string>& layouts, double pixel_mm, int threads, bool progress,
+    const std::function<void(const artefacts::RegisteredScan&, const std::vector<imaging::TileImage>&)>& on_registered) {
   RefuseRepeatedFiles(layouts, "--scan");
   std::vector<artefacts::RegisteredScan> scans;
   imaging::SetImagingThreads(threads);
@@ -68,6 +69,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(const std::vector<st
                                                              type == imaging::TilePixelType::kFloat, {},
                                                              [&](int, int) { bar.Advance(); });
     bar.Finish();
+    if (on_registered) on_registered(scan, images);
     scans.push_back(std::move(scan));
   }
   return scans;

@@ -38,6 +38,12 @@ void ScanSimulationOptions::Check() const {
     throw std::invalid_argument("scan simulation: height texture > 0 and noise >= 0 um");
   }
   camera.Check();
+  if (!distortion.Identity()) {
+    distortion.Check();
+    if (distortion.width_px != tile_px || distortion.height_px != tile_px) {
+      throw std::invalid_argument("scan simulation: the field distortion is for other tiles than these");
+    }
+  }
 }
 
 std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vector<imaging::ScanPath>& paths,
@@ -70,7 +76,15 @@ std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vec
       axes << c(0, 0), -c(0, 1), -c(1, 0), c(1, 1);
       const Eigen::Vector2d origin = Eigen::Vector2d(f.x() / p, -f.y() / p) + axes * Eigen::Vector2d(0.5 - half, 0.5 - half);
       scan.encoder_mm.push_back(e);
-      imaging::TileImage image = scene.Photograph(axes, origin, options.tile_px, options.tile_px, random);
+      imaging::TileImage image;
+      if (options.distortion.Identity()) {
+        image = scene.Photograph(axes, origin, options.tile_px, options.tile_px, random);
+      } else {
+        const int margin = static_cast<int>(std::ceil(options.distortion.LargestDisplacementPx())) + 4;
+        image = imaging::DistortTile(scene.Photograph(axes, origin - axes * Eigen::Vector2d::Constant(margin),
+                                                      options.tile_px + 2 * margin, options.tile_px + 2 * margin, random),
+                                     margin, options.distortion);
+      }
       if (options.heights) {
         // The face lies at the scan's z; the focal plane is at F_z(e), tilted by the camera's pitch and roll.
         for (int y = 0; y < options.tile_px; ++y) {

@@ -12,6 +12,7 @@
 
 #include "artefacts/simulation/stage_truth.h"
 #include "artefacts/simulation/tile_synthesis.h"
+#include "imaging/field_distortion.h"
 #include "imaging/io/tile_image.h"
 #include "imaging/tile_plan.h"
 
@@ -30,6 +31,10 @@ struct ScanSimulationOptions {
   bool heights = false;
   double height_texture_um = 1.0, height_noise_um = 0.01;
   std::uint64_t seed = 1;
+  // The objective's field distortion, the same in every tile (imaging/field_distortion.h): pixel u shows what an
+  // ideal camera shows at u + d(u). Each tile is rendered on a margin and resampled (cubic) through it, its noise
+  // with it. The encoder readings, the stage and the validation truth are those of the stage alone.
+  imaging::FieldDistortion distortion;
   void Check() const;  // throws std::invalid_argument
 };
 

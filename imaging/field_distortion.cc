@@ -1,0 +1,272 @@
+#include "imaging/field_distortion.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace fvm::imaging {
+namespace {
+
+// One monomial of one component of a term: coefficient * x^i y^j added to d_x (component 0) or d_y (1).
+struct FieldMonomial {
+  int component, i, j;
+  double factor;
+};
+struct FieldTerm {
+  std::string name;
+  int degree;
+  std::vector<FieldMonomial> monomials;
+};
+
+std::string MonomialName(int component, int i, int j) {
+  std::string name = component == 0 ? "dx_" : "dy_";
+  if (i > 0) name += "x" + (i > 1 ? std::to_string(i) : std::string());
+  if (j > 0) name += "y" + (j > 1 ? std::to_string(j) : std::string());
+  return name;
+}
+
+// The radial and tangential terms of one degree, then its monomials, each kept only when the terms before it do
+// not already span it (the monomials of one degree are the coordinates: the rank test is exact).
+std::vector<FieldTerm> TermsOfDegree(int degree) {
+  std::vector<FieldTerm> candidates;
+  if (degree == 2) {
+    candidates.push_back({"p1", 2, {{0, 1, 1, 2.0}, {1, 2, 0, 1.0}, {1, 0, 2, 3.0}}});
+    candidates.push_back({"p2", 2, {{0, 2, 0, 3.0}, {0, 0, 2, 1.0}, {1, 1, 1, 2.0}}});
+  } else if (degree == 3) {
+    candidates.push_back({"k1", 3, {{0, 3, 0, 1.0}, {0, 1, 2, 1.0}, {1, 2, 1, 1.0}, {1, 0, 3, 1.0}}});
+  } else if (degree == 5) {
+    candidates.push_back({"k2", 5, {{0, 5, 0, 1.0}, {0, 3, 2, 2.0}, {0, 1, 4, 1.0}, {1, 4, 1, 1.0}, {1, 2, 3, 2.0},
+                                    {1, 0, 5, 1.0}}});
+  }
+  for (int component = 0; component < 2; ++component) {
+    for (int j = 0; j <= degree; ++j) {
+      const int i = degree - j;
+      candidates.push_back({MonomialName(component, i, j), degree, {{component, i, j, 1.0}}});
+    }
+  }
+  const int dims = 2 * (degree + 1);  // coordinates: component * (degree + 1) + j
+  std::vector<FieldTerm> kept;
+  Eigen::MatrixXd span(dims, 0);
+  for (const FieldTerm& term : candidates) {
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(dims);
+    for (const FieldMonomial& m : term.monomials) v(m.component * (degree + 1) + m.j) += m.factor;
+    Eigen::MatrixXd trial(dims, span.cols() + 1);
+    trial << span, v;
+    if (Eigen::FullPivLU<Eigen::MatrixXd>(trial).rank() > span.cols()) {
+      span = trial;
+      kept.push_back(term);
+    }
+  }
+  return kept;
+}
+
+const std::vector<FieldTerm>& Terms(int order) {
+  if (order < 2 || order > kMaxDistortionOrder) {
+    throw std::invalid_argument("field distortion: order " + std::to_string(order) + " outside 2.." +
+                                std::to_string(kMaxDistortionOrder) +
+                                " (below 2 is the linear part no overlap can tell; above, the overlaps cannot)");
+  }
+  // Built once for every order (thread-safe static initialisation), read without a lock from then on.
+  static const std::vector<std::vector<FieldTerm>> all = [] {
+    std::vector<std::vector<FieldTerm>> by_order(kMaxDistortionOrder + 1);
+    for (int o = 2; o <= kMaxDistortionOrder; ++o) {
+      for (int degree = 2; degree <= o; ++degree) {
+        for (FieldTerm& t : TermsOfDegree(degree)) by_order[static_cast<size_t>(o)].push_back(std::move(t));
+      }
+    }
+    return by_order;
+  }();
+  return all[static_cast<size_t>(order)];
+}
+
+}  // namespace
+
+const std::vector<std::string>& FieldDistortionTermNames(int order) {
+  Terms(order);  // throws outside 2..kMaxDistortionOrder
+  static const std::vector<std::vector<std::string>> names = [] {
+    std::vector<std::vector<std::string>> by_order(kMaxDistortionOrder + 1);
+    for (int o = 2; o <= kMaxDistortionOrder; ++o) {
+      for (const FieldTerm& t : Terms(o)) by_order[static_cast<size_t>(o)].push_back(t.name);
+    }
+    return by_order;
+  }();
+  return names[static_cast<size_t>(order)];
+}
+
+void FieldDistortion::Check() const {
+  if (order == 0) return;
+  const size_t k = Terms(order).size();
+  if (static_cast<size_t>(coefficients.size()) != k) {
+    throw std::invalid_argument("field distortion of order " + std::to_string(order) + ": " + std::to_string(k) +
+                                " coefficients expected, " + std::to_string(coefficients.size()) + " given");
+  }
+  if (!(width_px > 0 && height_px > 0)) throw std::invalid_argument("field distortion: tile size not positive");
+  if (covariance.size() != 0 && (covariance.rows() != coefficients.size() || covariance.cols() != coefficients.size())) {
+    throw std::invalid_argument("field distortion: covariance does not match the coefficients");
+  }
+}
+
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldDistortion::Basis(const Eigen::Vector2d& pixel) const {
+  if (order == 0) return Eigen::Matrix<double, 2, Eigen::Dynamic>(2, 0);
+  const std::vector<FieldTerm>& terms = Terms(order);
+  const double s = 0.5 * width_px;
+  const double x = (pixel.x() - 0.5 * (width_px - 1)) / s, y = (pixel.y() - 0.5 * (height_px - 1)) / s;
+  std::array<double, kMaxDistortionOrder + 1> xp{}, yp{};
+  xp[0] = yp[0] = 1.0;
+  for (int p = 1; p <= kMaxDistortionOrder; ++p) xp[p] = xp[p - 1] * x, yp[p] = yp[p - 1] * y;
+  Eigen::Matrix<double, 2, Eigen::Dynamic> b = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, terms.size());
+  for (size_t t = 0; t < terms.size(); ++t) {
+    for (const FieldMonomial& m : terms[t].monomials) b(m.component, t) += m.factor * xp[m.i] * yp[m.j];
+  }
+  return b;
+}
+
+Eigen::Vector2d FieldDistortion::Displacement(const Eigen::Vector2d& pixel) const {
+  if (order == 0) return Eigen::Vector2d::Zero();
+  // Basis(pixel) * coefficients without the allocation: resampling a tile calls this millions of times.
+  const std::vector<FieldTerm>& terms = Terms(order);
+  const double s = 0.5 * width_px;
+  const double x = (pixel.x() - 0.5 * (width_px - 1)) / s, y = (pixel.y() - 0.5 * (height_px - 1)) / s;
+  std::array<double, kMaxDistortionOrder + 1> xp{}, yp{};
+  xp[0] = yp[0] = 1.0;
+  for (int p = 1; p <= order; ++p) xp[p] = xp[p - 1] * x, yp[p] = yp[p - 1] * y;
+  double d[2] = {0.0, 0.0};
+  for (size_t t = 0; t < terms.size(); ++t) {
+    const double c = coefficients(static_cast<Eigen::Index>(t));
+    for (const FieldMonomial& m : terms[t].monomials) d[m.component] += c * m.factor * xp[m.i] * yp[m.j];
+  }
+  return {d[0], d[1]};
+}
+
+Eigen::Vector2d FieldDistortion::RawPixel(const Eigen::Vector2d& undistorted_pixel) const {
+  // u = u' - d(u): d changes by well under a pixel per pixel, so the iteration contracts fast.
+  Eigen::Vector2d u = undistorted_pixel;
+  for (int k = 0; k < 8; ++k) u = undistorted_pixel - Displacement(u);
+  return u;
+}
+
+double FieldDistortion::LargestDisplacementPx(Eigen::Vector2d* where) const {
+  double largest = 0.0;
+  for (int j = 0; j <= 32; ++j) {
+    for (int i = 0; i <= 32; ++i) {
+      const Eigen::Vector2d u(i * (width_px - 1) / 32.0, j * (height_px - 1) / 32.0);
+      const double n = Displacement(u).norm();
+      if (n > largest) {
+        largest = n;
+        if (where) *where = u;
+      }
+    }
+  }
+  return largest;
+}
+
+double FieldDistortion::DisplacementSigmaPx() const {
+  if (order == 0 || covariance.size() == 0) return 0.0;
+  double sum = 0.0;
+  int n = 0;
+  for (int j = 0; j <= 16; ++j) {
+    for (int i = 0; i <= 16; ++i) {
+      const auto b = Basis(Eigen::Vector2d(i * (width_px - 1) / 16.0, j * (height_px - 1) / 16.0));
+      sum += (b * covariance * b.transpose()).trace() / 2.0;
+      ++n;
+    }
+  }
+  return std::sqrt(sum / n);
+}
+
+namespace {
+
+cv::Mat AsMat(const TileImage& image) {
+  return cv::Mat(static_cast<int>(image.rows()), static_cast<int>(image.cols()), CV_32F,
+                 const_cast<float*>(image.data()));
+}
+
+TileImage Remapped(const TileImage& source, const cv::Mat& map_x, const cv::Mat& map_y, bool outside_nan) {
+  TileImage out(map_x.rows, map_x.cols);
+  cv::Mat dst(map_x.rows, map_x.cols, CV_32F, out.data());
+  if (outside_nan) {
+    cv::remap(AsMat(source), dst, map_x, map_y, cv::INTER_CUBIC, cv::BORDER_CONSTANT,
+              cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  } else {
+    // remap takes its border value for a point wholly outside, whatever the border mode: the nearest edge pixel
+    // is the point clamped onto the tile.
+    cv::Mat x, y;
+    cv::min(cv::max(map_x, 0.0), source.cols() - 1.0, x);
+    cv::min(cv::max(map_y, 0.0), source.rows() - 1.0, y);
+    cv::remap(AsMat(source), dst, x, y, cv::INTER_CUBIC, cv::BORDER_REPLICATE);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<TileImage> UndistortTiles(const std::vector<TileImage>& raw, const FieldDistortion& field,
+                                      bool outside_nan) {
+  if (field.Identity() || raw.empty()) return raw;
+  field.Check();
+  const int w = static_cast<int>(raw.front().cols()), h = static_cast<int>(raw.front().rows());
+  for (const TileImage& tile : raw) {
+    if (tile.cols() != field.width_px || tile.rows() != field.height_px) {
+      throw std::invalid_argument("UndistortTiles: the field is for " + std::to_string(field.width_px) + " x " +
+                                  std::to_string(field.height_px) + " px tiles, a tile is " +
+                                  std::to_string(tile.cols()) + " x " + std::to_string(tile.rows()));
+    }
+  }
+  cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const Eigen::Vector2d u = field.RawPixel(Eigen::Vector2d(x, y));
+        map_x.at<float>(y, x) = static_cast<float>(u.x());
+        map_y.at<float>(y, x) = static_cast<float>(u.y());
+      }
+    }
+  });
+  std::vector<TileImage> out(raw.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(raw.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      TileImage& tile = out[static_cast<size_t>(i)];
+      tile = Remapped(raw[static_cast<size_t>(i)], map_x, map_y, outside_nan);
+      if (!outside_nan) continue;
+      // Outside the raw tile is no measurement: invalid, not the border's value.
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          const float ux = map_x.at<float>(y, x), uy = map_y.at<float>(y, x);
+          if (ux < 0.0f || uy < 0.0f || ux > w - 1.0f || uy > h - 1.0f) tile(y, x) = std::numeric_limits<float>::quiet_NaN();
+        }
+      }
+    }
+  });
+  return out;
+}
+
+TileImage UndistortTile(const TileImage& raw, const FieldDistortion& field, bool outside_nan) {
+  return UndistortTiles({raw}, field, outside_nan).front();
+}
+
+TileImage DistortTile(const TileImage& ideal_with_margin, int margin_px, const FieldDistortion& field) {
+  const int w = static_cast<int>(ideal_with_margin.cols()) - 2 * margin_px;
+  const int h = static_cast<int>(ideal_with_margin.rows()) - 2 * margin_px;
+  if (w <= 0 || h <= 0) throw std::invalid_argument("DistortTile: the margin leaves no tile");
+  if (field.LargestDisplacementPx() + 2.0 > margin_px) {
+    throw std::invalid_argument("DistortTile: a margin of " + std::to_string(margin_px) +
+                                " px does not cover the field's largest displacement and the cubic's reach");
+  }
+  cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const Eigen::Vector2d d = field.Displacement(Eigen::Vector2d(x, y));
+      map_x.at<float>(y, x) = static_cast<float>(x + d.x() + margin_px);
+      map_y.at<float>(y, x) = static_cast<float>(y + d.y() + margin_px);
+    }
+  }
+  return Remapped(ideal_with_margin, map_x, map_y, false);
+}
+
+}  // namespace fvm::imaging

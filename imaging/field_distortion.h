@@ -1,0 +1,75 @@
+#pragma once
+// Field distortion of an objective (and scanner): the same for every tile it takes. The pixel at u = (u, v) sees the
+// part point that an ideal, undistorted camera sees at u + d(u), d in pixels. d is a sum of terms in the tile's
+// normalised coordinates x = (u - c_u) / s, y = (v - c_v) / s about the tile centre c, s half the tile width (so a
+// radial coefficient is the displacement at the middle of the left and right edges):
+//   radial      k1 (x, y) r^2, k2 (x, y) r^4                      (Brown 1966)
+//   tangential  p1 (2xy, r^2 + 2y^2), p2 (r^2 + 2x^2, 2xy)         (Conrady 1919; OpenCV's convention)
+//   polynomial  dx_x{i}y{j} (x^i y^j, 0), dy_x{i}y{j} (0, x^i y^j)  for 2 <= i + j <= order, those the radial and
+//               tangential terms do not already span (Rouwane, Texier, Passieux 2024 use the polynomial alone).
+// What it leaves out, on purpose: the constant and linear part (a shift, the scale, the shear and the turn of the
+// field). Overlaps see d only through differences d(u_a) - d(u_b) between the two tiles' views of one point, and
+// those of a linear field are the same for every point of a pair: a linear field moves each pair's offset like a
+// longer step or a turned stage does, so the overlaps cannot tell it from the stage steps and the pixel size. It is
+// fixed at 0 (the pixel size, from the stage or --pixel-mm, holds the scale), and the model says so by name
+// (kFixedLinearPart).
+//
+// Pixel frame as in tile_registration.h: x right, y down; pixel (0, 0) is the centre of the top-left pixel.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "imaging/io/tile_image.h"
+
+namespace fvm::imaging {
+
+// The terms no overlap can determine, named for people: fixed at 0, never identified.
+inline constexpr const char* kFixedLinearPart =
+    "the field's linear part (shift, scale, shear, turn: dx_x, dx_y, dy_x, dy_y) cannot be told from the stage "
+    "steps and the pixel size using overlaps alone: fixed at 0";
+
+// Highest polynomial order any tile set is asked for; beyond it the terms change by less than a pixel's noise over
+// a 10-20 % overlap.
+inline constexpr int kMaxDistortionOrder = 6;
+
+// The names of the terms of `order` (2..kMaxDistortionOrder), in the order of the coefficients. Throws
+// std::invalid_argument outside that range.
+const std::vector<std::string>& FieldDistortionTermNames(int order);
+
+struct FieldDistortion {
+  int width_px = 0, height_px = 0;  // the tiles it was identified on
+  int order = 0;                    // 0: no distortion (the identity)
+  Eigen::VectorXd coefficients;     // px, one per FieldDistortionTermNames(order)
+  Eigen::MatrixXd covariance;       // px^2, of the coefficients (empty: unknown)
+
+  bool Identity() const { return order == 0; }
+  // d(u) in px at pixel u of a width_px x height_px tile.
+  Eigen::Vector2d Displacement(const Eigen::Vector2d& pixel) const;
+  // The 2 x K matrix B with d(u) = B c: each column is a term at u.
+  Eigen::Matrix<double, 2, Eigen::Dynamic> Basis(const Eigen::Vector2d& pixel) const;
+  // Where an undistorted pixel's point is seen in the raw tile: the u with u + d(u) = pixel (fixed point).
+  Eigen::Vector2d RawPixel(const Eigen::Vector2d& undistorted_pixel) const;
+  // The largest |d| over the tile (px) on a 33 x 33 grid of its pixels, and where.
+  double LargestDisplacementPx(Eigen::Vector2d* where = nullptr) const;
+  // The standard uncertainty of d, rms over the tile (px): sqrt(mean over the grid of trace(B Cov B^T) / 2).
+  double DisplacementSigmaPx() const;
+  // Throws std::invalid_argument when the order has no terms list or the sizes do not match it.
+  void Check() const;
+};
+
+// The tile resampled without distortion: output pixel u' shows what the raw tile shows at RawPixel(u') (cubic).
+// Where that lies outside the raw tile: NaN when `outside_nan`, else the nearest edge pixel (integer tiles, which
+// have no NaN; a band as wide as the field's inward displacement at the edges, none where it points outward).
+// Throws std::invalid_argument when the tile's size is not the field's.
+TileImage UndistortTile(const TileImage& raw, const FieldDistortion& field, bool outside_nan = true);
+// Every tile of one size, the resampling map computed once.
+std::vector<TileImage> UndistortTiles(const std::vector<TileImage>& raw, const FieldDistortion& field,
+                                      bool outside_nan = true);
+
+// The reverse, for simulators: a raw tile through the field from an ideal image rendered with `margin_px` extra
+// pixels on every side (its pixel (margin, margin) is the tile's (0, 0)): raw(u) = ideal(u + d(u)). Throws
+// std::invalid_argument when the margin does not cover the field.
+TileImage DistortTile(const TileImage& ideal_with_margin, int margin_px, const FieldDistortion& field);
+
+}  // namespace fvm::imaging

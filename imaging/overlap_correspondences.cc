@@ -1,0 +1,268 @@
+#include "imaging/overlap_correspondences.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <Eigen/QR>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <stdexcept>
+
+namespace fvm::imaging {
+
+void CorrespondenceOptions::Check() const {
+  if (grid_step_px < 2 || window_px < 5 || window_px % 2 == 0 || pyramid_levels < 0 || pyramid_levels > 6 ||
+      !(max_round_trip_px > 0.0) || !(highpass_sigma_px >= 0.0)) {
+    throw std::invalid_argument(
+        "correspondences: grid step >= 2 px, an odd window >= 5 px, 0-6 pyramid levels, round trip > 0");
+  }
+}
+
+namespace {
+
+// A tile as the matching takes it: high-passed (shading and offsets out) in float, with its gradient, for the
+// sub-pixel refinement; and stretched to 8 bits (128 +- 4 of the texture's standard deviations) for the tracker.
+struct TrackableTile {
+  cv::Mat u8, value, gx, gy;
+};
+
+// The image less the least-squares polynomial of degree 4 in x and y (vignetting, uneven illumination), fitted on
+// every 4th pixel: a window's mean and gain are taken out in the refinement, not a slope across it.
+cv::Mat LessShading(const cv::Mat& f) {
+  const auto basis = [&](double x, double y, Eigen::Ref<Eigen::RowVectorXd> row) {
+    const double xp[5] = {1.0, x, x * x, x * x * x, x * x * x * x}, yp[5] = {1.0, y, y * y, y * y * y, y * y * y * y};
+    int k = 0;
+    for (int degree = 0; degree <= 4; ++degree) {
+      for (int j = 0; j <= degree; ++j) row(k++) = xp[degree - j] * yp[j];
+    }
+  };
+  const double sx = 2.0 / f.cols, sy = 2.0 / f.rows;
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> values;
+  for (int y = 0; y < f.rows; y += 4) {
+    for (int x = 0; x < f.cols; x += 4) {
+      Eigen::RowVectorXd row(15);
+      basis(x * sx - 1.0, y * sy - 1.0, row);
+      rows.push_back(row), values.push_back(f.at<float>(y, x));
+    }
+  }
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(rows.size()), 15);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(rows.size()));
+  for (size_t i = 0; i < rows.size(); ++i) a.row(static_cast<Eigen::Index>(i)) = rows[i], b(static_cast<Eigen::Index>(i)) = values[i];
+  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
+  cv::Mat out(f.size(), CV_32F);
+  Eigen::RowVectorXd row(15);
+  for (int y = 0; y < f.rows; ++y) {
+    for (int x = 0; x < f.cols; ++x) {
+      basis(x * sx - 1.0, y * sy - 1.0, row);
+      out.at<float>(y, x) = static_cast<float>(f.at<float>(y, x) - row.dot(c));
+    }
+  }
+  return out;
+}
+
+// Invalid pixels (NaN) read as the mean.
+TrackableTile TrackableImage(const TileImage& tile, double sigma) {
+  cv::Mat f(static_cast<int>(tile.rows()), static_cast<int>(tile.cols()), CV_32F);
+  for (int y = 0; y < f.rows; ++y) {
+    for (int x = 0; x < f.cols; ++x) f.at<float>(y, x) = tile(y, x);
+  }
+  const cv::Mat invalid = f != f;
+  const double mean = cv::mean(f, ~invalid)[0];
+  f.setTo(mean, invalid);
+  TrackableTile out;
+  // The refinement's copy: the values less the shading's quartic over the whole tile, smoothed (sigma 1 px, the
+  // same for both tiles: no shift); not high-passed, since a high-pass reflects the tile at its edges, where the
+  // overlaps are, and so shifts what it shows there. Interpolation errs most near the Nyquist frequency, at the
+  // fraction every point of a regular scan shares: smoothed, that error would not pass for field.
+  cv::GaussianBlur(LessShading(f), out.value, cv::Size(), 1.0, 1.0, cv::BORDER_REFLECT);
+  cv::Sobel(out.value, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT);  // central differences
+  cv::Sobel(out.value, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT);
+  if (sigma > 0.0) {
+    cv::Mat low;
+    cv::GaussianBlur(f, low, cv::Size(), sigma, sigma, cv::BORDER_REFLECT);
+    f -= low;
+  } else {
+    f -= mean;
+  }
+  cv::Scalar m, sd;
+  cv::meanStdDev(f, m, sd);
+  const double scale = sd[0] > 0.0 ? 32.0 / sd[0] : 1.0;
+  f.convertTo(out.u8, CV_8U, scale, 128.0 - scale * m[0]);
+  return out;
+}
+
+// Keys' cubic convolution weights (a = -0.5) of the samples at -1, 0, 1, 2 for a point `f` past sample 0.
+std::array<double, 4> CubicWeights(double f) {
+  const auto w = [](double t) {
+    t = std::abs(t);
+    return t <= 1.0 ? (1.5 * t - 2.5) * t * t + 1.0 : ((-0.5 * t + 2.5) * t - 4.0) * t + 2.0;
+  };
+  return {w(1.0 + f), w(f), w(1.0 - f), w(2.0 - f)};
+}
+
+// The n x n patch of `image` whose first sample lies at `corner` (any sub-pixel point): one fraction for the whole
+// patch, so the cubic is two separable passes. (cv::remap rounds a fraction to 1/32 px: too coarse to settle on.)
+// False when the patch and its cubic's reach do not fit in the image.
+bool CubicPatch(const cv::Mat& image, const Eigen::Vector2d& corner, int n, cv::Mat& patch) {
+  const int ix = static_cast<int>(std::floor(corner.x())), iy = static_cast<int>(std::floor(corner.y()));
+  if (ix < 1 || iy < 1 || ix + n + 2 > image.cols || iy + n + 2 > image.rows) return false;
+  const std::array<double, 4> wx = CubicWeights(corner.x() - ix), wy = CubicWeights(corner.y() - iy);
+  cv::Mat rows(n + 3, n, CV_64F);
+  for (int r = 0; r < n + 3; ++r) {
+    const float* line = image.ptr<float>(iy - 1 + r);
+    for (int x = 0; x < n; ++x) {
+      const float* at = line + ix + x - 1;
+      rows.at<double>(r, x) = wx[0] * at[0] + wx[1] * at[1] + wx[2] * at[2] + wx[3] * at[3];
+    }
+  }
+  patch.create(n, n, CV_64F);
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      patch.at<double>(y, x) = wy[0] * rows.at<double>(y, x) + wy[1] * rows.at<double>(y + 1, x) +
+                               wy[2] * rows.at<double>(y + 2, x) + wy[3] * rows.at<double>(y + 3, x);
+    }
+  }
+  return true;
+}
+
+// The tracker interpolates bilinearly, which pulls a sub-pixel shift towards whole pixels by up to a few
+// hundredths of a pixel on fine speckle, the same way at every point of a regular scan (whose steps share their
+// fraction): a bias that would pass for field. So each point is refined by inverse-compositional Gauss-Newton
+// on sum (B(e + v) - A(u_a + v))^2 over the window (Baker, Matthews 2004), B resampled bicubically: A's template
+// at whole pixels, its gradient computed once. Returns false when the refinement does not settle.
+bool RefinePoint(const TrackableTile& a, const TrackableTile& b, const cv::Point& ua, int half, Eigen::Vector2d& e) {
+  const int n = 2 * half + 1;
+  const cv::Rect box(ua.x - half, ua.y - half, n, n);
+  if ((box & cv::Rect(0, 0, a.value.cols, a.value.rows)) != box) return false;
+  const cv::Mat t = a.value(box), gx = a.gx(box), gy = a.gy(box);
+  // Each window about its own mean and scaled to a's spread: shading and gain differ from tile to tile.
+  cv::Scalar t_mean, t_sd;
+  cv::meanStdDev(t, t_mean, t_sd);
+  Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const Eigen::Vector2d g(gx.at<float>(y, x), gy.at<float>(y, x));
+      h += g * g.transpose();
+    }
+  }
+  if (!(h.determinant() > 1e-12 * h.trace() * h.trace())) return false;
+  const Eigen::Matrix2d h_inverse = h.inverse();
+  cv::Mat sampled;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    if (!CubicPatch(b.value, e - Eigen::Vector2d::Constant(half), n, sampled)) return false;
+    cv::Scalar s_mean, s_sd;
+    cv::meanStdDev(sampled, s_mean, s_sd);
+    if (!(s_sd[0] > 0.0)) return false;
+    const double gain = t_sd[0] / s_sd[0];
+    Eigen::Vector2d r = Eigen::Vector2d::Zero();
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        const double d = gain * (sampled.at<double>(y, x) - s_mean[0]) - (t.at<float>(y, x) - t_mean[0]);
+        r += d * Eigen::Vector2d(gx.at<float>(y, x), gy.at<float>(y, x));
+      }
+    }
+    const Eigen::Vector2d step = h_inverse * r;
+    e -= step;
+    if (step.norm() < 1e-3) return true;
+    if (step.norm() > 2.0) return false;
+  }
+  return false;
+}
+
+PairCorrespondences MatchPrepared(const TrackableTile& ta, const TrackableTile& tb, int a_index, int b_index,
+                                  const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
+                                  const CorrespondenceOptions& options) {
+  PairCorrespondences out;
+  out.a = a_index, out.b = b_index;
+  const cv::Mat &ia = ta.u8, &ib = tb.u8;
+  const double half = options.window_px / 2 + 1.0;
+  const double wa = ia.cols, ha = ia.rows, wb = ib.cols, hb = ib.rows;
+  const double x0 = std::max(0.0, offset_px.x()) + half, x1 = std::min(wa, offset_px.x() + wb) - 1.0 - half;
+  const double y0 = std::max(0.0, offset_px.y()) + half, y1 = std::min(ha, offset_px.y() + hb) - 1.0 - half;
+  if (!(x1 > x0 && y1 > y0)) return out;
+  const auto inside = [&](const cv::Point2f& p, double w, double h) {
+    return p.x >= half && p.y >= half && p.x <= w - 1.0 - half && p.y <= h - 1.0 - half;
+  };
+  std::vector<cv::Point2f> from, to;
+  // The grid centred in the overlap, so that its points sit symmetrically about the pair's middle.
+  const int nx = static_cast<int>(std::floor((x1 - x0) / options.grid_step_px)) + 1;
+  const int ny = static_cast<int>(std::floor((y1 - y0) / options.grid_step_px)) + 1;
+  const double sx = 0.5 * ((x1 - x0) - (nx - 1) * options.grid_step_px);
+  const double sy = 0.5 * ((y1 - y0) - (ny - 1) * options.grid_step_px);
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      // Whole pixels of a: its window is read as stored, only b's is resampled.
+      const Eigen::Vector2d ua(std::round(x0 + sx + i * options.grid_step_px), std::round(y0 + sy + j * options.grid_step_px));
+      const Eigen::Vector2d ub = guess.RawPixel(ua + guess.Displacement(ua) - offset_px);
+      const cv::Point2f pb(static_cast<float>(ub.x()), static_cast<float>(ub.y()));
+      ++out.tried;
+      if (!inside(pb, wb, hb)) continue;
+      from.emplace_back(static_cast<float>(ua.x()), static_cast<float>(ua.y()));
+      to.push_back(pb);
+    }
+  }
+  if (from.empty()) return out;
+  const cv::Size window(options.window_px, options.window_px);
+  const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-3);
+  std::vector<unsigned char> status, back_status;
+  std::vector<float> error, back_error;
+  std::vector<cv::Point2f> back = from;
+  cv::calcOpticalFlowPyrLK(ia, ib, from, to, status, error, window, options.pyramid_levels, stop,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(ib, ia, to, back, back_status, back_error, window, options.pyramid_levels, stop,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  for (size_t k = 0; k < from.size(); ++k) {
+    if (!status[k] || !back_status[k] || !inside(to[k], wb, hb)) continue;
+    const double dx = back[k].x - from[k].x, dy = back[k].y - from[k].y;
+    if (std::hypot(dx, dy) > options.max_round_trip_px) continue;
+    Eigen::Vector2d e(to[k].x, to[k].y);
+    const cv::Point ua(static_cast<int>(std::lround(from[k].x)), static_cast<int>(std::lround(from[k].y)));
+    if (!RefinePoint(ta, tb, ua, options.window_px / 2, e) || (e - Eigen::Vector2d(to[k].x, to[k].y)).norm() > 0.5 ||
+        !inside(cv::Point2f(static_cast<float>(e.x()), static_cast<float>(e.y())), wb, hb)) {
+      continue;
+    }
+    out.a_px.emplace_back(ua.x, ua.y);
+    out.b_px.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace
+
+PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_index, int b_index,
+                                 const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
+                                 const CorrespondenceOptions& options) {
+  options.Check();
+  return MatchPrepared(TrackableImage(a, options.highpass_sigma_px), TrackableImage(b, options.highpass_sigma_px),
+                       a_index, b_index, offset_px, guess, options);
+}
+
+std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
+                                               const std::vector<OverlapToMatch>& overlaps,
+                                               const FieldDistortion& guess, const CorrespondenceOptions& options) {
+  options.Check();
+  for (const OverlapToMatch& o : overlaps) {
+    if (o.a < 0 || o.b < 0 || o.a >= static_cast<int>(images.size()) || o.b >= static_cast<int>(images.size())) {
+      throw std::invalid_argument("MatchOverlaps: a tile index outside the images");
+    }
+  }
+  std::vector<TrackableTile> prepared(images.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      prepared[static_cast<size_t>(i)] = TrackableImage(images[static_cast<size_t>(i)], options.highpass_sigma_px);
+    }
+  });
+  std::vector<PairCorrespondences> out(overlaps.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(overlaps.size())), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      const OverlapToMatch& o = overlaps[static_cast<size_t>(k)];
+      out[static_cast<size_t>(k)] = MatchPrepared(prepared[static_cast<size_t>(o.a)], prepared[static_cast<size_t>(o.b)],
+                                                  o.a, o.b, o.offset_px, guess, options);
+    }
+  });
+  return out;
+}
+
+}  // namespace fvm::imaging

@@ -1,0 +1,49 @@
+#pragma once
+// Dense sub-pixel correspondences in the overlap of two tiles: the raw pixel of a and the raw pixel of b that show
+// the same point of the part, on a grid over the overlap, by pyramidal Lucas-Kanade optical flow (Bouguet 2001, as
+// OpenCV implements it) of the high-passed tiles, kept when tracking back from b lands within a tenth of a pixel of
+// where it started. What a rigid registration averages away (the field distortion, field_distortion.h) is in the
+// way these pairs of pixels depart from one translation.
+//
+// Pixel frame as in tile_registration.h: x right, y down, an offset is b's top-left corner in a's frame.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "imaging/field_distortion.h"
+#include "imaging/io/tile_image.h"
+
+namespace fvm::imaging {
+
+struct CorrespondenceOptions {
+  int grid_step_px = 8;    // spacing of the grid of points over the overlap
+  int window_px = 15;      // Lucas-Kanade window (odd)
+  int pyramid_levels = 3;  // reaches 4 (2^levels) window half-widths: the field's pull between two tiles' views
+  double max_round_trip_px = 0.1;  // a -> b -> a must land this close to the start
+  double highpass_sigma_px = 8.0;  // shading and vignetting out before tracking
+  void Check() const;             // throws std::invalid_argument
+};
+
+struct PairCorrespondences {
+  int a = 0, b = 0;  // tile indices
+  std::vector<Eigen::Vector2d> a_px, b_px;  // raw pixels that see the same point
+  int tried = 0;     // grid points in the overlap
+};
+
+// Points of a on a grid over the overlap that b at `offset_px` shares with it, inset so that both views stay inside
+// their tiles whatever `guess` (the field believed so far; the identity at first) moves them; each point's start in b
+// is where the guess puts it: u_b + d(u_b) = u_a + d(u_a) - offset. Empty when the overlap is too small for a window.
+PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_index, int b_index,
+                                 const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
+                                 const CorrespondenceOptions& options = {});
+
+// Many overlaps of one tile set at once, on OpenCV's thread pool; each tile prepared once.
+struct OverlapToMatch {
+  int a = 0, b = 0;
+  Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();
+};
+std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
+                                               const std::vector<OverlapToMatch>& overlaps,
+                                               const FieldDistortion& guess, const CorrespondenceOptions& options = {});
+
+}  // namespace fvm::imaging
