@@ -19,8 +19,10 @@
 #include <string_view>
 
 #include "imaging/calotte_detection.h"
+#include "imaging/field_distortion.h"
 #include "imaging/focus_variation.h"
 #include "imaging/io/focus_stack_files.h"
+#include "imaging/overlap_correspondences.h"
 #include "imaging/tile_mosaic.h"
 #include "imaging/tile_pair_registration.h"
 #include "imaging/tile_registration.h"
@@ -45,6 +47,12 @@ struct OpenCvImaging {
   decltype(&ResolveFocusStack) resolve_focus_stack;
   decltype(&ReconstructFocusStackFiles) reconstruct_focus_stack_files;
   decltype(&AllInFocusImage) all_in_focus_image;
+  decltype(&UndistortTiles) undistort_tiles;
+  decltype(&UndistortTile) undistort_tile;
+  decltype(&DistortTile) distort_tile;
+  decltype(&CorrespondenceOptions::Check) check_correspondence_options;
+  decltype(&MatchOverlap) match_overlap;
+  decltype(&MatchOverlaps) match_overlaps;
 };
 
 // The table, loading the plugin on first use. `action` says what needed it ("registering tiles"); when the plugin

@@ -90,4 +90,34 @@ StackImage AllInFocusImage(const FocusResult& result, bool eight_bit) {
   return LoadOpenCvImaging("writing the all-in-focus image").all_in_focus_image(result, eight_bit);
 }
 
+std::vector<TileImage> UndistortTiles(const std::vector<TileImage>& raw, const FieldDistortion& field,
+                                      bool outside_nan) {
+  return LoadOpenCvImaging("resampling tiles without the field distortion").undistort_tiles(raw, field, outside_nan);
+}
+
+TileImage UndistortTile(const TileImage& raw, const FieldDistortion& field, bool outside_nan) {
+  return LoadOpenCvImaging("resampling tiles without the field distortion").undistort_tile(raw, field, outside_nan);
+}
+
+TileImage DistortTile(const TileImage& ideal_with_margin, int margin_px, const FieldDistortion& field) {
+  return LoadOpenCvImaging("rendering tiles through a field distortion").distort_tile(ideal_with_margin, margin_px,
+                                                                                        field);
+}
+
+void CorrespondenceOptions::Check() const {
+  (this->*LoadOpenCvImaging("checking the overlap matching options").check_correspondence_options)();
+}
+
+PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_index, int b_index,
+                                 const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
+                                 const CorrespondenceOptions& options) {
+  return LoadOpenCvImaging("matching overlaps").match_overlap(a, b, a_index, b_index, offset_px, guess, options);
+}
+
+std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
+                                               const std::vector<OverlapToMatch>& overlaps,
+                                               const FieldDistortion& guess, const CorrespondenceOptions& options) {
+  return LoadOpenCvImaging("matching overlaps").match_overlaps(images, overlaps, guess, options);
+}
+
 }  // namespace fvm::imaging

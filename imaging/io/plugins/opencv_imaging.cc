@@ -23,6 +23,12 @@ constexpr OpenCvImaging kOpenCvImaging{
     &ResolveFocusStack,
     &ReconstructFocusStackFiles,
     &AllInFocusImage,
+    &UndistortTiles,
+    &UndistortTile,
+    &DistortTile,
+    &CorrespondenceOptions::Check,
+    &MatchOverlap,
+    &MatchOverlaps,
 };
 
 }  // namespace

@@ -1,0 +1,103 @@
+// Tiles resampled through a field distortion (field_distortion.h), with OpenCV's cubic remap: the part of the field
+// that needs OpenCV, so that the model itself stays in fvm_imaging and the fvm executable reaches this through the
+// OpenCV plugin (opencv_imaging.h).
+
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "imaging/field_distortion.h"
+
+namespace fvm::imaging {
+namespace {
+
+cv::Mat AsMat(const TileImage& image) {
+  return cv::Mat(static_cast<int>(image.rows()), static_cast<int>(image.cols()), CV_32F,
+                 const_cast<float*>(image.data()));
+}
+
+TileImage Remapped(const TileImage& source, const cv::Mat& map_x, const cv::Mat& map_y, bool outside_nan) {
+  TileImage out(map_x.rows, map_x.cols);
+  cv::Mat dst(map_x.rows, map_x.cols, CV_32F, out.data());
+  if (outside_nan) {
+    cv::remap(AsMat(source), dst, map_x, map_y, cv::INTER_CUBIC, cv::BORDER_CONSTANT,
+              cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  } else {
+    // remap takes its border value for a point wholly outside, whatever the border mode: the nearest edge pixel
+    // is the point clamped onto the tile.
+    cv::Mat x, y;
+    cv::min(cv::max(map_x, 0.0), source.cols() - 1.0, x);
+    cv::min(cv::max(map_y, 0.0), source.rows() - 1.0, y);
+    cv::remap(AsMat(source), dst, x, y, cv::INTER_CUBIC, cv::BORDER_REPLICATE);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<TileImage> UndistortTiles(const std::vector<TileImage>& raw, const FieldDistortion& field,
+                                      bool outside_nan) {
+  if (field.Identity() || raw.empty()) return raw;
+  field.Check();
+  const int w = static_cast<int>(raw.front().cols()), h = static_cast<int>(raw.front().rows());
+  for (const TileImage& tile : raw) {
+    if (tile.cols() != field.width_px || tile.rows() != field.height_px) {
+      throw std::invalid_argument("UndistortTiles: the field is for " + std::to_string(field.width_px) + " x " +
+                                  std::to_string(field.height_px) + " px tiles, a tile is " +
+                                  std::to_string(tile.cols()) + " x " + std::to_string(tile.rows()));
+    }
+  }
+  cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const Eigen::Vector2d u = field.RawPixel(Eigen::Vector2d(x, y));
+        map_x.at<float>(y, x) = static_cast<float>(u.x());
+        map_y.at<float>(y, x) = static_cast<float>(u.y());
+      }
+    }
+  });
+  std::vector<TileImage> out(raw.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(raw.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      TileImage& tile = out[static_cast<size_t>(i)];
+      tile = Remapped(raw[static_cast<size_t>(i)], map_x, map_y, outside_nan);
+      if (!outside_nan) continue;
+      // Outside the raw tile is no measurement: invalid, not the border's value.
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          const float ux = map_x.at<float>(y, x), uy = map_y.at<float>(y, x);
+          if (ux < 0.0f || uy < 0.0f || ux > w - 1.0f || uy > h - 1.0f) tile(y, x) = std::numeric_limits<float>::quiet_NaN();
+        }
+      }
+    }
+  });
+  return out;
+}
+
+TileImage UndistortTile(const TileImage& raw, const FieldDistortion& field, bool outside_nan) {
+  return UndistortTiles({raw}, field, outside_nan).front();
+}
+
+TileImage DistortTile(const TileImage& ideal_with_margin, int margin_px, const FieldDistortion& field) {
+  const int w = static_cast<int>(ideal_with_margin.cols()) - 2 * margin_px;
+  const int h = static_cast<int>(ideal_with_margin.rows()) - 2 * margin_px;
+  if (w <= 0 || h <= 0) throw std::invalid_argument("DistortTile: the margin leaves no tile");
+  if (field.LargestDisplacementPx() + 2.0 > margin_px) {
+    throw std::invalid_argument("DistortTile: a margin of " + std::to_string(margin_px) +
+                                " px does not cover the field's largest displacement and the cubic's reach");
+  }
+  cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const Eigen::Vector2d d = field.Displacement(Eigen::Vector2d(x, y));
+      map_x.at<float>(y, x) = static_cast<float>(x + d.x() + margin_px);
+      map_y.at<float>(y, x) = static_cast<float>(y + d.y() + margin_px);
+    }
+  }
+  return Remapped(ideal_with_margin, map_x, map_y, false);
+}
+
+}  // namespace fvm::imaging
