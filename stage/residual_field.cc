@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include "core/dense_decomposition.h"
 
 namespace fvm::stage {
 
@@ -21,7 +24,8 @@ ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_
   field.sigma_mm = std::sqrt(variance);
   if (!(variance > 0)) return field;
   for (size_t i = 0; i < residuals_mm.size(); ++i) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariances[i]);
+    const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>>(
+        covariances[i], "the residual field: the covariance of centre " + std::to_string(i + 1));
     const Eigen::Vector3d gain = (variance / (variance + eig.eigenvalues().cwiseMax(0.0).array())).sqrt().matrix();
     field.offsets_mm[i] = eig.eigenvectors() * gain.asDiagonal() * eig.eigenvectors().transpose() * residuals_mm[i];
   }
