@@ -31,8 +31,8 @@ void CheckDepth(std::string_view text, const std::string& name, std::string_view
       in_string = true;
     } else if (c == '[' || c == '{') {
       if (++depth > max_depth) {
-        throw InputError(fmt::format("{}:{}: arrays and objects nested deeper than {} levels; no fvm file nests so "
-                                     "deep: is it the file meant{}",
+        throw InputError(fmt::format("{}:{}: arrays and objects nested deeper than {} levels, as no file fvm reads "
+                                     "is; check that it is the file meant{}",
                                      name, line, max_depth, Ending(hint)));
       }
     } else if (c == ']' || c == '}') {

@@ -66,10 +66,17 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   }
   const std::string what = fmt::format("the discrepancy scoring of candidate {}", candidate);
   RequireFiniteMatrix(r0, what + " (the residuals)");
-  auto base_qr = Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(all.leftCols(base.cols()), what + " (the base model's columns)");
-  base_qr.setThreshold(1e-9);
-  const int base_rank = static_cast<int>(base_qr.rank());
-  const Eigen::MatrixXd q_base = Eigen::MatrixXd(base_qr.householderQ()).leftCols(base_rank);
+  // A base model with every parameter fixed (a gross outlier makes them all look undetermined) has no columns:
+  // nothing of the residuals is its.
+  int base_rank = 0;
+  Eigen::MatrixXd q_base(all.rows(), 0);
+  if (base.cols() > 0) {
+    auto base_qr =
+        Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(all.leftCols(base.cols()), what + " (the base model's columns)");
+    base_qr.setThreshold(1e-9);
+    base_rank = static_cast<int>(base_qr.rank());
+    q_base = Eigen::MatrixXd(base_qr.householderQ()).leftCols(base_rank);
+  }
   const Eigen::VectorXd r_base = r0 - q_base * (q_base.transpose() * r0);
   s.rss_base = r_base.squaredNorm();
   Eigen::MatrixXd unique = all.rightCols(extra.cols()) - q_base * (q_base.transpose() * all.rightCols(extra.cols()));
