@@ -60,6 +60,16 @@ TEST_F(FuzzedInputs, SubnormalCoordinatesAreRefusedWhereTheyAreRead) {
   EXPECT_THAT(run.err, HasSubstr("id-y.free.csv:3: calotte 1: column 'x' (field 2): '1e-310' is a subnormal number"));
 }
 
+// The inputs that cannot carry a stage error are refused where they are read: a placement collapsed to one point.
+TEST_F(FuzzedInputs, ACollapsedPlacementIsRefusedWithItsFile) {
+  SetCells(dir_ / "batch/id-x.free.csv", 1, "-100.0", [](int) { return true; });
+  SetCells(dir_ / "batch/id-x.free.csv", 2, "-15.0", [](int) { return true; });
+  const FvmRun run = RunFvm(dir_, "calibrate " + Path("batch") + " --model 15 -o " + Path("cal.json"));
+  EXPECT_EQ(run.status, 1) << run.err;
+  EXPECT_THAT(run.err, HasSubstr("id-x.free.csv: its 17 calottes span 0 um in x and 0 um in y, less than 10 um"));
+  EXPECT_FALSE(fs::exists(dir_ / "cal.json"));
+}
+
 // One stitched y of -1 instead of about -135 (line 15 of id-y.stitched.csv, calotte 13): diagnose died with
 // SIGSEGV. A gross outlier is what the outliers candidate is for: it is named, and the rest diagnosed without it.
 TEST_F(FuzzedInputs, OneGrossOutlierIsDiagnosedAsTheOutlier) {
