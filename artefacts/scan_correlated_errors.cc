@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/dense_decomposition.h"
 #include "artefacts/scan_observations.h"
 #include "stage/parameter_layout.h"
 
@@ -41,7 +42,7 @@ ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& ca
     runs.back().push_back(i);
   }
   // A coefficient these displacements do not see (none, once the rank treatment fixed them) gets no response.
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> solve(normal);
+  const auto solve = Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(normal, "the scans' sub-pixel bias: the gains' normal equations");
   const Eigen::MatrixXd gain_response = solve.solve(pulled);  // to k_x and k_y
   out.subpixel_bias = gain_u * gain_u * gain_response * gain_response.transpose();
   for (const std::vector<size_t>& run : runs) {

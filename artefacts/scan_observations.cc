@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
 #include "artefacts/scan_correlated_errors.h"
 
 namespace fvm::artefacts {
@@ -158,7 +159,7 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
     }
     const Eigen::Vector2d r = residuals[i].head<2>();
     chained.push_back(chained.back() + r);
-    const Eigen::Matrix2d l = o.covariance.topLeftCorner<2, 2>().llt().matrixL();
+    const Eigen::Matrix2d l = Decompose<Eigen::LLT<Eigen::Matrix2d>>(o.covariance.topLeftCorner<2, 2>(), "a tile displacement's covariance").matrixL();
     const Eigen::Vector2d w = l.triangularView<Eigen::Lower>().solve(r);
     run.push_back(w);
     if (run.size() >= 3) {

@@ -252,6 +252,14 @@ std::optional<double> CsvTable::OptionalDouble(const CsvRow& row, int column, st
     FailCell(row, column, context,
              fmt::format(": '{}' is not a number; write plain numbers with '.' as the decimal mark", text));
   }
+  // Nonzero but below 2.2e-308 in size: no instrument writes it, and sums and squares of it underflow to 0 and
+  // divide into NaN further on (fvm diagnose died on stitching-free x of 1e-310, issue 44).
+  if (std::fpclassify(*value) == FP_SUBNORMAL) {
+    FailCell(row, column, context,
+             fmt::format(": '{}' is a subnormal number (nonzero, yet below 2.2e-308 in size), which no measurement "
+                         "gives; write 0 or the value meant",
+                         text));
+  }
   return value;
 }
 

@@ -65,7 +65,8 @@ class CsvTable {
   // "calotte 7") goes into messages after FILE:LINE. Messages read
   //   "FILE:LINE: context: column 'x' (field 3): 'abc' is not a number; write plain numbers with '.' ..."
   std::string_view Text(const CsvRow& row, int column) const;
-  // Empty cell: nullopt. Otherwise the number, nan and inf included (the caller knows what they mean).
+  // Empty cell: nullopt. Otherwise the number, nan and inf included (the caller knows what they mean); a subnormal
+  // number (nonzero, below 2.2e-308 in size) throws.
   std::optional<double> OptionalDouble(const CsvRow& row, int column, std::string_view context = {}) const;
   // A finite number; an empty cell, nan or inf throws.
   double Double(const CsvRow& row, int column, std::string_view context = {}) const;

@@ -3,6 +3,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -11,6 +12,7 @@
 #include "core/number_text.h"
 #include "artefacts/io/centre_export.h"
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "stage/io/calibration_file.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
@@ -41,8 +43,8 @@ struct CorrectArgs {
 bool IsMachineModel(const std::string& path) {
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(ReadFileBytes(path, std::size_t{1} << 28));
-  } catch (const nlohmann::json::exception&) {
+    doc = ReadJsonFile(path);
+  } catch (const InputError&) {
     return false;  // ReadCalibration says what is wrong with it
   }
   return doc.is_object() && (doc.contains("instrument_pose") || doc.contains("tool_offset_mm"));
@@ -119,7 +121,9 @@ void RunCentres(const CorrectArgs& args, const stage::Calibration& cal) {
   csv += "# frame: " + FrameText(args, frame) + "\n";
   for (const std::string& c : input.comments) csv += "#" + c + "\n";
   csv += "id,x,y,z,u_x,u_y,u_z";
-  const bool has_t = !input.centres.empty() && input.centres.front().t_s.has_value();
+  // t is optional cell by cell: a row whose t is empty is written with an empty t, never a made-up number.
+  const bool has_t = std::any_of(input.centres.begin(), input.centres.end(),
+                                 [](const artefacts::CentreRecord& c) { return c.t_s.has_value(); });
   if (has_t) csv += ",t";
   csv += "\n";
   nlohmann::json doc = FrameJson(args, frame);
@@ -128,7 +132,7 @@ void RunCentres(const CorrectArgs& args, const stage::Calibration& cal) {
     const Eigen::Vector3d& p = c.position;
     const Eigen::Vector3d& u = c.u;
     csv += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}", r.id, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
-    if (has_t) csv += fmt::format(",{:.3f}", r.t_s.value_or(NAN));
+    if (has_t) csv += r.t_s ? fmt::format(",{:.3f}", *r.t_s) : std::string(",");
     csv += "\n";
     doc["centres"].push_back({{"id", r.id}, {"x", p.x()}, {"y", p.y()}, {"z", p.z()},
                               {"u_um", {u.x() * 1e3, u.y() * 1e3, u.z() * 1e3}},

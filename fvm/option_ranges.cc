@@ -98,6 +98,10 @@ std::string NumberRange::Refusal(double value, std::string_view written) const {
   const std::string shown = written.empty() ? ReadableNumber(value) : std::string(TrimBlanks(written));
   if (!std::isfinite(value)) return fmt::format("{} is not a finite number; give one from {}", shown, Text());
   if (value < min || value > max) return fmt::format("{}{} is outside {}", shown, unit.empty() ? "" : " " + unit, Text());
+  if (std::fpclassify(value) == FP_SUBNORMAL) {
+    return fmt::format("{} is a subnormal number (nonzero, yet below 2.2e-308 in size); give 0 or a number from {}", shown,
+                       Text());
+  }
   if (whole && value != std::floor(value)) return fmt::format("{} is not a whole number (from {})", shown, Text());
   return {};
 }

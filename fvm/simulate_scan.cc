@@ -18,6 +18,7 @@
 #include "artefacts/simulation/scan_simulation.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "core/progress.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
@@ -49,14 +50,7 @@ struct SimulateScanArgs {
 
 // A truth.json of `fvm simulate fvm-batch` (model + parameters) or a calibration file (fvm calibrate -o).
 artefacts::StageTruth ReadStageTruth(const std::string& path, std::string* model) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the calibration truth");
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not JSON: " + e.what());
-  }
+  const nlohmann::json j = ReadJsonFile(path, "give a truth.json of fvm simulate fvm-batch or a calibration file");
   if (j.contains("format")) {
     const stage::Calibration c = stage::ReadCalibration(path);
     *model = c.model;

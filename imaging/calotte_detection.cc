@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/dense_decomposition.h"
 #include "core/input_error.h"
 #include "core/statistics.h"
 
@@ -43,7 +44,7 @@ Eigen::Vector3d LeastSquaresPlane(const std::vector<Eigen::Vector3d>& points, co
     ata += a * a.transpose();
     atb += a * points[i].z();
   }
-  return ata.ldlt().solve(atb);
+  return Decompose<Eigen::LDLT<Eigen::Matrix3d>>(ata, "the calotte detection's base plane").solve(atb);
 }
 
 FacePlane FitFace(const HeightMap& map, std::uint64_t seed) {
@@ -86,7 +87,7 @@ FacePlane FitFace(const HeightMap& map, std::uint64_t seed) {
       a.row(k) << 1.0, p.x(), p.y();
       b[k] = p.z();
     }
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
+    const auto lu = Decompose<Eigen::FullPivLU<Eigen::Matrix3d>>(a, "the calotte detection's plane sample");
     if (lu.rank() < 3) continue;
     const Eigen::Vector3d plane = lu.solve(b);
     for (std::size_t i = 0; i < score.size(); ++i) {

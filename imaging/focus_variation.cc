@@ -10,8 +10,10 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <variant>
 
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "imaging/focus_peak.h"
 #include "imaging/focus_stack_curves.h"
 #include "imaging/focus_window_centroid.h"
@@ -40,6 +42,10 @@ std::size_t PixelCount(const StackImageView& image) {
 // sharpness the larger windows would blur (focus-stack's own image on the real stack of focus_realdata_test.cc:
 // 1.15 times as sharp from the 3 px window, 1.06 from the 5 px one).
 constexpr int kAdaptiveWindows[] = {3, 5, 9};
+// Brightness in any scale a camera or a converter writes (0..1, 0..65535, photon counts) stays far below this; the
+// focus measures square differences of neighbours in float, and beyond it they overflow to inf and NaN (an image
+// all -3.4e38, a float format's "no data", left fvm focus with no valid point and a NaN median quality, issue 44).
+constexpr float kMaxIntensity = 1e15f;
 // The large window is taken where the surface's height changes by at most this many steps over its half-width
 // (4 px): beyond, the second-order bias of the heights it mixes grows faster than its noise falls (on 40 deg walls
 // the small window errs 0.2-0.3 step, the large one 0.3-0.55).
@@ -181,6 +187,16 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
                      std::to_string(s.curves.texture_channels));
   }
   if (!std::isfinite(z_mm)) throw InputError(what + ": the z position is not a finite number");
+  if (const auto* floats = std::get_if<std::span<const float>>(&image.pixels)) {
+    const auto absurd = std::find_if(floats->begin(), floats->end(), [](float v) { return std::abs(v) > kMaxIntensity; });
+    if (absurd != floats->end()) {
+      const std::size_t i = static_cast<std::size_t>(absurd - floats->begin());
+      throw InputError(what + ": pixel (" + std::to_string(i % std::size_t(image.width)) + ", " +
+                       std::to_string(i / std::size_t(image.width)) + ") has the brightness " + FormatShortest(*absurd) +
+                       ", beyond 1e15 in size, which no camera records (a 'no data' marker?); give the image as the "
+                       "camera took it");
+    }
+  }
   if (k == 0) {
     const int window = s.options.adaptive_window ? kAdaptiveWindows[std::size(kAdaptiveWindows) - 1] : s.options.window;
     if (image.width < window || image.height < window) {

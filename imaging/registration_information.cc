@@ -8,6 +8,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/dense_decomposition.h"
 #include "imaging/subpixel_refinement.h"
 
 namespace fvm::imaging::detail {
@@ -59,7 +60,7 @@ Alignment Measure(const cv::Mat& warped, const cv::Mat& target, const cv::Mat& u
   // The residual's variance: mean of (w - t)^2.
   const double residual = (sww - 2.0 * swt + stt) / n;
   const double variance = std::max(residual, 1e-12 * energy_b.trace() / n);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(cross);
+  const auto directions = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>>(cross, "a tile pair's registration information");
   for (int k = 0; k < 2; ++k) {
     const Eigen::Vector2d u = directions.eigenvectors().col(k);
     const double texture = directions.eigenvalues()(k);

@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
 #include "core/exit_codes.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
@@ -92,7 +93,7 @@ PolishedSphere PolishSphere(std::span<const Eigen::Vector3d> points, const std::
   Real last_step = std::numeric_limits<Real>::infinity();
   PolishedSphere out;
   for (int it = 0; it < 100; ++it) {
-    const Vector4r step = -sums.jtj.ldlt().solve(sums.jtr);
+    const Vector4r step = -Decompose<Eigen::LDLT<Matrix4r>>(sums.jtj, "the sphere polish: its normal equations").solve(sums.jtr);
     if (!step.allFinite()) break;
     const SphereSums next = SumSphere(points, mask, mean, theta + step);
     if (next.cost > sums.cost * (1 + 1e-12L) + 1e-30L) break;  // no longer downhill: rounding has the last word
@@ -108,7 +109,7 @@ PolishedSphere PolishSphere(std::span<const Eigen::Vector3d> points, const std::
   // A step that no longer lowers the cost, or stops shrinking, at the level of a double's rounding, is the
   // minimum too.
   if (!out.converged) {
-    const Vector4r step = -sums.jtj.ldlt().solve(sums.jtr);
+    const Vector4r step = -Decompose<Eigen::LDLT<Matrix4r>>(sums.jtj, "the sphere polish: its normal equations").solve(sums.jtr);
     out.converged = step.allFinite() && step.norm() <= 1e-12L * scale;
   }
   out.sphere.centre_mm = (mean + theta.head<3>()).cast<double>();
@@ -177,7 +178,8 @@ ShapeFit FitSphereShape(std::span<const Eigen::Vector3d> points, const ShapeFitO
   if (fit.has_uncertainty) {
     const Eigen::Matrix4d jtj = polished.sums.jtj.cast<double>();
     const double variance = static_cast<double>(polished.sums.cost) / static_cast<double>(kept - 4);
-    const Eigen::Matrix4d covariance = variance * jtj.ldlt().solve(Eigen::Matrix4d::Identity());
+    const Eigen::Matrix4d covariance =
+        variance * Decompose<Eigen::LDLT<Eigen::Matrix4d>>(jtj, "the sphere fit's covariance").solve(Eigen::Matrix4d::Identity());
     fit.u_centre_mm = covariance.diagonal().head<3>().cwiseMax(0.0).cwiseSqrt();
     fit.u_radius_mm = std::sqrt(std::max(0.0, covariance(3, 3)));
   }
@@ -201,7 +203,7 @@ PlaneSolution SolvePlane(std::span<const Eigen::Vector3d> points, const std::vec
     scatter.selfadjointView<Eigen::Lower>().rankUpdate(q);
   }
   scatter = scatter.selfadjointView<Eigen::Lower>();
-  const Eigen::SelfAdjointEigenSolver<Matrix3r> eigen(scatter);
+  const auto eigen = Decompose<Eigen::SelfAdjointEigenSolver<Matrix3r>>(scatter, "the plane fit: the scatter of the points");
   s.eigenvalues = eigen.eigenvalues().cwiseMax(Real(0));
   s.eigenvectors = eigen.eigenvectors();
   return s;

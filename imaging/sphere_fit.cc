@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/dense_decomposition.h"
 #include "core/input_error.h"
 #include "core/statistics.h"
 
@@ -174,7 +175,7 @@ SolveResult SolveNormalEquations(std::span<const Eigen::Vector3d> points, const 
     const Eigen::MatrixXd jtj = current.jtj.topLeftCorner(n, n);
     const Eigen::VectorXd jtr = current.jtr.head(n);
     const double variance = current.cost / std::max(1.0, static_cast<double>(current.count) - n);
-    const Eigen::LDLT<Eigen::MatrixXd> undamped(jtj);
+    const auto undamped = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(jtj, "the sphere fit: its normal equations");
     const Eigen::VectorXd sd = (variance * undamped.solve(Eigen::MatrixXd::Identity(n, n)).diagonal()).cwiseAbs().cwiseSqrt();
     const Eigen::VectorXd newton = -undamped.solve(jtr);
     const auto within = [&](double fraction) {
@@ -190,7 +191,7 @@ SolveResult SolveNormalEquations(std::span<const Eigen::Vector3d> points, const 
     while (lambda < 1e16) {
       Eigen::MatrixXd damped = jtj;
       damped.diagonal() *= 1.0 + lambda;
-      const Eigen::VectorXd step = -damped.ldlt().solve(jtr);
+      const Eigen::VectorXd step = -Decompose<Eigen::LDLT<Eigen::MatrixXd>>(damped, "the sphere fit: a damped step").solve(jtr);
       if (!step.allFinite()) {
         lambda *= 10;
         continue;
@@ -292,7 +293,7 @@ Algebraic AlgebraicFit(std::span<const Eigen::Vector3d> points, const std::vecto
   const Eigen::Vector4d atb(bx, by, bz, b1);
   const Eigen::Vector4d d = ata.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   const Eigen::Matrix4d equilibrated = d.asDiagonal() * ata * d.asDiagonal();
-  const Eigen::FullPivLU<Eigen::Matrix4d> lu(equilibrated);
+  const auto lu = Decompose<Eigen::FullPivLU<Eigen::Matrix4d>>(equilibrated, "the algebraic sphere fit");
   if (lu.rank() < 4 || lu.rcond() < 1e-12) {
     throw InputError("sphere fit: the " + std::to_string(count) +
                      " points lie on a plane or a line; they do not determine a sphere");
@@ -489,7 +490,8 @@ SphereFit FitSphere(std::span<const Eigen::Vector3d> points, const SphereFitOpti
   const double variance = normal.cost / dof;
   fit.residual_sigma_mm = std::sqrt(variance);
   const Eigen::MatrixXd jtj = normal.jtj.topLeftCorner(n, n);
-  const Eigen::MatrixXd covariance = variance * jtj.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd covariance =
+      variance * Decompose<Eigen::LDLT<Eigen::MatrixXd>>(jtj, "the sphere fit's covariance").solve(Eigen::MatrixXd::Identity(n, n));
   fit.centre_covariance_mm2 = covariance.topLeftCorner<3, 3>();
   fit.radius_sigma_mm = fixed ? 0.0 : std::sqrt(std::max(0.0, covariance(3, 3)));
   const double count = static_cast<double>(normal.count);
@@ -511,7 +513,8 @@ Eigen::MatrixXd SphereCramerRaoBound(std::span<const Eigen::Vector3d> points, co
   }
   jtj = jtj.selfadjointView<Eigen::Lower>();
   const Eigen::MatrixXd block = jtj.topLeftCorner(n, n);
-  return sigma_mm * sigma_mm * block.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  return sigma_mm * sigma_mm *
+         Decompose<Eigen::LDLT<Eigen::MatrixXd>>(block, "the Cramer-Rao bound of a sphere").solve(Eigen::MatrixXd::Identity(n, n));
 }
 
 }  // namespace fvm::imaging

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::imaging::detail {
 
 // Lanczos-4: sinc(x) sinc(x / 4) for |x| < 4.
@@ -125,7 +127,8 @@ Refinement RefineShift(const Prepared& a, const Prepared& b, double tolerance_px
     // Damped by a hundredth of the largest gradient energy: along a direction without texture (machining marks)
     // the energy is the noise's, and undamped steps would follow the noise off the match; with texture the
     // damping only slows each step by 1 %.
-    const Eigen::LDLT<Eigen::Matrix2d> solve(h + 0.01 * h.trace() * Eigen::Matrix2d::Identity());
+    const auto solve = Decompose<Eigen::LDLT<Eigen::Matrix2d>>(h + 0.01 * h.trace() * Eigen::Matrix2d::Identity(),
+                                                                "the sub-pixel refinement: the gradient energy");
     for (; iteration < kIterations; ++iteration) {
       const cv::Mat warped = ShiftedCrop(a.value, estimate, *inner);
       Eigen::Vector2d g = Eigen::Vector2d::Zero();

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dense_decomposition.h"
 #include "core/statistics.h"
 
 namespace fvm::imaging {
@@ -14,7 +15,7 @@ namespace {
 // (to within 18 degrees). Not the marginal variance: along machining marks the information is rank one and tilted
 // by its noise, and the marginal variance across the marks is then as large as along them.
 bool Fixes(const Eigen::Matrix2d& information, int k) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(information);
+  const auto directions = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>>(information, "a tile pair's information");
   double spanned = 0.0;
   for (int j = 0; j < 2; ++j) {
     if (directions.eigenvalues()(j) > 4.0) spanned += std::pow(directions.eigenvectors()(k, j), 2);

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/dense_decomposition.h"
 #include "imaging/registration_information.h"
 #include "imaging/subpixel_refinement.h"
 #include "imaging/tile_prefilter.h"
@@ -134,7 +135,7 @@ bool RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
     // Not refined (no room, wandered): the offset is a whole-pixel candidate, or the correlation's peak, which
     // on broad blobs lies up to a pixel off. Its information says what the overlap could tell, not what this
     // estimate holds: add a pixel's variance (0.5 px standard deviation) in every direction it claims.
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
+    const auto directions = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>>(pair.information, "a tile pair's information");
     Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
     for (int k = 0; k < 2; ++k) {
       const double lambda = directions.eigenvalues()(k);
@@ -148,7 +149,7 @@ bool RefineAndMeasure(const TileImage& a, const TileImage& b, Eigen::Vector2d of
     // Along a direction the overlap does not determine (machining marks), the offset is wherever the search ended
     // on the ridge, up to the window's width from the truth; the nominal says as much, and no tilt of the rank-one
     // information by noise can then carry a wild value into the solve.
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> directions(pair.information);
+    const auto directions = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>>(pair.information, "a tile pair's information");
     if (clear_peak_px > 0.0) {
       // Unless the overlap's NCC over the whole plausible range had one clear peak (WideCandidates): then the
       // images fix the offset along every direction, to clear_peak_px (the standard uncertainty), where the gradients of a noisy overlap stood out of their noise along one direction
@@ -274,7 +275,9 @@ PairRegistration RegisterPairOverRange(const TileImage& a, const TileImage& b, c
     searched.response = best.peak;
     const double level_px = 0.5 * wide.scale;
     const bool settled = RefineAndMeasure(a, b, best.offset_px, options, true, std::nullopt, searched, level_px);
-    const bool to_level = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(searched.information).eigenvalues()(0) <=
+    const bool to_level = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>>(searched.information,
+                                                                                    "a tile pair's information")
+                                  .eigenvalues()(0) <=
                           (1.0 + 1e-9) / (level_px * level_px);
     if ((!settled || to_level) && options.refine && wide.scale > 1) {
       // The refinement wandered off the level's pixel (on the real strip, tiles turned against each other by a

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::imaging::detail {
 
 cv::Mat View(const TileImage& image) {
@@ -32,7 +34,9 @@ void SubtractQuadratic(cv::Mat& crop, const cv::Mat& valid) {
     }
   }
   // A crop a few samples thin cannot hold a quadratic: the pseudo-inverse takes what it can.
-  const Eigen::Matrix<double, 6, 1> c = normal.completeOrthogonalDecomposition().solve(rhs);
+  const Eigen::Matrix<double, 6, 1> c =
+      Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 6, 6>>>(normal, "the tile prefilter's quadratic")
+          .solve(rhs);
   // Row by row: c0 + c2 v + c5 v^2 + (c1 + c4 v) u + c3 u^2.
   std::vector<float> u(static_cast<size_t>(crop.cols));
   for (int x = 0; x < crop.cols; ++x) u[static_cast<size_t>(x)] = static_cast<float>((x - cx) / scale);

@@ -144,6 +144,11 @@ Problem Build(const ParameterLayout& layout, const MeasurementSet& identify, con
   return p;
 }
 
+// "higher_order (xTx)" for messages.
+std::string Named(const std::string& effect, const std::string& component) {
+  return component.empty() ? effect : effect + " (" + component + ")";
+}
+
 bool IsApplied(const std::vector<Applied>& applied, const std::string& effect) {
   return std::any_of(applied.begin(), applied.end(), [&](const Applied& a) { return a.step.effect == effect; });
 }
@@ -179,12 +184,14 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
       for (size_t k = 0; k < c.flagged.size(); ++k) {
         for (int j = 0; j < 3; ++j) columns(3 * c.flagged[k] + j, 3 * static_cast<Eigen::Index>(k) + j) = 1.0;
       }
-      c.linear = ScoreColumns(r0, jb, columns);
+      c.linear = ScoreColumns(r0, jb, columns, "outliers");
       blunders = c.flagged;
       candidates.push_back(std::move(c));
     }
   }
-  const auto score = [&](const Eigen::MatrixXd& columns) { return ScoreColumnsWithout(blunders, r0, jb, columns); };
+  const auto score = [&](const Eigen::MatrixXd& columns, const std::string& name) {
+    return ScoreColumnsWithout(blunders, r0, jb, columns, name);
+  };
   const auto coefficient_candidate = [&](const std::string& effect, const std::string& component,
                                          const std::function<void(ParameterLayout&)>& extend) {
     ParameterLayout extended = fitted;
@@ -195,7 +202,10 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     }
     if (added.empty()) return;
     const std::vector<double> values = ValuesByName(fitted, fit.calibration.values, extended);
-    candidates.push_back({{effect, component}, score(CoefficientColumns(extended, values, added, identify, anchored)), added, {}});
+    candidates.push_back({{effect, component},
+                          score(CoefficientColumns(extended, values, added, identify, anchored), Named(effect, component)),
+                          added,
+                          {}});
   };
   for (int t = 0; t < kFirstSquarenessTerm; ++t) {
     const TermSpec& spec = p.layout.term(t);
@@ -205,7 +215,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
   }
   coefficient_candidate("z_coupling", "", AddPitchAndRoll);
   const auto column_candidate = [&](const std::string& effect, const std::string& component, const Eigen::MatrixXd& columns) {
-    candidates.push_back(Candidate{{effect, component}, score(columns), {}, {}});
+    candidates.push_back(Candidate{{effect, component}, score(columns, Named(effect, component)), {}, {}});
   };
   if (!anchored && identify.anchors.size() >= 2) {
     // Free offsets per placement (the first one is the reference): the most general anchor difference.
@@ -224,7 +234,7 @@ std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationRes
     // competes only when it beats the linear drift (its limit for a long time constant) by an F-test of its own.
     Candidate warm_up{{"thermal_drift", "warm-up"}, {}, {}, {}, 0.0};
     for (double tau_min : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
-      const LinearScore l = score(DriftColumns(identify, tau_min * 60.0));
+      const LinearScore l = score(DriftColumns(identify, tau_min * 60.0), "thermal_drift (warm-up)");
       if (warm_up.tau_s == 0.0 || l.rss < warm_up.linear.rss) warm_up.linear = l, warm_up.tau_s = tau_min * 60.0;
     }
     warm_up.linear.extra += 1;

@@ -1,9 +1,12 @@
 #include "stage/discrepancy_scoring.h"
 
+#include <fmt/core.h>
+
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 
+#include "core/dense_decomposition.h"
 #include "stage/axis_chain.h"
 
 namespace fvm::stage {
@@ -50,7 +53,8 @@ std::vector<double> ValuesByName(const ParameterLayout& from, const std::vector<
 // is the model's linear terms xTx1 and yTy1 but for the noise, the bar's pitch errors and the stage's own
 // non-polynomial error in the stitched coordinates it is built from (about 1e-4 of them), and fitted to that
 // remainder it comes out at 1e6 ppm.
-LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra) {
+LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra,
+                         std::string_view candidate) {
   constexpr double kNewDirection = 1e-2;
   LinearScore s;
   s.rows = static_cast<double>(r0.size());
@@ -60,10 +64,19 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   for (Eigen::Index c = 0; c < all.cols(); ++c) {
     if (norms[c] > 0) all.col(c) /= norms[c];
   }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> base_qr(all.leftCols(base.cols()));
-  base_qr.setThreshold(1e-9);
-  const int base_rank = static_cast<int>(base_qr.rank());
-  const Eigen::MatrixXd q_base = Eigen::MatrixXd(base_qr.householderQ()).leftCols(base_rank);
+  const std::string what = fmt::format("the discrepancy scoring of candidate {}", candidate);
+  RequireFiniteMatrix(r0, what + " (the residuals)");
+  // A base model with every parameter fixed (a gross outlier makes them all look undetermined) has no columns:
+  // nothing of the residuals is its.
+  int base_rank = 0;
+  Eigen::MatrixXd q_base(all.rows(), 0);
+  if (base.cols() > 0) {
+    auto base_qr =
+        Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(all.leftCols(base.cols()), what + " (the base model's columns)");
+    base_qr.setThreshold(1e-9);
+    base_rank = static_cast<int>(base_qr.rank());
+    q_base = Eigen::MatrixXd(base_qr.householderQ()).leftCols(base_rank);
+  }
   const Eigen::VectorXd r_base = r0 - q_base * (q_base.transpose() * r0);
   s.rss_base = r_base.squaredNorm();
   Eigen::MatrixXd unique = all.rightCols(extra.cols()) - q_base * (q_base.transpose() * all.rightCols(extra.cols()));
@@ -72,7 +85,7 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
     if (unique.col(c).norm() < kNewDirection) unique.col(c).setZero();
     else s.own = std::min(s.own, unique.col(c).norm());
   }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> extra_qr(unique);
+  auto extra_qr = Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(unique, what + " (its own columns)");
   extra_qr.setThreshold(kNewDirection);
   s.extra = static_cast<int>(extra_qr.rank());
   s.rank = base_rank + s.extra;
@@ -80,7 +93,7 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
   s.explained = q_extra * (q_extra.transpose() * r_base);
   s.rss = std::max(0.0, s.rss_base - s.explained.squaredNorm());
   // Effect estimates: minimum-norm least squares on the whole system, then undo the column scaling.
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(all);
+  const auto cod = Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(all, what + " (the whole system)");
   const Eigen::VectorXd solution = cod.solve(-r0);
   const double dof = std::max(1.0, static_cast<double>(all.rows() - s.rank));
   const double sigma2 = s.rss / dof;
@@ -99,13 +112,13 @@ LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
 // ScoreColumns without the equations of some observations: centres flagged as blunders, whose 80 um would otherwise
 // swamp the F-test of a 5 um effect (and pull its estimate).
 LinearScore ScoreColumnsWithout(const std::vector<int>& left_out, const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
-                                const Eigen::MatrixXd& extra) {
-  if (left_out.empty()) return ScoreColumns(r0, base, extra);
+                                const Eigen::MatrixXd& extra, std::string_view candidate) {
+  if (left_out.empty()) return ScoreColumns(r0, base, extra, candidate);
   std::vector<Eigen::Index> rows;
   for (Eigen::Index i = 0; i < r0.size(); ++i) {
     if (std::find(left_out.begin(), left_out.end(), static_cast<int>(i / 3)) == left_out.end()) rows.push_back(i);
   }
-  return ScoreColumns(r0(rows), base(rows, Eigen::all), extra(rows, Eigen::all));
+  return ScoreColumns(r0(rows), base(rows, Eigen::all), extra(rows, Eigen::all), candidate);
 }
 
 // d(residual)/d(drift rate) per coordinate: the centres move by rate * DriftShape(t).

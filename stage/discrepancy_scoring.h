@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stage/identification.h"
@@ -36,10 +37,12 @@ struct LinearScore {
 
 // Extra sum of squares of the candidate columns over the base model, on the linearised problem (only the part of
 // a candidate the base model leaves above 1 % of its norm counts as new).
-LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra);
+// `candidate` names the effect scored, for the message when a matrix holds NaN or infinity.
+LinearScore ScoreColumns(const Eigen::VectorXd& r0, const Eigen::MatrixXd& base, const Eigen::MatrixXd& extra,
+                         std::string_view candidate);
 // The same without the equations of some observations (centres flagged as blunders).
 LinearScore ScoreColumnsWithout(const std::vector<int>& left_out, const Eigen::VectorXd& r0, const Eigen::MatrixXd& base,
-                                const Eigen::MatrixXd& extra);
+                                const Eigen::MatrixXd& extra, std::string_view candidate);
 
 // How far a drift of initial rate 1 has gone after t: t itself (linear), or tau (1 - exp(-t/tau)), the warm-up
 // rho(t) = A + B (1 - exp(-t/tau)) of [Pérez thesis] eqs. 5.1-5.2 with B = rate * tau (A is the model's constant).

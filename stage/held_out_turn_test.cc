@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/dense_decomposition.h"
 #include "stage/discrepancy_scoring.h"
 #include "stage/undetermined_spread.h"
 
@@ -61,7 +62,8 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
   if (drift && model && !validate.t_s.empty()) {
     Eigen::MatrixXd a(drift->model_columns.rows(), drift->model_columns.cols() + 3);
     a << drift->model_columns, drift->drift_columns;
-    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a.transpose() * a);
+    const auto cod = Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(
+        a.transpose() * a, "the held-out turns: the normal equations of the model and its drift");
     joint = calibration.sigma_mm * calibration.sigma_mm * cod.pseudoInverse();
     for (Eigen::Index g = 0; g < n; ++g) {
       const PlacementTurn& turn = t.turns[static_cast<size_t>(g)];
@@ -86,7 +88,7 @@ TurnTest TestHeldOutTurns(const Calibration& calibration, const MeasurementSet& 
     }
   }
   if (model) covariance += UndeterminedYawCovariance(calibration, validate, frame, n);
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(covariance);
+  const auto ldlt = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(covariance, "the held-out turns: the covariance of the yaws");
   if (ldlt.info() != Eigen::Success || !(covariance.diagonal().minCoeff() > 0)) return t;
   const double chi2 = yaw.dot(ldlt.solve(yaw));
   const int dof = static_cast<int>(n);

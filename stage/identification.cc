@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/dense_decomposition.h"
 #include "stage/linear_dependence.h"
 #include "stage/observation_model.h"
 #include "stage/residual_summary.h"
@@ -131,7 +132,8 @@ Calibration::Undetermined Absorbed(const Eigen::MatrixXd& normal, const Eigen::M
   for (Eigen::Index a = 0; a < cross.rows(); ++a) {
     for (Eigen::Index b = 0; b < cross.cols(); ++b) cross(a, b) = normal(kept[static_cast<size_t>(a)], dropped[static_cast<size_t>(b)]);
   }
-  const Eigen::MatrixXd taken = kept_normal.ldlt().solve(cross);
+  const Eigen::MatrixXd taken =
+      Decompose<Eigen::LDLT<Eigen::MatrixXd>>(kept_normal, "the undetermined parameters: the kept normal equations").solve(cross);
   Eigen::Index free = 0;
   for (int c : kept) free += c < n_coefficients ? 1 : 0;
   u.absorbed.resize(free, cross.cols());
@@ -285,7 +287,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
     // R of j = QR has the column geometry of j in n x n: search dependences and form normal equations there.
     // (In place: j is large, 3 rows per point.)
     const Eigen::Index n_all = j.cols();
-    const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(j);
+    const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(j), "identification: the Jacobian of the model and the pose");
     const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(std::min(n_all, j.rows())).triangularView<Eigen::Upper>();
     std::vector<std::string> names = layout.FreeNames();
     for (int i = 0; i < pose_count; ++i) names.push_back(PoseParameterNames()[static_cast<size_t>(i)]);
@@ -348,7 +350,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
         gk[a] = gradient[kept[static_cast<size_t>(a)]];
         for (Eigen::Index b = 0; b < k; ++b) nk(a, b) = normal(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]);
       }
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(nk);
+      const auto ldlt = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(nk, "identification: the normal equations of the kept parameters");
       start = -ldlt.solve(gk);  // the linearised least-squares solution: where LM starts
       const double rss = std::max(0.0, r0_squared - gk.dot(ldlt.solve(gk)));
       const double dof = std::max(1.0, static_cast<double>(equations - k));
@@ -490,13 +492,14 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   result.weighted_rms = prepared.weighted ? std::sqrt(whitened.squaredNorm() / dof) : 0.0;
   const double factor = variance_factor(whitened.squaredNorm(), dof);
   if (n + pose_count > 0) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(kept_normal);
+    const auto eigen = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(kept_normal, "identification: the condition of the normal equations");
     const double lo = std::max(eigen.eigenvalues().minCoeff(), 0.0);
     result.condition_number = lo > 0 ? std::sqrt(eigen.eigenvalues().maxCoeff() / lo) : INFINITY;
     Eigen::VectorXd all_scale(n + pose_count);
     all_scale << scale, prepared.pose_scale.head(pose_count);
     const Eigen::MatrixXd covariance = factor * factor * (all_scale.asDiagonal() *
-                                                          kept_normal.ldlt().solve(Eigen::MatrixXd::Identity(n + pose_count, n + pose_count)) *
+                                                          Decompose<Eigen::LDLT<Eigen::MatrixXd>>(kept_normal, "identification: the parameters' covariance")
+                                                              .solve(Eigen::MatrixXd::Identity(n + pose_count, n + pose_count)) *
                                                           all_scale.asDiagonal());
     result.calibration.covariance = covariance.topLeftCorner(n, n);
     if (estimate_pose) result.pose_covariance = covariance.bottomRightCorner<kPoseParameters, kPoseParameters>();

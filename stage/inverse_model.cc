@@ -5,6 +5,8 @@
 #include <Eigen/LU>
 #include <vector>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::stage {
 
 InverseResult Inverse(const ParameterLayout& layout, const double* free, const Eigen::Vector3d& target,
@@ -29,7 +31,8 @@ InverseResult Inverse(const ParameterLayout& layout, const double* free, const E
       jacobian.row(r) = p[r].v.transpose();
       residual[r] = p[r].a - target[r];
     }
-    const Eigen::Vector3d step = jacobian.partialPivLu().solve(residual);
+    const Eigen::Vector3d step =
+        Decompose<Eigen::PartialPivLU<Eigen::Matrix3d>>(jacobian, "the inverse model's Newton step").solve(residual);
     result.command -= step;
     if (step.norm() < options.tolerance_mm) {
       result.converged = true;

@@ -4,12 +4,14 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::stage {
 
 std::vector<ColumnDependence> FindDependentColumns(const Eigen::MatrixXd& j, const std::vector<int>& order,
                                                    double relative_tolerance) {
-  // Pivoting on NaN picks no column at all (Eigen then indexes out of bounds): refuse it here, where it would crash.
-  if (!j.allFinite()) throw std::invalid_argument("FindDependentColumns: the matrix holds inf or NaN");
+  // Pivoting on NaN picks no column at all (Eigen then indexes out of bounds): refuse it before any work.
+  RequireFiniteMatrix(j, "the search for dependent parameters (the Jacobian's columns)");
   std::vector<ColumnDependence> dependent;
   std::vector<int> kept;
   Eigen::MatrixXd basis(j.rows(), 0);  // orthonormal basis of the kept columns
@@ -31,7 +33,10 @@ std::vector<ColumnDependence> FindDependentColumns(const Eigen::MatrixXd& j, con
     }
     Eigen::MatrixXd kept_columns(j.rows(), static_cast<Eigen::Index>(kept.size()));
     for (size_t k = 0; k < kept.size(); ++k) kept_columns.col(static_cast<Eigen::Index>(k)) = j.col(kept[k]);
-    const Eigen::VectorXd factors = kept_columns.colPivHouseholderQr().solve(column);
+    const Eigen::VectorXd factors =
+        Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(kept_columns, "the parameters column " + std::to_string(c) +
+                                                               " depends on")
+            .solve(column);
     ColumnDependence d{c, {}};
     for (size_t k = 0; k < kept.size(); ++k) {
       const double f = factors[static_cast<Eigen::Index>(k)];

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
 #include "stage/plausibility.h"
 #include "stage/residual_summary.h"
 
@@ -60,7 +61,7 @@ Pose RigidStartPose(const AxisChain& chain, const std::vector<Observation>& read
   }
   // The points must span three dimensions, or the rotation about their line or plane is free.
   const Eigen::Matrix3Xd centred = part.colwise() - part.rowwise().mean();
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(centred);
+  const auto svd = Decompose<Eigen::JacobiSVD<Eigen::Matrix3Xd>>(centred, "the tracker pose: the spread of the points");
   if (m < 3 || svd.singularValues()[2] < 1e-6 * std::max(svd.singularValues()[0], 1e-300)) {
     throw std::invalid_argument("the points lie on a line or a plane: the tracker pose cannot be found from them");
   }

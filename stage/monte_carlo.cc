@@ -13,6 +13,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
 #include "core/random.h"
 #include "stage/residual_field.h"
 
@@ -45,7 +46,9 @@ Eigen::Vector3d DrawReading(const Eigen::Vector3d& truth, const Eigen::Matrix3d*
 
 std::vector<Eigen::Matrix3d> CholeskyFactors(const std::vector<Eigen::Matrix3d>& covariances) {
   std::vector<Eigen::Matrix3d> out;
-  for (const Eigen::Matrix3d& c : covariances) out.push_back(c.llt().matrixL());
+  for (const Eigen::Matrix3d& c : covariances) {
+    out.push_back(Decompose<Eigen::LLT<Eigen::Matrix3d>>(c, "Monte Carlo: a reading's covariance").matrixL());
+  }
   return out;
 }
 
@@ -269,7 +272,7 @@ std::vector<PointSpread> PointSpreads(const std::vector<const MonteCarloRun*>& r
       norms[k] = d.norm();
     }
     if (runs.size() > 1) s.covariance /= static_cast<double>(runs.size() - 1);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s.covariance);
+    const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>>(s.covariance, "Monte Carlo: the scatter of a point");
     s.semi_axes_mm = (eig.eigenvalues().cwiseMax(0.0) * kChi2Of3At95).cwiseSqrt();
     s.axes = eig.eigenvectors();
     std::vector<double> sorted = norms;
@@ -390,7 +393,9 @@ std::vector<Eigen::Matrix3d> PredictedPointCovariances(const Calibration& calibr
     const Eigen::MatrixXd ji = jacobian.middleRows(3 * i, 3);
     normal += ji.transpose() * noise.Covariance(readings[static_cast<size_t>(i)]).inverse() * ji;
   }
-  const Eigen::MatrixXd parameter_covariance = normal.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd parameter_covariance =
+      Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(normal, "Monte Carlo: the calibration's normal equations")
+          .pseudoInverse();
   std::vector<Eigen::Matrix3d> out;
   for (Eigen::Index i = 0; i < m; ++i) {
     const Eigen::MatrixXd ji = jacobian.middleRows(3 * i, 3);
@@ -406,7 +411,7 @@ double U95OfCovariance(const Eigen::Matrix3d& covariance) {
     for (Eigen::Vector3d& v : z) v = Eigen::Vector3d(random.Normal(), random.Normal(), random.Normal());
     return z;
   }();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+  const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>>(covariance, "U95 of a point's covariance");
   const Eigen::Vector3d scale = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
   std::vector<double> norms;
   norms.reserve(draws.size());

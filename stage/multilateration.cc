@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/dense_decomposition.h"
 #include "stage/linear_dependence.h"
 #include "stage/multilateration_start.h"
 #include "stage/network_plausibility.h"
@@ -358,7 +359,8 @@ PreparedProblem Prepare(const MultilaterationProblem& p, const MultilaterationOp
 // Throws naming the first point whose block cannot be inverted: its lines of sight and stations in one plane.
 void CheckPointBlocks(const Problem& pr, const Normal& n) {
   for (size_t j = 0; j < n.d.size(); ++j) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(n.d[j]);
+    const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>>(
+        n.d[j], fmt::format("multilateration: the normal block of point {}", pr.problem->point_ids[j]));
     const Eigen::Vector3d ev = eig.eigenvalues();
     if (!(ev[0] > 1e-10 * ev[2])) {
       const MultilaterationProblem& p = *pr.problem;
@@ -383,7 +385,8 @@ std::vector<std::string> Unobservable(const Problem& pr, const State& st, const 
   Eigen::VectorXd scale(ng);
   for (Eigen::Index i = 0; i < ng; ++i) scale[i] = n.a(i, i) > 0 ? 1.0 / std::sqrt(n.a(i, i)) : 0.0;
   const Eigen::MatrixXd scaled = scale.asDiagonal() * s * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (scaled + scaled.transpose()));
+  const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
+      0.5 * (scaled + scaled.transpose()), "multilateration: the stations' and instruments' parameters (Schur complement)");
   Eigen::MatrixXd l = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
   const double tol = pr.options->rank_tolerance;
   for (Eigen::Index i = 0; i < ng; ++i) {
@@ -433,7 +436,7 @@ NetworkGeometry Geometry(const Problem& pr, const State& st) {
         ++pairs;
       }
     }
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(utu);
+    const auto lu = Decompose<Eigen::FullPivLU<Eigen::Matrix3d>>(utu, "multilateration: the geometry (PDOP) of a point");
     const double pdop = lu.isInvertible() ? std::sqrt(utu.inverse().trace()) : std::numeric_limits<double>::infinity();
     pdop_sum += pdop;
     g.max_pdop = std::max(g.max_pdop, pdop);
@@ -485,7 +488,10 @@ MultilaterationResult Multilaterate(const MultilaterationProblem& problem, const
   std::vector<Eigen::Matrix3d> dinv;
   const Eigen::MatrixXd s = Schur(n, &dinv);
   Eigen::MatrixXd cov_g = Eigen::MatrixXd::Zero(layout.size(), layout.size());
-  if (layout.size() > 0) cov_g = s.ldlt().solve(Eigen::MatrixXd::Identity(layout.size(), layout.size()));
+  if (layout.size() > 0) {
+    cov_g = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(s, "multilateration: the covariance of the stations' parameters")
+                .solve(Eigen::MatrixXd::Identity(layout.size(), layout.size()));
+  }
   result.points = st.points;
   result.point_covariance.resize(st.points.size());
   for (size_t j = 0; j < st.points.size(); ++j) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
 #include "stage/tracker.h"
 
 namespace fvm::stage {
@@ -45,7 +46,8 @@ Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const 
     a.row(static_cast<Eigen::Index>(i - 1)) = 2.0 * d.transpose();
     b[static_cast<Eigen::Index>(i - 1)] = ranges[0] * ranges[0] - ranges[i] * ranges[i] + d.squaredNorm();
   }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV | Eigen::ComputeThinU);
+  const auto svd = Decompose<Eigen::JacobiSVD<Eigen::MatrixXd>>(a, "multilateration start: the range differences",
+                                                                Eigen::ComputeFullV | Eigen::ComputeThinU);
   const Eigen::VectorXd sv = svd.singularValues();
   if (n >= 4 && sv.size() == 3 && sv[2] > 1e-6 * sv[0]) {
     const Eigen::Vector3d p = stations[0] + svd.solve(b);
@@ -55,7 +57,8 @@ Eigen::Vector3d Trilaterate(const std::vector<Eigen::Vector3d>& stations, const 
   // In the stations' plane, then the height above it.
   const Eigen::Matrix<double, 3, 2> plane = svd.matrixV().leftCols(2);
   Eigen::Vector3d normal = svd.matrixV().col(2);
-  const Eigen::Vector2d in_plane = (a * plane).colPivHouseholderQr().solve(b);
+  const Eigen::Vector2d in_plane =
+      Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(a * plane, "multilateration start: the stations' plane").solve(b);
   const Eigen::Vector3d x = plane * in_plane;
   double h2 = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -110,7 +113,8 @@ std::vector<Eigen::Vector3d> StartStationsFromAngles(const MultilaterationProble
     ct /= static_cast<double>(from.size());
     Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
     for (size_t k = 0; k < from.size(); ++k) h += (from[k] - cf) * (to[k] - ct).transpose();
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const auto svd = Decompose<Eigen::JacobiSVD<Eigen::Matrix3d>>(h, "multilateration start: a station's rotation",
+                                                               Eigen::ComputeFullU | Eigen::ComputeFullV);
     if (!(svd.singularValues()[1] > 1e-9 * svd.singularValues()[0])) {
       throw std::invalid_argument(fmt::format("the points station {} shares with station {} lie on one line: a start "
                                               "from the angles needs them spread; give starting positions (--stations)",
@@ -135,7 +139,8 @@ double StationRotationMisfit(const MultilaterationProblem& p, const std::vector<
       const Eigen::Vector3d local = FromSpherical({r.range_mm, r.azimuth_rad, r.elevation_rad});
       h += local * (points[static_cast<size_t>(r.point)] - stations[i]).transpose();
     }
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const auto svd = Decompose<Eigen::JacobiSVD<Eigen::Matrix3d>>(h, "multilateration start: a station's rotation",
+                                                               Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d fix = Eigen::Matrix3d::Identity();
     fix(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
     const Eigen::Matrix3d rotation = svd.matrixV() * fix * svd.matrixU().transpose();

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::stage {
 namespace {
 
@@ -26,14 +28,16 @@ Whitened Whitening(const Eigen::Matrix3d& covariance, int index) {
   for (Eigen::Index a = 0; a < k; ++a) {
     for (Eigen::Index b = 0; b < k; ++b) block(a, b) = covariance(observed[static_cast<size_t>(a)], observed[static_cast<size_t>(b)]);
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(block);
   bool crossed = false;  // an unobserved coordinate must not covary with an observed one
   for (int a = 0; a < 3; ++a) {
     for (int b = 0; b < 3; ++b) crossed = crossed || (a != b && std::isinf(covariance(a, a)) && covariance(a, b) != 0.0);
   }
-  if (k == 0 || llt.info() != Eigen::Success || !block.allFinite() || crossed) {
-    throw std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
-  }
+  const auto not_positive = [&] {
+    return std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
+  };
+  if (k == 0 || !block.allFinite() || crossed) throw not_positive();
+  const auto llt = Decompose<Eigen::LLT<Eigen::MatrixXd>>(block, fmt::format("the covariance of observation {}", index + 1));
+  if (llt.info() != Eigen::Success) throw not_positive();
   const Eigen::MatrixXd l = llt.matrixL();
   const Eigen::MatrixXd l_inverse = l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(k, k));
   Whitened w;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dense_decomposition.h"
 #include "stage/calibration.h"
 #include "stage/error_terms.h"
 
@@ -173,7 +174,8 @@ void CheckReadingsSpan(const ParameterLayout& layout, const std::vector<Observat
   // machine's errors change them by parts per thousand at most.
   const auto spread = [&](const Eigen::Matrix3Xd& points) {
     const Eigen::Matrix3Xd centred = points.colwise() - points.rowwise().mean();
-    return Eigen::Vector3d(Eigen::JacobiSVD<Eigen::Matrix3Xd>(centred).singularValues() / std::sqrt(static_cast<double>(m)));
+    return Eigen::Vector3d(Decompose<Eigen::JacobiSVD<Eigen::Matrix3Xd>>(centred, "the spread of the readings").singularValues() /
+                           std::sqrt(static_cast<double>(m)));
   };
   const Eigen::Vector3d seen = spread(measured), commanded = spread(ideal);
   int collapsed = 0;

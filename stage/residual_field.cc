@@ -4,14 +4,19 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include "core/dense_decomposition.h"
 
 namespace fvm::stage {
 
 namespace {
 
 // The component of `residual` along each principal axis of `covariance` (variance l) scaled by sqrt(s^2 / (s^2 + l)).
-Eigen::Vector3d ShrunkForNoise(const Eigen::Vector3d& residual, const Eigen::Matrix3d& covariance, double variance) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance);
+Eigen::Vector3d ShrunkForNoise(const Eigen::Vector3d& residual, const Eigen::Matrix3d& covariance, double variance,
+                               size_t index) {
+  const auto eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>>(
+      covariance, "the residual field: the covariance of point " + std::to_string(index + 1));
   const Eigen::Vector3d gain = (variance / (variance + eig.eigenvalues().cwiseMax(0.0).array())).sqrt().matrix();
   return eig.eigenvectors() * gain.asDiagonal() * eig.eigenvectors().transpose() * residual;
 }
@@ -31,7 +36,7 @@ ResidualField ShrunkResidualField(const std::vector<Eigen::Vector3d>& residuals_
   const double variance = std::max(0.0, excess / (3.0 * static_cast<double>(residuals_mm.size())));
   field.sigma_mm = std::sqrt(variance);
   if (!(variance > 0)) return field;
-  for (size_t i = 0; i < residuals_mm.size(); ++i) field.offsets_mm[i] = ShrunkForNoise(residuals_mm[i], covariances[i], variance);
+  for (size_t i = 0; i < residuals_mm.size(); ++i) field.offsets_mm[i] = ShrunkForNoise(residuals_mm[i], covariances[i], variance, i);
   return field;
 }
 
@@ -71,7 +76,8 @@ ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals
     const Eigen::Index used = std::min<Eigen::Index>(runs, std::max(200, 4 * dimension));
     const double rescale = std::sqrt(static_cast<double>(runs - 1) / static_cast<double>(std::max<Eigen::Index>(used - 1, 1)));
     const Eigen::MatrixXd first = u.leftCols(used) * rescale;  // their covariance from those runs
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(first.transpose() * first);  // ascending
+    const auto gram = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
+        Eigen::MatrixXd(first.transpose() * first), "the held-out field: the runs' Gram matrix");  // ascending
     const Eigen::Index m = std::min<Eigen::Index>(dimension, used);
     Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
     for (Eigen::Index j = used - 1; j >= used - m; --j) {
@@ -93,7 +99,7 @@ ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals
   field.sigma_mm = std::sqrt(variance);
   if (!(variance > 0)) return field;
   for (size_t p = 0; p < n; ++p) {
-    field.offsets_mm[p] = ShrunkForNoise(r.segment<3>(3 * static_cast<Eigen::Index>(p)), noise_covariances[p], variance);
+    field.offsets_mm[p] = ShrunkForNoise(r.segment<3>(3 * static_cast<Eigen::Index>(p)), noise_covariances[p], variance, p);
   }
   return field;
 }

@@ -6,6 +6,8 @@
 #include <Eigen/QR>
 #include <stdexcept>
 
+#include "core/dense_decomposition.h"
+
 namespace fvm::stage {
 
 const char* StitchedFrameName(StitchedFrame frame) { return frame == StitchedFrame::kRotated ? "rotated" : "translated"; }
@@ -83,9 +85,8 @@ TurnFit FitTurn(const std::vector<Eigen::Vector3d>& residuals, const std::vector
   // seen only through its tilt) are left out rather than amplified.
   // The threshold must be set before the decomposition: the orthogonal factor Z is built for the rank found
   // then, and a threshold lowered afterwards makes the solve read Z coefficients that were never computed.
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(a.rows(), a.cols());
-  cod.setThreshold(1e-2);
-  cod.compute(a);
+  const auto cod = DecomposeWithThreshold<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(
+      a, 1e-2, "the turn of a placement about its first tile (lever arms)");
   TurnFit fit;
   fit.solve = cod.pseudoInverse();
   fit.rotation = fit.solve * b;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dense_decomposition.h"
 #include "stage/discrepancy_scoring.h"
 #include "stage/residual_findings.h"
 #include "stage/validation.h"
@@ -77,9 +78,11 @@ std::optional<TurnsRefused> DriftInsteadOfTurns(const Calibration& calibration, 
       for (int k = 0; k < 2; ++k) alternative(3 * static_cast<Eigen::Index>(i) + c, 3 + 2 * c + k) = arm[k];
     }
   }
-  const Eigen::VectorXd left = r - alternative * alternative.colPivHouseholderQr().solve(r);
+  const Eigen::VectorXd left =
+      r - alternative * Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(alternative, "the remainder: drift and turn").solve(r);
   const Eigen::MatrixXd linear = alternative.rightCols(6);
-  const Eigen::VectorXd left_linear = r - linear * linear.colPivHouseholderQr().solve(r);
+  const Eigen::VectorXd left_linear =
+      r - linear * Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(linear, "the remainder: turn").solve(r);
   const double m = static_cast<double>(r.size());
   const double drift_rms_mm = std::sqrt(left.squaredNorm() / m), turn_rms_mm = std::sqrt(Stack(turned_residuals).squaredNorm() / m);
   if (drift_rms_mm > turn_rms_mm || m <= 9.0 || !(left.squaredNorm() > 0)) return std::nullopt;

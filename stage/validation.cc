@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 
+#include "core/dense_decomposition.h"
 #include "stage/undetermined_spread.h"
 
 namespace fvm::stage {
@@ -182,7 +183,7 @@ FrameFreeStats RigidValidation(const Calibration* calibration, const std::vector
       rigid.block<3, 3>(3 * i, 0).setIdentity();
       rigid.block<3, 3>(3 * i, 3) = -Skew(d);  // a small rotation w about the centroid moves d by w x d
     }
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(rigid);
+    const auto qr = Decompose<Eigen::HouseholderQR<Eigen::MatrixXd>>(rigid, "validation: the rigid motions of a placement");
     const Eigen::MatrixXd q = Eigen::MatrixXd(qr.householderQ()).leftCols(6);
     if (calibration->covariance.size() > 0) {
       Eigen::MatrixXd stacked(3 * n, calibration->covariance.cols());

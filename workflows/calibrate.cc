@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/dense_decomposition.h"
 #include "artefacts/batch_observations.h"
 #include "core/input_error.h"
 #include "stage/calibration.h"
@@ -61,7 +62,9 @@ double PredictedXyUm(const stage::Calibration& calibration, const std::vector<ar
     rigid.row(2 * i) << 1.0, 0.0, -(q.y() - centre.y());  // a small turn w about z moves (x, y) by w (-y, x)
     rigid.row(2 * i + 1) << 0.0, 1.0, q.x() - centre.x();
   }
-  const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(rigid).householderQ() * Eigen::MatrixXd::Identity(2 * kPoints, 3);
+  const Eigen::MatrixXd basis =
+      Decompose<Eigen::HouseholderQR<Eigen::MatrixXd>>(rigid, "the rigid motions of the scanned field").householderQ() *
+      Eigen::MatrixXd::Identity(2 * kPoints, 3);
   const Eigen::MatrixXd seen = field - basis * (basis.transpose() * field);
   return std::sqrt(std::max(0.0, (seen * calibration.covariance * seen.transpose()).trace()) / kPoints) * 1e3;
 }

@@ -1,14 +1,32 @@
 #include "workflows/focus.h"
 
-#include <cmath>
+#include <fmt/core.h>
 
+#include <cmath>
+#include <string>
+
+#include "core/input_error.h"
 #include "core/statistics.h"
 #include "imaging/tile_registration.h"  // SetImagingThreads
 
 namespace fvm::workflows {
 namespace {
 
-double MedianOrZero(const std::vector<float>& values) { return values.empty() ? 0.0 : HighMedian(values); }
+// Over the finite values only: a pixel without a peak has no quality, and one NaN must not make the median NaN.
+double MedianOrZero(const std::vector<float>& values) {
+  std::vector<float> finite;
+  finite.reserve(values.size());
+  for (float v : values) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  return finite.empty() ? 0.0 : HighMedian(finite);
+}
+
+// What the stack is called in messages: its list, or its first and last image.
+std::string StackName(const std::vector<imaging::FocusStackEntry>& entries) {
+  if (!entries.front().list.empty()) return entries.front().list.string();
+  return entries.front().file.string() + " .. " + entries.back().file.string();
+}
 
 }  // namespace
 
@@ -28,6 +46,15 @@ FocusSummary ReconstructFocus(std::vector<imaging::FocusStackEntry> entries, con
   s.map = result.height;
   if (s.slice_units) s.map.source += "; heights in slice units (no z step given)";
   s.stats = imaging::ComputeStats(s.map);
+  if (s.stats.valid_points == 0) {
+    // A map of no height is no measurement: say so rather than write it and print medians of nothing.
+    throw InputError(fmt::format(
+        "{}: no pixel of the {} images has a focus peak of quality {:g} or more inside the stack, so there is no "
+        "height to write; check that the images are one focus stack of a textured surface, in focus somewhere "
+        "between the first and the last, lower --min-quality, or give --keep-end-peaks when the surface is in focus "
+        "at an end",
+        StackName(s.entries), s.entries.size(), options.focus.min_quality));
+  }
   std::vector<float> valid_quality, valid_u;
   for (std::size_t i = 0; i < s.map.z_mm.size(); ++i) {
     if (std::isfinite(s.map.z_mm[i])) valid_quality.push_back(result.quality[i]);

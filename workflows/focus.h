@@ -32,7 +32,8 @@ struct FocusSummary {
 };
 
 // `entries`: imaging::ResolveFocusStack of the stack's files with options.z_step_mm. Throws InputError naming the
-// list line or the file. `on_image` is called after each image (progress).
+// list line or the file, and naming the stack when no pixel has a valid height (nothing to write). `on_image` is
+// called after each image (progress).
 FocusSummary ReconstructFocus(std::vector<imaging::FocusStackEntry> entries, const FocusOptions& options,
                               const std::function<void()>& on_image = {});
 

@@ -12,6 +12,7 @@
 #include "core/csv.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "core/number_text.h"
 
 namespace fvm::artefacts {
@@ -215,12 +216,7 @@ MachinedPieceDescription PublishedMachinedPiece() {
 }
 
 MachinedPieceDescription ParseMachinedPiece(std::string_view json_text, const std::string& name) {
-  json j;
-  try {
-    j = json::parse(json_text);
-  } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: not valid JSON ({}); see fvm testpiece design --help for the format", name, e.what()));
-  }
+  const json j = ParseJsonText(json_text, name, "see fvm testpiece design --help for the format");
   if (!j.is_object()) throw InputError(name + ": the description must be a JSON object with \"envelope_mm\" and \"features\"");
   MachinedPieceDescription piece;
   piece.features.clear();

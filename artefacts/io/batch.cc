@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "core/file_io.h"
+#include "core/json_text.h"
 #include "core/input_error.h"
 
 namespace fvm::artefacts {
@@ -25,6 +26,29 @@ bool EndsWith(const std::string& s, std::string_view suffix) {
   return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+
+// Calottes of a placement closer together than this in x and y cannot show a stage error: the stage moves between
+// them by less than ten times a centre's noise (about 1 um). Such a placement is a constant or copied column, or
+// numbers in the wrong unit, not a measurement.
+constexpr double kMinPlacementSpanMm = 0.01;
+
+// Throws naming the file when the centres of an export of two or more calottes collapse to one point in x and y.
+void CheckSpan(const CentreExport& from) {
+  if (from.centres.size() < 2) return;
+  Eigen::Vector2d lo = from.centres.front().position.head<2>(), hi = lo;
+  for (const CentreRecord& c : from.centres) {
+    lo = lo.cwiseMin(c.position.head<2>());
+    hi = hi.cwiseMax(c.position.head<2>());
+  }
+  const Eigen::Vector2d span = hi - lo;
+  if (span.maxCoeff() < kMinPlacementSpanMm) {
+    throw InputError(fmt::format("{}: its {} calottes span {:.3g} um in x and {:.3g} um in y, less than {} um: they "
+                                 "cannot show a stage error; check that x and y hold each calotte's centre in mm "
+                                 "(not a constant or copied column)",
+                                 from.source, from.centres.size(), span.x() * 1e3, span.y() * 1e3,
+                                 kMinPlacementSpanMm * 1e3));
+  }
+}
 
 // "FILE:LINE" for a record read from a file, "FILE" for one found in a surface.
 std::string Where(const CentreExport& from, const CentreRecord& record) {
@@ -48,6 +72,8 @@ Placement PairCentreExports(const std::string& name, const CentreExport& stitche
                                    Where(free, c), c.id, stitched.source));
     }
   }
+  CheckSpan(stitched);
+  CheckSpan(free);
   Placement placement;
   placement.name = name;
   const bool timed = std::all_of(free.centres.begin(), free.centres.end(),
@@ -95,25 +121,8 @@ std::vector<std::string> ReadNameList(const nlohmann::json& roles, const char* k
 // everything unexpected is an error rather than a default.
 void ReadRoles(const std::filesystem::path& path, Batch& batch) {
   const std::string where = path.string();
-  std::ifstream in(path);
-  if (!in) throw InputError(fmt::format("{}: cannot open; check its permissions", where));
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string content = text.str();
-  nlohmann::json roles;
-  try {
-    roles = nlohmann::json::parse(content);
-  } catch (const nlohmann::json::parse_error& e) {
-    const size_t byte = std::min<size_t>(e.byte, content.size());
-    const long line = 1 + std::count(content.begin(), content.begin() + static_cast<long>(byte), '\n');
-    throw InputError(fmt::format("{}:{}: not valid JSON ({}); write {{\"identify\": [...], \"validate\": [...], "
-                                 "\"lens\": \"5x\"}}",
-                                 where, line, e.what()));
-  } catch (const nlohmann::json::exception& e) {  // a number beyond double is out_of_range, not parse_error
-    throw InputError(fmt::format("{}: not valid JSON ({}); write {{\"identify\": [...], \"validate\": [...], "
-                                 "\"lens\": \"5x\"}}",
-                                 where, e.what()));
-  }
+  const nlohmann::json roles =
+      ReadJsonFile(path, "write {\"identify\": [...], \"validate\": [...], \"lens\": \"5x\"}", std::size_t{1} << 24);
   if (!roles.is_object()) {
     throw InputError(fmt::format("{}: expected an object {{\"identify\": [...], \"validate\": [...], \"lens\": "
                                  "\"5x\"}}, found {}",

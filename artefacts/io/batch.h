@@ -32,12 +32,13 @@ struct Batch {
 
 // Throws InputError naming the file and calotte id on: a missing or empty directory, a placement with only one
 // of its two files, ids present in one file of a pair and not the other, unreadable exports (see
-// ReadCentreExport), a batch.json that is not JSON, names an unknown placement, or puts one in both roles.
+// ReadCentreExport), an export whose calottes span less than 10 um in x and y (they cannot show a stage error), a
+// batch.json that is not JSON (or nests deeper than 64 levels), names an unknown placement, or puts one in both roles.
 Batch ReadBatch(const std::filesystem::path& dir);
 
 // One placement from its two centre exports (messages name their `source`): the stitched export defines the
 // calottes and their order; throws InputError naming the file, line and calotte id when the free export does not
-// hold exactly the same calottes.
+// hold exactly the same calottes, and naming the file when either export's calottes span less than 10 um in x and y.
 Placement PairCentreExports(const std::string& name, const CentreExport& stitched, const CentreExport& free);
 
 // Gives batch.placements their roles: from dir/batch.json when it exists (throws as ReadBatch on a bad one), else

@@ -8,6 +8,7 @@
 
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "stage/error_terms.h"
 
 namespace fvm::artefacts {
@@ -83,12 +84,7 @@ std::optional<double> LargestOnTravel(const TermTruth& term, double travel, doub
 
 MachineTruth ParseMachineTruth(std::string_view json_text, const std::string& name, const Workspace& ws) {
   ws.Check();
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: not valid JSON ({})", name, e.what()));
-  }
+  const json root = ParseJsonText(json_text, name);
   if (!root.is_object() || !root.contains("terms") || !root.at("terms").is_object()) {
     throw InputError(fmt::format("{}: expected an object with \"terms\": {{\"xTx\": {{\"poly\": [...]}}, ...}} "
                                  "(format: docs/tutorials/machine-tool.md)",

@@ -11,6 +11,7 @@
 #include "core/csv.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "core/number_text.h"
 
 namespace fvm::artefacts {
@@ -147,14 +148,7 @@ void WriteMultilaterationReadings(const std::filesystem::path& path, const Multi
 std::vector<Station> ReadStations(const std::filesystem::path& path) {
   const std::string text = ReadFileBytes(path, kMaxStationsBytes);
   const std::string file = path.string();
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON ({}); write {{\"stations\": [{{\"name\": \"A\", \"x\": 0, \"y\": 0, "
-                                 "\"z\": 0}}, ...]}} (mm)",
-                                 file, e.what()));
-  }
+  nlohmann::json doc = ParseJsonText(text, file, "write {\"stations\": [{\"name\": \"A\", \"x\": 0, \"y\": 0, \"z\": 0}, ...]} (mm)");
   if (!doc.is_object() || !doc.contains("stations") || !doc["stations"].is_array()) {
     throw InputError(fmt::format("{}: no \"stations\" array; write {{\"stations\": [{{\"name\": \"A\", \"x\": 0, \"y\": "
                                  "0, \"z\": 0}}, ...]}} (mm)",

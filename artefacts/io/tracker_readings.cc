@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/dense_decomposition.h"
 #include "core/csv.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
@@ -107,7 +108,7 @@ Columns FindColumns(const CsvTable& table) {
 }
 
 bool IsCovariance(const Eigen::Matrix3d& v) {
-  return v.allFinite() && Eigen::LLT<Eigen::Matrix3d>(v).info() == Eigen::Success;
+  return v.allFinite() && Decompose<Eigen::LLT<Eigen::Matrix3d>>(v, "a reading's covariance").info() == Eigen::Success;
 }
 
 std::string PointName(std::string_view id) { return "point " + std::string(id); }

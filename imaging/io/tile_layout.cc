@@ -1,6 +1,7 @@
 #include "imaging/io/tile_layout.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -24,6 +25,18 @@ TileLayout ReadTileLayout(const std::filesystem::path& path) {
   if (z >= 0 && x < 0) {
     throw InputError(table.name() + ":" + std::to_string(table.header_line()) + ": the header has z without x, y; give all three");
   }
+  // Encoder readings within 100 m of the origin, as the options' coordinates (fvm/option_ranges.h): beyond, a
+  // value is a unit slip or a broken export, and its squares overflow in the fit (a y of 1e308 reached the
+  // rigid-motion QR of fvm calibrate --scan as -inf, issue 44).
+  constexpr double kMaxStageMm = 1e5;
+  const auto stage = [&](const CsvRow& record, int column) {
+    const double v = table.Double(record, column);
+    if (std::abs(v) > kMaxStageMm) {
+      table.Fail(record, "column '" + table.header()[static_cast<std::size_t>(column)] + "' = " + FormatShortest(v) +
+                             " mm is beyond 100 m: give the stage's encoder reading in mm");
+    }
+    return v;
+  };
   TileLayout layout;
   layout.source = table.name();
   std::map<std::pair<int, int>, int> seen;
@@ -34,8 +47,8 @@ TileLayout ReadTileLayout(const std::filesystem::path& path) {
     if (entry.file.empty()) table.Fail(record, "empty file name; name the tile's image file");
     entry.row = static_cast<int>(table.Int(record, row, 0, kMaxTilesPerAxis - 1));
     entry.col = static_cast<int>(table.Int(record, col, 0, kMaxTilesPerAxis - 1));
-    if (x >= 0) entry.stage_mm = Eigen::Vector2d(table.Double(record, x), table.Double(record, y));
-    if (z >= 0) entry.stage_z_mm = table.Double(record, z);
+    if (x >= 0) entry.stage_mm = Eigen::Vector2d(stage(record, x), stage(record, y));
+    if (z >= 0) entry.stage_z_mm = stage(record, z);
     const auto [it, fresh] = seen.emplace(std::make_pair(entry.row, entry.col), record.line);
     if (!fresh) {
       table.Fail(record, "tile row " + std::to_string(entry.row) + " col " + std::to_string(entry.col) +

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "core/input_error.h"
+#include "core/json_text.h"
 #include "stage/error_terms.h"
 
 namespace fvm::stage {
@@ -105,14 +106,8 @@ json CalibrationToJson(const stage::IdentificationResult& result) {
 }
 
 stage::Calibration ReadCalibration(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(fmt::format("{}: cannot open the calibration file", path.string()));
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: not a JSON calibration file ({})", path.string(), e.what()));
-  }
+  const json doc = ReadJsonFile(path, fmt::format("a calibration file is written by 'fvm calibrate ... -o {}'",
+                                                  path.filename().string()));
   const auto fail = [&](const std::string& what) {
     return InputError(fmt::format("{}: {}; write it with 'fvm calibrate ... -o {}'", path.string(), what, path.filename().string()));
   };

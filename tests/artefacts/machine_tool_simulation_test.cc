@@ -346,7 +346,8 @@ TEST(MachineTruthFile, RefusesWithTheFileAndTerm) {
   const auto refuse = [](const std::string& text) {
     return InputErrorOf([&] { ParseMachineTruth(text, "e.json", kPublished); });
   };
-  EXPECT_THAT(refuse("{"), HasSubstr("e.json: not valid JSON"));
+  EXPECT_THAT(refuse("{"), HasSubstr("e.json:1: not valid JSON"));
+  EXPECT_THAT(refuse(std::string(100, '[')), HasSubstr("e.json:1: arrays and objects nested deeper than 64 levels"));
   EXPECT_THAT(refuse(R"({"poly": []})"), HasSubstr("\"terms\""));
   EXPECT_THAT(refuse(R"({"terms": {"xQx": {"poly": [0]}}})"), HasSubstr("unknown error term 'xQx'"));
   EXPECT_THAT(refuse(R"({"terms": {"xTx": {"poly": [0]}, "EXX": {"poly": [0]}}})"), HasSubstr("given twice"));

@@ -30,10 +30,11 @@ TEST(TrackerReadings, CartesianRoundTripIsBitExact) {
   testing::TempDir dir;
   TrackerReadings data;
   data.comments = {"chain XFYZ, tool 0,0,100 mm", "tracker published, seed 1"};
-  // Values with all 17 significant digits, a tiny one, a negative zero's neighbour and the 100 m bound.
+  // Values with all 17 significant digits, a tiny one (the smallest normal double: a subnormal is refused as no
+  // measurement, issue 44), a negative zero's neighbour and the 100 m bound.
   data.points = {Reading("P0001", {0, 0, 0}, {-1234.5678901234567, 2345.0000000000005, -1e-12}, "+x"),
                  Reading("P0002", {2500, 1500, 1200}, {0.1 + 0.2, 1.0 / 3.0, 99'999.5}, "-x"),
-                 Reading("odd, id", {-0.001, 1e-7, 99'999.0}, {5e-324, -7.0, 1.0})};
+                 Reading("odd, id", {-0.001, 1e-7, 99'999.0}, {2.2250738585072014e-308, -7.0, 1.0})};
   const auto path = dir / "readings.csv";
   WriteTrackerReadings(path, data);
   const TrackerReadings back = ReadTrackerReadings(path);
