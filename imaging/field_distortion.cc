@@ -1,4 +1,5 @@
 #include "imaging/field_distortion.h"
+#include "core/dense_decomposition.h"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -56,7 +57,7 @@ std::vector<FieldTerm> TermsOfDegree(int degree) {
     for (const FieldMonomial& m : term.monomials) v(m.component * (degree + 1) + m.j) += m.factor;
     Eigen::MatrixXd trial(dims, span.cols() + 1);
     trial << span, v;
-    if (Eigen::FullPivLU<Eigen::MatrixXd>(trial).rank() > span.cols()) {
+    if (Decompose<Eigen::FullPivLU<Eigen::MatrixXd>>(trial, "the field terms' span").rank() > span.cols()) {
       span = trial;
       kept.push_back(term);
     }

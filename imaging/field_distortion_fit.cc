@@ -1,4 +1,5 @@
 #include "imaging/field_distortion_fit.h"
+#include "core/dense_decomposition.h"
 
 #include <ceres/ceres.h>
 #include <fmt/core.h>
@@ -97,7 +98,8 @@ void RefuseUnseenTerms(const std::vector<FitPoint>& points, const std::vector<in
   }
   Eigen::MatrixXd s = n.bottomRightCorner(k, k);
   if (free_params > 0) {
-    const Eigen::LDLT<Eigen::MatrixXd> pp(n.topLeftCorner(free_params, free_params));
+    const auto pp = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(Eigen::MatrixXd(n.topLeftCorner(free_params, free_params)),
+                                                            "the field fit: the positions' information");
     s -= n.bottomLeftCorner(k, free_params) * pp.solve(n.topRightCorner(free_params, k));
   }
   Eigen::VectorXd scale = n.bottomRightCorner(k, k).diagonal().cwiseSqrt();
@@ -107,7 +109,8 @@ void RefuseUnseenTerms(const std::vector<FitPoint>& points, const std::vector<in
   }
   if (unseen.empty()) {
     const Eigen::MatrixXd normalised = scale.cwiseInverse().asDiagonal() * s * scale.cwiseInverse().asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
+    const auto eigen = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
+        normalised, "the field fit: the terms' information less the positions'");
     // The projector onto the directions without information: a term whose own direction lies a tenth or more in
     // it is named (whatever basis of those directions the solver returns).
     Eigen::MatrixXd projector = Eigen::MatrixXd::Zero(k, k);
@@ -303,7 +306,9 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   }
   j.setFromTriplets(entries.begin(), entries.end());
   const Eigen::MatrixXd information = Eigen::MatrixXd(Eigen::SparseMatrix<double>(j.transpose() * j));
-  Eigen::MatrixXd covariance = information.ldlt().solve(Eigen::MatrixXd::Identity(information.rows(), information.cols()));
+  Eigen::MatrixXd covariance =
+      Decompose<Eigen::LDLT<Eigen::MatrixXd>>(information, "the field fit: the information of positions and field")
+          .solve(Eigen::MatrixXd::Identity(information.rows(), information.cols()));
 
   // Inliers' residuals; each pair's mean residual against the scatter its points allow. Positions take up two
   // components of each pair's mean, so only the loops of a grid check them.

@@ -1,4 +1,5 @@
 #include "imaging/overlap_correspondences.h"
+#include "core/dense_decomposition.h"
 
 #include <algorithm>
 #include <array>
@@ -50,7 +51,8 @@ cv::Mat LessShading(const cv::Mat& f) {
   Eigen::MatrixXd a(static_cast<Eigen::Index>(rows.size()), 15);
   Eigen::VectorXd b(static_cast<Eigen::Index>(rows.size()));
   for (size_t i = 0; i < rows.size(); ++i) a.row(static_cast<Eigen::Index>(i)) = rows[i], b(static_cast<Eigen::Index>(i)) = values[i];
-  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd c =
+      Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(a, "the shading polynomial of an overlap window").solve(b);
   cv::Mat out(f.size(), CV_32F);
   Eigen::RowVectorXd row(15);
   for (int y = 0; y < f.rows; ++y) {

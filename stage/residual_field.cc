@@ -76,14 +76,14 @@ ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals
     const Eigen::Index used = std::min<Eigen::Index>(runs, std::max(200, 4 * dimension));
     const double rescale = std::sqrt(static_cast<double>(runs - 1) / static_cast<double>(std::max<Eigen::Index>(used - 1, 1)));
     const Eigen::MatrixXd first = u.leftCols(used) * rescale;  // their covariance from those runs
-    const auto gram = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
+    const auto gram_eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
         Eigen::MatrixXd(first.transpose() * first), "the held-out field: the runs' Gram matrix");  // ascending
     const Eigen::Index m = std::min<Eigen::Index>(dimension, used);
     Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
     for (Eigen::Index j = used - 1; j >= used - m; --j) {
-      const double l = gram.eigenvalues()[j];
-      if (!(l > 1e-12 * gram.eigenvalues()[used - 1]) || !(l > 0)) break;
-      const Eigen::VectorXd axis = first * gram.eigenvectors().col(j) / std::sqrt(l);  // unit
+      const double l = gram_eig.eigenvalues()[j];
+      if (!(l > 1e-12 * gram_eig.eigenvalues()[used - 1]) || !(l > 0)) break;
+      const Eigen::VectorXd axis = first * gram_eig.eigenvectors().col(j) / std::sqrt(l);  // unit
       double axis_noise = 0;  // the readings' noise along it
       for (size_t p = 0; p < n; ++p) {
         const Eigen::Index at = 3 * static_cast<Eigen::Index>(p);
