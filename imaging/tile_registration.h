@@ -13,6 +13,7 @@
 
 #include "imaging/io/tile_image.h"
 #include "imaging/grid_tile.h"
+#include "imaging/loop_misclosure.h"
 #include "imaging/tile_grid_steps.h"
 #include "imaging/tile_pair_registration.h"
 
@@ -46,6 +47,13 @@ struct RegistrationResult {
   std::vector<Eigen::Vector2d> stage_positions_px;
   double stage_sigma_px = 0.0;
   int pairs_searched_again = 0;  // pairs the model's window searched a second time
+  // The pairs the loops of the grid overruled (loop_misclosure.h), and how far the loops' misclosures exceed what
+  // the pairs claim (the pairs' information is scaled by it before the solve).
+  LoopCheck loops;
+  // Pairs that place nothing (rejected, or dropped by the loops). When a quarter or more of the pairs are, the
+  // positions rest on the stage as much as on the images: the run says so.
+  int pairs_unresolved = 0;
+  bool MostlyUnresolved() const { return !pairs.empty() && 4 * pairs_unresolved >= static_cast<int>(pairs.size()); }
 };
 
 // Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, within
