@@ -118,10 +118,6 @@ Eigen::Matrix2d WidenedInformation(const Eigen::Matrix2d& w, const Eigen::Matrix
   return 0.5 * (widened + widened.transpose());
 }
 
-Eigen::Matrix2d WithFloor(const Eigen::Matrix2d& information, const LoopCheckOptions& options) {
-  return WidenedInformation(information, options.pair_floor_px * options.pair_floor_px * Eigen::Matrix2d::Identity());
-}
-
 // The pair the loops contradict most, searched again where they put it or dropped; repeated until none is
 // contradicted beyond options' thresholds.
 void OverruleWorst(const std::vector<Eigen::Vector2d>& stage_px, double stage_sigma_px,
@@ -177,7 +173,6 @@ void OverruleWorst(const std::vector<Eigen::Vector2d>& stage_px, double stage_si
     record.replaced = replaced;
     if (replaced) {
       replacement.nominal_px = pairs[chosen].nominal_px;
-      replacement.information = WithFloor(replacement.information, options);
       pairs[chosen] = replacement;
     } else {
       pairs[chosen].accepted = false;
@@ -210,7 +205,6 @@ int RecoverRejected(const std::vector<Eigen::Vector2d>& stage_px, double stage_s
       continue;
     }
     again.nominal_px = pairs[k].nominal_px;
-    again.information = WithFloor(again.information, options);
     pairs[k] = again;
     check.recovered.push_back(static_cast<int>(k));
     ++recovered;
@@ -235,9 +229,6 @@ LoopCheck CheckPairsAgainstLoops(const std::vector<Eigen::Vector2d>& stage_px, d
                                  const LoopCheckOptions& options) {
   if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("CheckPairsAgainstLoops: the stage sigma must be positive");
   LoopCheck check;
-  for (auto& pair : pairs) {
-    if (pair.accepted) pair.information = WithFloor(pair.information, options);
-  }
   // Overrule until the loops close, then search the rejected pairs where the loops put them; what that recovers
   // closes more loops, so again, until nothing changes (each pair is recovered at most once).
   std::vector<bool> tried(pairs.size(), false);
@@ -250,19 +241,23 @@ LoopCheck CheckPairsAgainstLoops(const std::vector<Eigen::Vector2d>& stage_px, d
   const std::vector<PairTest> tests = TestPairs(stage_px, stage_sigma_px, pairs);
   double chi_square = 0.0;
   for (size_t k = 0; k < pairs.size(); ++k) {
+    // The pairs that claim a precision in both directions: along machining marks a pair's rank-one information,
+    // tilted by its noise, weighs a residual that is whatever the noise put there, not a misclosure.
     if (!pairs[k].accepted) continue;
+    const Eigen::Vector2d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(pairs[k].information).eigenvalues();
+    if (!(lambda(0) >= 1e-2 * lambda(1))) continue;
     chi_square += tests[k].chi_square;
     check.dof += tests[k].redundancy;
   }
   if (check.dof >= 1.0) check.birge_ratio = std::sqrt(chi_square / check.dof);
-  // Both ways once the loops are enough to say (the ratio's own relative spread is 1 / sqrt(2 dof): 32 % at 5):
-  // a pair's information comes from its overlap's gradients and noise, and on real tiles it claimed 0.03-0.05 px
-  // where the loops and the truth showed 0.01 px.
-  const double scale = check.dof >= options.min_dof_to_scale_down ? check.birge_ratio : std::max(1.0, check.birge_ratio);
+  // Up always; down once the loops are enough to say (the ratio's own relative spread is 1 / sqrt(2 dof): 32 % at
+  // 5). A pair's information comes from its overlap's gradients and noise; on the cut real tiles of issue 42 it
+  // claimed 0.03-0.05 px where the loops and the truth showed 0.01 px.
+  check.uncertainty_scale =
+      check.dof >= options.min_dof_to_scale_down ? check.birge_ratio : std::max(1.0, check.birge_ratio);
   for (size_t k = 0; k < pairs.size(); ++k) {
     PairRegistration& pair = pairs[k];
     if (!pair.accepted) continue;
-    pair.information /= scale * scale;
     if (!pair.ambiguous) continue;
     // An ambiguous pair: the places that matched about as well as the chosen one. Where the others predict the
     // pair well enough to tell them apart, the loops decided; otherwise its offset is any of them.
@@ -271,8 +266,11 @@ LoopCheck CheckPairsAgainstLoops(const std::vector<Eigen::Vector2d>& stage_px, d
     Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();
     int alternatives = 0;
     bool decided = true;
+    // Only places apart along what the pair determines: along machining marks every place on the ridge matches,
+    // and the stage, not the pair, holds that direction.
+    const Eigen::Matrix2d determined = DeterminedDirections(pair.information);
     for (const auto& c : pair.candidates) {
-      const Eigen::Vector2d d = c.offset_px - pair.offset_px;
+      const Eigen::Vector2d d = determined * (c.offset_px - pair.offset_px);
       if (d.norm() < 3.0 || c.ncc < best - options.ambiguous_ncc) continue;
       spread += d * d.transpose();
       ++alternatives;

@@ -5,8 +5,8 @@
 // Each pair is tested against the prediction of the others (the leave-one-out residual of the global least
 // squares, its deleted residual [Cook and Weisberg 1982] with the covariance of both sides); the worst one is
 // searched again where the loops put it, and either takes the offset found there or is dropped. Then the
-// misclosures that remain scale the pairs' stated precision (the Birge ratio of the solve), and a pair that could
-// not choose between candidates and that no loop decides carries their spread.
+// misclosures that remain measure the pairs' stated precision (the Birge ratio of the solve [Birge 1932]), and a
+// pair that could not choose between candidates and that no loop decides carries their spread.
 //
 // Pixel frame as in tile_registration.h: offsets are b's top-left corner in a's frame.
 
@@ -37,6 +37,9 @@ struct LoopCheck {
   // the pairs' stated precision), and the degrees of freedom (the redundancy the loops give); 1 and 0 without loops.
   double birge_ratio = 1.0;
   double dof = 0.0;
+  // What the solve multiplies every pair's standard uncertainty by: the Birge ratio (at least 1 below
+  // LoopCheckOptions::min_dof_to_scale_down degrees of freedom). The pairs keep their own claims.
+  double uncertainty_scale = 1.0;
 };
 
 // A pair searched again within window_px (per axis) of predicted_px; the caller has the images.
@@ -54,14 +57,8 @@ struct LoopCheckOptions {
   // A rejected pair is searched again where the loops put it when they place its two tiles to within this (px,
   // standard deviation): only images, not the stage alone, say where to look.
   double recover_within_px = 3.0;
-  // Added in quadrature to every pair's stated uncertainty, per axis (px): what its information cannot see. Its
-  // noise it sees; the shading it does not: vignetting and exposure that differ between the two tiles tilt the
-  // overlap and shift its best match, the same way in every pair of a tile, which no loop shows either. On the
-  // cut-tile sets of issue 42 (real texture, 30 % vignetting, 15 % exposure) the pairs' errors reached 0.1 px
-  // where they claimed 0.02-0.04 px.
-  double pair_floor_px = 0.02;
-  // The loops' degrees of freedom from which the Birge ratio also scales the pairs' information up (it always
-  // scales it down, i.e. their uncertainty up, when the loops misclose by more than the pairs claim).
+  // The loops' degrees of freedom from which the Birge ratio may also scale the pairs' uncertainties down (it
+  // always scales them up when the loops misclose by more than the pairs claim).
   double min_dof_to_scale_down = 5.0;
   // Candidates of an ambiguous pair whose NCC lies within this of the best are places it could be
   // (RegistrationOptions::ambiguous_ncc).
@@ -71,8 +68,8 @@ struct LoopCheckOptions {
 // Checks the accepted pairs against the loops, in place: an overruled pair takes what research() found near the
 // prediction, or is rejected (`rejection` says why); a rejected pair whose tiles the others place well is searched
 // again there (a stage that stepped farther than the first window reached). `stage_px` and `stage_sigma_px` are the prior of every tile.
-// Then scales the information of every accepted pair by 1 / birge_ratio^2 (up only with fewer than
-// min_dof_to_scale_down degrees of freedom), and widens an ambiguous pair that no loop decides by its candidates' spread.
+// Then measures the loops' misclosures against what the pairs claim (LoopCheck::uncertainty_scale), and widens an
+// ambiguous pair that no loop decides by its candidates' spread.
 LoopCheck CheckPairsAgainstLoops(const std::vector<Eigen::Vector2d>& stage_px, double stage_sigma_px,
                                  std::vector<PairRegistration>& pairs, const ResearchPair& research,
                                  const LoopCheckOptions& options = {});

@@ -1,5 +1,6 @@
 #include "imaging/tile_registration.h"
 
+#include <Eigen/LU>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
@@ -235,11 +236,14 @@ TileGridSteps EstimateFromUnambiguous(const std::vector<GridTile>& tiles, std::v
 }
 
 // The spread (rms per axis, about their mean) of the placed tiles' positions about their stage positions, over the
-// tiles placed from the first one; zero with fewer than three.
+// tiles placed from the first one by images along both axes; zero with fewer than three.
 Eigen::Vector2d StageSpread(const TilePositions& positions, const std::vector<Eigen::Vector2d>& stage_px) {
   std::vector<Eigen::Vector2d> off;
   for (size_t i = 1; i < stage_px.size(); ++i) {
-    if (positions.anchor[i] == 0 && positions.registered[i]) off.push_back(positions.positions_px[i] - stage_px[i]);
+    // Only tiles the images place along both axes: along machining marks a tile is wherever the loose prior let it.
+    if (positions.anchor[i] == 0 && positions.registered[i] && positions.sigma_px[i].maxCoeff() < 1.0) {
+      off.push_back(positions.positions_px[i] - stage_px[i]);
+    }
   }
   if (off.size() < 3) return Eigen::Vector2d::Zero();
   Eigen::Vector2d mean = Eigen::Vector2d::Zero(), square = Eigen::Vector2d::Zero();
@@ -360,9 +364,20 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // The stage prior as loose as the placed tiles show the stage to be (their spread about the model), where the
   // model's repeatability, from the spread of the pairs about the mean step, says less: a stage whose rows sit apart
   // by 20 px has pairs that agree with each other row by row, and a prior of a pixel would pull every tile.
-  const TilePositions loose = SolveTilePositions(result.stage_positions_px, result.pairs, loose_stage_px, unregistered);
+  // The pairs weighed as the loops show them (the Birge ratio; the pairs keep their own claims).
+  // And no pair better than kPairFloorPx: what neither a pair's noise nor the loops see, the shading of its two
+  // tiles shifting the match the same way in every pair of a tile (on issue 42's cut real tiles a tile 0.04 px off
+  // claimed 0.009 px without it).
+  constexpr double kPairFloorPx = 0.007;
+  std::vector<PairRegistration> weighed = result.pairs;
+  for (auto& pair : weighed) {
+    const Eigen::Matrix2d w = pair.information / (result.loops.uncertainty_scale * result.loops.uncertainty_scale);
+    const Eigen::Matrix2d floored = w * (Eigen::Matrix2d::Identity() + kPairFloorPx * kPairFloorPx * w).inverse();
+    pair.information = 0.5 * (floored + floored.transpose());
+  }
+  const TilePositions loose = SolveTilePositions(result.stage_positions_px, weighed, loose_stage_px, unregistered);
   result.stage_sigma_px = std::max(result.stage_sigma_px, StageSpread(loose, result.stage_positions_px).maxCoeff());
-  result.positions = SolveTilePositions(result.stage_positions_px, result.pairs, result.stage_sigma_px, unregistered);
+  result.positions = SolveTilePositions(result.stage_positions_px, weighed, result.stage_sigma_px, unregistered);
   return result;
 }
 
