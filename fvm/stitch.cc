@@ -144,6 +144,10 @@ void RunStitch(const StitchArgs& args) {
     }
   }
 
+  // What the loops overruled, and a run that leaves a quarter of its pairs unresolved, go to stderr whatever the
+  // output: a script reading --json sees them there too.
+  for (const auto& text : stitched.overruled) fmt::print(stderr, "fvm stitch: overruled {}\n", text);
+  if (stitched.mostly_unresolved) fmt::print(stderr, "fvm stitch: warning: {}\n", stitched.UnresolvedWarning());
   const int accepted = stitched.accepted, ambiguous = stitched.ambiguous;
   const std::vector<std::string>& fallback = stitched.at_stage_position;
   const std::vector<std::string>& stage_bound = stitched.stage_along_one_axis;
@@ -158,6 +162,21 @@ void RunStitch(const StitchArgs& args) {
     out["pairs_accepted"] = accepted;
     out["pairs_ambiguous"] = ambiguous;
     out["mean_overlap_ncc"] = ncc_count > 0 ? nlohmann::ordered_json(stitched.mean_overlap_ncc) : nlohmann::ordered_json(nullptr);
+    out["pairs_unresolved"] = stitched.unresolved;
+    out["unresolved_warning"] =
+        stitched.mostly_unresolved ? nlohmann::ordered_json(stitched.UnresolvedWarning()) : nlohmann::ordered_json(nullptr);
+    out["overruled"] = nlohmann::ordered_json::array();
+    for (const auto& o : result.loops.overruled) {
+      const imaging::PairRegistration& pair = result.pairs[static_cast<size_t>(o.pair)];
+      out["overruled"].push_back({{"a", layout.tiles[static_cast<size_t>(pair.a)].file},
+                                  {"b", layout.tiles[static_cast<size_t>(pair.b)].file},
+                                  {"registered_px", {o.registered_px.x(), o.registered_px.y()}},
+                                  {"predicted_px", {o.predicted_px.x(), o.predicted_px.y()}},
+                                  {"misclosure_sigma", o.misclosure_sigma},
+                                  {"replaced", o.replaced}});
+    }
+    out["loop_birge_ratio"] = result.loops.birge_ratio;
+    out["loop_dof"] = result.loops.dof;
     out["stage_fallback"] = fallback;
     out["stage_along_one_axis"] = stage_bound;
     if (field) {
@@ -337,7 +356,10 @@ void RegisterStitch(CLI::App& app) {
   AddHiddenAlias(sub, "--stage-sigma", args->stage_sigma_px, "--stage-sigma-px");
   AddDistortionOptions(sub, &args->distortion, true);
   sub->add_flag("--json", args->json,
-                "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", \"stage_fallback\": [files], "
+                "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", "
+                "\"pairs_unresolved\", \"unresolved_warning\" (null unless a quarter of the pairs or more), \"overruled\": "
+                "[{\"a\", \"b\", \"registered_px\", \"predicted_px\", \"misclosure_sigma\", \"replaced\"}] (pairs the "
+                "grid's loops contradicted, also on stderr), \"loop_birge_ratio\", \"loop_dof\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
                 "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "

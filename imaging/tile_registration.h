@@ -13,6 +13,7 @@
 
 #include "imaging/io/tile_image.h"
 #include "imaging/grid_tile.h"
+#include "imaging/loop_misclosure.h"
 #include "imaging/tile_grid_steps.h"
 #include "imaging/tile_pair_registration.h"
 
@@ -46,14 +47,23 @@ struct RegistrationResult {
   std::vector<Eigen::Vector2d> stage_positions_px;
   double stage_sigma_px = 0.0;
   int pairs_searched_again = 0;  // pairs the model's window searched a second time
+  // The pairs the loops of the grid overruled (loop_misclosure.h), and how far the loops' misclosures exceed what
+  // the pairs claim (the pairs' information is scaled by it before the solve).
+  LoopCheck loops;
+  // Pairs that place nothing (rejected, or dropped by the loops). When a quarter or more of the pairs are, the
+  // positions rest on the stage as much as on the images: the run says so.
+  int pairs_unresolved = 0;
+  bool MostlyUnresolved() const { return !pairs.empty() && 4 * pairs_unresolved >= static_cast<int>(pairs.size()); }
 };
 
 // Registers each tile with its right (col + 1) and lower (row + 1) neighbour, in parallel, within
 // options.search_fraction of the nominal offsets. From the accepted pairs it estimates the stage model; pairs that
 // failed, or that disagree with the model by more than its tolerance, are searched again within that tolerance of
-// the model's offset and keep the result only if it passes and agrees. Then solves, with the model's positions and
-// repeatability as the stage prior (the nominal positions and options.stage_sigma_px along what it could not
-// estimate). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
+// the model's offset; what registers stands (the first match where the search found nothing), and pairs still
+// failing are searched over the whole plausible range. Then the loops of the grid judge every pair
+// (loop_misclosure.h: overruled pairs searched again where the loops put them or dropped, rejected ones searched
+// there, the weights scaled by the loops' Birge ratio), and it solves with the model's positions as the stage prior,
+// its sigma the placed tiles' spread about them (the model's repeatability at least). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
 // given, is called after each pair, from the pool's threads at once: it must be thread-safe.
 RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const std::vector<GridTile>& tiles,
                                     const RegistrationOptions& options,

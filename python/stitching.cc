@@ -91,6 +91,9 @@ py::dict Stitch(const py::sequence& tiles, const std::vector<std::pair<int, int>
   out["mean_overlap_ncc"] = r->mean_overlap_ncc;
   out["from_stage"] = r->from_stage;
   out["at_stage_position"] = r->at_stage_position;
+  out["overruled"] = r->overruled;
+  out["pairs_unresolved"] = r->unresolved;
+  out["unresolved_warning"] = r->UnresolvedWarning();
   return out;
 }
 
@@ -105,7 +108,9 @@ void BindStitching(py::module_& m) {
         "tile, row 0 the highest Y, in scan order (the first tile anchors the frame); stage_mm: optional (x, y) "
         "stage positions of the tiles' centres, used with pixel_mm for the nominal positions. Returns a dict: "
         "positions (N x 2 px of each tile's top-left, x right and y down from the first tile), sigma (their "
-        "standard uncertainties), nominal, registered, pairs, accepted, mean_overlap_ncc. Raises fvm.InputError for "
+        "standard uncertainties), nominal, registered, pairs, accepted, mean_overlap_ncc, overruled (the pairs the "
+        "grid's loops contradicted, as text), pairs_unresolved, unresolved_warning (empty unless a quarter of the "
+        "pairs or more are unresolved). Raises fvm.InputError for "
         "an incomplete grid or tiles of different sizes.\n\nExample:\n"
         "    >>> r = fvm.stitch([t00, t01, t10, t11], [(0, 0), (0, 1), (1, 0), (1, 1)], overlap=0.25)\n"
         "    >>> r['positions']");

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <set>
+#include <string>
 #include <utility>
 
 namespace fvm::workflows {
@@ -51,6 +52,13 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
     if (std::isfinite(o.correlation.ncc)) sum += o.correlation.ncc, ++s.ncc_pairs;
   }
   if (s.ncc_pairs > 0) s.mean_overlap_ncc = sum / s.ncc_pairs;
+  for (const auto& o : r.loops.overruled) {
+    const auto& pair = r.pairs[static_cast<size_t>(o.pair)];
+    s.overruled.push_back(layout.tiles[static_cast<size_t>(pair.a)].file + " - " +
+                          layout.tiles[static_cast<size_t>(pair.b)].file + ": " + o.Text());
+  }
+  s.unresolved = r.pairs_unresolved;
+  s.mostly_unresolved = r.MostlyUnresolved();
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
     if (!r.positions.registered[i]) {
       s.at_stage_position.push_back(layout.tiles[i].file);
@@ -61,6 +69,13 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
     }
   }
   return s;
+}
+
+std::string StitchResult::UnresolvedWarning() const {
+  if (!mostly_unresolved) return {};
+  return std::to_string(unresolved) + " of " + std::to_string(registration.pairs.size()) +
+         " pairs are unresolved (a quarter or more): the positions of the tiles they leave rest on the stage, "
+         "not on the images; check the overlap, the focus and the texture";
 }
 
 }  // namespace fvm::workflows

@@ -42,6 +42,12 @@ struct StitchResult {
   int ncc_pairs = 0, accepted = 0, ambiguous = 0;
   std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one
   std::vector<std::string> stage_along_one_axis;  // linked across parallel marks only
+  // Pairs the loops of the grid overruled ("a - b: why, and what was done"), in the order they were.
+  std::vector<std::string> overruled;
+  // Pairs that place nothing (rejected or dropped); a quarter or more of them is a run to distrust, said aloud.
+  int unresolved = 0;
+  bool mostly_unresolved = false;
+  std::string UnresolvedWarning() const;  // empty unless mostly_unresolved
 };
 
 // `images[i]` is the layout's tile i. `on_pair` is called as each pair is registered (progress).
