@@ -36,6 +36,12 @@ fvm simulate fvm-batch -o raw --seed 3 --surfaces tif --validation-placements 0 
 plugin_loaded() { LD_DEBUG=files "$@" 2>&1 >/dev/null | grep -o "file=[^ ]*libfvm_image_oiio.so" | head -n 1; }
 loaded="$(plugin_loaded fvm info raw/id-x.free.tif --pixel-mm 0.2 --json)"
 [[ "$loaded" == "file=/usr/lib/fvm/libfvm_image_oiio.so" ]] || fail "fvm info on a TIFF loaded '$loaded'"
+# Calottes found in images need the OpenCV plugin, a report the report plugin: both the installed ones.
+loaded="$(LD_DEBUG=files fvm calibrate raw --model 9 --pixel-mm 0.2 -o raw-calibration.json --report report 2>&1 >/dev/null |
+  grep -o "file=[^ ]*libfvm_\(imaging_opencv\|report\)\.so" | sort -u | tr '\n' ' ')"
+[[ "$loaded" == "file=/usr/lib/fvm/libfvm_imaging_opencv.so file=/usr/lib/fvm/libfvm_report.so " ]] ||
+  fail "fvm calibrate on raw TIFF exports with --report loaded '$loaded'"
+[[ -s report/index.html ]] || fail "fvm calibrate --report wrote no report/index.html"
 /usr/bin/python3 -c "import fvm, sys; print('check_package: import fvm', fvm.__version__, fvm.__file__)"
 [[ "$(/usr/bin/python3 -c 'import fvm; print(fvm.__file__)')" == /usr/lib/python3/dist-packages/* ]] ||
   fail "import fvm did not take the installed module"
