@@ -119,12 +119,13 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
   const double det2 = a2[0] * t[0] + a2[1] * t[1] + a2[2] * t[2];
   double z0 = z1;
   if (!solve(det1, det2, z0)) return z1;
-  if (u_noise) {
+  // The sum over the fitted images of the vertex's squared move when image j's t moves by w dP (1, u, u^2), dP its
+  // measure's move (`move_of_measure(j)`, as a share of power P).
+  const auto vertex_variance = [&](const auto& move_of_measure) {
     double variance = 0.0;
     for (int j = 0; j < 5; ++j) {
       if (!(weight[j] > 0.0)) continue;
-      // t moves by w dP (1, u, u^2) when the measure moves by sigma.
-      const double d0 = weight[j] * power * p[j] * sigma / f[std::size_t(j)];
+      const double d0 = weight[j] * power * p[j] * move_of_measure(j);
       const double dt[3] = {d0, d0 * u[j], d0 * u[j] * u[j]};
       double vertex = z1;
       if (!solve(det1 + a1[0] * dt[0] + a1[1] * dt[1] + a1[2] * dt[2],
@@ -133,23 +134,17 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
       }
       variance += (vertex - z0) * (vertex - z0);
     }
+    return variance;
+  };
+  if (u_noise) {
+    // The measure moves by sigma.
+    const double variance = vertex_variance([&](int j) { return sigma / f[std::size_t(j)]; });
     *u_noise = std::sqrt(variance) * MisfitRatio(s, t, det, weight, u, p, inverse_variance, f[2] / (power * sigma));
   }
   if (u_shape) {
     // Each measure off the model by a share of itself (dP = power P share), by a small share, scaled to 1.
     constexpr double kShare = 1e-3;
-    double variance = 0.0;
-    for (int j = 0; j < 5; ++j) {
-      if (!(weight[j] > 0.0)) continue;
-      const double d0 = weight[j] * power * p[j] * kShare;
-      const double dt[3] = {d0, d0 * u[j], d0 * u[j] * u[j]};
-      double vertex = z1;
-      if (!solve(det1 + a1[0] * dt[0] + a1[1] * dt[1] + a1[2] * dt[2],
-                 det2 + a2[0] * dt[0] + a2[1] * dt[1] + a2[2] * dt[2], vertex)) {
-        vertex = z1;
-      }
-      variance += (vertex - z0) * (vertex - z0);
-    }
+    const double variance = vertex_variance([](int) { return kShare; });
     *u_shape = std::sqrt(variance) / kShare;
   }
   return z0;

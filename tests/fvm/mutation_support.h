@@ -38,19 +38,28 @@ inline std::string Join(const std::vector<std::string>& parts, const std::string
   return out;
 }
 
+// Where a CSV's header and data lines are ('#' comments and empty lines skipped); header = lines.size() when none.
+struct CsvLines {
+  size_t header = 0;
+  std::vector<size_t> rows;
+};
+inline CsvLines FindCsvLines(const std::vector<std::string>& lines) {
+  CsvLines found{lines.size(), {}};
+  for (size_t k = 0; k < lines.size(); ++k) {
+    if (lines[k].empty() || lines[k][0] == '#') continue;
+    if (found.header == lines.size()) {
+      found.header = k;
+    } else {
+      found.rows.push_back(k);
+    }
+  }
+  return found;
+}
+
 // One structured mutation of a CSV file (header first, '#' comments kept).
 inline std::string MutateCsv(const std::string& text, std::mt19937_64& random) {
   std::vector<std::string> lines = Lines(text);
-  std::vector<size_t> rows;
-  size_t header = lines.size();
-  for (size_t k = 0; k < lines.size(); ++k) {
-    if (lines[k].empty() || lines[k][0] == '#') continue;
-    if (header == lines.size()) {
-      header = k;
-    } else {
-      rows.push_back(k);
-    }
-  }
+  const auto [header, rows] = FindCsvLines(lines);
   if (rows.empty()) return text;
   const auto pick = [&](size_t n) { return static_cast<size_t>(random() % n); };
   const size_t row = rows[pick(rows.size())];
@@ -109,16 +118,7 @@ inline const std::vector<std::string> kNumberTraps = {"1e-310", "4.9e-324", "-2e
 // export carries), or an empty field.
 inline std::string MutateNumbers(const std::string& text, std::mt19937_64& random) {
   std::vector<std::string> lines = Lines(text);
-  std::vector<size_t> rows;
-  size_t header = lines.size();
-  for (size_t k = 0; k < lines.size(); ++k) {
-    if (lines[k].empty() || lines[k][0] == '#') continue;
-    if (header == lines.size()) {
-      header = k;
-    } else {
-      rows.push_back(k);
-    }
-  }
+  const auto [header, rows] = FindCsvLines(lines);
   if (rows.empty()) return text;
   const auto pick = [&](size_t n) { return static_cast<size_t>(random() % n); };
   const size_t row = rows[pick(rows.size())];
