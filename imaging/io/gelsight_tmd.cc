@@ -22,13 +22,6 @@ constexpr std::string_view kTmdFamily("Binary TrueMap Data File");
 constexpr std::size_t kTmdLongestComment = 4096;
 constexpr const char* kTmdReexport = "the file is damaged or incomplete: export it from GelSight again";
 
-template <typename T>
-void AppendTmd(std::string& bytes, T value) {
-  char buffer[sizeof(T)];
-  std::memcpy(buffer, &value, sizeof value);
-  bytes.append(buffer, sizeof buffer);
-}
-
 }  // namespace
 
 HeightMap ParseGelSightTmd(const std::string& bytes, const std::string& name) {
@@ -57,10 +50,7 @@ HeightMap ParseGelSightTmd(const std::string& bytes, const std::string& name) {
   const float length_y = LoadBytes<float>(p + 12);
   const float offset_x = LoadBytes<float>(p + 16);
   const float offset_y = LoadBytes<float>(p + 20);
-  if (cols < 1 || rows < 1 || cols * rows > kMaxPoints) {
-    FailReading(name, "says " + std::to_string(cols) + " x " + std::to_string(rows) +
-                          " points, not a grid fvm can hold; " + kTmdReexport);
-  }
+  RequireGridSize(name, "says", cols, rows, kTmdReexport);
   const std::uint64_t n = cols * rows;
   const std::size_t data_at = header_at + 24;
   if (bytes.size() - data_at != 4 * n) {
@@ -102,13 +92,13 @@ std::string BuildGelSightTmd(const HeightMap& map) {
   }
   std::string bytes(kTmdSignature);
   bytes += '\0';  // an empty comment
-  AppendTmd(bytes, static_cast<std::uint32_t>(map.size_x));
-  AppendTmd(bytes, static_cast<std::uint32_t>(map.size_y));
-  AppendTmd(bytes, static_cast<float>(map.dx_mm * map.size_x));
-  AppendTmd(bytes, static_cast<float>(map.dy_mm * map.size_y));
-  AppendTmd(bytes, static_cast<float>(map.x0_mm));
-  AppendTmd(bytes, static_cast<float>(map.y0_mm));
-  for (const double z : map.z_mm) AppendTmd(bytes, static_cast<float>(z));
+  AppendBytes(bytes, static_cast<std::uint32_t>(map.size_x));
+  AppendBytes(bytes, static_cast<std::uint32_t>(map.size_y));
+  AppendBytes(bytes, static_cast<float>(map.dx_mm * map.size_x));
+  AppendBytes(bytes, static_cast<float>(map.dy_mm * map.size_y));
+  AppendBytes(bytes, static_cast<float>(map.x0_mm));
+  AppendBytes(bytes, static_cast<float>(map.y0_mm));
+  for (const double z : map.z_mm) AppendBytes(bytes, static_cast<float>(z));
   return bytes;
 }
 

@@ -39,10 +39,7 @@ HeightMap ParseNms(const std::string& bytes, const std::string& name) {
   const std::uint64_t rows = LoadBytes<std::uint32_t>(p + 1372);
   const double dx_nm = LoadBytes<double>(p + 1376);
   const double dy_nm = LoadBytes<double>(p + 1384);
-  if (cols < 1 || rows < 1 || cols * rows > kMaxPoints) {
-    FailReading(name, "says " + std::to_string(cols) + " x " + std::to_string(rows) +
-                          " points, not a grid fvm can hold; " + kNmsReexport);
-  }
+  RequireGridSize(name, "says", cols, rows, kNmsReexport);
   const std::uint64_t n = cols * rows;
   if (bytes.size() - kNmsHeaderSize < 2 * n) {
     FailReading(name, std::to_string(cols) + " x " + std::to_string(rows) + " heights need " + std::to_string(2 * n) +

@@ -28,6 +28,24 @@ T LoadBytes(const char* p) {
   return value;
 }
 
+// `value` appended to `bytes` in the machine's byte order: the writers' side of LoadBytes.
+template <typename T>
+void AppendBytes(std::string& bytes, T value) {
+  char buffer[sizeof(T)];
+  std::memcpy(buffer, &value, sizeof value);
+  bytes.append(buffer, sizeof buffer);
+}
+
+// Refuses, naming the file, a grid of no point or more than a map can hold: "<file>: <says> C x R points, not a grid
+// fvm can hold; <remedy>" (`says`: "says", "the data block says").
+inline void RequireGridSize(const std::string& name, const std::string& says, std::uint64_t cols, std::uint64_t rows,
+                            const std::string& remedy) {
+  if (cols < 1 || rows < 1 || cols * rows > kMaxPoints) {
+    FailReading(name, says + " " + std::to_string(cols) + " x " + std::to_string(rows) +
+                          " points, not a grid fvm can hold; " + remedy);
+  }
+}
+
 // A T stored big-endian at p (Zygo MetroPro headers and data).
 template <typename T>
 T LoadBigEndian(const char* p) {

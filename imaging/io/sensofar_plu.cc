@@ -44,10 +44,7 @@ HeightMap ParseSensofarPlu(const std::string& bytes, const std::string& name) {
   }
   const std::uint64_t rows = LoadBytes<std::uint32_t>(p + kPluDataAt);
   const std::uint64_t cols = LoadBytes<std::uint32_t>(p + kPluDataAt + 4);
-  if (rows < 1 || cols < 1 || rows * cols > kMaxPoints) {
-    FailReading(name, "the data block says " + std::to_string(cols) + " x " + std::to_string(rows) +
-                          " points, not a grid fvm can hold; " + kPluReexport);
-  }
+  RequireGridSize(name, "the data block says", cols, rows, kPluReexport);
   const std::uint64_t n = rows * cols;
   const std::uint64_t heights_at = kPluDataAt + 8;
   if (bytes.size() - heights_at < n * sizeof(float)) {

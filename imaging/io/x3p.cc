@@ -417,13 +417,6 @@ void AddAxis(pugi::xml_node axes, const char* tag, char axis_type, char data_typ
   Add(axis, "Offset", FormatShortest(offset));
 }
 
-template <typename T>
-void Store(std::string& bytes, T value) {
-  char buffer[sizeof(T)];
-  std::memcpy(buffer, &value, sizeof value);
-  bytes.append(buffer, sizeof buffer);
-}
-
 }  // namespace
 
 void X3pWriteOptions::Check() const {
@@ -485,16 +478,16 @@ std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
     for (std::size_t i = 0; i < n; ++i) {
       switch (options.z_type) {
         case X3pDataType::kInt16:
-          Store(data, static_cast<std::int16_t>(value[i]));
+          AppendBytes(data, static_cast<std::int16_t>(value[i]));
           break;
         case X3pDataType::kInt32:
-          Store(data, static_cast<std::int32_t>(value[i]));
+          AppendBytes(data, static_cast<std::int32_t>(value[i]));
           break;
         case X3pDataType::kFloat32:
-          Store(data, valid[i] ? static_cast<float>(value[i]) : std::numeric_limits<float>::quiet_NaN());
+          AppendBytes(data, valid[i] ? static_cast<float>(value[i]) : std::numeric_limits<float>::quiet_NaN());
           break;
         default:
-          Store(data, valid[i] ? value[i] : std::numeric_limits<double>::quiet_NaN());
+          AppendBytes(data, valid[i] ? value[i] : std::numeric_limits<double>::quiet_NaN());
           break;
       }
     }
