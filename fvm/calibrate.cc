@@ -21,7 +21,7 @@
 #include "fvm/distortion_options.h"
 #include "workflows/field_distortion_file.h"
 #include "workflows/scan_distortion.h"
-#include "fvm/report.h"
+#include "report/stage_report.h"
 #include "stage/validation.h"
 
 namespace fvm::cli {
@@ -103,9 +103,9 @@ void PrintParameters(const stage::IdentificationResult& r) {
   }
 }
 
-ReportData MakeReport(const CalibrateArgs& args, const std::string& source, const stage::IdentificationResult& r,
+report::ReportData MakeReport(const CalibrateArgs& args, const std::string& source, const stage::IdentificationResult& r,
                       const stage::MeasurementSet& shown, const std::string& shown_what, const BeforeAfter& judged) {
-  ReportData data;
+  report::ReportData data;
   data.title = fmt::format("fvm calibrate: model {} on {}", r.calibration.model, source);
   const stage::StitchedFrame frame = args.settings.Frame();
   const Judgement& judged_after = judged.after;
@@ -232,7 +232,7 @@ void Run(const CalibrateArgs& args) {
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
-    WriteReport(args.report, MakeReport(args, args.batch, result, c.Shown(),
+    report::WriteReport(args.report, MakeReport(args, args.batch, result, c.Shown(),
                                         validate ? "validation placements" : "identification placements", *c.judged));
   }
   if (args.json) {
@@ -343,7 +343,7 @@ void RunScans(const CalibrateArgs& args) {
   if (!args.output.empty()) WriteFileAtomically(args.output, doc.dump(2) + "\n");
   if (!args.report.empty()) {
     if (!judged) throw InputError("--report with --scan needs --validate BATCH: the report shows held-out placements");
-    WriteReport(args.report, MakeReport(args, source, result, *validate, "validation placements of " + args.validate, *judged));
+    report::WriteReport(args.report, MakeReport(args, source, result, *validate, "validation placements of " + args.validate, *judged));
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));

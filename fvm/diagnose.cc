@@ -11,7 +11,7 @@
 #include "fvm/identify_options.h"
 #include "workflows/diagnose.h"
 #include "fvm/commands.h"
-#include "fvm/report.h"
+#include "report/stage_report.h"
 #include "stage/discrepancy.h"
 
 namespace fvm::cli {
@@ -35,10 +35,10 @@ std::string AlternativesSentence(const stage::DiagnosisStep& s) {
   return fmt::format("These data fit {} exactly as well: one cannot be told from the other here.", fmt::join(s.alternatives, ", "));
 }
 
-ReportData MakeDiagnosisReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis& diagnosis) {
+report::ReportData MakeDiagnosisReport(const DiagnoseArgs& args, const workflows::BatchDiagnosis& diagnosis) {
   const stage::Diagnosis& d = diagnosis.diagnosis;
   const stage::MeasurementSet& identify = diagnosis.identification;
-  ReportData data;
+  report::ReportData data;
   data.title = fmt::format("fvm diagnose: model {} on {}", args.model.Name(), args.batch);
   std::string added;
   for (const stage::DiagnosisStep& s : d.steps) added += (added.empty() ? "adding " : ", then ") + s.effect;
@@ -86,7 +86,7 @@ void Run(const DiagnoseArgs& args) {
   const workflows::BatchDiagnosis diagnosis =
       workflows::DiagnoseBatch(batch, {args.model, Threaded(args.settings), args.alpha});
   const stage::Diagnosis& d = diagnosis.diagnosis;
-  if (!args.report.empty()) WriteReport(args.report, MakeDiagnosisReport(args, diagnosis));
+  if (!args.report.empty()) report::WriteReport(args.report, MakeDiagnosisReport(args, diagnosis));
 
   nlohmann::json doc;
   doc["batch"] = args.batch;

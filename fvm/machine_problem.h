@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "fvm/machine_report.h"
+#include "report/machine_report.h"
 #include "stage/identification.h"
 #include "stage/machine_verification.h"
 #include "workflows/machine_problem.h"
@@ -56,7 +56,7 @@ nlohmann::json PoseJson(const stage::Pose& pose, const Eigen::Matrix<double, 6, 
 // The report of a verification (fvm verify, fvm testpiece verify): the error functions with their bands, the
 // squareness, pose and fixed-term tables, every point's error before and after. `doc` is the command's JSON
 // ("chain", "order", "weights", "initial", "final", "validation", "pose" with "estimated").
-MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
+report::MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
                                             const std::vector<stage::Observation>& observations,
                                             const std::vector<stage::Observation>* validation,
                                             const std::vector<Eigen::Vector3d>& tools);

@@ -12,7 +12,7 @@ namespace fvm::cli {
 namespace {
 
 // Before (ideal machine, initial pose) and after (identified model and pose) volumetric error of each reading.
-std::vector<MachineReportData::PointError> PointErrors(const stage::VerificationResult& v,
+std::vector<report::MachineReportData::PointError> PointErrors(const stage::VerificationResult& v,
                                                        const std::vector<stage::Observation>& observations,
                                                        const std::vector<Eigen::Vector3d>& tools) {
   const stage::Calibration& cal = v.identified.calibration;
@@ -20,7 +20,7 @@ std::vector<MachineReportData::PointError> PointErrors(const stage::Verification
       stage::VolumetricResiduals(cal.layout, nullptr, v.initial_pose, observations, tools);
   const std::vector<Eigen::Vector3d> after =
       stage::VolumetricResiduals(cal.layout, &cal.values, v.identified.pose, observations, tools);
-  std::vector<MachineReportData::PointError> out;
+  std::vector<report::MachineReportData::PointError> out;
   for (size_t i = 0; i < observations.size(); ++i) {
     const Eigen::Vector3d& q = observations[i].command;
     out.push_back({q.x(), q.y(), q.z(), before[i].norm() * 1e3, after[i].norm() * 1e3});
@@ -32,13 +32,13 @@ std::vector<std::string> Row(std::initializer_list<std::string> cells) { return 
 
 }  // namespace
 
-MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
+report::MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohmann::json& doc, const stage::VerificationResult& v,
                                             const std::vector<stage::Observation>& observations,
                                             const std::vector<stage::Observation>* validation,
                                             const std::vector<Eigen::Vector3d>& tools) {
   const stage::IdentificationResult& r = v.identified;
   const stage::Calibration& cal = r.calibration;
-  MachineReportData data;
+  report::MachineReportData data;
   data.title = fmt::format("fvm verify: {} order {} ({}) on {}", doc["chain"].get<std::string>(), doc["order"].get<int>(),
                            args.basis, args.data);
   const auto errors = [](const nlohmann::json& e) {
@@ -59,7 +59,7 @@ MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohm
   for (int k = 0; k < 3; ++k) origin[k] = cal.layout.travel()[static_cast<size_t>(k)].min;
   constexpr int kSamples = 101;
   for (int k = 0; k < 3; ++k) {
-    MachineReportData::AxisFunctions& f = data.functions[static_cast<size_t>(k)];
+    report::MachineReportData::AxisFunctions& f = data.functions[static_cast<size_t>(k)];
     f.axis = std::string(1, "XYZ"[k]);
     const stage::Travel travel = cal.layout.travel()[static_cast<size_t>(k)];
     const stage::Axis axis = static_cast<stage::Axis>(k);
@@ -82,7 +82,7 @@ MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohm
     }
   }
 
-  MachineReportData::Table squareness{"Squareness", "Constant angles; U is the expanded uncertainty (k = 2).",
+  report::MachineReportData::Table squareness{"Squareness", "Constant angles; U is the expanded uncertainty (k = 2).",
                                       {"term", "value (urad)", "U (urad)"}, {}};
   const stage::TermValuesWithUncertainty at_origin = stage::TermValuesAt(cal, origin);
   for (int w = 0; w < 3; ++w) {
@@ -93,7 +93,7 @@ MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohm
   data.tables.push_back(squareness);
 
   const nlohmann::json& p = doc["pose"];
-  MachineReportData::Table pose{"Tracker pose",
+  report::MachineReportData::Table pose{"Tracker pose",
                                 fmt::format("{} in the machine frame; u is the standard uncertainty.",
                                             p["estimated"].get<bool>() ? "Estimated jointly with the errors" : "Held (--pose)"),
                                 {"", "x", "y", "z"}, {}};
@@ -109,7 +109,7 @@ MachineReportData MachineVerificationReport(const MachineArgs& args, const nlohm
   if (p.contains("u_rotation_urad")) triple("u rotation vector (urad)", p["u_rotation_urad"], "{:.1f}");
   data.tables.push_back(pose);
 
-  MachineReportData::Table fixed{"Terms the data cannot separate",
+  report::MachineReportData::Table fixed{"Terms the data cannot separate",
                                  "Fixed at zero before the fit, each with the combination of other parameters that has the "
                                  "same effect on these readings (the pose absorbs constants; aliases share one effect).",
                                  {"coefficient", "reason"}, {}};

@@ -18,7 +18,7 @@
 #include "core/input_error.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
-#include "fvm/machine_report.h"
+#include "report/machine_report.h"
 #include "fvm/option_parsing.h"
 #include "stage/io/calibration_file.h"
 #include "stage/series_extraction.h"
@@ -98,7 +98,7 @@ nlohmann::json TermsJson(const std::vector<stage::TermRecovery>& terms) {
 
 // Counts of the volumetric errors before and after in bins of `width` um: the report's histograms ([Lorente 2021] Figs.
 // 126-127, 132-133).
-MachineReportData::Table Histogram(const std::vector<MachineReportData::PointError>& points) {
+report::MachineReportData::Table Histogram(const std::vector<report::MachineReportData::PointError>& points) {
   double top = 0;
   for (const auto& p : points) top = std::max({top, p.before_um, p.after_um});
   const double width = std::max(0.5, std::ceil(top / 12.0 * 2.0) / 2.0);
@@ -108,7 +108,7 @@ MachineReportData::Table Histogram(const std::vector<MachineReportData::PointErr
     ++before[static_cast<size_t>(std::min(bins - 1, static_cast<int>(p.before_um / width)))];
     ++after[static_cast<size_t>(std::min(bins - 1, static_cast<int>(p.after_um / width)))];
   }
-  MachineReportData::Table t{"Histogram of the volumetric errors", "Number of points per error bin, before and after the verification.",
+  report::MachineReportData::Table t{"Histogram of the volumetric errors", "Number of points per error bin, before and after the verification.",
                              {"error (um)", "before", "after", ""}, {}};
   const int most = std::max(*std::max_element(before.begin(), before.end()), *std::max_element(after.begin(), after.end()));
   for (int b = 0; b < bins; ++b) {
@@ -168,14 +168,14 @@ void RunVerify(const MachinedPieceVerifyArgs& args) {
   if (!r.converged) doc["solver_report"] = r.solver_report;
 
   if (!args.report.empty()) {
-    MachineReportData data = MachineVerificationReport(args, doc, v.result, problem.observations,
+    report::MachineReportData data = MachineVerificationReport(args, doc, v.result, problem.observations,
                                                        problem.validation ? &problem.validation_observations : nullptr,
                                                        problem.options.tool_offsets);
     data.title = fmt::format("fvm testpiece verify: {} {} order {} on {}", problem.chain.code, args.basis, args.order, args.data);
-    for (MachineReportData::Table& t : data.tables) {
+    for (report::MachineReportData::Table& t : data.tables) {
       if (t.heading == "Tracker pose") t.heading = "Datum: the piece in the CMM frame";
     }
-    MachineReportData::Table log{"Iterations", "Volumetric error after each solver iteration (0: the ideal machine at the initial datum).",
+    report::MachineReportData::Table log{"Iterations", "Volumetric error after each solver iteration (0: the ideal machine at the initial datum).",
                                  {"iteration", "max (um)", "mean (um)", "min (um)"}, {}};
     for (size_t i = 0; i < v.iterations.size(); ++i) {
       const stage::ResidualSummary& e = v.iterations[i];
@@ -183,13 +183,13 @@ void RunVerify(const MachinedPieceVerifyArgs& args) {
     }
     data.tables.insert(data.tables.begin(), log);
     data.tables.insert(data.tables.begin() + 1, Histogram(data.readings));
-    MachineReportData::Table g{"Geometric verification", "From " + geometric_from + ": each error at the far end of its axis.",
+    report::MachineReportData::Table g{"Geometric verification", "From " + geometric_from + ": each error at the far end of its axis.",
                                {"error", "recoverable", "value (um or urad)", "u", "why not"}, {}};
     for (const stage::TermRecovery& t : geometric) {
       g.rows.push_back({t.error, t.recoverable ? "yes" : t.partly ? "partly" : "no", fmt::format("{:.2f}", t.value), fmt::format("{:.2f}", t.u), t.reason});
     }
     data.tables.push_back(g);
-    WriteMachineReport(args.report, data);
+    report::WriteMachineReport(args.report, data);
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));

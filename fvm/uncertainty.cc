@@ -16,7 +16,7 @@
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
 #include "fvm/option_parsing.h"
-#include "fvm/uncertainty_report.h"
+#include "report/uncertainty_report.h"
 #include "stage/monte_carlo.h"
 #include "workflows/tracker_placement.h"
 #include "workflows/uncertainty.h"
@@ -101,7 +101,7 @@ workflows::MonteCarloSettings MonteCarloSettingsOf(const UncertaintyArgs& args, 
   return mc;
 }
 
-UncertaintyReportData::Point ReportPoint(const std::string& id, const Eigen::Vector3d& q, const stage::PointSpread& s) {
+report::UncertaintyReportData::Point ReportPoint(const std::string& id, const Eigen::Vector3d& q, const stage::PointSpread& s) {
   return {id, q.x(), q.y(), q.z(), s.u95_mm * 1e3,
           {s.semi_axes_mm[0] * 1e3, s.semi_axes_mm[1] * 1e3, s.semi_axes_mm[2] * 1e3},
           {s.covariance(0, 0) * 1e6, s.covariance(0, 1) * 1e6, s.covariance(1, 1) * 1e6}};
@@ -159,7 +159,7 @@ void RunStage(const UncertaintyArgs& args) {
   doc["U95_um"] = {{"mean", u95.mean}, {"max", u95.max}};
   doc["budget"] = BudgetJson(budget);
   if (!args.report.empty()) {
-    UncertaintyReportData data;
+    report::UncertaintyReportData data;
     data.title = fmt::format("fvm uncertainty: model {}, {} runs, seed {} on {}", reference.calibration.model, args.runs,
                              args.seed, args.data);
     data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
@@ -179,7 +179,7 @@ void RunStage(const UncertaintyArgs& args) {
       const Eigen::Vector3d& q = evaluated.observations[i].command;
       data.points.push_back(ReportPoint(evaluated.labels[i], q, p));
     }
-    WriteUncertaintyReport(args.report, data);
+    report::WriteUncertaintyReport(args.report, data);
   }
   if (args.json) {
     fmt::print("{}\n", doc.dump(2));
@@ -316,7 +316,7 @@ void Run(const UncertaintyArgs& args) {
   doc["budget"] = BudgetJson(budget);
 
   if (!args.report.empty()) {
-    UncertaintyReportData data;
+    report::UncertaintyReportData data;
     data.title = fmt::format("fvm uncertainty: {} order {}, {} runs, seed {} on {}", problem.chain.code, args.order, args.runs,
                              args.seed, args.data);
     data.summary = {{"runs", fmt::format("{} ({} converged) in {:.1f} s", args.runs, converged, seconds)},
@@ -338,7 +338,7 @@ void Run(const UncertaintyArgs& args) {
       const Eigen::Vector3d& q = problem.observations[i].command;
       data.points.push_back(ReportPoint(problem.readings.points[i].id, q, s));
     }
-    WriteUncertaintyReport(args.report, data);
+    report::WriteUncertaintyReport(args.report, data);
   }
 
   if (args.json) {

@@ -9,7 +9,7 @@
 #include "core/file_io.h"
 #include "fvm/commands.h"
 #include "fvm/machine_problem.h"
-#include "fvm/machine_report.h"
+#include "report/machine_report.h"
 #include "stage/io/calibration_file.h"
 #include "workflows/verify_machine.h"
 
@@ -81,7 +81,7 @@ void Run(const VerifyArgs& args) {
   }
 
   if (!args.report.empty()) {
-    WriteMachineReport(args.report, MachineVerificationReport(args, doc, v, observations, validation ? &problem.validation_observations : nullptr,
+    report::WriteMachineReport(args.report, MachineVerificationReport(args, doc, v, observations, validation ? &problem.validation_observations : nullptr,
                                              options.tool_offsets));
   }
   if (!args.output.empty()) {

@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,10 @@ void BindCalibration(py::module_& m);
 void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
 void BindFocus(py::module_& m);
+void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 
+// A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
+py::object ToPython(const nlohmann::json& document);
 // An N x 3 array as points (mm). Throws InputError naming `what` for another shape or a non-finite coordinate when
 // `finite` is asked.
 std::vector<Eigen::Vector3d> PointsFrom(const DoubleArray& array, const std::string& what, bool finite = true);

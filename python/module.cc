@@ -22,6 +22,7 @@ PYBIND11_MODULE(fvm, m) {
   m.attr("__version__") = fvm::Version();
   m.attr("__git_commit__") = fvm::GitCommit();  // as `fvm --version` names it
   fvm::python::BindErrors(m);
+  fvm::python::BindResults(m);
   fvm::python::BindSurfaces(m);
   fvm::python::BindFits(m);
   fvm::python::BindCalibration(m);

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-namespace fvm::cli {
+namespace fvm::report {
 
 struct MachineReportData {
   std::string title;
@@ -50,4 +50,4 @@ struct MachineReportData {
 // thread-safe (PLplot).
 void WriteMachineReport(const std::filesystem::path& dir, const MachineReportData& data);
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

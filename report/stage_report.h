@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace fvm::cli {
+namespace fvm::report {
 
 struct ReportData {
   std::string title;                                         // e.g. "fvm calibrate: model 27 on samples/bar17"
@@ -50,4 +50,4 @@ struct ReportData {
 // Not thread-safe: PLplot keeps its streams in process-wide state. The caller's current PLplot stream is kept.
 void WriteReport(const std::filesystem::path& dir, const ReportData& data);
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

@@ -1,4 +1,4 @@
-#include "fvm/report.h"
+#include "report/stage_report.h"
 
 #include <gtest/gtest.h>
 #include <plplot.h>
@@ -12,7 +12,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -192,4 +192,4 @@ TEST_F(WriteReportTest, KeepsTheCallersPlplotStreamCurrentAndUsable) {
 }
 
 }  // namespace
-}  // namespace fvm::cli
+}  // namespace fvm::report

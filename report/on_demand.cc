@@ -1,12 +1,12 @@
 // The report writers as the fvm executable links them: each forwards to the plugin libfvm_report.so, loaded on the
-// first report (fvm/report_plugin.h says why and how).
+// first report (report/plugin.h says why and how).
 
 #include <string>
 
-#include "fvm/report_plugin.h"
+#include "report/plugin.h"
 #include "imaging/io/plugin_loader.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 
 const ReportWriters& LoadReportWriters(std::string_view action) {
   static constexpr imaging::PluginSpec kPlugin{"libfvm_report.so", "fvm_report_v1", "PLplot", "libplplot17"};
@@ -25,4 +25,4 @@ void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyR
   LoadReportWriters("writing the report " + dir.string()).write_uncertainty_report(dir, data);
 }
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

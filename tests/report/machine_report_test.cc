@@ -1,7 +1,7 @@
 // The report of `fvm verify --report`: the page and its three plots, the tables on the page, and a directory it
 // cannot write refused with nothing left behind.
 
-#include "fvm/machine_report.h"
+#include "report/machine_report.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>  // getpid
@@ -14,7 +14,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -88,4 +88,4 @@ TEST_F(WriteMachineReportTest, RefusesADirectoryItCannotWriteAndLeavesNothing) {
 }
 
 }  // namespace
-}  // namespace fvm::cli
+}  // namespace fvm::report

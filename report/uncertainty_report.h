@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace fvm::cli {
+namespace fvm::report {
 
 struct UncertaintyReportData {
   std::string title;
@@ -27,4 +27,4 @@ struct UncertaintyReportData {
 // index.html, distribution.svg, u95_map.svg, points.csv, runs.csv. Throws fvm::InputError when DIR cannot be written.
 void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyReportData& data);
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

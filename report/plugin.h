@@ -3,18 +3,18 @@
 // freetype, png, brotli, qhull and its own helpers: a dozen shared objects, about a sixth of the start-up of a light
 // command, issue 47) only when a command writes a report.
 //
-// How it is built (fvm/CMakeLists.txt): fvm_report stays a static library for the tests; the plugin
-// libfvm_report.so (report_plugin.cc) holds it and returns this table; the executable links report_on_demand.cc
+// How it is built (report/CMakeLists.txt): fvm_report stays a static library for the tests; the plugin
+// libfvm_report.so (plugin.cc) holds it and returns this table; the executable links on_demand.cc
 // instead, the same three functions forwarded through the table of the plugin, loaded on the first call
 // (imaging/io/plugin_loader.h). The members take their types from the declarations.
 
 #include <string_view>
 
-#include "fvm/machine_report.h"
-#include "fvm/report.h"
-#include "fvm/uncertainty_report.h"
+#include "report/machine_report.h"
+#include "report/stage_report.h"
+#include "report/uncertainty_report.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 
 // The plugin's function table (entry point "fvm_report_v1").
 struct ReportWriters {
@@ -27,4 +27,4 @@ struct ReportWriters {
 // libfvm_report.so could not be loaded (...); install the Debian package ...".
 const ReportWriters& LoadReportWriters(std::string_view action);
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

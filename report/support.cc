@@ -1,7 +1,7 @@
 // The shared parts of the reports: PLplot's C API into SVG, one PLplot stream per plot, and a plain HTML page that
 // shows the plots with <img>, so the directory can be copied, mailed or archived as it is.
 
-#include "fvm/report_support.h"
+#include "report/support.h"
 
 #include <fmt/format.h>
 #include <stdlib.h>  // mkstemps
@@ -23,7 +23,7 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 
-namespace fvm::cli::report {
+namespace fvm::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -435,4 +435,4 @@ void WriteReportFiles(const fs::path& dir, const std::vector<std::pair<std::stri
   }
 }
 
-}  // namespace fvm::cli::report
+}  // namespace fvm::report

@@ -1,4 +1,4 @@
-#include "fvm/uncertainty_report.h"
+#include "report/uncertainty_report.h"
 
 #include <fmt/format.h>
 #include <plplot.h>
@@ -7,12 +7,11 @@
 #include <cmath>
 
 #include "core/number_text.h"
-#include "fvm/report_support.h"
+#include "report/support.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 namespace {
 
-using namespace report;  // NOLINT: the report helpers
 
 // Histograms of the per-run mean errors: final (after) and validation (series colour), on one axis.
 std::string RenderDistribution(const UncertaintyReportData& data) {
@@ -161,4 +160,4 @@ void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyR
                         });
 }
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

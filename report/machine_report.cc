@@ -1,7 +1,7 @@
 // The machine-tool report of `fvm verify --report`: drawn with the shared PLplot and HTML parts of
-// fvm/report_support.h.
+// report/support.h.
 
-#include "fvm/machine_report.h"
+#include "report/machine_report.h"
 
 #include <fmt/format.h>
 #include <plplot.h>
@@ -11,12 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "fvm/report_support.h"
+#include "report/support.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 namespace {
 
-using namespace report;  // NOLINT: the report helpers
 
 // ---- error functions: a row per axis, translations left, rotations right ---------------------------------------
 
@@ -302,4 +301,4 @@ void WriteMachineReport(const std::filesystem::path& dir, const MachineReportDat
                         });
 }
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

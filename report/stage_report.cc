@@ -1,7 +1,7 @@
 // The report of `fvm calibrate` and `fvm diagnose`: its three plots and its page (the shared parts, PLplot into SVG
-// and the HTML skeleton, are in fvm/report_support.h).
+// and the HTML skeleton, are in report/support.h).
 
-#include "fvm/report.h"
+#include "report/stage_report.h"
 
 #include <fmt/format.h>
 #include <plplot.h>
@@ -13,13 +13,12 @@
 #include <utility>
 #include <vector>
 
-#include "fvm/report_support.h"
+#include "report/support.h"
 
-namespace fvm::cli {
+namespace fvm::report {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace report;  // NOLINT: the report helpers
 
 bool IsFinite(const ReportData::ErrorVector& e) {
   return std::isfinite(e.x_mm) && std::isfinite(e.y_mm) && std::isfinite(e.dx_um) && std::isfinite(e.dy_um);
@@ -418,4 +417,4 @@ void WriteReport(const fs::path& dir, const ReportData& data) {
   WriteReportFiles(dir, files);
 }
 
-}  // namespace fvm::cli
+}  // namespace fvm::report

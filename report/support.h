@@ -1,5 +1,5 @@
 #pragma once
-// What the reports of fvm share (fvm/report.cc for `fvm calibrate`/`diagnose`, fvm/machine_report.cc for
+// What the reports of fvm share (report/stage_report.cc for `fvm calibrate`/`diagnose`, report/machine_report.cc for
 // `fvm verify`): PLplot into SVG, one stream per plot; the palette; axis helpers; the HTML page skeleton and its
 // tables; writing a report directory atomically. Internal to the report library.
 
@@ -13,7 +13,7 @@
 
 #include "core/statistics.h"
 
-namespace fvm::cli::report {
+namespace fvm::report {
 
 // Indices into PLplot's colour map 0. Before and after use the Okabe-Ito vermilion and blue, which stay apart for
 // colour-blind readers and in greyscale print; the three series colours (Okabe-Ito bluish green, orange, reddish
@@ -107,4 +107,4 @@ std::string HtmlFigure(std::string_view file, std::string_view heading, std::str
 // cannot be written, and then leaves no file or directory it created behind.
 void WriteReportFiles(const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& files);
 
-}  // namespace fvm::cli::report
+}  // namespace fvm::report
