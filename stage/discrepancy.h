@@ -2,7 +2,7 @@
 // The discrepancy workflow: fit a stage model, study where it and the measurements disagree, name the physical
 // effect that explains the disagreement, add it, refit, and show the gap shrink.
 //
-// Each candidate effect is a block of extra parameters with a physical story (README, "Worked example: the discrepancy workflow"):
+// Each candidate effect is a block of extra parameters with a physical story (docs/tutorials/discrepancy.md):
 //   higher_order      a component needs the next polynomial order (one candidate per component: xTx, yRz, ...)
 //   z_coupling        pitch and roll (xRx, xRy, yRx, yRy) that only height changes reveal
 //   reference_anchor  each stitched measurement is anchored at the stage error of its own first tile

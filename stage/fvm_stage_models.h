@@ -4,7 +4,7 @@
 //
 // Convention: every model goes through [Pérez 2019] eq. 1 (AxisChain::FvmStage(): stitching-free coordinates in,
 // stitched coordinates out), so signs follow eq. 1. Where eq. 15 prints (1 + yTy1) it is (1 - yTy1) here, the sign typo
-// README documents ("The models"); eq. 15's combined offsets xTx0 + yTx0 etc. are carried by xTx0, xTy0, xTz0 alone.
+// docs/concepts/models.md documents; eq. 15's combined offsets xTx0 + yTx0 etc. are carried by xTx0, xTy0, xTz0 alone.
 //
 //   "15": the 12 translation and rotation components of X and Y and the 3 squareness terms, order 0.
 //   "27": the same 15 components of order 1, minus xTy1, xTz1, yTz1, which are the squareness terms xWy, xWz,

@@ -1,6 +1,6 @@
 #pragma once
 // Geometric verification of an XFYZ machine from a test piece's series ([Lorente 2021], second method), with extraction
-// formulas derived from our own first-order model instead of the published ones (which carry sign typos: README,
+// formulas derived from our own first-order model instead of the published ones (which carry sign typos: docs/commands/testpiece.md,
 // "Geometric verification").
 //
 // The model (stage/axis_chain.h to first order; X moves the part, Y sits on the frame, Z rides on Y, the tool point

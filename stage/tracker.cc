@@ -34,7 +34,7 @@ TrackerNoise TrackerNoise::Preset(std::string_view name) {
   if (name == "published") return t;
   if (name == "ifm") {
     // [Aguado 2016] Table 3, tracker A (interferometer): angular accuracy +-10 um/m across the beam, i.e. 10 urad. The
-    // table gives no range figure for it; an interferometer's 0.5 um + 0.4 um/m is assumed (README).
+    // table gives no range figure for it; an interferometer's 0.5 um + 0.4 um/m is assumed (docs/commands/verify.md).
     t.azimuth_sigma_rad = t.elevation_sigma_rad = 10e-6;
     t.range_sigma_mm = 0.0005;
     t.range_sigma_per_mm = 0.4e-6;

@@ -34,7 +34,7 @@ struct TrackerNoise {
   double elevation_sigma_rad = 24e-6;
 
   // "published" ([IJSIMM 2016] section 5, [Aguado 2017]): 24 urad, 4 um + 0.8 um/m; "ifm" and "adm": the interferometer
-  // and absolute distance meter of [Aguado 2016] Table 3 as README documents them; "none": a perfect tracker. Throws
+  // and absolute distance meter of [Aguado 2016] Table 3 as docs/commands/verify.md documents them; "none": a perfect tracker. Throws
   // std::invalid_argument listing the presets.
   static TrackerNoise Preset(std::string_view name);
   static std::vector<std::string> PresetNames();

@@ -54,7 +54,7 @@ struct MachinedPieceDescription {
 // Our reconstruction of the final design of [Lorente 2021] (section 5.2): a 300 x 270 x 180 mm block, crenellations on
 // its four edges up to z 180, four main slots 20 mm wide, a four-level pyramid, three side slots on each of two lateral
 // faces, and conical holes in two side faces for the Z series. 480 probe points, 167 of them on the pyramid; the
-// series X1..Z3 as [Lorente 2021] section 6.2.1 arranges them (see README, "The machined test piece").
+// series X1..Z3 as [Lorente 2021] section 6.2.1 arranges them (see docs/commands/testpiece.md).
 MachinedPieceDescription PublishedMachinedPiece();
 
 // Parses the JSON above. Throws InputError naming `name` and the feature on a malformed description, and listing

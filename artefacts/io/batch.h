@@ -1,6 +1,6 @@
 #pragma once
 // A batch directory: pairs <placement>.stitched.csv / <placement>.free.csv of the same calottes, and an optional
-// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (README, "The main job").
+// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (docs/formats.md).
 
 #include <Eigen/Core>
 #include <filesystem>

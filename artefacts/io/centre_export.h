@@ -1,5 +1,5 @@
 #pragma once
-// Calotte-centre exports (CSV), the contract between imaging and stage calibration (README, "The main job"):
+// Calotte-centre exports (CSV), the contract between imaging and stage calibration (docs/formats.md):
 // '#' comment lines, then a header naming at least id,x,y,z; optional t (s since the measurement started),
 // radius, form_rms; other columns ignored. Units mm. One file is one measurement of one artefact placement.
 

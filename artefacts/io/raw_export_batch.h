@@ -10,7 +10,7 @@
 // numbered expecting the stitched surface's rotation (both see the part through the same stage within tens of
 // microradians), so the two numberings agree or fail visibly. They must then hold the same calottes, and no
 // calotte may lie further from its partner than a quarter of the artefact's smallest spacing: the stitched
-// export lies at its first tile's stage reading (README, "The stitched frame"), so the two differ by the stage
+// export lies at its first tile's stage reading (docs/concepts/stitched-frame.md), so the two differ by the stage
 // error, a fraction of that. Otherwise the batch is refused with the
 // calotte ids named. Both surfaces must therefore carry their stage position (X3P axes' offsets).
 //

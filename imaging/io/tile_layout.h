@@ -1,5 +1,5 @@
 #pragma once
-// Tile layout files (README, "Worked example: stitching"): CSV `file,row,col[,x,y[,z]]`, '#' comment lines allowed;
+// Tile layout files (docs/tutorials/stitching.md): CSV `file,row,col[,x,y[,z]]`, '#' comment lines allowed;
 // file names relative to the layout's directory; row 0 is the highest Y and column 0 the lowest X (tile_plan.h); x, y
 // the nominal stage position of the tile's centre in mm, optional. `fvm tiles plan` writes it, `fvm stitch` reads it.
 

@@ -27,7 +27,7 @@ if(NOT a STREQUAL b)
 endif()
 
 run(0 simulate testpiece -o ${WORK}/tp --validation 30,30,30)
-# truth.json names the default errors by their source's key (README, "References").
+# truth.json names the default errors by their source's key (docs/bibliography.md).
 file(READ ${WORK}/tp/truth.json truth)
 string(JSON errors GET "${truth}" errors)
 if(NOT errors STREQUAL "[Lorente 2021] Table 4")

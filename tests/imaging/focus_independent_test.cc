@@ -107,7 +107,7 @@ class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
 // 0.055 on seed 6; 0.070 / 0.079 / 0.058 on seed 8). u_z: 95 % coverage measured at 91-97 % per region on these;
 // a region here holds a few hundred independent patches (errors correlate over the 9 px window), so one seed's
 // coverage scatters by about 1.5 %: held at 90-98.5 %. Outside these conditions (a 2 px texture, or NA 0.9 with
-// an 0.8 um floor) the errors reach 0.1-0.2 step and u_z covers only 75-90 % (README's table).
+// an 0.8 um floor) the errors reach 0.1-0.2 step and u_z covers only 75-90 % (the table of docs/commands/focus.md).
 TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
   if (!BenchUsable()) GTEST_SKIP() << kBench << " or python3 with numpy, scipy and tifffile is absent";
   const Condition& c = GetParam();

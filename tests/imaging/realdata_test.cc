@@ -175,7 +175,7 @@ TEST_P(RealSurfaces, MatchTheIndependentReader) {
   EXPECT_NEAR(stats.sq_mm, c.sq_m * 1e3, 1e-6 * c.sq_m * 1e3);
 }
 
-// The SDF "S2 Softgauges Example": README gives a 7 x 4 grid of 1 um; its Sq is computed here from the 28
+// The SDF "S2 Softgauges Example": its README gives a 7 x 4 grid of 1 um; its Sq is computed here from the 28
 // heights as the file prints them (Zscale 1e-6 m), by the textbook two-pass formula.
 double SoftgaugeSq() {
   const double z[28] = {1.00000, 0.99874, 0.99495, 0.98865, 0.97986, 0.96858, 1.00000,

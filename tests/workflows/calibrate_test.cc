@@ -73,7 +73,7 @@ TEST(CalibrateScans, ShortensTheValidationDistanceErrors) {
   EXPECT_EQ(r.validation_placements, sim.batch.validate);
   EXPECT_GT(r.predicted_xy_um, 0.0);
   EXPECT_LT(r.judged->after.distances.rms_mm, 0.5 * r.judged->before.distances.rms_mm);
-  // 2.3 um at 256 px (1.1 um at 1024 px in the README): the registrations' noise grows as the tiles shrink.
+  // 2.3 um at 256 px (1.1 um at 1024 px): the registrations' noise grows as the tiles shrink.
   EXPECT_LT(r.judged->after.distances.rms_mm * 1e3, 4.0);
 
   // Scans whose pairs all failed are refused, naming the first rejection.

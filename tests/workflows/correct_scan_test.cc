@@ -17,7 +17,7 @@ stage::Calibration Calibrated() {
   return CalibrateBatch(artefacts::SimulateFvmBatch(sim).batch, {}).result.calibration;
 }
 
-// A scan's points are corrected exactly as centres at the same coordinates (the README's promise: equal to 1 nm),
+// A scan's points are corrected exactly as centres at the same coordinates (the promise of docs/commands/correct.md: equal to 1 nm),
 // uncertainties included; a NaN point is counted, not moved.
 TEST(CorrectCloud, EveryPointAsACentreAtTheSameCoordinates) {
   const stage::Calibration cal = Calibrated();
