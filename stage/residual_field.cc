@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/dense_decomposition.h"
 
@@ -19,6 +21,22 @@ Eigen::Vector3d ShrunkForNoise(const Eigen::Vector3d& residual, const Eigen::Mat
       covariance, "the residual field: the covariance of point " + std::to_string(index + 1));
   const Eigen::Vector3d gain = (variance / (variance + eig.eigenvalues().cwiseMax(0.0).array())).sqrt().matrix();
   return eig.eigenvectors() * gain.asDiagonal() * eig.eigenvectors().transpose() * residual;
+}
+
+// The field's power per direction in the estimation error's span, the same in each: components a_j ~ N(0, f + k_j)
+// with k_j known (estimation error and noise), f by Paule and Mandel's moment equation sum a_j^2 / (f + k_j) = m
+// [Paule 1982], whose left side falls with f: zero when the components are no larger than their known variances.
+double FieldPowerAlong(const std::vector<double>& along, const std::vector<double>& known) {
+  const auto excess = [&](double f) {
+    double q = 0;
+    for (size_t j = 0; j < along.size(); ++j) q += along[j] * along[j] / (f + known[j]);
+    return q - static_cast<double>(along.size());
+  };
+  if (along.empty() || !(excess(0.0) > 0)) return 0.0;
+  double lo = 0, hi = 0;
+  for (size_t j = 0; j < along.size(); ++j) hi = std::max(hi, along[j] * along[j]);  // excess(max a_j^2) <= 0
+  for (int i = 0; i < 100 && hi - lo > 1e-12 * hi; ++i) (excess(0.5 * (lo + hi)) > 0 ? lo : hi) = 0.5 * (lo + hi);
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace
@@ -78,20 +96,33 @@ ResidualField HeldOutResidualField(const std::vector<Eigen::Vector3d>& residuals
     const Eigen::MatrixXd first = u.leftCols(used) * rescale;  // their covariance from those runs
     const auto gram_eig = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(
         Eigen::MatrixXd(first.transpose() * first), "the held-out field: the runs' Gram matrix");  // ascending
+    // Along each leading direction (unit, estimation variance l_j, the readings' noise n_j there) the residual's
+    // component a_j = field + estimation error + noise.
+    struct Direction {
+      Eigen::VectorXd axis;
+      double estimation = 0, noise = 0, along = 0;
+    };
+    std::vector<Direction> directions;
     const Eigen::Index m = std::min<Eigen::Index>(dimension, used);
-    Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
     for (Eigen::Index j = used - 1; j >= used - m; --j) {
       const double l = gram_eig.eigenvalues()[j];
       if (!(l > 1e-12 * gram_eig.eigenvalues()[used - 1]) || !(l > 0)) break;
-      const Eigen::VectorXd axis = first * gram_eig.eigenvectors().col(j) / std::sqrt(l);  // unit
-      double axis_noise = 0;  // the readings' noise along it
+      Direction d{first * gram_eig.eigenvectors().col(j) / std::sqrt(l), l, 0.0, 0.0};
       for (size_t p = 0; p < n; ++p) {
         const Eigen::Index at = 3 * static_cast<Eigen::Index>(p);
-        axis_noise += axis.segment<3>(at).dot(noise_covariances[p] * axis.segment<3>(at));
+        d.noise += d.axis.segment<3>(at).dot(noise_covariances[p] * d.axis.segment<3>(at));
       }
-      const double a = axis.dot(r);
-      const double field_there = std::max(0.0, a * a - l - axis_noise);
-      removed += axis * (l / (l + field_there + axis_noise) * a);
+      d.along = d.axis.dot(r);
+      directions.push_back(std::move(d));
+    }
+    std::vector<double> along, known;
+    for (const Direction& d : directions) along.push_back(d.along), known.push_back(d.estimation + d.noise);
+    const double f = FieldPowerAlong(along, known);
+    // Each component scaled to keep the expected power of the field and the noise, sqrt((f + n) / (f + n + l)).
+    Eigen::VectorXd removed = Eigen::VectorXd::Zero(rows);
+    for (const Direction& d : directions) {
+      const double keep = std::sqrt((f + d.noise) / (f + d.noise + d.estimation));
+      removed += d.axis * ((1.0 - keep) * d.along);
     }
     r -= removed;
   }

@@ -203,9 +203,9 @@ TEST(ResidualField, KeepsThePowerAboveTheNoiseAlikeInEveryDirection) {
   EXPECT_THROW(ShrunkResidualField(residuals, one), std::invalid_argument);
 }
 
-// Held-out residuals: a component along the estimation error's direction no larger than that error is taken out
-// whole; one far above it (the field's own) is kept less its expected share, l / a; the rest is the field, kept
-// whole where the readings are noise-free.
+// Held-out residuals along one direction of the estimation error (variance l): a component no larger than that
+// error is taken out whole; one far above it keeps its power less the error's, sqrt(a^2 - l); the rest is the field,
+// kept whole where the readings are noise-free.
 TEST(ResidualField, HeldOutTakesOutTheEstimationErrorAndKeepsTheFieldAlongIt) {
   const double s = 0.002;  // mm: the estimation error's standard deviation along its one direction w
   std::vector<Eigen::Vector3d> w(4, Eigen::Vector3d(0.5, 0, 0)), u;  // |w| = 1 over the four points
@@ -221,13 +221,57 @@ TEST(ResidualField, HeldOutTakesOutTheEstimationErrorAndKeepsTheFieldAlongIt) {
     std::vector<Eigen::Vector3d> residuals;
     for (int p = 0; p < 4; ++p) residuals.push_back(u[static_cast<size_t>(p)] + along * w[static_cast<size_t>(p)]);
     const ResidualField field = HeldOutResidualField(residuals, noise_free, runs, 3);
-    const double kept = along > s ? along - s * s / along : 0.0;
+    const double kept = along > s ? std::sqrt(along * along - s * s) : 0.0;
     for (int p = 0; p < 4; ++p) {
       const Eigen::Vector3d expected = u[static_cast<size_t>(p)] + kept * w[static_cast<size_t>(p)];
       EXPECT_NEAR((field.offsets_mm[static_cast<size_t>(p)] - expected).norm(), 0.0, 1e-12) << "along " << along << ", point " << p;
     }
   }
   EXPECT_THROW(HeldOutResidualField(std::vector<Eigen::Vector3d>(3), noise_free, runs, 3), std::invalid_argument);
+}
+
+// The field's power in the estimation error's span is one for all its directions: one direction of large estimation
+// error (sd 10 s) where the reference's error happens to be 2 sd (20 s), eight of small error (sd s) with components
+// of s, all of it estimation error. Judged alone, the large component would keep sqrt(400 - 100) / 20 = 87 % of
+// itself; pooled, the eight say that the field is weak there (f = 0.59 s^2 from sum a_j^2 / (f + l_j) = 9), and it
+// keeps sqrt(f / (f + 100 s^2)) = 7.7 %. The field outside the span stays whole.
+TEST(ResidualField, HeldOutLearnsTheFieldsPowerFromEveryDirectionOfTheEstimationError) {
+  const double s = 0.001;
+  constexpr int kPoints = 9;
+  const std::vector<double> sd{10 * s, s, s, s, s, s, s, s, s}, along{20 * s, s, s, s, s, s, s, s, s};
+  // Direction j: the x coordinate of point j alone. Runs +-c_j along it: variance 2 c_j^2 / (runs - 1) = sd_j^2.
+  std::vector<std::vector<Eigen::Vector3d>> runs;
+  const double runs_minus_one = 2.0 * kPoints - 1.0;
+  for (int j = 0; j < kPoints; ++j) {
+    for (double sign : {-1.0, 1.0}) {
+      std::vector<Eigen::Vector3d> run(kPoints, Eigen::Vector3d::Zero());
+      run[static_cast<size_t>(j)].x() = sign * sd[static_cast<size_t>(j)] * std::sqrt(runs_minus_one / 2.0);
+      runs.push_back(run);
+    }
+  }
+  std::vector<Eigen::Vector3d> residuals, outside;
+  for (int p = 0; p < kPoints; ++p) {
+    outside.emplace_back(0.0, 0.02 * (p % 3 - 1), 0.01 * (p + 1));
+    residuals.push_back(outside.back() + Eigen::Vector3d(along[static_cast<size_t>(p)], 0, 0));
+  }
+  const std::vector<Eigen::Matrix3d> noise_free(kPoints, Eigen::Matrix3d::Zero());
+  const ResidualField field = HeldOutResidualField(residuals, noise_free, runs, kPoints);
+  std::vector<double> keep;
+  for (int p = 0; p < kPoints; ++p) {
+    const Eigen::Vector3d f = field.offsets_mm[static_cast<size_t>(p)];
+    EXPECT_NEAR((Eigen::Vector3d(0, f.y(), f.z()) - outside[static_cast<size_t>(p)]).norm(), 0.0, 1e-12) << "point " << p;
+    keep.push_back(f.x() / along[static_cast<size_t>(p)]);
+  }
+  EXPECT_NEAR(keep[0], 0.0767, 0.0005);
+  // The power behind the kept shares, f = l keep^2 / (1 - keep^2), is one, and it solves the moment equation.
+  const double power = 100 * s * s * keep[0] * keep[0] / (1 - keep[0] * keep[0]);
+  double moment = 0;
+  for (int p = 0; p < kPoints; ++p) {
+    const double l = sd[static_cast<size_t>(p)] * sd[static_cast<size_t>(p)];
+    EXPECT_NEAR(l * keep[static_cast<size_t>(p)] * keep[static_cast<size_t>(p)] / (1 - keep[static_cast<size_t>(p)] * keep[static_cast<size_t>(p)]), power, 1e-9 * power);
+    moment += along[static_cast<size_t>(p)] * along[static_cast<size_t>(p)] / (power + l);
+  }
+  EXPECT_NEAR(moment, kPoints, 1e-6);
 }
 
 }  // namespace

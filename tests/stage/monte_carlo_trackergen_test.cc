@@ -1,0 +1,150 @@
+// The machine Monte Carlo against repeats of machines the project did not make: ../shared/bench's trackergen.py
+// (written apart from this code; --truth rich: cubics plus ball-screw and waviness sines no polynomial follows,
+// squareness per machine; the published tracker noise) reads machines 4, 5 and 6 again and again with fresh noise
+// (--noise-seed), as `bash ../shared/bench/check uncertainty` does for machine 4. Each repeat is verified as
+// fvm verify --chain XFYZ --order 1 --tool 0,0,100 --fit-pose --validate does, on the machine's noise-free
+// validation mesh, and the Monte Carlo from one repeat alone must predict the mean and the spread (sd) of the
+// repeats' validation mean errors, whichever repeat it starts from. Skips where ../shared or Debian's python3-numpy
+// and python3-scipy are absent.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "artefacts/io/tracker_readings.h"
+#include "artefacts/tracker_observations.h"
+#include "stage/machine_verification.h"
+#include "stage/monte_carlo.h"
+#include "tests/support/test_support.h"
+
+namespace fvm::stage {
+namespace {
+
+const std::filesystem::path kTrackergen = std::filesystem::path(FVM_BENCH_DIR) / "trackergen.py";
+
+bool TrackergenAvailable() {
+  return std::filesystem::exists(kTrackergen) && std::system("/usr/bin/python3 -c 'import numpy, scipy' >/dev/null 2>&1") == 0;
+}
+
+// trackergen.py's own main in one Python process (nothing written beside the bench): for each machine seed S,
+// DIR/S/val.csv (noise-free, --step 250,250,200) and DIR/S/dK.csv (--noise --noise-seed K) for K in 1..repeats.
+void Generate(const std::filesystem::path& dir, const std::vector<int>& seeds, int repeats) {
+  const std::string script =
+      "import sys, io, os, contextlib\n"
+      "sys.dont_write_bytecode = True\n"
+      "sys.path.insert(0, sys.argv[1]); import trackergen\n"
+      "d, n = sys.argv[2], int(sys.argv[3])\n"
+      "for seed in sys.argv[4:]:\n"
+      "    os.makedirs(d + '/' + seed)\n"
+      "    for name, extra in [('val.csv', ['--step', '250,250,200'])]"
+      " + [('d%d.csv' % k, ['--noise', '--noise-seed', str(k)]) for k in range(1, n + 1)]:\n"
+      "        sys.argv = ['trackergen.py', d + '/' + seed + '/' + name, '--seed', seed, '--truth', 'rich'] + extra\n"
+      "        with contextlib.redirect_stdout(io.StringIO()): trackergen.main()\n";
+  std::string command = "/usr/bin/python3 -c \"" + script + "\" '" + kTrackergen.parent_path().string() + "' '" +
+                        dir.string() + "' " + std::to_string(repeats);
+  for (int s : seeds) command += " " + std::to_string(s);
+  command += " >/dev/null 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+}
+
+// What fvm verify builds from the files: XFYZ, Legendre of order 1 on the span of the commanded points, tool
+// 0,0,100 mm, the pose estimated, each reading weighted by the published tracker noise.
+ParameterLayout SpanLayout(const std::filesystem::path& readings, const Eigen::Vector3d& tool) {
+  const artefacts::TrackerReadings read = artefacts::ReadTrackerReadings(readings);
+  std::array<Travel, 3> travel;
+  for (int k = 0; k < 3; ++k) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const artefacts::TrackerReading& r : read.points) lo = std::min(lo, r.nominal[k]), hi = std::max(hi, r.nominal[k]);
+    travel[static_cast<size_t>(k)] = Travel{lo, hi};
+  }
+  AxisChain chain = AxisChain::Parse("XFYZ");
+  chain.tool_offset = tool;
+  return MachineLayout(chain, travel, Basis::kLegendre, 1);
+}
+
+struct Machine {
+  TrackerNoise noise = TrackerNoise::Preset("published");
+  std::vector<Eigen::Vector3d> tools{Eigen::Vector3d(0, 0, 100)};
+  std::vector<Observation> validation;  // with the tracker's covariances (the Monte Carlo tells they are noise-free)
+  ParameterLayout layout;
+  IdentificationOptions options;
+
+  explicit Machine(const std::filesystem::path& dir)
+      : validation(artefacts::TrackerObservations(artefacts::ReadTrackerReadings(dir / "val.csv"), &noise)),
+        layout(SpanLayout(dir / "d1.csv", tools.front())) {
+    options.tool_offsets = tools;
+    options.instrument = InstrumentPose::kEstimated;
+    options.num_threads = 1;
+  }
+  std::vector<Observation> Readings(const std::filesystem::path& file) const {
+    return artefacts::TrackerObservations(artefacts::ReadTrackerReadings(file), &noise);
+  }
+  double ValidationMeanUm(const VerificationResult& v) const {
+    const Calibration& c = v.identified.calibration;
+    return Summarize(VolumetricResiduals(c.layout, &c.values, v.identified.pose, validation, tools)).mean_um();
+  }
+};
+
+// Three machines, 150 repeats each (the sd of their validation mean error, a skewed quantity, known to about 8 %),
+// the Monte Carlo (150 runs) from two repeats of each: the first (what check does) and the one of repeats 1-12
+// whose own validation error is largest, the hardest start, whose model is furthest from the machine. With the
+// field's power judged direction by direction, the reference's own estimation error stayed in the validation truth
+// and the prediction followed the start: from the hardest starts the spread came out 1.19, 1.28 and 1.16 of the
+// repeats' (1.36, 1.20, 1.27 against 200 repeats; stage/residual_field.h), 1.06, 1.03 and 0.88 now. Bounds: the
+// issue's 0.8-1.25 for both ratios. About 20 s on 2 cores. (A dozen repeats cannot judge this: the sd of 12 draws
+// of a quantity this skewed is below 1 / 1.4 of the truth's one time in seven, and trackergen's noise seeds 1-12,
+// the same noise for every machine, give 0.44-0.79 of what 200 repeats give on machines 4-6.)
+TEST(MachineMonteCarloTrackergen, PredictsRepeatsOfThreeMachinesFromAnyStart) {
+  if (!TrackergenAvailable()) GTEST_SKIP() << kTrackergen << " or python3-numpy/scipy absent (no ../shared)";
+  constexpr int kRepeats = 150, kCandidates = 12;
+  const std::vector<int> seeds{4, 5, 6};
+  fvm::testing::TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(Generate(dir.path(), seeds, kRepeats));
+  for (int seed : seeds) {
+    const std::filesystem::path at = dir.path() / std::to_string(seed);
+    const Machine machine(at);
+    std::vector<double> observed;
+    std::vector<std::vector<Observation>> candidates;
+    std::vector<VerificationResult> verified;
+    for (int k = 1; k <= kRepeats; ++k) {
+      std::string name = "d";
+      name += std::to_string(k) + ".csv";
+      std::vector<Observation> readings = machine.Readings(at / name);
+      VerificationResult v = VerifyMachine(machine.layout, readings, machine.options);
+      observed.push_back(machine.ValidationMeanUm(v));
+      if (k <= kCandidates) candidates.push_back(std::move(readings)), verified.push_back(std::move(v));
+    }
+    const SampleSummary real = SummarizeSample(observed);
+    const int hardest = static_cast<int>(std::max_element(observed.begin(), observed.begin() + kCandidates) - observed.begin());
+    for (int start : {0, hardest}) {
+      MonteCarloOptions mc;
+      mc.runs = 150;
+      mc.seed = 1;
+      std::vector<double> predicted;
+      for (const MachineMonteCarloRun& r : MachineMonteCarlo(machine.layout, verified[static_cast<size_t>(start)],
+                                                             candidates[static_cast<size_t>(start)], machine.validation,
+                                                             machine.noise, machine.options, mc)) {
+        predicted.push_back(r.validation.mean_um());
+      }
+      const SampleSummary simulated = SummarizeSample(predicted);
+      std::printf("trackergen --seed %d --truth rich: %d repeats %.2f +- %.2f um; Monte Carlo from repeat %d (its own "
+                  "%.2f um) %.2f +- %.2f um (ratios: mean %.3f, spread %.3f)\n",
+                  seed, kRepeats, real.mean, real.sd, start + 1, observed[static_cast<size_t>(start)], simulated.mean,
+                  simulated.sd, simulated.mean / real.mean, simulated.sd / real.sd);
+      EXPECT_GT(simulated.mean / real.mean, 0.8) << "machine " << seed << ", from repeat " << start + 1;
+      EXPECT_LT(simulated.mean / real.mean, 1.25) << "machine " << seed << ", from repeat " << start + 1;
+      EXPECT_GT(simulated.sd / real.sd, 0.8) << "machine " << seed << ", from repeat " << start + 1;
+      EXPECT_LT(simulated.sd / real.sd, 1.25) << "machine " << seed << ", from repeat " << start + 1;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fvm::stage
