@@ -256,6 +256,8 @@ std::vector<std::pair<std::string, std::string>> FixedCoefficients(const stage::
   return fixed;
 }
 
+void BindCalibrationJobs(py::module_& m);
+
 void BindCalibration(py::module_& m) {
   py::class_<PyCalibration, workflows::Summary>(
       m, "Calibration",
@@ -327,6 +329,11 @@ void BindCalibration(py::module_& m) {
                            c.result.calibration.layout.NumFree(), c.from_file ? ", from a file" : "");
       });
 
+  BindCalibrationJobs(m);
+}
+
+// fvm.calibrate, fvm.calibrate_scans, fvm.read_calibration.
+void BindCalibrationJobs(py::module_& m) {
   const workflows::CalibrateJobOptions defaults;  // the keywords' defaults are the command line's
   m.def("calibrate", &Calibrate, py::arg("batch"), py::arg("model") = defaults.model.model,
         py::arg("terms") = defaults.model.terms, py::arg("anchor") = defaults.settings.anchor,
