@@ -1,13 +1,15 @@
-// The main job: a stage model identified from a batch of stitched / stitching-free centre pairs (`fvm calibrate`),
-// judged on the validation placements, and used to compensate points (`fvm correct`); read from and saved to the
-// calibration file the command line writes and reads.
+// The main job: a stage model identified from a batch of stitched / stitching-free centre pairs, or from stitched
+// calibration scans (`fvm calibrate [--scan]`), judged on the validation placements, and used to compensate points
+// (`fvm correct`); read from and saved to the calibration file the command line writes and reads. The job and its
+// summary are the library's (workflows/calibrate_job.h, workflows/calibration_summary.h): a Calibration is an
+// fvm.Result whose summary is the command's --json document, the file save() writes the one -o writes.
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
 #include <fmt/core.h>
-#include <set>
+#include <fstream>
 
 #include "artefacts/io/batch.h"
 #include "artefacts/io/raw_export_batch.h"
@@ -17,17 +19,21 @@
 #include "python/bindings.h"
 #include "stage/calibration.h"
 #include "stage/io/calibration_file.h"
-#include "workflows/calibrate.h"
+#include "workflows/calibrate_job.h"
+#include "workflows/calibration_summary.h"
+#include "workflows/summary.h"
 
 namespace fvm::python {
 namespace {
 
-// What Python holds: the identification (the calibration and what the file records of the fit) and the figures
-// that judged it, as the command line's JSON names them.
-struct PyCalibration {
+// What Python holds: the job's summary (the --json document, the printed text, the report's data), the
+// identification (the calibration and what the file records of the fit), and the judged set's figures for plots.
+struct PyCalibration : workflows::Summary {
+  PyCalibration(workflows::Summary summary, stage::IdentificationResult r, bool file, py::dict j)
+      : workflows::Summary(std::move(summary)), result(std::move(r)), from_file(file), judged(std::move(j)) {}
   stage::IdentificationResult result;
   bool from_file = false;
-  py::dict summary;
+  py::dict judged;
 };
 
 py::dict StatsDict(const stage::ValidationStats& s) {
@@ -84,48 +90,18 @@ artefacts::Batch BatchFromArrays(const py::dict& placements, const std::optional
   std::sort(batch.placements.begin(), batch.placements.end(),
             [](const artefacts::Placement& a, const artefacts::Placement& b) { return a.name < b.name; });
   batch.has_roles = identify || validate;
-  batch.validate = validate.value_or(std::vector<std::string>{});
-  const std::set<std::string> validating(batch.validate.begin(), batch.validate.end());
-  if (identify) {
-    batch.identify = *identify;
-  } else {
-    for (const auto& p : batch.placements) {
-      if (!validating.count(p.name)) batch.identify.push_back(p.name);
-    }
+  for (const auto& role : {identify, validate}) {
+    for (const std::string& name : role.value_or(std::vector<std::string>{})) batch.Get(name);  // names an unknown placement
   }
-  for (const std::vector<std::string>* role : {&batch.identify, &batch.validate}) {
-    for (const std::string& name : *role) batch.Get(name);  // names an unknown placement
-  }
-  for (const std::string& name : batch.identify) {
-    if (validating.count(name)) {
-      throw InputError("placement " + name + " is both identified and validated on: validation data never enters the fit");
-    }
-  }
-  if (batch.identify.empty()) throw InputError("no placement left to identify from");
+  artefacts::AssignBatchRoles(batch, identify, validate.value_or(std::vector<std::string>{}), "arrays");
   return batch;
 }
 
-PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, const std::string& terms,
-                        const std::string& anchor, const std::string& loss, double loss_scale_um,
-                        const std::string& stitched_frame, int threads,
-                        const std::optional<std::vector<std::string>>& identify,
-                        const std::optional<std::vector<std::string>>& validate, bool allow_unconverged,
-                        const std::string& artefact) {
-  artefacts::Batch batch;
-  std::string source;
-  if (py::isinstance<py::dict>(batch_arg)) {
-    batch = BatchFromArrays(batch_arg.cast<py::dict>(), identify, validate);
-    source = "arrays";
-  } else {
-    if (identify || validate) throw InputError("identify / validate go with a batch of arrays: a directory has batch.json");
-    source = py::str(batch_arg);
-    py::gil_scoped_release release;
-    // Centre exports, or the instrument's raw surface exports (X3P, AL3D, SDF, TIFF) searched for the artefact's
-    // calottes, as `fvm calibrate DIR --artefact NAME` does.
-    batch = artefacts::HoldsRawExports(source) ? artefacts::ReadRawExportBatch(source, {artefact}).batch
-                                               : artefacts::ReadBatch(source);
-  }
-  workflows::CalibrateOptions options;
+// The keywords every calibration takes, as the command line's options.
+workflows::CalibrateJobOptions JobOptions(const py::object& model, const std::string& terms, const std::string& anchor,
+                                          const std::string& loss, double loss_scale_um,
+                                          const std::string& stitched_frame, int threads) {
+  workflows::CalibrateJobOptions options;
   options.model.model = py::str(model);
   options.model.terms = terms;
   options.settings.anchor = anchor;
@@ -133,31 +109,27 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
   options.settings.loss_scale_um = loss_scale_um;
   options.settings.stitched_frame = stitched_frame;
   options.settings.threads = threads;
-  options.judge_identification = true;
-  std::optional<workflows::BatchCalibration> c;
-  {
-    py::gil_scoped_release release;
-    c.emplace(workflows::CalibrateBatch(batch, options));
-  }
-  const stage::IdentificationResult& r = c->result;
+  return options;
+}
+
+void RefuseUnconverged(const stage::IdentificationResult& r, bool allow_unconverged) {
   if (!r.converged && !allow_unconverged) {
     throw NotConvergedError(fmt::format("model {}: the solver stopped after {} iterations without converging; do not "
                                         "use it: check the batch for outliers or try loss='huber' "
                                         "(allow_unconverged=True returns it anyway)",
                                         r.calibration.model, r.iterations));
   }
-  PyCalibration out{r, false, {}};
-  py::dict identification = py::dict(py::arg("placements") = batch.identify, py::arg("centres") = r.residuals.size(),
-                                     py::arg("mean_um") = r.residual_summary.mean_um(), py::arg("rms_um") = r.residual_summary.rms_um(),
-                                     py::arg("max_um") = r.residual_summary.max_um(),
-                                     py::arg("before_mean_um") = c->identification_before.mean_mm * 1e3);
-  out.summary["batch"] = source;
-  out.summary["identification"] = identification;
-  // Judged on the validation placements when the batch names them, else on the identification ones.
-  const workflows::BeforeAfter& judged = *c->judged;
+}
+
+// The judged set's figures (the validation placements, or the identification ones without them), as the
+// validation block names them, with what a plot of the correction needs: where each shown centre was commanded and
+// its error before and after (stitched - compensated, the residual's opposite), in the first tile's frame.
+py::dict JudgedDict(const workflows::BatchCalibrationRun& run) {
+  const workflows::BatchCalibration& c = run.calibration;
+  const workflows::BeforeAfter& judged = *c.judged;
   py::dict v = JudgementDict(judged.after);
-  v["placements"] = c->validation ? batch.validate : batch.identify;
-  v["held_out"] = c->validation.has_value();
+  v["placements"] = c.validation ? run.input.batch.validate : run.input.batch.identify;
+  v["held_out"] = c.validation.has_value();
   v["before"] = JudgementDict(judged.before);
   const auto max_abs = [](const std::vector<double>& e) {
     double m = 0;
@@ -166,9 +138,7 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
   };
   v["distance_error_max_um"] = py::dict(py::arg("before") = max_abs(judged.distance_errors_before_mm),
                                         py::arg("after") = max_abs(judged.distance_errors_after_mm));
-  // The figures a plot of the correction needs: where each shown centre was commanded and its error before and
-  // after (stitched - compensated, the residual's opposite), in the first tile's frame.
-  const stage::MeasurementSet& shown = c->Shown();
+  const stage::MeasurementSet& shown = c.Shown();
   std::vector<Eigen::Vector3d> commands, before, after;
   for (std::size_t i = 0; i < shown.observations.size(); ++i) {
     commands.push_back(shown.observations[i].command);
@@ -178,11 +148,75 @@ PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, co
   v["commands"] = PointsArray(commands);
   v["errors_before"] = PointsArray(before);
   v["errors_after"] = PointsArray(after);
-  out.summary["judged"] = v;
-  return out;
+  return v;
 }
 
-nlohmann::json Document(const PyCalibration& c) { return stage::CalibrationToJson(c.result); }
+PyCalibration Calibrate(const py::object& batch_arg, const py::object& model, const std::string& terms,
+                        const std::string& anchor, const std::string& loss, double loss_scale_um,
+                        const std::string& stitched_frame, int threads,
+                        const std::optional<std::vector<std::string>>& identify,
+                        const std::optional<std::vector<std::string>>& validate, bool allow_unconverged,
+                        const std::string& artefact, const std::string& centres_dir) {
+  workflows::CalibrateJobOptions options = JobOptions(model, terms, anchor, loss, loss_scale_um, stitched_frame, threads);
+  options.artefact = artefact;
+  options.centres_dir = centres_dir;
+  options.judge_identification = true;  // what write_report and `judged` show without validation placements
+  std::optional<workflows::CalibrationBatchInput> input;
+  if (py::isinstance<py::dict>(batch_arg)) {
+    input = workflows::CalibrationBatchInput{"arrays", BatchFromArrays(batch_arg.cast<py::dict>(), identify, validate), std::nullopt};
+  } else {
+    if (identify || validate) throw InputError("identify / validate go with a batch of arrays: a directory has batch.json");
+    const std::string source = py::str(batch_arg);
+    py::gil_scoped_release release;
+    // Centre exports, or the instrument's raw surface exports (X3P, AL3D, SDF, TIFF) searched for the artefact's
+    // calottes, as `fvm calibrate DIR --artefact NAME` does.
+    input = workflows::ReadCalibrationBatch(source, options);
+  }
+  std::optional<workflows::BatchCalibrationRun> run;
+  std::optional<workflows::Summary> summary;
+  {
+    py::gil_scoped_release release;
+    run.emplace(workflows::CalibrateBatchInput(std::move(*input), options));
+    summary.emplace(workflows::Summarize(*run));
+  }
+  RefuseUnconverged(run->calibration.result, allow_unconverged);
+  return PyCalibration(std::move(*summary), run->calibration.result, false, JudgedDict(*run));
+}
+
+// distortion=None / False: none; True: identify the default order; N: identify order N (as --distortion [N]).
+workflows::DistortionOptions DistortionKeywords(const py::object& distortion, const std::string& file, const std::string& save) {
+  workflows::DistortionOptions d;
+  d.file = file;
+  d.save = save;
+  if (!distortion.is_none() && !(py::isinstance<py::bool_>(distortion) && !distortion.cast<bool>())) {
+    d.identify = true;
+    if (!py::isinstance<py::bool_>(distortion)) d.order = py::str(distortion);
+  }
+  return d;
+}
+
+PyCalibration CalibrateScans(const std::vector<std::string>& scan, double pixel_mm, double pixel_u_mm,
+                             const py::object& model, const std::string& terms, const std::string& anchor,
+                             const std::string& loss, double loss_scale_um, const std::string& stitched_frame,
+                             int threads, const std::string& validate, const py::object& distortion,
+                             const std::string& distortion_file, const std::string& save_distortion,
+                             bool allow_unconverged) {
+  workflows::CalibrateJobOptions options = JobOptions(model, terms, anchor, loss, loss_scale_um, stitched_frame, threads);
+  options.pixel_mm = pixel_mm;
+  options.pixel_u_mm = pixel_u_mm;
+  options.validate = validate;
+  options.distortion = DistortionKeywords(distortion, distortion_file, save_distortion);
+  if (scan.empty()) throw InputError("scan: give the layout CSV of at least one stitched calibration scan");
+  std::optional<workflows::ScanCalibrationRun> run;
+  std::optional<workflows::Summary> summary;
+  {
+    py::gil_scoped_release release;
+    run.emplace(workflows::CalibrateScanLayouts(scan, options));
+    summary.emplace(workflows::Summarize(*run));
+  }
+  RefuseUnconverged(run->calibration.fitted.result, allow_unconverged);
+  return PyCalibration(std::move(*summary), run->calibration.fitted.result, false, py::dict());
+}
 
 }  // namespace
 
@@ -207,10 +241,14 @@ std::vector<std::pair<std::string, std::string>> FixedCoefficients(const stage::
   return fixed;
 }
 
+void BindCalibrationJobs(py::module_& m);
+
 void BindCalibration(py::module_& m) {
-  py::class_<PyCalibration>(m, "Calibration",
-                            "An identified stage model: parameters (names, values, u in mm and rad), correct(points), "
-                            "save(path), and the figures that judged it (summary).\n\nExample:\n"
+  py::class_<PyCalibration, workflows::Summary>(
+      m, "Calibration",
+      "An identified stage model: parameters (names, values, u in mm and rad), correct(points), save(path); an "
+      "fvm.Result whose summary is `fvm calibrate --json`'s document (str(): the printed table; "
+      "fvm.write_report(cal, dir): the --report files).\n\nExample:\n"
                             "    >>> cal = fvm.calibrate('samples/bar17', model=27)\n"
                             "    >>> p = cal.parameters\n    >>> dict(zip(p['names'], p['values']))['xTx1']")
       .def_property_readonly("model", [](const PyCalibration& c) { return c.result.calibration.model; })
@@ -231,11 +269,11 @@ void BindCalibration(py::module_& m) {
       .def_property_readonly("condition_number", [](const PyCalibration& c) { return c.result.condition_number; })
       .def_property_readonly("fixed", [](const PyCalibration& c) { return FixedCoefficients(c.result); },
                              "(name, reason) of the coefficients the data could not determine, fixed at 0")
-      .def_readonly("summary", &PyCalibration::summary,
-                    "what judged the calibration, as `fvm calibrate --json` names it: identification (rms_um, ...) "
-                    "and judged (the validation placements, or the identification ones without them: rigid, "
-                    "distances, first tile before and after; commands and errors_before / errors_after, N x 3 mm, "
-                    "for plots)")
+      .def_readonly("judged", &PyCalibration::judged,
+                    "the set that judged a batch calibration (its validation placements, or the identification "
+                    "ones without them) as the --json validation block names it (rigid, distances, first tile "
+                    "before and after, held_out), with commands and errors_before / errors_after, N x 3 mm, for "
+                    "plots; empty for a scan calibration or a file")
       .def(
           "correct",
           [](const PyCalibration& c, const DoubleArray& points) {
@@ -262,40 +300,73 @@ void BindCalibration(py::module_& m) {
               throw InputError(path.string() + ": a calibration read from a file holds no fit to write again; copy the "
                                "file instead; nothing was written");
             }
-            WriteFileAtomically(path, Document(c).dump(2) + "\n");
+            WriteFileAtomically(path, c.json.dump(2) + "\n");
           },
           py::arg("path"),
-          "Writes the calibration file `fvm correct --calibration` reads (JSON, mm and rad), atomically.\n\n"
+          "Writes the calibration file `fvm correct --calibration` reads (JSON, mm and rad), atomically: the file "
+          "`fvm calibrate -o` writes for the same calibration (its summary).\n\n"
           "Example:\n    >>> cal.save('cal.json')")
-      .def("to_json", [](const PyCalibration& c) { return Document(c).dump(2); },
-           "The calibration file's JSON text (parameters, covariance, residual statistics).\n\nExample:\n"
+      .def("to_json", [](const PyCalibration& c) { return c.json.dump(2); },
+           "The calibration file's JSON text (parameters, covariance, residual statistics, what judged it).\n\nExample:\n"
            "    >>> import json; json.loads(cal.to_json())['parameters'][0]")
       .def("__repr__", [](const PyCalibration& c) {
         return fmt::format("<fvm.Calibration model {} ({} free parameters{})>", c.result.calibration.model,
                            c.result.calibration.layout.NumFree(), c.from_file ? ", from a file" : "");
       });
 
-  m.def("calibrate", &Calibrate, py::arg("batch"), py::arg("model") = "27", py::arg("terms") = "",
-        py::arg("anchor") = "none", py::arg("loss") = "none", py::arg("loss_scale_um") = 5.0,
-        py::arg("stitched_frame") = "rotated", py::arg("threads") = 0, py::arg("identify") = std::nullopt,
-        py::arg("validate") = std::nullopt, py::arg("allow_unconverged") = false, py::arg("artefact") = "bar17",
+  BindCalibrationJobs(m);
+}
+
+// fvm.calibrate, fvm.calibrate_scans, fvm.read_calibration.
+void BindCalibrationJobs(py::module_& m) {
+  const workflows::CalibrateJobOptions defaults;  // the keywords' defaults are the command line's
+  m.def("calibrate", &Calibrate, py::arg("batch"), py::arg("model") = defaults.model.model,
+        py::arg("terms") = defaults.model.terms, py::arg("anchor") = defaults.settings.anchor,
+        py::arg("loss") = defaults.settings.loss, py::arg("loss_scale_um") = defaults.settings.loss_scale_um,
+        py::arg("stitched_frame") = defaults.settings.stitched_frame, py::arg("threads") = defaults.settings.threads,
+        py::arg("identify") = std::nullopt, py::arg("validate") = std::nullopt, py::arg("allow_unconverged") = false,
+        py::arg("artefact") = defaults.artefact, py::arg("centres_dir") = defaults.centres_dir,
         "Identifies the stage model (9, 15, 27 or 42 parameters, or `terms`) from a batch, as `fvm calibrate BATCH "
         "--model N` does: a batch directory (pairs <placement>.stitched.csv / .free.csv, optional batch.json; or "
         "the raw surface exports <placement>.stitched.x3p / .free.x3p etc., searched for the calottes of "
-        "`artefact`), or "
+        "`artefact`, their centre exports written into `centres_dir` when given), or "
         "a dict {name: {'ids': [...], 'stitched': N x 3, 'free': N x 3}} with optional identify / validate lists "
-        "of names. Raises fvm.InputError for a bad batch or a model it cannot carry, fvm.NotConvergedError when the "
-        "solver did not converge (unless allow_unconverged).\n\nExample:\n"
+        "of names. Returns a Calibration: its summary is `fvm calibrate --json`'s document, save() writes what -o "
+        "writes, fvm.write_report(cal, dir) what --report writes. Raises fvm.InputError for a bad batch or a model "
+        "it cannot carry, fvm.NotConvergedError when the solver did not converge (unless allow_unconverged)."
+        "\n\nExample:\n"
         "    >>> cal = fvm.calibrate('samples/bar17', model=27)\n"
-        "    >>> cal.summary['judged']['distances']['rms_um']");
+        "    >>> cal.summary['validation']['distances']['rms_um']");
+
+  m.def("calibrate_scans", &CalibrateScans, py::arg("scan"), py::arg("pixel_mm"),
+        py::arg("pixel_u_mm") = defaults.pixel_u_mm, py::arg("model") = defaults.model.model,
+        py::arg("terms") = defaults.model.terms, py::arg("anchor") = defaults.settings.anchor,
+        py::arg("loss") = defaults.settings.loss, py::arg("loss_scale_um") = defaults.settings.loss_scale_um,
+        py::arg("stitched_frame") = defaults.settings.stitched_frame, py::arg("threads") = defaults.settings.threads,
+        py::arg("validate") = defaults.validate, py::arg("distortion") = py::none(),
+        py::arg("distortion_file") = defaults.distortion.file, py::arg("save_distortion") = defaults.distortion.save,
+        py::arg("allow_unconverged") = false,
+        "Identifies the stage model from stitched calibration scans of any textured part, as `fvm calibrate --scan "
+        "L.csv [--scan ...] --pixel-mm P` does: `scan` the layout CSVs (file,row,col,x,y[,z], encoder readings in "
+        "mm), `pixel_mm` the pixel size on the part and `pixel_u_mm` its standard uncertainty, `validate` an "
+        "artefact batch whose validation placements judge the result (and make a report), `distortion` True or an "
+        "order 2-6 to identify the objective's field distortion from the overlaps (or `distortion_file` a saved "
+        "one; `save_distortion` writes it). Returns a Calibration whose summary is `fvm calibrate --scan ... "
+        "--json`'s document.\n\nExample:\n"
+        "    >>> cal = fvm.calibrate_scans(['s/row.csv', 's/column.csv', 's/diagonal.csv'], pixel_mm=0.022, model=15)\n"
+        "    >>> cal.summary['predicted_xy_u_um']['combined']");
 
   m.def(
       "read_calibration",
       [](const std::filesystem::path& path) {
-        return PyCalibration{stage::IdentificationResult(stage::ReadCalibration(path)), true, {}};
+        stage::IdentificationResult result(stage::ReadCalibration(path));
+        std::ifstream in(path);
+        workflows::Summary summary{nlohmann::json::parse(in, nullptr, false), "", std::nullopt};
+        return PyCalibration(std::move(summary), std::move(result), true, py::dict());
       },
       py::arg("path"),
-      "Reads a calibration file written by `fvm calibrate -o` (or Calibration.save) for correct().\n\nExample:\n"
+      "Reads a calibration file written by `fvm calibrate -o` (or Calibration.save) for correct(); its summary "
+      "is the file's document.\n\nExample:\n"
       "    >>> cal = fvm.read_calibration('cal.json')\n    >>> cal.correct(points)");
 }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -146,26 +147,9 @@ void ReadRoles(const std::filesystem::path& path, Batch& batch) {
       }
     }
   }
-  for (const std::string& name : batch.validate) {
-    if (std::find(batch.identify.begin(), batch.identify.end(), name) != batch.identify.end()) {
-      throw InputError(fmt::format("{}: placement '{}' is both in \"identify\" and \"validate\"; validation data "
-                                   "must not enter the fit: keep it in one list",
-                                   where, name));
-    }
-  }
-  if (!has_identify) {
-    // Everything not held out for validation identifies, as without batch.json.
-    for (const std::string& name : all) {
-      if (std::find(batch.validate.begin(), batch.validate.end(), name) == batch.validate.end()) {
-        batch.identify.push_back(name);
-      }
-    }
-  }
-  if (batch.identify.empty()) {
-    throw InputError(fmt::format("{}: no placement is left to identify the model; list at least one in "
-                                 "\"identify\"",
-                                 where));
-  }
+  std::optional<std::vector<std::string>> identify;
+  if (has_identify) identify = batch.identify;
+  AssignBatchRoles(batch, identify, batch.validate, where);
   if (const auto lens = roles.find("lens"); lens != roles.end()) {
     if (!lens->is_string()) {
       throw InputError(fmt::format("{}: \"lens\" must be a string such as \"5x\", found {}", where, lens->dump()));
@@ -231,6 +215,32 @@ Batch ReadBatch(const std::filesystem::path& dir) {
   }
   ApplyBatchRoles(dir, batch);
   return batch;
+}
+
+void AssignBatchRoles(Batch& batch, const std::optional<std::vector<std::string>>& identify,
+                      const std::vector<std::string>& validate, const std::string& where) {
+  for (const std::string& name : validate) {
+    if (identify && std::find(identify->begin(), identify->end(), name) != identify->end()) {
+      throw InputError(fmt::format("{}: placement '{}' is both in \"identify\" and \"validate\"; validation data "
+                                   "must not enter the fit: keep it in one list",
+                                   where, name));
+    }
+  }
+  batch.validate = validate;
+  if (identify) {
+    batch.identify = *identify;
+  } else {
+    // Everything not held out for validation identifies, as without batch.json.
+    batch.identify.clear();
+    for (const Placement& p : batch.placements) {
+      if (std::find(validate.begin(), validate.end(), p.name) == validate.end()) batch.identify.push_back(p.name);
+    }
+  }
+  if (batch.identify.empty()) {
+    throw InputError(fmt::format("{}: no placement is left to identify the model; list at least one in "
+                                 "\"identify\"",
+                                 where));
+  }
 }
 
 void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,13 @@ Placement PairCentreExports(const std::string& name, const CentreExport& stitche
 // Gives batch.placements their roles: from dir/batch.json when it exists (throws as ReadBatch on a bad one), else
 // every placement identifies. ReadBatch calls it; so does a reader of raw exports (raw_export_batch.h).
 void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch);
+
+// The role rules batch.json and a batch given as arrays (Python's fvm.calibrate) share: no placement in both
+// lists (validation data never enters the fit), every placement not validated identifies when `identify` is not
+// given, and at least one identifies. Sets batch.identify and batch.validate; InputError messages start with
+// `where`. The names must already be placements of the batch.
+void AssignBatchRoles(Batch& batch, const std::optional<std::vector<std::string>>& identify,
+                      const std::vector<std::string>& validate, const std::string& where);
 
 // Writes a batch (pairs and, when roles are given, batch.json) atomically file by file.
 void WriteBatch(const std::filesystem::path& dir, const Batch& batch);

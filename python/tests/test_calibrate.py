@@ -32,7 +32,7 @@ def test_parameters_equal_the_command_lines_bit_for_bit(cal, cli_doc):
 
 
 def test_validation_figures_equal_the_command_lines(cal, cli_doc):
-    judged, v = cal.summary["judged"], cli_doc["validation"]
+    judged, v = cal.judged, cli_doc["validation"]
     assert judged["held_out"] and judged["placements"] == v["placements"]
     for key in ("rigid", "distances"):
         assert judged[key]["rms_um"] == v[key]["rms_um"]
@@ -59,7 +59,7 @@ def test_arrays_give_the_same_calibration_as_the_directory(cal):
         placements[name] = {"ids": ids, "stitched": stitched, "free": free[order]}
     from_arrays = fvm.calibrate(placements, model=27, identify=roles["identify"], validate=roles["validate"])
     assert from_arrays.parameters["values"].tolist() == cal.parameters["values"].tolist()
-    assert from_arrays.summary["judged"]["distances"] == cal.summary["judged"]["distances"]
+    assert from_arrays.judged["distances"] == cal.judged["distances"]
 
 
 def test_correct_equals_fvm_correct_with_the_saved_file(cal, tmp_path):
@@ -84,7 +84,7 @@ def test_bad_batches_raise_the_command_lines_messages(tmp_path):
     assert err.strip() == f"fvm: error: {raised.value}"
     with pytest.raises(fvm.InputError, match="unknown model '8'"):
         fvm.calibrate(str(SAMPLE), model=8)
-    with pytest.raises(fvm.InputError, match="both identified and validated"):
+    with pytest.raises(fvm.InputError, match='arrays: placement .a. is both in "identify" and "validate"'):
         fvm.calibrate({"a": {"ids": [1, 2, 3], "stitched": np.eye(3), "free": np.eye(3)}}, identify=["a"], validate=["a"])
 
 

@@ -4,7 +4,7 @@ import re
 import fvm
 from conftest import run_cli
 
-FUNCTIONS = ["read_surface", "write_surface", "find_calottes", "fit_sphere", "fit_plane", "calibrate",
+FUNCTIONS = ["read_surface", "write_surface", "find_calottes", "fit_sphere", "fit_plane", "calibrate", "calibrate_scans",
              "read_calibration", "verify", "stitch", "focus"]
 
 

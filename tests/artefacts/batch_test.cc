@@ -190,6 +190,23 @@ TEST(Batch, ValidateAloneLeavesTheRestToIdentify) {
   EXPECT_THAT(batch.validate, ElementsAre("y"));
 }
 
+// The rules batch.json follows, for a batch given another way (Python's arrays): the messages start with `where`.
+TEST(Batch, RolesOfABatchInMemoryFollowTheRulesOfBatchJson) {
+  Batch batch;
+  batch.placements = {MakePlacement("x", {1}, 0.0, false), MakePlacement("y", {1}, 0.0, false),
+                      MakePlacement("z", {1}, 0.0, false)};
+  AssignBatchRoles(batch, std::nullopt, {"y"}, "arrays");
+  EXPECT_THAT(batch.identify, ElementsAre("x", "z"));
+  EXPECT_THAT(batch.validate, ElementsAre("y"));
+  AssignBatchRoles(batch, std::vector<std::string>{"z"}, {}, "arrays");
+  EXPECT_THAT(batch.identify, ElementsAre("z"));
+  EXPECT_TRUE(batch.validate.empty());
+  EXPECT_THAT(InputErrorOf([&] { AssignBatchRoles(batch, std::vector<std::string>{"x"}, {"x"}, "arrays"); }),
+              HasSubstr("arrays: placement 'x' is both in \"identify\" and \"validate\""));
+  EXPECT_THAT(InputErrorOf([&] { AssignBatchRoles(batch, std::nullopt, {"x", "y", "z"}, "arrays"); }),
+              HasSubstr("arrays: no placement is left to identify the model"));
+}
+
 TEST(Batch, FailingWriteLeavesNoFileBehind) {
   testing::TempDir dir;
   Batch batch;
