@@ -33,7 +33,8 @@ void AddMachineOptions(CLI::App* sub, workflows::MachineProblemOptions& o) {
 void AddToolOption(CLI::App* sub, workflows::MachineProblemOptions& o, const std::string& description) {
   std::string shown;
   for (const Eigen::Vector3d& t : o.tools) {
-    shown += (shown.empty() ? "" : ",") + FormatShortest(t.x()) + "," + FormatShortest(t.y()) + "," + FormatShortest(t.z());
+    if (!shown.empty()) shown += ',';
+    shown += FormatShortest(t.x()) + "," + FormatShortest(t.y()) + "," + FormatShortest(t.z());
   }
   sub->add_option_function<std::vector<std::string>>(
          "--tool",
