@@ -3,13 +3,9 @@
 
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <optional>
 #include <stdexcept>
 
-#include "artefacts/io/multilateration_readings.h"
-#include "artefacts/io/tracker_readings.h"
-#include "core/file_io.h"
 #include "core/number_text.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
@@ -61,18 +57,7 @@ void RunTracker(const SimulateTrackerCommand& c) {
   }
   o.Check();
   const workflows::SimulatedTracker s = workflows::SimulateTracker(o);
-  const std::filesystem::path dir(c.output);
-  std::filesystem::create_directories(dir);
-  WriteFileAtomically(dir / "points.csv", s.points_csv);
-  WriteFileAtomically(dir / "program.nc", s.program);
-  if (s.readings) artefacts::WriteTrackerReadings(dir / "readings.csv", *s.readings);
-  if (s.station_readings) {
-    artefacts::WriteMultilaterationReadings(dir / "readings.csv", *s.station_readings);
-    WriteFileAtomically(dir / "stations.json", s.stations_json);
-    WriteFileAtomically(dir / "true_points.csv", s.true_points_csv);
-  }
-  if (s.validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *s.validation);
-  if (s.truth) WriteFileAtomically(dir / "truth.json", s.truth->dump(2) + "\n");
+  workflows::WriteFiles(s, c.output);
   fmt::print("{}", workflows::Summarize(s, o, c.output).text);
 }
 

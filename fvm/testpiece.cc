@@ -75,12 +75,7 @@ struct PieceSimulateCommand {
 void RunPieceSimulate(const PieceSimulateCommand& c) {
   c.options.Check();
   const workflows::SimulatedTestPiece simulated = workflows::SimulateTestPiece(c.options);
-  std::filesystem::create_directories(c.output);
-  const std::filesystem::path dir(c.output);
-  artefacts::WriteNominalPoints((dir / "nominal.csv").string(), simulated.nominal);
-  artefacts::WriteTrackerReadings(dir / "measured.csv", simulated.measured);
-  if (simulated.validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *simulated.validation);
-  WriteFileAtomically(dir / "truth.json", simulated.truth.dump(2) + "\n");
+  workflows::WriteFiles(simulated, c.output);
   workflows::Summary summary = workflows::Summarize(simulated, c.options, c.output);
   summary.json["output"] = c.output;
   fmt::print("{}", c.json ? summary.json.dump(2) + "\n" : summary.text);

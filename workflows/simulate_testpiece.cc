@@ -5,6 +5,7 @@
 #include "artefacts/io/machine_truth_file.h"
 #include "artefacts/simulation/machine_tool_simulation.h"
 #include "artefacts/simulation/machined_piece_simulation.h"
+#include "core/file_io.h"
 #include "core/input_error.h"
 #include "workflows/machine_summary.h"
 #include "workflows/machined_piece_verify.h"
@@ -112,6 +113,14 @@ SimulatedTestPiece SimulateTestPiece(const SimulateTestPieceOptions& o) {
   out.truth["seed"] = o.seed;
   out.truth["errors"] = ErrorsName(o);
   return out;
+}
+
+void WriteFiles(const SimulatedTestPiece& simulated, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  artefacts::WriteNominalPoints((dir / "nominal.csv").string(), simulated.nominal);
+  artefacts::WriteTrackerReadings(dir / "measured.csv", simulated.measured);
+  if (simulated.validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *simulated.validation);
+  WriteFileAtomically(dir / "truth.json", simulated.truth.dump(2) + "\n");
 }
 
 Summary Summarize(const SimulatedTestPiece& simulated, const SimulateTestPieceOptions& o, const std::string& output) {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +43,9 @@ struct SimulatedTestPiece {
   nlohmann::json truth;                                    // truth.json: the errors, chain, tool, datum, noise, seed
 };
 SimulatedTestPiece SimulateTestPiece(const SimulateTestPieceOptions& options);
+
+// Writes DIR/nominal.csv, measured.csv, validation.csv (with the grid) and truth.json, each atomically; creates DIR.
+void WriteFiles(const SimulatedTestPiece& simulated, const std::filesystem::path& dir);
 
 // What the command prints and its --json; `output`: the directory the front end writes (the text names it, the
 // front end adds it to the JSON).

@@ -10,6 +10,7 @@
 #include "artefacts/io/machine_truth_file.h"
 #include "artefacts/tracker_sight.h"
 #include "core/csv.h"
+#include "core/file_io.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
 #include "core/random.h"
@@ -302,6 +303,20 @@ SimulatedTracker SimulateTracker(const SimulateTrackerOptions& o) {
     SimulateOneTracker(o, chain, truth, noise, seed, out);
   }
   return out;
+}
+
+void WriteFiles(const SimulatedTracker& s, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  WriteFileAtomically(dir / "points.csv", s.points_csv);
+  WriteFileAtomically(dir / "program.nc", s.program);
+  if (s.readings) artefacts::WriteTrackerReadings(dir / "readings.csv", *s.readings);
+  if (s.station_readings) {
+    artefacts::WriteMultilaterationReadings(dir / "readings.csv", *s.station_readings);
+    WriteFileAtomically(dir / "stations.json", s.stations_json);
+    WriteFileAtomically(dir / "true_points.csv", s.true_points_csv);
+  }
+  if (s.validation) artefacts::WriteTrackerReadings(dir / "validation.csv", *s.validation);
+  if (s.truth) WriteFileAtomically(dir / "truth.json", s.truth->dump(2) + "\n");
 }
 
 Summary Summarize(const SimulatedTracker& s, const SimulateTrackerOptions& o, const std::string& output) {

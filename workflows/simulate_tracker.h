@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,6 +70,10 @@ struct SimulatedTracker {
 // Everything checked before anything is written: points the tracker (or a station) cannot see are an InputError
 // naming the pose and the first points.
 SimulatedTracker SimulateTracker(const SimulateTrackerOptions& options);
+
+// Writes DIR/points.csv and program.nc, and with a truth readings.csv, validation.csv, truth.json (stations:
+// stations.json and true_points.csv), each atomically; creates DIR.
+void WriteFiles(const SimulatedTracker& simulated, const std::filesystem::path& dir);
 
 // The line the command prints; `output`: the directory the front end writes.
 Summary Summarize(const SimulatedTracker& simulated, const SimulateTrackerOptions& options, const std::string& output);
