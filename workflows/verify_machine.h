@@ -12,7 +12,7 @@
 namespace fvm::workflows {
 
 struct VerifyMachineOptions {
-  MachineProblemOptions machine;  // the readings and how to read them (fvm verify's DATA, --chain, --tool, ...)
+  MachineProblemOptions machine = {};  // the readings and how to read them (fvm verify's DATA, --chain, --tool, ...)
   std::vector<int> orders{3};     // polynomial orders (1-3) to try; with several the best one is chosen (--order auto)
   // The machine's options, and orders 1-3 only (--order).
   void Check() const;
