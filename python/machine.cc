@@ -22,10 +22,11 @@ struct Verification : workflows::Summary {
 };
 
 Verification Verify(const py::object& readings, const py::object& tool, const std::string& chain, const py::object& order,
-                    const std::string& basis, const py::object& validate, const py::object& pose, const std::string& tracker,
-                    bool unweighted, double max_error_mm, int threads, bool allow_unconverged) {
+                    const std::string& basis, const py::object& validate, const py::object& pose, const py::object& machine,
+                    const std::string& tracker, bool unweighted, double max_error_mm, int threads, bool allow_unconverged) {
   workflows::VerifyMachineOptions options;
-  const MachineKeywords k{readings, tool, validate, pose, chain, basis, tracker, unweighted, max_error_mm, threads};
+  MachineKeywords k{readings, tool, validate, pose, chain, basis, tracker, unweighted, max_error_mm, threads};
+  k.machine = machine;
   options.machine = MachineOptionsFrom(k, options.machine);
   options.orders = workflows::ParseOrders(py::str(order));
   options.Check();
@@ -42,13 +43,14 @@ Verification Verify(const py::object& readings, const py::object& tool, const st
 
 workflows::Summary Uncertainty(const py::object& data, const py::object& tool, const std::string& chain, int order,
                                const std::string& basis, const py::object& validate, const py::object& pose,
-                               const std::string& tracker, bool unweighted, double max_error_mm, int runs,
+                               const py::object& machine, const std::string& tracker, bool unweighted, double max_error_mm, int runs,
                                std::uint64_t seed, double u_cal_um, double temperature_c, double cte_per_k, double k,
                                const std::string& model, const std::string& terms, double centre_noise_um,
                                const std::optional<std::array<double, 6>>& place_tracker, int place_steps,
                                int place_confirm, int threads) {
   workflows::UncertaintyOptions o;
-  const MachineKeywords keywords{data, tool, validate, pose, chain, basis, tracker, unweighted, max_error_mm, threads};
+  MachineKeywords keywords{data, tool, validate, pose, chain, basis, tracker, unweighted, max_error_mm, threads};
+  keywords.machine = machine;
   o.machine = MachineOptionsFrom(keywords, o.machine);
   o.order = order;
   o.monte_carlo.runs = runs;
@@ -94,14 +96,16 @@ void BindMachine(py::module_& m) {
   const workflows::MachineProblemOptions& d = verify.machine;
   m.def("verify", &Verify, py::arg("readings"), py::arg("tool") = std::array<double, 3>{0, 0, 0},
         py::arg("chain") = d.chain, py::arg("order") = verify.orders.front(), py::arg("basis") = d.basis,
-        py::arg("validate") = py::none(), py::arg("pose") = py::none(), py::arg("tracker") = d.tracker,
+        py::arg("validate") = py::none(), py::arg("pose") = py::none(), py::arg("machine") = py::none(),
+        py::arg("tracker") = d.tracker,
         py::arg("unweighted") = d.unweighted, py::arg("max_error_mm") = d.max_error_mm, py::arg("threads") = d.threads,
         py::arg("allow_unconverged") = false,
         "The volumetric verification of a machine tool from laser-tracker readings, as `fvm verify DATA.csv "
         "--chain XFYZ --order N --tool X,Y,Z` does. readings (and validate): a CSV path, or a dict {'nominal': "
         "N x 3, 'measured': N x 3 (tracker frame, mm), optional 'ids', 'tool' (1, 2, ...), 'approach'}; tool: one offset "
         "(x, y, z) mm or a list of them; order 1-3 or 'auto'; pose: (X, Y, Z mm, A, B, C XYZ Euler deg) as --pose, or "
-        "((tx, ty, tz) mm, rotation vector rad), to hold the tracker's pose, else it is estimated. Returns an "
+        "((tx, ty, tz) mm, rotation vector rad), to hold the tracker's pose, else it is estimated; machine: the travel "
+        "(X0, Y0, Z0, X1, Y1, Z1) mm, else the span of the points. Returns an "
         "fvm.Verification: its summary is `fvm verify --json` (initial / final volumetric errors in um, validation, "
         "pose with Euler angles and uncertainties, fixed, parameters, plausibility), .parameters and .residuals arrays; "
         "fvm.write_report(v, dir) writes --report's page. Raises fvm.InputError with the command line's messages "
@@ -112,7 +116,8 @@ void BindMachine(py::module_& m) {
   const workflows::UncertaintyOptions u;
   m.def("uncertainty", &Uncertainty, py::arg("data"), py::arg("tool") = std::array<double, 3>{0, 0, 0},
         py::arg("chain") = u.machine.chain, py::arg("order") = u.order, py::arg("basis") = u.machine.basis,
-        py::arg("validate") = py::none(), py::arg("pose") = py::none(), py::arg("tracker") = u.machine.tracker,
+        py::arg("validate") = py::none(), py::arg("pose") = py::none(), py::arg("machine") = py::none(),
+        py::arg("tracker") = u.machine.tracker,
         py::arg("unweighted") = u.machine.unweighted, py::arg("max_error_mm") = u.machine.max_error_mm,
         py::arg("runs") = u.monte_carlo.runs, py::arg("seed") = u.monte_carlo.seed, py::arg("u_cal_um") = u.u_cal_um,
         py::arg("temperature_c") = u.temperature_c, py::arg("cte_per_k") = u.cte_per_k, py::arg("k") = u.k,

@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
 #include "core/input_error.h"
 
@@ -78,6 +79,11 @@ workflows::MachineProblemOptions MachineOptionsFrom(const MachineKeywords& k, wo
   o.basis = k.basis;
   if (!k.tool.is_none()) o.tools = ToolsFrom(k.tool);
   if (!k.pose.is_none()) o.pose = PoseFrom(k.pose);
+  if (!k.machine.is_none()) {
+    const auto box = k.machine.cast<std::array<double, 6>>();
+    o.travel = artefacts::Workspace{Eigen::Vector3d(box[0], box[1], box[2]), Eigen::Vector3d(box[3], box[4], box[5])};
+    o.travel_name = fmt::format("machine ({})", fmt::join(box, ", "));
+  }
   o.tracker = k.tracker;
   o.unweighted = k.unweighted;
   o.max_error_mm = k.max_error_mm;

@@ -16,14 +16,15 @@ namespace fvm::python {
 // (1, 2, ... into the tool offsets), "approach" (+x, ...)}.
 artefacts::TrackerReadings ReadingsFrom(const py::object& arg, const std::string& what);
 
-// The shared keywords (fvm verify's DATA, --tool, --chain, --basis, --validate, --pose, --tracker, --unweighted,
-// --max-error-mm, --threads); `defaults` gives what a keyword left out means.
+// The shared keywords (fvm verify's DATA, --tool, --chain, --basis, --validate, --pose, --machine, --tracker,
+// --unweighted, --max-error-mm, --threads); `defaults` gives what a keyword left out means.
 struct MachineKeywords {
   py::object readings, tool, validate, pose;
   std::string chain, basis, tracker;
   bool unweighted = false;
   double max_error_mm = 0;
   int threads = 0;
+  py::object machine = py::none();  // the axes' travel X0, Y0, Z0, X1, Y1, Z1 (mm), as --machine gives it
 };
 workflows::MachineProblemOptions MachineOptionsFrom(const MachineKeywords& k, workflows::MachineProblemOptions defaults);
 // The problem read (files) or made (arrays) without the GIL; refusals as the command line's.

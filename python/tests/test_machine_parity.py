@@ -66,6 +66,8 @@ def test_verify_auto_order_and_held_pose(work):
     held = fvm.verify(readings, tool=(0, 0, 100), order=1, pose=(1100, -1000, 600, 63, 14, 35))
     assert summary(held) == cli_json("verify", readings, "--order", "1", "--tool", "0,0,100", "--pose", "1100,-1000,600,63,14,35")
     assert held["pose"]["estimated"] is False
+    travel = fvm.verify(readings, tool=(0, 0, 100), order=1, machine=(0, 0, 0, 2500, 1500, 1200))
+    assert summary(travel) == cli_json("verify", readings, "--order", "1", "--tool", "0,0,100", "--machine", "2500x1500x1200")
 
 
 def test_verify_refuses_an_implausible_result_as_the_command_line_does(work):
