@@ -25,16 +25,22 @@ class Random {
   std::mt19937_64 engine_;
 };
 
-// A seed for stream `index` of `seed` (SplitMix64 finaliser of both): Monte Carlo run i draws from
-// Random(StreamSeed(seed, i)), so a run's draws depend on neither the thread that made it nor the other runs.
-inline std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t index) {
-  const auto mix = [](std::uint64_t z) {
-    z += 0x9e3779b97f4a7c15ULL;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  };
-  return mix(mix(seed) ^ index);
+// SplitMix64's output function [Steele 2014]: the generator's next number from state z (the state advanced by the
+// golden gamma, then mixed). Every seed fvm derives from another goes through it.
+inline std::uint64_t SplitMix64(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
 }
+
+// A seed for stream `index` of `seed` (SplitMix64 of both): Monte Carlo run i draws from Random(StreamSeed(seed, i)),
+// so a run's draws depend on neither the thread that made it nor the other runs.
+inline std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t index) { return SplitMix64(SplitMix64(seed) ^ index); }
+
+// The n-th number (from 0) of the SplitMix64 sequence started at `seed`: the seeds of a simulation's named parts
+// (fvm simulate tracker: 0 the machine, 1 the point cloud, 2 the noise, 3 the validation points), which never share
+// draws.
+inline std::uint64_t SequenceSeed(std::uint64_t seed, std::uint64_t n) { return SplitMix64(seed + 0x9e3779b97f4a7c15ULL * n); }
 
 }  // namespace fvm

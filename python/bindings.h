@@ -25,6 +25,8 @@ void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
 void BindFocus(py::module_& m);
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
+void BindTestPiece(py::module_& m);
+void BindTracker(py::module_& m);
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
 py::object ToPython(const nlohmann::json& document);

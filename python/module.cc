@@ -27,6 +27,8 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindFits(m);
   fvm::python::BindCalibration(m);
   fvm::python::BindMachine(m);
+  fvm::python::BindTestPiece(m);
+  fvm::python::BindTracker(m);
   fvm::python::BindStitching(m);
   fvm::python::BindFocus(m);
 }

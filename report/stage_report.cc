@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/histogram.h"
 #include "report/support.h"
 
 namespace fvm::report {
@@ -32,11 +33,8 @@ struct Histogram {
 };
 
 Histogram Bin(const std::vector<double>& values, double first_edge, double width, int bins) {
-  Histogram h{std::vector<int>(static_cast<std::size_t>(bins), 0)};
-  for (const double v : values) {
-    const int bin = std::clamp(static_cast<int>(std::floor((v - first_edge) / width)), 0, bins - 1);
-    h.max_count = std::max(h.max_count, ++h.counts[static_cast<std::size_t>(bin)]);
-  }
+  Histogram h{BinCounts(values, first_edge, width, bins)};
+  for (const int count : h.counts) h.max_count = std::max(h.max_count, count);
   return h;
 }
 

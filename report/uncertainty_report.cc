@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/number_text.h"
+#include "core/histogram.h"
 #include "report/support.h"
 
 namespace fvm::report {
@@ -26,9 +27,8 @@ std::string RenderDistribution(const UncertaintyReportData& data) {
   std::vector<PLFLT> centres(kBins);
   for (int b = 0; b < kBins; ++b) centres[static_cast<size_t>(b)] = lo + (b + 0.5) * (hi - lo) / kBins;
   const auto counts = [&](const std::vector<double>& v) {
-    std::vector<PLFLT> c(kBins, 0.0);
-    for (double x : v) c[static_cast<size_t>(std::clamp(static_cast<int>((x - lo) / (hi - lo) * kBins), 0, kBins - 1))] += 1;
-    return c;
+    const std::vector<int> n = BinCounts(v, lo, (hi - lo) / kBins, kBins);
+    return std::vector<PLFLT>(n.begin(), n.end());
   };
   const std::vector<PLFLT> final_counts = counts(data.final_mean_um), validation_counts = counts(data.validation_mean_um);
   double top = 1;

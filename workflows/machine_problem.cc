@@ -2,6 +2,9 @@
 
 #include <fmt/core.h>
 
+#include <fmt/ranges.h>
+
+#include <algorithm>
 #include <limits>
 
 #include "artefacts/tracker_observations.h"
@@ -59,6 +62,17 @@ artefacts::Workspace WorkspaceOf(const MachineProblemOptions& options, const art
 }
 
 }  // namespace
+
+void MachineProblemOptions::Check() const {
+  if (!stage::ParseBasis(basis)) throw InputError(fmt::format("--basis {}: use power, legendre or chebyshev", basis));
+  const std::vector<std::string> presets = stage::TrackerNoise::PresetNames();
+  if (std::find(presets.begin(), presets.end(), tracker) == presets.end()) {
+    throw InputError(fmt::format("--tracker {}: use one of {}", tracker, fmt::join(presets, ", ")));
+  }
+  if (tools.empty()) throw InputError("no tool offset: give at least one (--tool X,Y,Z, mm)");
+  if (!(max_error_mm >= 0)) throw InputError(fmt::format("--max-error-mm {}: give a bound > 0 mm (0: the default)", max_error_mm));
+  if (threads < 0) throw InputError(fmt::format("--threads {}: give 0 (all cores) or more", threads));
+}
 
 std::string MachineProblem::WeightsName() const {
   if (!weighted) return "equal";

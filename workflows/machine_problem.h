@@ -32,6 +32,9 @@ struct MachineProblemOptions {
   bool unweighted = false;            // equal weights instead of the readings' covariances (their own or the tracker's)
   double max_error_mm = 0;            // plausibility bound; 0: 1 mm per metre of the longest travel
   int threads = 0;                    // 0: all cores
+  // Refuses a basis, tracker preset or bound no job takes, and no tool, naming the option (--basis, --tracker, ...);
+  // the chain and the files are checked as they are read (LoadMachineProblem).
+  void Check() const;
 };
 
 struct MachineProblem {

@@ -22,6 +22,20 @@ std::map<std::string, std::string> ReadSeries(const std::string& path) {
 
 }  // namespace
 
+MachineProblemOptions CmmMachineOptions() {
+  MachineProblemOptions o;
+  o.basis = "chebyshev";
+  o.tools = {Eigen::Vector3d(0, 0, 100)};
+  o.tracker = "none";
+  o.unweighted = true;
+  return o;
+}
+
+void MachinedPieceVerifyOptions::Check() const {
+  machine.Check();
+  if (order < 1 || order > 3) throw InputError(fmt::format("--order {}: use 1, 2 or 3", order));
+}
+
 bool IsSeries(const std::string& s) { return s.size() == 2 && (s[0] == 'X' || s[0] == 'Y' || s[0] == 'Z') && s[1] >= '1' && s[1] <= '3'; }
 
 MachinedPieceVerifyResult VerifyMachinedPiece(const MachineProblem& problem, const MachinedPieceVerifyOptions& options) {

@@ -14,9 +14,15 @@
 
 namespace fvm::workflows {
 
+// fvm verify's machine options as a CMM-measured piece takes them: Chebyshev polynomials, a 100 mm tool, equal
+// weights (a CMM has no tracker noise model).
+MachineProblemOptions CmmMachineOptions();
+
 struct MachinedPieceVerifyOptions {
+  MachineProblemOptions machine = CmmMachineOptions();  // DATA (id,x,y,z,xm,ym,zm), --chain, --basis, --tool, ...
   int order = 2;        // polynomial order of each error function
   std::string nominal;  // NOMINAL.csv id,x,y,z,series of the piece: its series X1..Z3; empty: all points judge
+  void Check() const;   // the machine's options, and --order 1-3
 };
 
 struct MachinedPieceVerifyResult {

@@ -1,6 +1,7 @@
 #include "workflows/multilaterate.h"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +22,14 @@ std::vector<artefacts::MultilateratedPoint> Multilateration::Points() const {
     points.push_back({problem.point_ids[j], result.points[j], result.point_covariance[j].diagonal().cwiseMax(0.0).cwiseSqrt()});
   }
   return points;
+}
+
+void MultilaterateOptions::Check() const {
+  if (readings.empty()) throw InputError("no readings file: give READINGS.csv (id,station,range[,azimuth,elevation])");
+  const std::vector<std::string> presets = stage::TrackerNoise::PresetNames();
+  if (std::find(presets.begin(), presets.end(), tracker) == presets.end()) {
+    throw InputError(fmt::format("--tracker {}: use one of {}", tracker, fmt::join(presets, ", ")));
+  }
 }
 
 Multilateration Multilaterate(const MultilaterateOptions& args) {

@@ -23,6 +23,10 @@ struct MultilaterateOptions {
   bool self_calibrate = false;        // estimate the stations with the points (at least 4 stations)
   bool angles = false;                // use azimuth and elevation too (bundle adjustment)
   std::string tracker = "published";  // noise preset for the weights
+  std::string nominal;                // nominal machine coordinates id,x,y,z; empty: the readings' x,y,z columns
+  std::string truth;                  // true positions id,x,y,z in the same frame: each point's error; empty: none
+  // Refuses an unknown tracker preset (--tracker) and no readings file.
+  void Check() const;
 };
 
 struct Multilateration {

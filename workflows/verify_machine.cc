@@ -3,7 +3,23 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/core.h>
+
 namespace fvm::workflows {
+
+void VerifyMachineOptions::Check() const {
+  machine.Check();
+  if (orders.empty()) throw InputError("--order: give an order 1, 2, 3 or auto");
+  for (int order : orders) {
+    if (order < 1 || order > 3) throw InputError(fmt::format("--order {}: use 1, 2, 3 or auto", order));
+  }
+}
+
+std::vector<int> ParseOrders(const std::string& text) {
+  if (text == "auto") return {1, 2, 3};
+  if (text == "1" || text == "2" || text == "3") return {text[0] - '0'};
+  throw InputError("--order " + text + ": use 1, 2, 3 or auto (the best of the three)");
+}
 
 MachineVerification VerifyMachine(const MachineProblem& problem, const VerifyMachineOptions& options) {
   if (options.orders.empty()) throw InputError("no polynomial order to verify: give one of 1, 2, 3");

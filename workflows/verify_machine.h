@@ -12,8 +12,13 @@
 namespace fvm::workflows {
 
 struct VerifyMachineOptions {
-  std::vector<int> orders{3};  // polynomial orders (1-3) to try; with several the best one is chosen
+  MachineProblemOptions machine = {};  // the readings and how to read them (fvm verify's DATA, --chain, --tool, ...)
+  std::vector<int> orders{3};     // polynomial orders (1-3) to try; with several the best one is chosen (--order auto)
+  // The machine's options, and orders 1-3 only (--order).
+  void Check() const;
 };
+// --order as the command line and Python spell it: "1", "2", "3" or "auto" (all three); InputError otherwise.
+std::vector<int> ParseOrders(const std::string& text);
 
 // One order identified, with what judges it.
 struct OrderFit {

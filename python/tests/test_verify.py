@@ -29,8 +29,8 @@ def test_verify_equals_the_command_line_and_learns_the_machine(plan):
     # (the CLI test's bound: 24 urad of angle noise on 96 readings), and finds the simulated tracker position
     # (1100, -1000, 600) mm to 0.1 mm.
     assert v["validation"]["final"]["mean_um"] < 2 / 3 * v["validation"]["initial"]["mean_um"]
-    np.testing.assert_allclose(v["pose"]["translation"], [1100, -1000, 600], atol=0.1)
-    assert v["residuals"].shape == (v["points"], 3)
+    np.testing.assert_allclose(v["pose"]["translation_mm"], [1100, -1000, 600], atol=0.1)
+    assert v.residuals.shape == (v["points"], 3)
 
 
 def test_arrays_give_what_the_file_gives(plan):
@@ -44,7 +44,7 @@ def test_arrays_give_what_the_file_gives(plan):
     from_arrays = fvm.verify({"ids": ids, "nominal": nominal, "measured": measured, "approach": approach},
                              tool=(0, 0, 100), order=1)
     assert from_arrays["final"] == from_file["final"]
-    assert from_arrays["parameters"]["values"].tolist() == from_file["parameters"]["values"].tolist()
+    assert from_arrays.parameters["values"].tolist() == from_file.parameters["values"].tolist()
     measured[3, 0] = np.nan
     with pytest.raises(fvm.InputError, match=f"point {ids[3]} .row 4.: a coordinate is not finite"):
         fvm.verify({"ids": ids, "nominal": nominal, "measured": measured}, tool=(0, 0, 100))

@@ -59,7 +59,7 @@ struct MeasuredPiece {
 // uncertainty, s sqrt(p / N) = 0.3 um: below 0.5 um, from about 100 um before.
 TEST(VerifyMachinedPiece, LeavesTheCmmNoiseOnThePieceAndTheModelUncertaintyOnTheGrid) {
   const MeasuredPiece piece;
-  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, ""});
+  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {.order = 2, .nominal = ""});
   const stage::MachinedPieceVerification& v = r.verification;
   ASSERT_TRUE(v.result.identified.converged);
   EXPECT_GT(v.result.final.mean_um(), 1.4 * kCmmNoiseUm);
@@ -79,7 +79,7 @@ TEST(VerifyMachinedPiece, LeavesTheCmmNoiseOnThePieceAndTheModelUncertaintyOnThe
 // (hence the proposed series with more tools); the job says the same and extracts errors from them.
 TEST(VerifyMachinedPiece, TheSeriesAloneLeaveTheYawsOfZAndEcyUnrecovered) {
   const MeasuredPiece piece;
-  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, piece.nominal});
+  const MachinedPieceVerifyResult r = VerifyMachinedPiece(LoadMachineProblem(piece.options), {.order = 2, .nominal = piece.nominal});
   EXPECT_EQ(r.geometric_from.rfind("series X1..Z3 (", 0), 0u) << r.geometric_from;
   std::set<std::string> lost;
   for (const stage::TermRecovery& t : r.geometric) {
@@ -95,7 +95,7 @@ TEST(VerifyMachinedPiece, ANominalFileWithoutSeriesIsRefusedNamingBothFiles) {
   const std::string other = (piece.dir.path() / "other.csv").string();
   artefacts::WriteNominalPoints(other, {{"Q1", Eigen::Vector3d(1, 2, 3), "X1", "", {}}});
   try {
-    VerifyMachinedPiece(LoadMachineProblem(piece.options), {2, other});
+    VerifyMachinedPiece(LoadMachineProblem(piece.options), {.order = 2, .nominal = other});
     FAIL() << "a nominal file without the piece's points was accepted";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), other + ": no point of " + piece.options.data +

@@ -28,7 +28,7 @@ TEST(VerifyMachine, RecoversASimulatedMachineWithinItsUncertainty) {
   artefacts::WriteTrackerReadings(dir.path() / "readings.csv", m.readings);
   const MachineProblem problem = LoadMachineProblem(OptionsFor(dir.path() / "readings.csv"));
   EXPECT_EQ(problem.WeightsName(), "tracker adm");
-  const MachineVerification v = VerifyMachine(problem, {{3}});
+  const MachineVerification v = VerifyMachine(problem, {.orders = {3}});
   ASSERT_EQ(v.fits.size(), 1u);
   const stage::VerificationResult& r = v.Chosen().result;
   ASSERT_TRUE(r.identified.converged);
@@ -62,11 +62,11 @@ TEST(VerifyMachine, ChoosesTheOrderTheMachineNeeds) {
   artefacts::WriteTrackerReadings(dir.path() / "readings.csv", m.readings);
   artefacts::WriteTrackerReadings(dir.path() / "validation.csv", held_out.noise_free);
   MachineProblemOptions o = OptionsFor(dir.path() / "readings.csv");
-  const MachineVerification by_bic = VerifyMachine(LoadMachineProblem(o), {{1, 2, 3}});
+  const MachineVerification by_bic = VerifyMachine(LoadMachineProblem(o), {.orders = {1, 2, 3}});
   EXPECT_EQ(by_bic.ChosenBy(), "BIC");
   EXPECT_EQ(by_bic.Chosen().order, 3);
   o.validate = (dir.path() / "validation.csv").string();
-  const MachineVerification by_validation = VerifyMachine(LoadMachineProblem(o), {{1, 2, 3}});
+  const MachineVerification by_validation = VerifyMachine(LoadMachineProblem(o), {.orders = {1, 2, 3}});
   EXPECT_EQ(by_validation.ChosenBy(), "validation mean");
   EXPECT_EQ(by_validation.Chosen().order, 3);
   // The held-out points are noise-free: what is left on them is the model's own uncertainty, a few um.
