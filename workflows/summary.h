@@ -15,7 +15,9 @@
 namespace fvm::workflows {
 
 struct Summary {
-  nlohmann::json json;                   // the --json document
+  // Ordered: the keys stay where the job put them, as the commands have always printed them (a document built as
+  // nlohmann::json keeps its sorted order when assigned here).
+  nlohmann::ordered_json json;           // the --json document
   std::string text;                      // what the command prints, newline-terminated lines
   std::optional<report::Report> report;  // what --report DIR draws; empty for a job without a report
 };
