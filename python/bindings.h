@@ -23,6 +23,7 @@ void BindFits(py::module_& m);
 void BindCalibration(py::module_& m);
 void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
+void BindTiles(py::module_& m);  // tiles_plan, tiles_simulate, tiles_synthesize (tiles.cc)
 void BindFocus(py::module_& m);
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 

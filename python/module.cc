@@ -28,5 +28,6 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindCalibration(m);
   fvm::python::BindMachine(m);
   fvm::python::BindStitching(m);
+  fvm::python::BindTiles(m);
   fvm::python::BindFocus(m);
 }
