@@ -123,7 +123,7 @@ void BindTiles(py::module_& m) {
         py::arg("render") = strategies.render, py::arg("tile_px") = strategies.tile_px,
         py::arg("tiles") = std::nullopt, py::arg("seed") = strategies.seed, py::arg("threads") = strategies.threads,
         "The end-to-end distance error of the six stitching strategies of [Pérez 2019] under the stage model of "
-        "`calibration` (a file written by `fvm calibrate -o`), as `fvm tiles simulate` computes it; from_ and to: "
+        "`calibration` (a file written by `fvm calibrate -o`), as `fvm tiles simulate` computes it; ``from_`` and ``to``: "
         "the first and last calotte (x, y, z mm). render: also on tiles rendered where the stage puts them, "
         "registered and fitted; tiles: a directory for the rendered row (16-bit TIFFs and layout.csv). Returns "
         "fvm.Result (.summary: the command's --json document).\n\nExample:\n"
