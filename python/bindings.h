@@ -23,6 +23,7 @@ void BindFits(py::module_& m);
 void BindCalibration(py::module_& m);
 void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
+void BindTiles(py::module_& m);  // tiles_plan, tiles_simulate, tiles_synthesize (tiles.cc)
 void BindFocus(py::module_& m);
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 void BindTestPiece(py::module_& m);
@@ -30,6 +31,7 @@ void BindTracker(py::module_& m);
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
 py::object ToPython(const nlohmann::json& document);
+py::object ToPython(const nlohmann::ordered_json& document);  // keys in the document's order
 // An N x 3 array as points (mm). Throws InputError naming `what` for another shape or a non-finite coordinate when
 // `finite` is asked.
 std::vector<Eigen::Vector3d> PointsFrom(const DoubleArray& array, const std::string& what, bool finite = true);

@@ -30,5 +30,6 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindTestPiece(m);
   fvm::python::BindTracker(m);
   fvm::python::BindStitching(m);
+  fvm::python::BindTiles(m);
   fvm::python::BindFocus(m);
 }

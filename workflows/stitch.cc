@@ -1,11 +1,33 @@
 #include "workflows/stitch.h"
 
+#include <fmt/core.h>
+
 #include <cmath>
 #include <set>
 #include <string>
 #include <utility>
 
+#include "core/input_error.h"
+
 namespace fvm::workflows {
+
+void StitchOptions::Check() const {
+  if (!(overlap > 0.0 && overlap < 1.0)) {
+    throw InputError(fmt::format("--overlap {}: give the nominal overlap of neighbouring tiles as a fraction in (0, 1), "
+                                 "e.g. 0.2 for 20 %",
+                                 overlap));
+  }
+  if (pixel_mm < 0.0 || !std::isfinite(pixel_mm)) {
+    throw InputError(fmt::format("--pixel-mm {}: give the pixel size in mm, e.g. 0.000875", pixel_mm));
+  }
+  if (!(registration.min_quality >= -1.0 && registration.min_quality <= 1.0)) {
+    throw InputError("--min-quality: give a correlation in [-1, 1], e.g. 0.5");
+  }
+  if (!(registration.stage_sigma_px > 0.0) || !std::isfinite(registration.stage_sigma_px)) {
+    throw InputError("--stage-sigma-px: give the stage's positioning error over the grid in pixels, e.g. 2");
+  }
+  if (threads < 0) throw InputError(fmt::format("--threads {}: give 0 (all cores) or more", threads));
+}
 
 std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, int width_px, int height_px,
                                            const StitchOptions& options, bool* from_stage) {

@@ -20,6 +20,9 @@ struct StitchOptions {
   double pixel_mm = 0.0;        // > 0: the layout's stage positions (mm) give the nominal positions
   imaging::RegistrationOptions registration;
   int threads = 0;              // OpenCV's pool; 0: all cores
+  // Throws InputError naming the option as fvm stitch spells it (--overlap, --pixel-mm, --min-quality,
+  // --stage-sigma-px, --threads).
+  void Check() const;
 };
 
 // The nominal grid, the first tile of the layout at the origin (image y runs down = -Y). `from_stage`: whether the

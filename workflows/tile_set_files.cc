@@ -1,13 +1,14 @@
-#include "fvm/tile_set_files.h"
+#include "workflows/tile_set_files.h"
 
 #include <fmt/core.h>
 
 #include <optional>
+#include <sstream>
 
 #include "core/file_io.h"
 #include "imaging/io/tile_layout.h"
 
-namespace fvm::cli {
+namespace fvm::workflows {
 
 std::string TileFile(int row, int col) { return fmt::format("tile_r{:03d}_c{:03d}.tif", row, col); }
 
@@ -41,4 +42,4 @@ std::vector<std::string> WriteTileSet(const std::filesystem::path& directory,
   return files;
 }
 
-}  // namespace fvm::cli
+}  // namespace fvm::workflows

@@ -11,7 +11,7 @@
 #include "imaging/io/tile_image.h"
 #include "imaging/tile_plan.h"
 
-namespace fvm::cli {
+namespace fvm::workflows {
 
 // tile_r003_c012.tif
 std::string TileFile(int row, int col);
@@ -25,4 +25,4 @@ std::vector<std::string> WriteTileSet(const std::filesystem::path& directory,
                                       const std::vector<Eigen::Vector2d>& stage_mm, imaging::TilePixelType type,
                                       const std::string& comment);
 
-}  // namespace fvm::cli
+}  // namespace fvm::workflows

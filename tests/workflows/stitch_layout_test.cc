@@ -1,0 +1,152 @@
+// fvm stitch as a job (workflows/stitch_layout.h, stitch_summary.h): a synthesized tile set read as the command
+// reads it, stitched back to its truth, its positions CSV and summary; the options and mosaics refused by name.
+
+#include <fmt/core.h>
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "core/input_error.h"
+#include "workflows/stitch_layout.h"
+#include "workflows/stitch_summary.h"
+#include "workflows/tiles_synthesize.h"
+
+namespace fvm::workflows {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+std::filesystem::path StitchLayoutScratch(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / fmt::format("fvm_stitch_layout_test_{}_{}", name, ::getpid());
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+std::vector<std::vector<std::string>> CsvRows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::stringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::vector<std::string> cells;
+    std::stringstream cell(line);
+    for (std::string c; std::getline(cell, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+std::string ReadText(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The set tests/fvm/tiles_cli_test.cmake stitches: 3 x 3 8-bit tiles, 1.5 px of stage error. Every pair
+// registers; every tile lands within 0.15 px of its truth (the set's rms is 0.04 px, 8-bit quantisation); the CSV
+// carries mm with the pixel size; the summary counts what the result holds and prints it.
+TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
+  TilesSynthesizeOptions synth;
+  synth.output = StitchLayoutScratch("set").string();
+  synth.bits = 8;
+  synth.seed = 4;
+  const SynthesizedTileSet set = SynthesizeTileSet(synth);
+  const LayoutTiles tiles = ReadLayoutTiles(std::filesystem::path(synth.output) / "layout.csv");
+  EXPECT_EQ(tiles.pixel_type, imaging::TilePixelType::kUint8);
+  StitchLayoutOptions options;
+  options.stitch.pixel_mm = 0.001;
+  EXPECT_EQ(StitchPairCount(tiles.layout, tiles.images, options.stitch), 12);
+  const StitchedLayout stitched = StitchLayout(tiles.layout, tiles.images, options);
+  EXPECT_EQ(stitched.files, set.files);
+
+  const auto rows = CsvRows(PositionsCsv(stitched));
+  const auto truth = CsvRows(ReadText(std::filesystem::path(synth.output) / "truth.csv"));
+  ASSERT_EQ(rows.size(), 10u);
+  EXPECT_EQ(fmt::format("{}", fmt::join(rows[0], ",")), "file,x,y,x_mm,y_mm,registered,u_x,u_y");
+  for (size_t i = 1; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i][0], truth[i][0]);
+    EXPECT_NEAR(std::stod(rows[i][1]), std::stod(truth[i][1]), 0.15) << rows[i][0];
+    EXPECT_NEAR(std::stod(rows[i][2]), std::stod(truth[i][2]), 0.15) << rows[i][0];
+    // mm: the first tile's centre is the origin without stage positions; +Y up, so y_mm = -y px x pixel.
+    EXPECT_NEAR(std::stod(rows[i][3]), std::stod(rows[i][1]) * 0.001, 1e-6);
+    EXPECT_NEAR(std::stod(rows[i][4]), -std::stod(rows[i][2]) * 0.001, 1e-6);
+    EXPECT_EQ(rows[i][5], "1");
+  }
+
+  const Summary summary = Summarize(stitched);
+  EXPECT_EQ(summary.json["tiles"], 9);
+  EXPECT_EQ(summary.json["nominal"], "grid");
+  EXPECT_EQ(summary.json["pairs_accepted"], 12);
+  EXPECT_EQ(summary.json["pairs"].size(), 12u);
+  EXPECT_EQ(summary.json["pairs"][0]["a"], set.files[0]);
+  EXPECT_FALSE(summary.json.contains("distortion"));
+  EXPECT_EQ(summary.json.begin().key(), "tiles");  // the keys in the order the command has always printed them
+  EXPECT_THAT(summary.text, StartsWith("9 tiles of 256 x 256 px, 12 pairs, 12 accepted (quality >= 0.5); nominal "
+                                       "positions from the grid and overlap\n  stage model from 6 east and 6 south"));
+  EXPECT_THAT(summary.text, HasSubstr("\nlargest standard uncertainty of a registered tile against the first of its "
+                                      "chain: "));
+  EXPECT_FALSE(summary.report.has_value());
+  std::filesystem::remove_all(synth.output);
+}
+
+// A strip in one direction cannot tell the field's terms apart: refused naming --distortion and the layout.
+TEST(StitchLayout, RefusesAFieldTheOverlapsCannotDetermineNamingTheLayout) {
+  TilesSynthesizeOptions synth;
+  synth.output = StitchLayoutScratch("strip").string();
+  synth.rows = 1;
+  synth.cols = 3;
+  synth.tile_px = 128;
+  (void)SynthesizeTileSet(synth);
+  const LayoutTiles read = ReadLayoutTiles(std::filesystem::path(synth.output) / "layout.csv");
+  StitchLayoutOptions options;
+  options.distortion = StitchDistortionOptions{};
+  try {
+    StitchLayout(read.layout, read.images, options);
+    FAIL() << "a strip identified a field";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), StartsWith("--distortion, " + read.layout.source + ": "));
+  }
+  std::filesystem::remove_all(synth.output);
+}
+
+TEST(StitchOptions, CheckNamesTheOptionAsTheCommandSpellsIt) {
+  const auto refusal = [](const std::function<void(StitchOptions&)>& change) {
+    StitchOptions o;
+    change(o);
+    try {
+      o.Check();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal([](StitchOptions&) {}), "accepted");
+  EXPECT_THAT(refusal([](StitchOptions& o) { o.overlap = 1.0; }), StartsWith("--overlap 1:"));
+  EXPECT_THAT(refusal([](StitchOptions& o) { o.pixel_mm = -1.0; }), StartsWith("--pixel-mm -1:"));
+  EXPECT_THAT(refusal([](StitchOptions& o) { o.registration.min_quality = 1.5; }), StartsWith("--min-quality:"));
+  EXPECT_THAT(refusal([](StitchOptions& o) { o.registration.stage_sigma_px = 0.0; }), StartsWith("--stage-sigma-px:"));
+  EXPECT_THAT(refusal([](StitchOptions& o) { o.threads = -2; }), StartsWith("--threads -2:"));
+}
+
+TEST(StitchMosaic, AHeightMapNeedsThePixelSizeAndFloatTiles) {
+  EXPECT_NO_THROW(CheckMosaicPath("", 0.0));
+  EXPECT_NO_THROW(CheckMosaicPath("m.tif", 0.0));
+  EXPECT_NO_THROW(CheckMosaicPath("m.x3p", 0.01));
+  EXPECT_THROW(CheckMosaicPath("m.x3p", 0.0), InputError);
+  EXPECT_NO_THROW(CheckMosaicTiles("m.x3p", imaging::TilePixelType::kFloat));
+  EXPECT_NO_THROW(CheckMosaicTiles("m.png", imaging::TilePixelType::kUint16));
+  try {
+    CheckMosaicTiles("m.x3p", imaging::TilePixelType::kUint16);
+    FAIL() << "16-bit tiles made a height map";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), StartsWith("--mosaic m.x3p: the tiles hold 16-bit counts, not heights"));
+  }
+}
+
+}  // namespace
+}  // namespace fvm::workflows

@@ -1,0 +1,124 @@
+#include "workflows/stitch_layout.h"
+
+#include <fmt/core.h>
+
+#include <cmath>
+
+#include "core/file_io.h"
+#include "core/input_error.h"
+#include "imaging/field_distortion.h"
+#include "imaging/io/x3p.h"
+
+namespace fvm::workflows {
+
+void StitchLayoutOptions::Check() const { stitch.Check(); }
+
+LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout) {
+  LayoutTiles tiles;
+  tiles.layout = imaging::ReadTileLayout(layout);
+  imaging::CheckLayoutComplete(tiles.layout);
+  tiles.images = imaging::ReadLayoutImages(tiles.layout, layout.parent_path(), &tiles.pixel_type);
+  return tiles;
+}
+
+const std::vector<Eigen::Vector2d>& StitchedLayout::PositionsPx() const {
+  return field ? field->fit.positions_px : rigid.registration.positions.positions_px;
+}
+
+const std::vector<Eigen::Vector2d>& StitchedLayout::SigmaPx() const {
+  return field ? field->sigma_px : rigid.registration.positions.sigma_px;
+}
+
+int StitchPairCount(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
+                    const StitchOptions& options) {
+  return CountGridPairs(NominalGrid(layout, static_cast<int>(images.front().cols()),
+                                    static_cast<int>(images.front().rows()), options, nullptr));
+}
+
+StitchedLayout StitchLayout(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
+                            const StitchLayoutOptions& options, const std::function<void(int, int)>& on_pair) {
+  StitchedLayout s;
+  for (const auto& tile : layout.tiles) s.files.push_back(tile.file);
+  s.width_px = static_cast<int>(images.front().cols());
+  s.height_px = static_cast<int>(images.front().rows());
+  s.options = options.stitch;
+  s.rigid = StitchTiles(layout, images, options.stitch, on_pair);
+  if (options.distortion) {
+    try {
+      s.field = StitchWithoutDistortion(s.rigid, images, *options.distortion);
+    } catch (const imaging::FieldDistortionUndeterminable& e) {
+      throw InputError(fmt::format("--distortion, {}: {}", layout.source, e.what()));
+    }
+  }
+  return s;
+}
+
+std::string PositionsCsv(const StitchedLayout& stitched) {
+  const double pixel_mm = stitched.options.pixel_mm;
+  const Eigen::Vector2d& origin = stitched.rigid.origin_mm;
+  const std::vector<Eigen::Vector2d>& positions = stitched.PositionsPx();
+  const std::vector<Eigen::Vector2d>& sigmas = stitched.SigmaPx();
+  std::string csv = pixel_mm > 0.0 ? "file,x,y,x_mm,y_mm,registered,u_x,u_y\n" : "file,x,y,registered,u_x,u_y\n";
+  for (size_t i = 0; i < stitched.files.size(); ++i) {
+    const Eigen::Vector2d& p = positions[i];
+    csv += fmt::format("{},{:.4f},{:.4f}", stitched.files[i], p.x(), p.y());
+    if (pixel_mm > 0.0) {
+      csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * pixel_mm, origin.y() - p.y() * pixel_mm);
+    }
+    const Eigen::Vector2d& u = sigmas[i];
+    csv += fmt::format(",{},{:.4f},{:.4f}\n", stitched.rigid.registration.positions.registered[i] ? 1 : 0, u.x(),
+                       u.y());
+  }
+  return csv;
+}
+
+namespace {
+bool IsHeightMapPath(const std::string& path) { return std::filesystem::path(path).extension() == ".x3p"; }
+}  // namespace
+
+void CheckMosaicPath(const std::string& path, double pixel_mm) {
+  if (IsHeightMapPath(path) && !(pixel_mm > 0.0)) {
+    throw InputError("--mosaic " + path + ": an X3P height map needs the pixel size; give --pixel-mm");
+  }
+}
+
+void CheckMosaicTiles(const std::string& path, imaging::TilePixelType type) {
+  if (IsHeightMapPath(path) && type != imaging::TilePixelType::kFloat) {
+    throw InputError(fmt::format("--mosaic {}: the tiles hold {}-bit counts, not heights; an X3P height map needs "
+                                 "float tiles in mm (or write the mosaic as .tif)",
+                                 path, type == imaging::TilePixelType::kUint8 ? 8 : 16));
+  }
+}
+
+imaging::Mosaic FuseStitched(const StitchedLayout& stitched, const std::vector<imaging::TileImage>& images,
+                             const std::function<void(int, int)>& on_tile) {
+  return imaging::FuseTiles(stitched.field ? stitched.field->undistorted : images, stitched.PositionsPx(), on_tile);
+}
+
+void WriteMosaic(const std::string& path, imaging::Mosaic mosaic, const StitchedLayout& stitched,
+                 imaging::TilePixelType type) {
+  if (IsHeightMapPath(path)) {
+    imaging::WriteX3p(path, imaging::MosaicToHeightMap(mosaic, stitched.width_px, stitched.height_px,
+                                                       stitched.options.pixel_mm, stitched.rigid.origin_mm));
+    return;
+  }
+  // Integer pixels have no NaN: where no tile reaches is 0.
+  if (type != imaging::TilePixelType::kFloat) {
+    mosaic.image = mosaic.image.unaryExpr([](float v) { return std::isnan(v) ? 0.0f : v; });
+  }
+  imaging::WriteTileImage(path, mosaic.image, type);
+}
+
+void WriteUndistortedTiles(const std::filesystem::path& dir, const StitchedLayout& stitched,
+                           const std::vector<imaging::TileImage>& images, imaging::TilePixelType type) {
+  const StitchDistortionResult& field = stitched.field.value();
+  const std::vector<imaging::TileImage> written =
+      type == imaging::TilePixelType::kFloat ? field.undistorted : imaging::UndistortTiles(images, field.fit.field, false);
+  for (size_t i = 0; i < stitched.files.size(); ++i) {
+    const std::filesystem::path out = dir / stitched.files[i];
+    std::filesystem::create_directories(out.parent_path());
+    imaging::WriteTileImage(out, written[i], type);
+  }
+}
+
+}  // namespace fvm::workflows
