@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-#include "workflows/field_distortion_summary.h"
+#include "workflows/distortion_options.h"
 
 namespace fvm::workflows {
 namespace {
@@ -102,7 +102,7 @@ Json StitchJson(const StitchedLayout& s) {
   out["stage_fallback"] = rigid.at_stage_position;
   out["stage_along_one_axis"] = rigid.stage_along_one_axis;
   if (s.field) {
-    out["distortion"] = FieldDistortionFitJson(s.field->fit, s.field->identified, s.options.pixel_mm);
+    out["distortion"] = DistortionJson(s.field->fit, s.field->identified, s.options.pixel_mm);
     out["distortion"]["overlap_ncc_before"] = FiniteOrNull(s.field->mean_overlap_ncc_before);
     out["distortion"]["overlap_ncc_after"] = FiniteOrNull(s.field->mean_overlap_ncc_after);
   }
@@ -180,7 +180,7 @@ std::string StitchText(const StitchedLayout& s) {
   }
   text += PairsText(s);
   if (s.field) {
-    text += FieldDistortionFitText(s.field->fit, s.field->identified, s.options.pixel_mm);
+    text += DistortionText(s.field->fit, s.field->identified, s.options.pixel_mm);
     text += fmt::format("  mean overlap correlation of the undistorted tiles at their positions: {:.3f} (raw tiles, "
                         "rigid: {:.3f})\n",
                         s.field->mean_overlap_ncc_after, s.field->mean_overlap_ncc_before);
