@@ -25,6 +25,7 @@ void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
 void BindFocus(py::module_& m);
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
+void BindStageJobs(py::module_& m);  // fvm.compare, fvm.diagnose, fvm.correct (stage_jobs.cc)
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
 py::object ToPython(const nlohmann::json& document);

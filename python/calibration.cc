@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <fmt/core.h>
-#include <set>
 
 #include "artefacts/io/batch.h"
 #include "artefacts/io/raw_export_batch.h"
@@ -84,24 +83,7 @@ artefacts::Batch BatchFromArrays(const py::dict& placements, const std::optional
   std::sort(batch.placements.begin(), batch.placements.end(),
             [](const artefacts::Placement& a, const artefacts::Placement& b) { return a.name < b.name; });
   batch.has_roles = identify || validate;
-  batch.validate = validate.value_or(std::vector<std::string>{});
-  const std::set<std::string> validating(batch.validate.begin(), batch.validate.end());
-  if (identify) {
-    batch.identify = *identify;
-  } else {
-    for (const auto& p : batch.placements) {
-      if (!validating.count(p.name)) batch.identify.push_back(p.name);
-    }
-  }
-  for (const std::vector<std::string>* role : {&batch.identify, &batch.validate}) {
-    for (const std::string& name : *role) batch.Get(name);  // names an unknown placement
-  }
-  for (const std::string& name : batch.identify) {
-    if (validating.count(name)) {
-      throw InputError("placement " + name + " is both identified and validated on: validation data never enters the fit");
-    }
-  }
-  if (batch.identify.empty()) throw InputError("no placement left to identify from");
+  artefacts::AssignBatchRoles(batch, identify, validate.value_or(std::vector<std::string>{}), "identify / validate");
   return batch;
 }
 

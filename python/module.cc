@@ -29,4 +29,5 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindMachine(m);
   fvm::python::BindStitching(m);
   fvm::python::BindFocus(m);
+  fvm::python::BindStageJobs(m);
 }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,12 @@ Placement PairCentreExports(const std::string& name, const CentreExport& stitche
 // Gives batch.placements their roles: from dir/batch.json when it exists (throws as ReadBatch on a bad one), else
 // every placement identifies. ReadBatch calls it; so does a reader of raw exports (raw_export_batch.h).
 void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch);
+
+// The role rules, for batch.json and a script's lists alike: `identify` when given, else every placement not in
+// `validate`. Throws InputError starting with `where` for a placement the batch lacks, one in both roles (validation
+// data never enters the fit), or no placement left to identify. Sets batch.identify and batch.validate.
+void AssignBatchRoles(Batch& batch, std::optional<std::vector<std::string>> identify, std::vector<std::string> validate,
+                      const std::string& where);
 
 // Writes a batch (pairs and, when roles are given, batch.json) atomically file by file.
 void WriteBatch(const std::filesystem::path& dir, const Batch& batch);

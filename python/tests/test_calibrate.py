@@ -84,7 +84,7 @@ def test_bad_batches_raise_the_command_lines_messages(tmp_path):
     assert err.strip() == f"fvm: error: {raised.value}"
     with pytest.raises(fvm.InputError, match="unknown model '8'"):
         fvm.calibrate(str(SAMPLE), model=8)
-    with pytest.raises(fvm.InputError, match="both identified and validated"):
+    with pytest.raises(fvm.InputError, match='both in "identify" and "validate"'):
         fvm.calibrate({"a": {"ids": [1, 2, 3], "stitched": np.eye(3), "free": np.eye(3)}}, identify=["a"], validate=["a"])
 
 
