@@ -28,6 +28,7 @@ void BindFocus(py::module_& m);
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 void BindTestPiece(py::module_& m);
 void BindTracker(py::module_& m);
+void BindStageJobs(py::module_& m);  // fvm.compare, fvm.diagnose, fvm.correct (stage_jobs.cc)
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
 py::object ToPython(const nlohmann::json& document);

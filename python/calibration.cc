@@ -90,9 +90,6 @@ artefacts::Batch BatchFromArrays(const py::dict& placements, const std::optional
   std::sort(batch.placements.begin(), batch.placements.end(),
             [](const artefacts::Placement& a, const artefacts::Placement& b) { return a.name < b.name; });
   batch.has_roles = identify || validate;
-  for (const auto& role : {identify, validate}) {
-    for (const std::string& name : role.value_or(std::vector<std::string>{})) batch.Get(name);  // names an unknown placement
-  }
   artefacts::AssignBatchRoles(batch, identify, validate.value_or(std::vector<std::string>{}), "arrays");
   return batch;
 }

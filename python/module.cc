@@ -32,4 +32,5 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindStitching(m);
   fvm::python::BindTiles(m);
   fvm::python::BindFocus(m);
+  fvm::python::BindStageJobs(m);
 }

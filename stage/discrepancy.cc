@@ -12,6 +12,7 @@
 #include <map>
 #include <numeric>
 
+#include "stage/discrepancy_effects.h"
 #include "stage/discrepancy_scoring.h"
 #include "stage/held_out_turn_test.h"
 #include "stage/outlier_flagging.h"
@@ -21,394 +22,101 @@
 #include "stage/validation.h"
 
 namespace fvm::stage {
-namespace {
+namespace discrepancy {
 
-struct Candidate {
-  EffectScore score;
-  LinearScore linear;
-  std::vector<std::string> coefficient_names;  // higher_order, z_coupling
-  std::vector<int> flagged;                    // outliers: observation indices
-  double tau_s = 0.0;                          // thermal_drift: 0 linear, else the warm-up's time constant
-};
+// The forward selection of Diagnose and its state from step to step: the effects applied, the problem they make,
+// its fit and the held-out residual, and the candidates of the last step.
+class EffectSelection {
+ public:
+  EffectSelection(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
+                  const DiagnosisOptions& options)
+      : layout_(layout), identify_(identify), validate_(validate), options_(options), base_(options.identification),
+        turns_testable_(!validate.observations.empty() && !validate.anchors.empty()), problem_(BuildWith({})),
+        fit_(FitOf(problem_)) {}
 
-void Test(Candidate& c, double alpha_each) {
-  const LinearScore& l = c.linear;
-  const double m = l.rows;
-  c.score.extra_parameters = l.extra;
-  if (l.extra <= 0 || l.rss <= 0 || m - l.rank <= 0) return;
-  const double d1 = l.extra, d2 = m - l.rank;
-  c.score.f_statistic = ((l.rss_base - l.rss) / d1) / (l.rss / d2);
-  const boost::math::fisher_f_distribution<double> f(d1, d2);
-  c.score.p_value = c.score.f_statistic > 0 ? boost::math::cdf(boost::math::complement(f, c.score.f_statistic)) : 1.0;
-  c.score.delta_bic = m * std::log(l.rss / l.rss_base) + d1 * std::log(m);
-  c.score.significant = c.score.p_value < alpha_each && c.score.delta_bic < 0;
-}
-
-// The next power of a term's polynomial; its existing coefficients keep their states (dropped stay dropped,
-// fixed stay fixed).
-void RaiseOrder(ParameterLayout& layout, const std::string& term) {
-  const int index = *FindErrorTerm(term);
-  const TermSpec spec = layout.term(index);
-  std::vector<ParameterLayout::Coefficient> kept;
-  for (const ParameterLayout::Coefficient& c : layout.coefficients()) {
-    if (c.term == index) kept.push_back(c);
+  // The base model: its residuals, findings and held-out figure.
+  void Start() {
+    d_.residuals_before = fit_.residuals;
+    d_.before = Summarize(fit_.residuals);
+    d_.validation_before = HeldOut(fit_.calibration, problem_.validate);
+    d_.findings = Findings(fit_.residuals, identify_, RobustSigma(fit_.residuals, base_.noise_floor_mm));
+    validation_ = d_.validation_before;
   }
-  layout.SetTerm(term, spec.basis, spec.order + 1);
-  for (int p = 0; p <= spec.order; ++p) {
-    const std::string name = term + std::to_string(p);
-    const auto it = std::find_if(kept.begin(), kept.end(), [&](const auto& c) { return c.name == name; });
-    if (it == kept.end()) {
-      layout.Drop(name);
-    } else if (it->state == ParameterLayout::State::kFixed) {
-      layout.Fix(name, it->value);
+
+  // Step `step` of the forward selection, then the backward check; false when no candidate was accepted.
+  bool Step(int step) {
+    // Alpha spending: step k may raise a false alarm with probability alpha / 2^k at most.
+    const double alpha_step = options_.alpha / std::pow(2.0, step);
+    candidates_ = ScoreCandidates(problem_, fit_, layout_, applied_, base_, alpha_step);
+    const double alpha_each = alpha_step / static_cast<double>(std::max<size_t>(1, candidates_.size() + (turns_testable_ ? 1 : 0)));
+    for (Candidate& c : candidates_) Test(c, alpha_each);
+    std::sort(candidates_.begin(), candidates_.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.score.significant != b.score.significant) return a.score.significant;
+      return a.score.delta_bic < b.score.delta_bic;
+    });
+    std::vector<EffectScore> scores;
+    for (const Candidate& c : candidates_) scores.push_back(c.score);
+    if (step == 1) d_.candidates = scores;
+    refused_.clear();
+    bool accepted = false;
+    for (const Candidate& c : candidates_) {
+      if (!c.score.significant) break;
+      if ((accepted = TryCandidate(c, step, alpha_step, scores))) break;
     }
+    if (!accepted) return false;
+    refused_.clear();  // refused before the accepted one: the next step scores them again on what is left
+    DropRedundant(step, alpha_step);
+    return true;
   }
-}
 
-// Pitch and roll of X and Y (order 0) where the layout lacks them.
-void AddPitchAndRoll(ParameterLayout& layout) {
-  for (const char* term : {"xRx", "xRy", "yRx", "yRy"}) {
-    if (!layout.term(*FindErrorTerm(term)).present) layout.SetTerm(term, Basis::kPower, 0);
+  // After the selection: what is left, and whether the held-out placements turn about their first tiles.
+  Diagnosis Finish(int step) {
+    for (const Applied& a : applied_) d_.steps.push_back(a.step);
+    std::vector<std::string> refused_now;
+    for (const Candidate* c : refused_) refused_now.push_back(Named(*c));
+    const Remainder remainder = JudgeRemainder(fit_.residuals, fit_.calibration.layout.NumFree(), problem_.identify,
+                                               refused_now, ever_refused_, validation_);
+    d_.unexplained = remainder.unexplained;
+    // Where the data do not fit to noise, nothing else is named for what is left: the turn of the held-out frames,
+    // above all, would take the pattern a drift leaves on placements measured in order.
+    if (remainder.fits_noise && turns_testable_ && step <= kMostSteps) TestTurns(step);
+    d_.residuals_after = fit_.residuals;
+    d_.after = Summarize(fit_.residuals);
+    d_.validation_after = d_.steps.empty() ? d_.validation_before : validation_;
+    return std::move(d_);
   }
-}
 
-// A measurement set with each observation changed by `change` (observation, index).
-MeasurementSet Changed(const MeasurementSet& set, const std::function<void(Observation&, size_t)>& change) {
-  MeasurementSet out = set;
-  for (size_t i = 0; i < out.observations.size(); ++i) change(out.observations[i], i);
-  return out;
-}
+  static constexpr int kMostSteps = 6;
 
-// What an accepted step added, with the values it was estimated at: enough to rebuild the problem with or without
-// it (the backward check).
-struct Applied {
-  DiagnosisStep step;
-  std::vector<std::string> coefficient_names;            // higher_order, z_coupling
-  Eigen::Vector3d drift_mm_per_s = Eigen::Vector3d::Zero();  // thermal_drift: its initial rate
-  double tau_s = 0.0;                                    // thermal_drift: 0 linear, else a warm-up's time constant
-  double scale = 0.0;                                    // scale
-  std::vector<int> flagged;                              // outliers: indices into the original identification set
-  int extra = 0;                                         // parameters it added
-};
-
-// The problem a step fits: the base model and data with every applied effect.
-struct Problem {
-  ParameterLayout layout;
-  MeasurementSet identify, validate;
-  Anchor anchor = Anchor::kNone;
-  std::vector<int> original;  // index of each identification observation in the original set
-};
-
-MeasurementSet Undrifted(const MeasurementSet& set, const Eigen::Vector3d& v, double tau) {
-  if (set.t_s.empty()) return set;
-  return Changed(set, [&](Observation& o, size_t i) { o.command -= v * DriftShape(set.t_s[i], tau); });
-}
-
-MeasurementSet Unscaled(const MeasurementSet& set, double kappa) {
-  if (set.anchors.empty()) return set;
-  return Changed(set, [&](Observation& o, size_t) {
-    const Eigen::Vector3d a = set.anchors[static_cast<size_t>(o.group)];
-    o.measured.head<2>() = a.head<2>() + (o.measured - a).head<2>() / (1.0 + kappa);
-  });
-}
-
-Problem Build(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate, Anchor anchor,
-              const std::vector<Applied>& applied) {
-  Problem p{layout, identify, validate, anchor, {}};
-  std::vector<int> dropped;
-  for (const Applied& a : applied) {
-    const std::string& e = a.step.effect;
-    if (e == "higher_order") RaiseOrder(p.layout, a.step.component);
-    if (e == "z_coupling") AddPitchAndRoll(p.layout);
-    if (e == "reference_anchor") p.anchor = Anchor::kFirstTile;
-    if (e == "thermal_drift") {
-      p.identify = Undrifted(p.identify, a.drift_mm_per_s, a.tau_s);
-      p.validate = Undrifted(p.validate, a.drift_mm_per_s, a.tau_s);
-    }
-    if (e == "scale") p.identify = Unscaled(p.identify, a.scale), p.validate = Unscaled(p.validate, a.scale);
-    if (e == "outliers") dropped.insert(dropped.end(), a.flagged.begin(), a.flagged.end());
-  }
-  // Outliers last: the indices refer to the original set, which the other effects change in place only.
-  MeasurementSet kept = p.identify;
-  kept.observations.clear();
-  kept.t_s.clear();
-  kept.labels.clear();
-  for (size_t i = 0; i < p.identify.observations.size(); ++i) {
-    if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) != dropped.end()) continue;
-    kept.observations.push_back(p.identify.observations[i]);
-    if (!p.identify.t_s.empty()) kept.t_s.push_back(p.identify.t_s[i]);
-    if (!p.identify.labels.empty()) kept.labels.push_back(p.identify.labels[i]);
-    p.original.push_back(static_cast<int>(i));
-  }
-  p.identify = std::move(kept);
-  return p;
-}
-
-// "higher_order (xTx)" for messages.
-std::string Named(const std::string& effect, const std::string& component) {
-  return component.empty() ? effect : effect + " (" + component + ")";
-}
-
-bool IsApplied(const std::vector<Applied>& applied, const std::string& effect) {
-  return std::any_of(applied.begin(), applied.end(), [&](const Applied& a) { return a.step.effect == effect; });
-}
-
-// Every candidate effect scored against the current fit (CoefficientColumns, ScoreColumns), but those already
-// applied once (an anchor, a drift, a scale, outliers cannot be added twice). An applied drift or scale is a value
-// the data were corrected by, not a model term: its directions join the base here, so that a later candidate is
-// scored as if it could still move (a scale estimated alone takes part of a bend along x; with the bend it would not).
-std::vector<Candidate> ScoreCandidates(const Problem& p, const IdentificationResult& fit, const ParameterLayout& base_layout,
-                                       const std::vector<Applied>& applied, const IdentificationOptions& base_options,
-                                       double alpha) {
-  const MeasurementSet& identify = p.identify;
-  const bool anchored = p.anchor == Anchor::kFirstTile;
-  const Eigen::VectorXd r0 = Stack(fit.residuals);
-  const ParameterLayout& fitted = fit.calibration.layout;
-  Eigen::MatrixXd jb = CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), identify, anchored);
-  for (const Applied& a : applied) {
-    Eigen::MatrixXd free_again;
-    if (a.step.effect == "thermal_drift" && !identify.t_s.empty()) free_again = DriftColumns(identify, a.tau_s);
-    if (a.step.effect == "scale" && !identify.anchors.empty()) free_again = ScaleColumn(identify);
-    if (free_again.cols() == 0) continue;
-    jb.conservativeResize(Eigen::NoChange, jb.cols() + free_again.cols());
-    jb.rightCols(free_again.cols()) = free_again;
-  }
-  const Eigen::Index rows = r0.size();
-  std::vector<Candidate> candidates;
-  // Blunders first: the other candidates are scored without them, so a large one cannot hide a small effect.
-  std::vector<int> blunders;
-  if (!IsApplied(applied, "outliers")) {
-    Candidate c{{"outliers", ""}, {}, {}, FlagOutliers(p.layout, p.identify, p.anchor, fit.residuals, base_options, alpha)};
-    if (!c.flagged.empty()) {
-      Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(c.flagged.size()));
-      for (size_t k = 0; k < c.flagged.size(); ++k) {
-        for (int j = 0; j < 3; ++j) columns(3 * c.flagged[k] + j, 3 * static_cast<Eigen::Index>(k) + j) = 1.0;
-      }
-      c.linear = ScoreColumns(r0, jb, columns, "outliers");
-      blunders = c.flagged;
-      candidates.push_back(std::move(c));
-    }
-  }
-  const auto score = [&](const Eigen::MatrixXd& columns, const std::string& name) {
-    return ScoreColumnsWithout(blunders, r0, jb, columns, name);
-  };
-  const auto coefficient_candidate = [&](const std::string& effect, const std::string& component,
-                                         const std::function<void(ParameterLayout&)>& extend) {
-    ParameterLayout extended = fitted;
-    extend(extended);
-    std::vector<std::string> added;
-    for (const std::string& name : extended.FreeNames()) {
-      if (fitted.FreeIndexOf(name) < 0) added.push_back(name);
-    }
-    if (added.empty()) return;
-    const std::vector<double> values = ValuesByName(fitted, fit.calibration.values, extended);
-    candidates.push_back({{effect, component},
-                          score(CoefficientColumns(extended, values, added, identify, anchored), Named(effect, component)),
-                          added,
-                          {}});
-  };
-  for (int t = 0; t < kFirstSquarenessTerm; ++t) {
-    const TermSpec& spec = p.layout.term(t);
-    if (!spec.present || spec.order >= kMaxOrder || !base_layout.term(t).present) continue;
-    const std::string term(GetErrorTerm(t).vdi);
-    coefficient_candidate("higher_order", term, [&](ParameterLayout& l) { RaiseOrder(l, term); });
-  }
-  coefficient_candidate("z_coupling", "", AddPitchAndRoll);
-  const auto column_candidate = [&](const std::string& effect, const std::string& component, const Eigen::MatrixXd& columns) {
-    candidates.push_back(Candidate{{effect, component}, score(columns, Named(effect, component)), {}, {}});
-  };
-  if (!anchored && identify.anchors.size() >= 2) {
-    // Free offsets per placement (the first one is the reference): the most general anchor difference.
-    Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(rows, 3 * static_cast<Eigen::Index>(identify.anchors.size() - 1));
-    for (size_t i = 0; i < identify.observations.size(); ++i) {
-      const int g = identify.observations[i].group;
-      if (g == 0) continue;
-      for (int c = 0; c < 3; ++c) columns(3 * static_cast<Eigen::Index>(i) + c, 3 * (g - 1) + c) = 1.0;
-    }
-    column_candidate("reference_anchor", "", columns);
-  }
-  if (!identify.t_s.empty() && !IsApplied(applied, "thermal_drift")) {
-    column_candidate("thermal_drift", "", DriftColumns(identify, 0.0));
-    const LinearScore& linear = candidates.back().linear;
-    // A warm-up settling within the measurements: the time constant from a grid, counted as one more parameter. It
-    // competes only when it beats the linear drift (its limit for a long time constant) by an F-test of its own.
-    Candidate warm_up{{"thermal_drift", "warm-up"}, {}, {}, {}, 0.0};
-    for (double tau_min : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
-      const LinearScore l = score(DriftColumns(identify, tau_min * 60.0), "thermal_drift (warm-up)");
-      if (warm_up.tau_s == 0.0 || l.rss < warm_up.linear.rss) warm_up.linear = l, warm_up.tau_s = tau_min * 60.0;
-    }
-    warm_up.linear.extra += 1;
-    warm_up.linear.rank += 1;
-    const double dof = warm_up.linear.rows - warm_up.linear.rank;
-    if (dof > 0 && warm_up.linear.rss > 0 && linear.rss > warm_up.linear.rss) {
-      const double f = (linear.rss - warm_up.linear.rss) / (warm_up.linear.rss / dof);
-      const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f_distribution<double>(1.0, dof), f));
-      if (p < alpha) candidates.push_back(std::move(warm_up));
-    }
-  }
-  if (!identify.anchors.empty() && !IsApplied(applied, "scale")) {  // a scale about the first tile needs one
-    column_candidate("scale", "xy", ScaleColumn(identify));
-  }
-  return candidates;
-}
-
-// A candidate as an effect to apply, with what can be said of it before the refit (coefficient effects get their
-// size from the refit: FinishCoefficientEffect).
-Applied MakeApplied(const Candidate& c, const Problem& p, const IdentificationResult& fit) {
-  Applied a;
-  a.step.effect = c.score.effect;
-  a.step.component = c.score.component;
-  a.coefficient_names = c.coefficient_names;
-  a.extra = c.linear.extra;
-  const LinearScore& l = c.linear;
-  const std::string& effect = c.score.effect;
-  if (effect == "reference_anchor") {
-    double largest = 0;
-    for (Eigen::Index k = 0; k < l.effect.size(); ++k) largest = std::max(largest, std::abs(l.effect[k]));
-    a.step.size = largest * 1e3;
-    a.step.size_u = (l.effect_u.size() ? l.effect_u.maxCoeff() : 0.0) * 1e3;
-    a.step.size_unit = "um";
-    a.step.explanation = fmt::format(
-        "The placements did not start at one spot, and the instrument places the first tile of every stitched "
-        "measurement by its encoders: each measurement carries the stage error of its own first tile (offsets up to "
-        "{:.1f} +- {:.1f} um between placements). Referencing each measurement to its first tile (--anchor first-tile) "
-        "removes them.", a.step.size, a.step.size_u);
-  } else if (effect == "thermal_drift") {
-    a.drift_mm_per_s = Eigen::Vector3d(l.effect[0], l.effect[1], l.effect[2]);
-    a.tau_s = c.tau_s;
-    Eigen::Index axis = 0;
-    a.drift_mm_per_s.cwiseAbs().maxCoeff(&axis);
-    const Eigen::Vector3d v = a.drift_mm_per_s * 6e4;  // um/min
-    a.step.component = std::string(1, "xyz"[axis]) + (a.tau_s > 0 ? " warm-up" : "");
-    a.step.size = v[axis];
-    a.step.size_u = l.effect_u[axis] * 6e4;
-    a.step.size_unit = "um/min";
-    a.step.explanation =
-        a.tau_s > 0
-            ? fmt::format("The stitching-free centres drift with measurement time as a warm-up settles, rho(t) = A + B (1 - "
-                          "exp(-t/tau)) ([Pérez thesis] eqs. 5.1-5.2): initial rate {:.2f} +- {:.2f} um/min along {} (all axes: {:.2f}, {:.2f}, "
-                          "{:.2f} um/min), time constant about {:.1f} min, better than a drift linear in t.",
-                          a.step.size, a.step.size_u, std::string(1, "xyz"[axis]), v.x(), v.y(), v.z(), a.tau_s / 60.0)
-            : fmt::format("The stitching-free centres drift with measurement time: {:.2f} +- {:.2f} um/min along {} (all axes: "
-                          "{:.2f}, {:.2f}, {:.2f} um/min), as a stage or column warming up would ([Pérez thesis] 5.7.1). Removing a "
-                          "drift linear in t takes the time-correlated residuals away.",
-                          a.step.size, a.step.size_u, a.step.component, v.x(), v.y(), v.z());
-  } else if (effect == "scale") {
-    a.scale = -l.effect[0];  // the column is -(s - a): its coefficient undoes the scale
-    a.step.size = a.scale * 1e6;
-    a.step.size_u = l.effect_u[0] * 1e6;
-    a.step.size_unit = "ppm";
-    a.step.explanation = fmt::format(
-        "Stitched distances are scaled by {:.0f} +- {:.0f} ppm about the first tile: a lens (pixel size) or stitching scale "
-        "error of the reference. The stage model cannot absorb a scale that restarts at every measurement's first tile.",
-        a.step.size, a.step.size_u);
-  } else if (effect == "outliers") {
-    double largest = 0;
-    for (int i : c.flagged) {
-      a.flagged.push_back(p.original[static_cast<size_t>(i)]);
-      const std::string name = p.identify.labels.empty() ? std::to_string(i) : p.identify.labels[static_cast<size_t>(i)];
-      a.step.component += (a.step.component.empty() ? "" : ",") + name;
-      largest = std::max(largest, fit.residuals[static_cast<size_t>(i)].norm());
-    }
-    a.step.size = largest * 1e3;
-    a.step.size_u = fit.calibration.sigma_mm * std::sqrt(3.0) * 1e3;
-    a.step.size_unit = "um";
-    a.step.explanation = fmt::format(
-        "{} centre(s) ({}) lie far outside the noise (largest {:.1f} um against {:.2f} um per coordinate): failed sphere "
-        "fits, e.g. a burr or missing points in the calotte. Dropping them (or --loss cauchy) restores the fit.",
-        c.flagged.size(), a.step.component, a.step.size, fit.calibration.sigma_mm * 1e3);
-  }
-  return a;
-}
-
-// higher_order and z_coupling: the largest added coefficient the refit could determine is the effect's size.
-void FinishCoefficientEffect(Applied& a, const ParameterLayout& before, const Calibration& refit) {
-  const Eigen::VectorXd u = refit.StandardUncertainty();
-  std::string name;
-  double largest = -1.0;
-  for (const std::string& candidate : a.coefficient_names) {
-    const int slot = refit.layout.FreeIndexOf(candidate);
-    if (slot < 0) continue;
-    const DisplayUnit unit = UnitOf(refit.layout.coefficients()[static_cast<size_t>(refit.layout.FindCoefficient(candidate))]);
-    const double value = refit.values[static_cast<size_t>(slot)] * unit.per_si;
-    if (std::abs(value) > largest) {
-      largest = std::abs(value);
-      name = candidate;
-      a.step.size = value;
-      a.step.size_u = u[slot] * unit.per_si;
-      a.step.size_unit = unit.name;
-    }
-  }
-  if (name.empty()) name = a.coefficient_names.front();
-  if (a.step.effect == "z_coupling") a.step.component = name.substr(0, 3);
-  a.step.explanation =
-      a.step.effect == "higher_order"
-          ? fmt::format("The {} error of the stage bends more than its order-{} polynomial can follow: adding {} ({:.2f} +- "
-                        "{:.2f} {}) takes the residual structure along the axis away.",
-                        a.step.component, before.term(*FindErrorTerm(a.step.component)).order, name, a.step.size,
-                        a.step.size_u, a.step.size_unit)
-          : fmt::format("The stage pitches and rolls ({} = {:.1f} +- {:.1f} urad): the artefact was measured at different "
-                        "heights, and a rotation moves the lateral coordinates in proportion to the height, which the model "
-                        "without pitch and roll cannot follow.",
-                        name, a.step.size, a.step.size_u);
-}
-
-double ResidualSquares(const std::vector<Eigen::Vector3d>& residuals) {
-  double s = 0;
-  for (const Eigen::Vector3d& r : residuals) s += r.squaredNorm();
-  return s;
-}
-
-// A candidate's name as the notes and the steps give it: the effect and its component.
-std::string Named(const Candidate& c) {
-  return c.score.component.empty() ? c.score.effect : c.score.effect + " " + c.score.component;
-}
-
-// The refused candidate whose pattern takes most of what `c` explains in the identification data (the share of c's
-// explained sum of squares along it), when that share is more than half; else none.
-std::pair<const Candidate*, double> MostlyThePatternOf(const Candidate& c, const std::vector<const Candidate*>& refused) {
-  const Eigen::VectorXd& mine = c.linear.explained;
-  const Candidate* most = nullptr;
-  double most_share = 0.5;
-  for (const Candidate* r : refused) {
-    const Eigen::VectorXd& theirs = r->linear.explained;
-    if (theirs.size() != mine.size() || mine.squaredNorm() <= 0 || theirs.squaredNorm() <= 0) continue;
-    const double share = std::pow(mine.dot(theirs), 2) / (mine.squaredNorm() * theirs.squaredNorm());
-    if (share > most_share) most = r, most_share = share;
-  }
-  return {most, most_share};
-}
-
-}  // namespace
-
-Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
-                   const DiagnosisOptions& options) {
-  Diagnosis d;
-  const IdentificationOptions& base_options = options.identification;
-  const auto fit_of = [&](const Problem& p) {
-    IdentificationOptions o = base_options;
+ private:
+  IdentificationResult FitOf(const Problem& p) const {
+    IdentificationOptions o = base_;
     o.anchor = p.anchor;
     o.anchors = p.identify.anchors;
     return Identify(p.layout, p.identify.observations, o);
-  };
-  const auto held_out = [&](const Calibration& cal, const MeasurementSet& set) {
+  }
+  ResidualSummary HeldOut(const Calibration& cal, const MeasurementSet& set) const {
     if (set.observations.empty()) return ResidualSummary{};
-    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors, base_options.frame));
-  };
-  const auto build = [&](const std::vector<Applied>& applied) {
-    return Build(layout, identify, validate, base_options.anchor, applied);
-  };
+    return static_cast<ResidualSummary>(Validate(&cal, set.observations, set.anchors, base_.frame));
+  }
+  Problem BuildWith(const std::vector<Applied>& applied) const {
+    return Build(layout_, identify_, validate_, base_.anchor, applied);
+  }
+  void Refuse(const Candidate& c) {
+    refused_.push_back(&c);
+    if (std::find(ever_refused_.begin(), ever_refused_.end(), Named(c)) == ever_refused_.end()) ever_refused_.push_back(Named(c));
+  }
 
   // A drift or a scale estimated again with every other applied effect in the model: it was estimated before the
   // later ones, and an outlier or a bend may have pulled it. True when the value changed.
-  const auto reestimate = [&](std::vector<Applied>& list, size_t j, double alpha) {
+  bool Reestimate(std::vector<Applied>& list, size_t j, double alpha) const {
     const std::string effect = list[j].step.effect;
     if (effect != "thermal_drift" && effect != "scale") return false;
     std::vector<Applied> without = list;
     without.erase(without.begin() + static_cast<long>(j));
-    const Problem reduced = build(without);
-    const IdentificationResult reduced_fit = fit_of(reduced);
-    for (const Candidate& c : ScoreCandidates(reduced, reduced_fit, layout, without, base_options, alpha)) {
+    const Problem reduced = BuildWith(without);
+    const IdentificationResult reduced_fit = FitOf(reduced);
+    for (const Candidate& c : ScoreCandidates(reduced, reduced_fit, layout_, without, base_, alpha)) {
       if (c.score.effect != effect) continue;
       Applied fresh = MakeApplied(c, reduced, reduced_fit);
       fresh.step.before = list[j].step.before;
@@ -420,185 +128,158 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
       return true;
     }
     return false;
-  };
+  }
 
-  std::vector<Applied> applied;
-  Problem problem = build(applied);
-  IdentificationResult fit = fit_of(problem);
-  d.residuals_before = fit.residuals;
-  d.before = Summarize(fit.residuals);
-  d.validation_before = held_out(fit.calibration, problem.validate);
-  d.findings = Findings(fit.residuals, identify, RobustSigma(fit.residuals, base_options.noise_floor_mm));
-  ResidualSummary validation = d.validation_before;
-  const bool turns_testable = !validate.observations.empty() && !validate.anchors.empty();
-  std::vector<Candidate> candidates;        // the last step's, scored on the residuals left
-  std::vector<const Candidate*> refused;    // the last step's significant candidates that were not accepted
-  std::vector<std::string> ever_refused;    // every candidate refused at any step, by name, in order
-  constexpr int kMostSteps = 6;
-  int step = 1;
-  for (; step <= kMostSteps; ++step) {
-    // Alpha spending: step k may raise a false alarm with probability alpha / 2^k at most.
-    const double alpha_step = options.alpha / std::pow(2.0, step);
-    candidates = ScoreCandidates(problem, fit, layout, applied, base_options, alpha_step);
-    const double alpha_each = alpha_step / static_cast<double>(std::max<size_t>(1, candidates.size() + (turns_testable ? 1 : 0)));
-    for (Candidate& c : candidates) Test(c, alpha_each);
-    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
-      if (a.score.significant != b.score.significant) return a.score.significant;
-      return a.score.delta_bic < b.score.delta_bic;
-    });
-    std::vector<EffectScore> scores;
-    for (const Candidate& c : candidates) scores.push_back(c.score);
-    if (step == 1) d.candidates = scores;
-    bool accepted = false;
-    refused.clear();
-    const auto refuse = [&](const Candidate& c) {
-      refused.push_back(&c);
-      if (std::find(ever_refused.begin(), ever_refused.end(), Named(c)) == ever_refused.end()) ever_refused.push_back(Named(c));
-    };
-    for (const Candidate& c : candidates) {
-      if (!c.score.significant) break;
-      Applied a = MakeApplied(c, problem, fit);
-      std::vector<Applied> with = applied;
-      with.push_back(a);
-      for (size_t j = 0; j + 1 < with.size(); ++j) reestimate(with, j, alpha_step);
-      const Problem next = build(with);
-      const IdentificationResult refit = fit_of(next);
-      const ResidualSummary next_validation = held_out(refit.calibration, next.validate);
-      // Held-out placements must not get worse (beyond their own scatter): otherwise the effect fitted noise.
-      if (validation.count > 0 && next_validation.mean_mm > 1.05 * validation.mean_mm) {
-        // Why it may fail: an effect whose pattern the model's terms nearly take is estimated from what little is
-        // its own. A drift along bars measured in order is the usual case, and the design is the cure.
-        const bool drift = c.score.effect == "thermal_drift";
-        d.notes.push_back(fmt::format("step {}: {} fits the identification data better but makes the held-out placements "
-                                      "worse ({:.2f} -> {:.2f} um; {:.0f} % of its pattern is its own, the rest the model "
-                                      "can take){}; the next candidate was tried",
-                                      step, Named(c),
-                                      validation.mean_mm * 1e3, next_validation.mean_mm * 1e3, 100 * c.linear.own,
-                                      drift ? ". A drift grows along each bar as its calottes are measured in order, like "
-                                              "anything else that grows along it; measuring every other placement "
-                                              "backwards shows the drift at the shared start"
-                                            : ""));
-        refuse(c);
-        continue;
-      }
-      // An effect that is mostly the pattern of one the held-out placements refused would take what that one left
-      // behind; it is named only where it predicts the held-out placements clearly better (by a fifth) on its own.
-      if (const auto [other, share] = MostlyThePatternOf(c, refused);
-          other != nullptr && validation.count > 0 && next_validation.mean_mm > 0.8 * validation.mean_mm) {
-        d.notes.push_back(fmt::format("step {}: {} fits the identification data better, but {:.0f} % of what it explains "
-                                      "there is the pattern of the refused {}, and the held-out placements barely change "
-                                      "({:.2f} -> {:.2f} um): it would take what that one leaves; not named",
-                                      step, Named(c), 100 * share, Named(*other), validation.mean_mm * 1e3,
-                                      next_validation.mean_mm * 1e3));
-        refuse(c);
-        continue;
-      }
-      if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem.layout, refit.calibration);
-      a.step.before = Summarize(fit.residuals);
-      a.step.after = Summarize(refit.residuals);
-      a.step.validation_before = validation;
-      a.step.validation_after = next_validation;
-      a.step.candidates = scores;
-      for (const Candidate& other : candidates) {
-        const double explained = c.linear.rss_base - c.linear.rss;
-        if (&other == &c || other.linear.extra != c.linear.extra || !other.score.significant ||
-            std::abs(other.linear.rss - c.linear.rss) > 1e-3 * explained) {
-          continue;
-        }
-        a.step.alternatives.push_back(other.score.effect + (other.score.component.empty() ? "" : " " + other.score.component));
-      }
-      with.back() = a;
-      applied = with;
-      problem = next;
-      fit = refit;
-      validation = next_validation;
-      accepted = true;
-      break;
+  // Applies `c` when the held-out placements agree; else notes why not and refuses it.
+  bool TryCandidate(const Candidate& c, int step, double alpha_step, const std::vector<EffectScore>& scores) {
+    Applied a = MakeApplied(c, problem_, fit_);
+    std::vector<Applied> with = applied_;
+    with.push_back(a);
+    for (size_t j = 0; j + 1 < with.size(); ++j) Reestimate(with, j, alpha_step);
+    const Problem next = BuildWith(with);
+    const IdentificationResult refit = FitOf(next);
+    const ResidualSummary next_validation = HeldOut(refit.calibration, next.validate);
+    // Held-out placements must not get worse (beyond their own scatter): otherwise the effect fitted noise.
+    if (validation_.count > 0 && next_validation.mean_mm > 1.05 * validation_.mean_mm) {
+      // Why it may fail: an effect whose pattern the model's terms nearly take is estimated from what little is
+      // its own. A drift along bars measured in order is the usual case, and the design is the cure.
+      const bool drift = c.score.effect == "thermal_drift";
+      d_.notes.push_back(fmt::format("step {}: {} fits the identification data better but makes the held-out placements "
+                                     "worse ({:.2f} -> {:.2f} um; {:.0f} % of its pattern is its own, the rest the model "
+                                     "can take){}; the next candidate was tried",
+                                     step, Named(c),
+                                     validation_.mean_mm * 1e3, next_validation.mean_mm * 1e3, 100 * c.linear.own,
+                                     drift ? ". A drift grows along each bar as its calottes are measured in order, like "
+                                             "anything else that grows along it; measuring every other placement "
+                                             "backwards shows the drift at the shared start"
+                                           : ""));
+      Refuse(c);
+      return false;
     }
-    if (!accepted) break;
-    refused.clear();  // refused before the accepted one: the next step scores them again on what is left
-    // Backward check: an earlier effect the later ones made redundant no longer earns its parameters.
+    // An effect that is mostly the pattern of one the held-out placements refused would take what that one left
+    // behind; it is named only where it predicts the held-out placements clearly better (by a fifth) on its own.
+    if (const auto [other, share] = MostlyThePatternOf(c, refused_);
+        other != nullptr && validation_.count > 0 && next_validation.mean_mm > 0.8 * validation_.mean_mm) {
+      d_.notes.push_back(fmt::format("step {}: {} fits the identification data better, but {:.0f} % of what it explains "
+                                     "there is the pattern of the refused {}, and the held-out placements barely change "
+                                     "({:.2f} -> {:.2f} um): it would take what that one leaves; not named",
+                                     step, Named(c), 100 * share, Named(*other), validation_.mean_mm * 1e3,
+                                     next_validation.mean_mm * 1e3));
+      Refuse(c);
+      return false;
+    }
+    if (!a.coefficient_names.empty()) FinishCoefficientEffect(a, problem_.layout, refit.calibration);
+    a.step.before = Summarize(fit_.residuals);
+    a.step.after = Summarize(refit.residuals);
+    a.step.validation_before = validation_;
+    a.step.validation_after = next_validation;
+    a.step.candidates = scores;
+    for (const Candidate& other : candidates_) {
+      const double explained = c.linear.rss_base - c.linear.rss;
+      if (&other == &c || other.linear.extra != c.linear.extra || !other.score.significant ||
+          std::abs(other.linear.rss - c.linear.rss) > 1e-3 * explained) {
+        continue;
+      }
+      a.step.alternatives.push_back(other.score.effect + (other.score.component.empty() ? "" : " " + other.score.component));
+    }
+    with.back() = a;
+    applied_ = with;
+    problem_ = next;
+    fit_ = refit;
+    validation_ = next_validation;
+    return true;
+  }
+
+  // Backward check: an earlier effect the later ones made redundant no longer earns its parameters.
+  void DropRedundant(int step, double alpha_step) {
     bool refreshed = false;
-    for (size_t j = 0; j + 1 < applied.size(); ++j) {
-      if (applied[j].step.effect == "outliers" || applied[j].extra <= 0) continue;  // other data, not nested
-      std::vector<Applied> without = applied;
+    for (size_t j = 0; j + 1 < applied_.size(); ++j) {
+      if (applied_[j].step.effect == "outliers" || applied_[j].extra <= 0) continue;  // other data, not nested
+      std::vector<Applied> without = applied_;
       without.erase(without.begin() + static_cast<long>(j));
-      const Problem reduced = build(without);
-      const IdentificationResult reduced_fit = fit_of(reduced);
-      const double rss = ResidualSquares(fit.residuals), rss_reduced = ResidualSquares(reduced_fit.residuals);
-      const double dof = std::max(1.0, 3.0 * static_cast<double>(fit.residuals.size()) - fit.calibration.layout.NumFree());
-      const double f = ((rss_reduced - rss) / applied[j].extra) / (rss / dof);
-      const boost::math::fisher_f_distribution<double> dist(applied[j].extra, dof);
+      const Problem reduced = BuildWith(without);
+      const IdentificationResult reduced_fit = FitOf(reduced);
+      const double rss = ResidualSquares(fit_.residuals), rss_reduced = ResidualSquares(reduced_fit.residuals);
+      const double dof = std::max(1.0, 3.0 * static_cast<double>(fit_.residuals.size()) - fit_.calibration.layout.NumFree());
+      const double f = ((rss_reduced - rss) / applied_[j].extra) / (rss / dof);
+      const boost::math::fisher_f_distribution<double> dist(applied_[j].extra, dof);
       const double p = f > 0 ? boost::math::cdf(boost::math::complement(dist, f)) : 1.0;
       if (p < alpha_step) {
-        refreshed = reestimate(applied, j, alpha_step) || refreshed;
+        refreshed = Reestimate(applied_, j, alpha_step) || refreshed;
         continue;
       }
-      d.notes.push_back(fmt::format("step {}: {}{} dropped, the later effects explain it (p = {:.2g})", step,
-                                    applied[j].step.effect, applied[j].step.component.empty() ? "" : " " + applied[j].step.component, p));
-      applied = without;
-      problem = reduced;
-      fit = reduced_fit;
-      validation = held_out(fit.calibration, problem.validate);
+      d_.notes.push_back(fmt::format("step {}: {}{} dropped, the later effects explain it (p = {:.2g})", step,
+                                     applied_[j].step.effect, applied_[j].step.component.empty() ? "" : " " + applied_[j].step.component, p));
+      applied_ = without;
+      problem_ = reduced;
+      fit_ = reduced_fit;
+      validation_ = HeldOut(fit_.calibration, problem_.validate);
       refreshed = false;
       break;  // one at a time: the others are judged again at the next step
     }
     if (refreshed) {
-      problem = build(applied);
-      fit = fit_of(problem);
-      validation = held_out(fit.calibration, problem.validate);
+      problem_ = BuildWith(applied_);
+      fit_ = FitOf(problem_);
+      validation_ = HeldOut(fit_.calibration, problem_.validate);
     }
   }
-  for (const Applied& a : applied) d.steps.push_back(a.step);
 
-  std::vector<std::string> refused_now;
-  for (const Candidate* c : refused) refused_now.push_back(Named(*c));
-  const Remainder remainder = JudgeRemainder(fit.residuals, fit.calibration.layout.NumFree(), problem.identify,
-                                             refused_now, ever_refused, validation);
-  d.unexplained = remainder.unexplained;
-  // Where the data do not fit to noise, nothing else is named for what is left: the turn of the held-out frames,
-  // above all, would take the pattern a drift leaves on placements measured in order.
-  if (remainder.fits_noise && turns_testable && step <= kMostSteps) {
-    // The identification data fit to noise now: do the held-out placements turn about their first tiles?
-    const double alpha_step = options.alpha / std::pow(2.0, step);
+  // The identification data fit to noise now: do the held-out placements turn about their first tiles?
+  void TestTurns(int step) {
+    const double alpha_step = options_.alpha / std::pow(2.0, step);
     std::optional<DriftCorrection> drift;
-    for (const Applied& a : applied) {
+    for (const Applied& a : applied_) {
       if (a.step.effect != "thermal_drift") continue;
-      const ParameterLayout& fitted = fit.calibration.layout;
-      drift = DriftCorrection{CoefficientColumns(fitted, fit.calibration.values, fitted.FreeNames(), problem.identify,
-                                                 problem.anchor == Anchor::kFirstTile),
-                              DriftColumns(problem.identify, a.tau_s), a.tau_s};
+      const ParameterLayout& fitted = fit_.calibration.layout;
+      drift = DriftCorrection{CoefficientColumns(fitted, fit_.calibration.values, fitted.FreeNames(), problem_.identify,
+                                                 problem_.anchor == Anchor::kFirstTile),
+                              DriftColumns(problem_.identify, a.tau_s), a.tau_s};
     }
-    TurnTest turn = TestHeldOutTurns(fit.calibration, problem.validate, base_options.frame, drift, alpha_step);
-    if (applied.empty()) d.candidates.push_back(turn.score);
+    TurnTest turn = TestHeldOutTurns(fit_.calibration, problem_.validate, base_.frame, drift, alpha_step);
+    if (applied_.empty()) d_.candidates.push_back(turn.score);
     const std::optional<TurnsRefused> refused_turns =
-        turn.score.significant ? DriftInsteadOfTurns(fit.calibration, problem.validate, base_options.frame, turn.residuals_after,
-                                                     {step, turn.score.p_value, drift.has_value()}, validation,
-                                                     Summarize(fit.residuals), alpha_step)
+        turn.score.significant ? DriftInsteadOfTurns(fit_.calibration, problem_.validate, base_.frame, turn.residuals_after,
+                                                     {step, turn.score.p_value, drift.has_value()}, validation_,
+                                                     Summarize(fit_.residuals), alpha_step)
                                : std::nullopt;
     if (refused_turns) {
-      d.notes.push_back(refused_turns->note);
-      d.unexplained = refused_turns->unexplained;
+      d_.notes.push_back(refused_turns->note);
+      d_.unexplained = refused_turns->unexplained;
     } else if (turn.score.significant) {
-      d.steps.push_back(FrameRotationStep(turn, fit.calibration.layout, Summarize(fit.residuals), validation,
-                                          validate.groups, &d.turns));
-      validation = d.steps.back().validation_after;
+      d_.steps.push_back(FrameRotationStep(turn, fit_.calibration.layout, Summarize(fit_.residuals), validation_,
+                                           validate_.groups, &d_.turns));
+      validation_ = d_.steps.back().validation_after;
     }
   }
 
-  d.residuals_after = fit.residuals;
-  d.after = Summarize(fit.residuals);
-  d.validation_after = d.steps.empty() ? d.validation_before : validation;
+  const ParameterLayout& layout_;
+  const MeasurementSet& identify_;
+  const MeasurementSet& validate_;
+  const DiagnosisOptions& options_;
+  const IdentificationOptions& base_;
+  const bool turns_testable_;
+  Diagnosis d_;
+  std::vector<Applied> applied_;
+  Problem problem_;
+  IdentificationResult fit_;
+  ResidualSummary validation_;
+  std::vector<Candidate> candidates_;        // the last step's, scored on the residuals left
+  std::vector<const Candidate*> refused_;    // the last step's significant candidates that were not accepted
+  std::vector<std::string> ever_refused_;    // every candidate refused at any step, by name, in order
+};
+
+// The first accepted effect is the diagnosis' headline; without one, why none is named.
+static void Explain(Diagnosis& d, double alpha) {
   if (d.steps.empty()) {
     if (!d.unexplained.empty()) {
       d.explanation = "No effect is named; " + d.unexplained + ".";
-      return d;
+      return;
     }
     d.explanation = "No listed effect explains the residuals better than noise: the model fits these data to " +
                     fmt::format("{:.2f} um rms, and no candidate passes the F-test at the {:.0f} % level with a lower BIC.",
-                                d.before.rms_mm * 1e3, options.alpha * 100);
+                                d.before.rms_mm * 1e3, alpha * 100);
     if (!d.notes.empty()) d.explanation += " " + d.notes.front() + ".";
-    return d;
+    return;
   }
   const DiagnosisStep& first = d.steps.front();
   d.effect = first.effect;
@@ -607,6 +288,18 @@ Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify
   d.size = first.size;
   d.size_u = first.size_u;
   d.size_unit = first.size_unit;
+}
+
+}  // namespace discrepancy
+
+Diagnosis Diagnose(const ParameterLayout& layout, const MeasurementSet& identify, const MeasurementSet& validate,
+                   const DiagnosisOptions& options) {
+  discrepancy::EffectSelection selection(layout, identify, validate, options);
+  selection.Start();
+  int step = 1;
+  while (step <= discrepancy::EffectSelection::kMostSteps && selection.Step(step)) ++step;
+  Diagnosis d = selection.Finish(step);
+  discrepancy::Explain(d, options.alpha);
   return d;
 }
 

@@ -225,22 +225,31 @@ const std::vector<std::string>& PoseParameterNames() {
   return names;
 }
 
-IdentificationResult Identify(const ParameterLayout& input_layout, const std::vector<Observation>& observations,
-                              const IdentificationOptions& options) {
-  options.Check();
+namespace {
+
+// The variance factor: residuals per coordinate in mm (equal weights), or chi^2 per degree of freedom (weighted;
+// never below 1, since the readings cannot be better than their covariances say).
+double VarianceFactor(bool weighted, double noise_floor_mm, double rss, double dof) {
+  const double s = std::sqrt(rss / dof);
+  return weighted ? std::max(s, 1.0) : std::max(s, noise_floor_mm);
+}
+
+// The observed coordinates (three a point, fewer where a covariance leaves one unobserved). Throws
+// std::invalid_argument when they cannot determine the model or refer to what was not given.
+int CountEquations(const ParameterLayout& layout, const std::vector<Observation>& observations,
+                   const IdentificationOptions& options, int pose_count) {
   const int m = static_cast<int>(observations.size());
-  const bool estimate_pose = options.instrument == InstrumentPose::kEstimated;
-  const int pose_count = estimate_pose ? kPoseParameters : 0;
-  int equations = 0;  // observed coordinates: three a point, fewer where a covariance leaves one unobserved
+  const bool estimate_pose = pose_count > 0;
+  int equations = 0;
   for (const Observation& o : observations) {
     for (int c = 0; c < 3; ++c) equations += std::isinf(o.covariance(c, c)) ? 0 : 1;
   }
-  if (equations < input_layout.NumFree() + pose_count) {
+  if (equations < layout.NumFree() + pose_count) {
     throw std::invalid_argument(fmt::format(
         "{} points give {} equations, fewer than the {} coefficients of the model{}: measure more points or choose a "
-        "smaller model", m, equations, input_layout.NumFree(), estimate_pose ? " and the 6 of the instrument pose" : ""));
+        "smaller model", m, equations, layout.NumFree(), estimate_pose ? " and the 6 of the instrument pose" : ""));
   }
-  if (options.instrument != InstrumentPose::kNone && input_layout.chain().instrument) {
+  if (options.instrument != InstrumentPose::kNone && layout.chain().instrument) {
     throw std::invalid_argument("the chain already carries an instrument pose: give it as the identification's pose instead");
   }
   const size_t tools = std::max<size_t>(1, options.tool_offsets.size());
@@ -252,162 +261,203 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
       throw std::invalid_argument("anchoring at the first tile needs a first tile for every measurement");
     }
   }
+  return equations;
+}
 
-  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0, std::nullopt, {}});
-  if (!options.anchors.empty()) result.calibration.frame_reference = options.anchors.front();
-  ParameterLayout& layout = result.calibration.layout;
-  Prepared prepared = Prepare(layout, observations, options);
-  const double* start_pose = prepared.pose6.data();
+// The problem linearised at zero error (the model is linear in its coefficients to first order), its columns in
+// units of the plausible sizes `tau`: what the rank treatment works on. The pose's columns follow the coefficients'.
+struct ScaledLinearisation {
+  Eigen::Index n_coefficients = 0;
+  Eigen::VectorXd tau, gradient;
+  Eigen::MatrixXd r_factor;  // R of J = QR: the column geometry of J in n x n
+  double r0_squared = 0.0;
+  std::vector<std::string> names;  // the free coefficients, then the pose's
+  std::vector<int> keeping_order;  // the pose first, then KeepingOrder
+  std::vector<int> rank_of;        // position of each column in keeping_order
+  bool IsPose(int column) const { return column >= n_coefficients; }
+};
 
-  std::vector<double> start_parameters;  // in units of the plausible sizes: the kept coefficients, then the pose
-  Eigen::MatrixXd kept_normal;           // J^T J of the kept parameters in those units, at zero error
-  // The variance factor: residuals per coordinate in mm (equal weights), or chi^2 per degree of freedom
-  // (weighted; never below 1, since the readings cannot be better than their covariances say).
-  const auto variance_factor = [&](double rss, double dof) {
-    const double s = std::sqrt(rss / dof);
-    return prepared.weighted ? std::max(s, 1.0) : std::max(s, options.noise_floor_mm);
-  };
-  // Rank treatment on the Jacobian at zero error (the model is linear in its coefficients to first order).
-  {
-    const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
-    Eigen::VectorXd r0;
-    Eigen::MatrixXd j;
-    Linearise(layout, zeros, start_pose, prepared, &r0, &j);
-    // Polynomial bases are defined on their travel; far outside it (or on a travel of 1e-300 mm) their powers
-    // overflow, and a rank search on inf and NaN reads memory it does not own (Eigen's pivoting).
-    if (!j.allFinite() || !r0.allFinite()) {
-      throw std::invalid_argument("the model cannot be evaluated at these points (its derivatives overflow): do the "
-                                  "points lie inside the travel the error functions are defined on?");
-    }
-    const Eigen::Index n_coefficients = layout.NumFree();
-    Eigen::VectorXd tau(n_coefficients + pose_count);
-    tau << PlausibleSizes(layout), prepared.pose_scale.head(pose_count);
-    j.array().rowwise() *= tau.transpose().array();  // columns in units of the plausible sizes
-    const Eigen::VectorXd gradient = j.transpose() * r0;
-    // R of j = QR has the column geometry of j in n x n: search dependences and form normal equations there.
-    // (In place: j is large, 3 rows per point.)
-    const Eigen::Index n_all = j.cols();
-    const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(j), "identification: the Jacobian of the model and the pose");
-    const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(std::min(n_all, j.rows())).triangularView<Eigen::Upper>();
-    std::vector<std::string> names = layout.FreeNames();
-    for (int i = 0; i < pose_count; ++i) names.push_back(PoseParameterNames()[static_cast<size_t>(i)]);
-    std::vector<bool> fixed(names.size(), false);
-
-    // The pose comes first: it is never fixed, and coefficients that only move the whole point set (constant
-    // terms next to the tracker) are named as aliases of it.
-    std::vector<int> keeping_order;
-    for (int i = 0; i < pose_count; ++i) keeping_order.push_back(static_cast<int>(n_coefficients) + i);
-    for (int c : KeepingOrder(layout)) keeping_order.push_back(c);
-    std::vector<int> rank_of(names.size());
-    for (size_t i = 0; i < keeping_order.size(); ++i) rank_of[static_cast<size_t>(keeping_order[i])] = static_cast<int>(i);
-    const auto is_pose = [&](int column) { return column >= n_coefficients; };
-    for (const ColumnDependence& d : FindDependentColumns(r_factor, keeping_order, options.alias_tolerance)) {
-      if (is_pose(d.column)) {
-        throw std::invalid_argument(fmt::format(
-            "the points do not determine the instrument pose ({} has no effect of its own): measure points that span "
-            "the workspace in all three axes, or hold the pose", names[static_cast<size_t>(d.column)]));
-      }
-      fixed[static_cast<size_t>(d.column)] = true;
-      std::string why;
-      if (d.on.empty()) {
-        const bool displacements = std::all_of(observations.begin(), observations.end(), [](const Observation& o) { return o.from.has_value(); });
-        why = displacements ? "no effect on these data: displacements between tiles, seen from the first tile, show no constant offset or turn"
-              : options.anchor != Anchor::kFirstTile ? "no effect on these data"
-              : options.frame == StitchedFrame::kRotated
-                  ? "no effect on these data: every measurement is seen from its own first tile, offset and turned "
-                    "with the stage there, which cancels it"
-                  : "no effect on these data: anchoring every measurement at its first tile cancels it";
-      } else {
-        why = "same effect as";
-        for (size_t k = 0; k < d.on.size(); ++k) {
-          const auto [other, factor] = d.on[k];
-          why += fmt::format("{} {:.4g} * {}", k ? " +" : "", factor * tau[other] / tau[d.column],
-                             names[static_cast<size_t>(other)]);
-        }
-        why += " on these data";
-        if (std::any_of(d.on.begin(), d.on.end(), [&](const auto& o) { return is_pose(o.first); })) {
-          why += " (the instrument pose absorbs it: error functions are only known up to their value at the origin)";
-        }
-      }
-      result.fixed.push_back({names[static_cast<size_t>(d.column)], why});
-    }
-
-    // Weakly determined coefficients: fix the worst while one's standard uncertainty, in units of its
-    // plausible size, exceeds the limit. Normal equations on scaled columns are well enough conditioned here.
-    const Eigen::MatrixXd normal = r_factor.transpose() * r_factor;
-    const double r0_squared = r0.squaredNorm();
-    Eigen::VectorXd start;
-    while (true) {
-      std::vector<int> kept;
-      for (size_t c = 0; c < fixed.size(); ++c) {
-        if (!fixed[c]) kept.push_back(static_cast<int>(c));
-      }
-      const Eigen::Index k = static_cast<Eigen::Index>(kept.size());
-      if (k == 0) break;
-      Eigen::MatrixXd nk(k, k);
-      Eigen::VectorXd gk(k);
-      for (Eigen::Index a = 0; a < k; ++a) {
-        gk[a] = gradient[kept[static_cast<size_t>(a)]];
-        for (Eigen::Index b = 0; b < k; ++b) nk(a, b) = normal(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]);
-      }
-      const auto ldlt = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(nk, "identification: the normal equations of the kept parameters");
-      start = -ldlt.solve(gk);  // the linearised least-squares solution: where LM starts
-      const double rss = std::max(0.0, r0_squared - gk.dot(ldlt.solve(gk)));
-      const double dof = std::max(1.0, static_cast<double>(equations - k));
-      const double sigma = variance_factor(rss, dof);
-      const Eigen::MatrixXd covariance = sigma * sigma * ldlt.solve(Eigen::MatrixXd::Identity(k, k));
-      // Of the coefficients the data cannot determine, fix the one we would keep last (KeepingOrder): when
-      // pitch and a squareness term explain the same thing, the squareness stays. The pose is never fixed.
-      Eigen::Index worst = -1;
-      for (Eigen::Index a = 0; a < k; ++a) {
-        if (is_pose(kept[static_cast<size_t>(a)])) continue;
-        const double u = std::sqrt(std::max(0.0, covariance(a, a)));
-        if (!(u <= options.max_relative_uncertainty)) {
-          if (worst < 0 || rank_of[static_cast<size_t>(kept[static_cast<size_t>(a)])] >
-                               rank_of[static_cast<size_t>(kept[static_cast<size_t>(worst)])]) {
-            worst = a;
-          }
-        }
-      }
-      if (worst < 0) {
-        start_parameters.assign(start.data(), start.data() + start.size());
-        kept_normal = nk;
-        break;
-      }
-      const double u = std::sqrt(std::max(0.0, covariance(worst, worst)));
-      const int column = kept[static_cast<size_t>(worst)];
-      Eigen::Index partner = worst == 0 ? 1 : 0;  // the kept parameter it is most correlated with
-      for (Eigen::Index a = 0; a < k; ++a) {
-        if (a == worst) continue;
-        const double rho = std::abs(covariance(worst, a)) / std::sqrt(covariance(a, a) * covariance(worst, worst));
-        const double best = std::abs(covariance(worst, partner)) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
-        if (rho > best) partner = a;
-      }
-      const ParameterLayout::Coefficient& c = FreeCoefficient(layout, column);
-      std::string why = fmt::format(
-          "undetermined by these data: its standard uncertainty would be {}, {:.0f}% of a plausible {}", FormatValue(c, u * tau[column]),
-          100.0 * u, FormatValue(c, tau[column]));
-      if (k > 1) {
-        const double rho = covariance(worst, partner) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
-        why += fmt::format(" (correlation {:+.3f} with {})", rho, names[static_cast<size_t>(kept[static_cast<size_t>(partner)])]);
-      }
-      const ErrorTerm& term = GetErrorTerm(c.term);
-      if (term.kind == ErrorKind::kRotation && term.component != 2) why += "; pitch and roll need height changes";
-      result.fixed.push_back({names[static_cast<size_t>(column)], why});
-      fixed[static_cast<size_t>(column)] = true;
-    }
-    result.calibration.undetermined = Absorbed(normal, kept_normal, fixed, tau, names, n_coefficients);
+ScaledLinearisation LineariseScaled(const ParameterLayout& layout, const Prepared& prepared, int pose_count) {
+  const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
+  Eigen::VectorXd r0;
+  Eigen::MatrixXd j;
+  Linearise(layout, zeros, prepared.pose6.data(), prepared, &r0, &j);
+  // Polynomial bases are defined on their travel; far outside it (or on a travel of 1e-300 mm) their powers
+  // overflow, and a rank search on inf and NaN reads memory it does not own (Eigen's pivoting).
+  if (!j.allFinite() || !r0.allFinite()) {
+    throw std::invalid_argument("the model cannot be evaluated at these points (its derivatives overflow): do the "
+                                "points lie inside the travel the error functions are defined on?");
   }
-  for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
-  prepared = Prepare(layout, observations, options);
+  ScaledLinearisation s;
+  s.n_coefficients = layout.NumFree();
+  s.tau.resize(s.n_coefficients + pose_count);
+  s.tau << PlausibleSizes(layout), prepared.pose_scale.head(pose_count);
+  j.array().rowwise() *= s.tau.transpose().array();  // columns in units of the plausible sizes
+  s.gradient = j.transpose() * r0;
+  s.r0_squared = r0.squaredNorm();
+  // Dependences are searched and normal equations formed on R. (In place: j is large, 3 rows per point.)
+  const Eigen::Index n_all = j.cols();
+  const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(j), "identification: the Jacobian of the model and the pose");
+  s.r_factor = qr.matrixQR().topRows(std::min(n_all, j.rows())).triangularView<Eigen::Upper>();
+  s.names = layout.FreeNames();
+  for (int i = 0; i < pose_count; ++i) s.names.push_back(PoseParameterNames()[static_cast<size_t>(i)]);
+  // The pose comes first: it is never fixed, and coefficients that only move the whole point set (constant
+  // terms next to the tracker) are named as aliases of it.
+  for (int i = 0; i < pose_count; ++i) s.keeping_order.push_back(static_cast<int>(s.n_coefficients) + i);
+  for (int c : KeepingOrder(layout)) s.keeping_order.push_back(c);
+  s.rank_of.resize(s.names.size());
+  for (size_t i = 0; i < s.keeping_order.size(); ++i) s.rank_of[static_cast<size_t>(s.keeping_order[i])] = static_cast<int>(i);
+  return s;
+}
 
-  // Levenberg-Marquardt over the coefficients (and the pose correction) in units of their plausible size.
-  const Eigen::VectorXd scale = PlausibleSizes(layout);
+// Why a column without an effect of its own on these data is fixed.
+std::string NoEffectReason(const std::vector<Observation>& observations, const IdentificationOptions& options) {
+  const bool displacements = std::all_of(observations.begin(), observations.end(), [](const Observation& o) { return o.from.has_value(); });
+  return displacements ? "no effect on these data: displacements between tiles, seen from the first tile, show no constant offset or turn"
+         : options.anchor != Anchor::kFirstTile ? "no effect on these data"
+         : options.frame == StitchedFrame::kRotated
+             ? "no effect on these data: every measurement is seen from its own first tile, offset and turned "
+               "with the stage there, which cancels it"
+             : "no effect on these data: anchoring every measurement at its first tile cancels it";
+}
+
+// Fixes the columns the others (or nothing) explain exactly, naming what takes their place; a dependent pose
+// column is an error.
+void FixDependentColumns(const ScaledLinearisation& s, const std::vector<Observation>& observations,
+                         const IdentificationOptions& options, std::vector<bool>& fixed, std::vector<FixedCoefficient>& named) {
+  for (const ColumnDependence& d : FindDependentColumns(s.r_factor, s.keeping_order, options.alias_tolerance)) {
+    if (s.IsPose(d.column)) {
+      throw std::invalid_argument(fmt::format(
+          "the points do not determine the instrument pose ({} has no effect of its own): measure points that span "
+          "the workspace in all three axes, or hold the pose", s.names[static_cast<size_t>(d.column)]));
+    }
+    fixed[static_cast<size_t>(d.column)] = true;
+    std::string why;
+    if (d.on.empty()) {
+      why = NoEffectReason(observations, options);
+    } else {
+      why = "same effect as";
+      for (size_t k = 0; k < d.on.size(); ++k) {
+        const auto [other, factor] = d.on[k];
+        why += fmt::format("{} {:.4g} * {}", k ? " +" : "", factor * s.tau[other] / s.tau[d.column],
+                           s.names[static_cast<size_t>(other)]);
+      }
+      why += " on these data";
+      if (std::any_of(d.on.begin(), d.on.end(), [&](const auto& o) { return s.IsPose(o.first); })) {
+        why += " (the instrument pose absorbs it: error functions are only known up to their value at the origin)";
+      }
+    }
+    named.push_back({s.names[static_cast<size_t>(d.column)], why});
+  }
+}
+
+// The linearised least-squares solution of the kept columns (where Levenberg-Marquardt starts) and their normal
+// equations.
+struct KeptStart {
+  std::vector<double> parameters;  // in units of the plausible sizes: the kept coefficients, then the pose
+  Eigen::MatrixXd normal;          // J^T J of the kept parameters in those units, at zero error
+};
+
+// The kept column the weakly determined `worst` is most correlated with.
+Eigen::Index MostCorrelated(const Eigen::MatrixXd& covariance, Eigen::Index worst) {
+  Eigen::Index partner = worst == 0 ? 1 : 0;
+  for (Eigen::Index a = 0; a < covariance.rows(); ++a) {
+    if (a == worst) continue;
+    const double rho = std::abs(covariance(worst, a)) / std::sqrt(covariance(a, a) * covariance(worst, worst));
+    const double best = std::abs(covariance(worst, partner)) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
+    if (rho > best) partner = a;
+  }
+  return partner;
+}
+
+std::string UndeterminedReason(const ParameterLayout& layout, const ScaledLinearisation& s, const std::vector<int>& kept,
+                               const Eigen::MatrixXd& covariance, Eigen::Index worst) {
+  const double u = std::sqrt(std::max(0.0, covariance(worst, worst)));
+  const int column = kept[static_cast<size_t>(worst)];
+  const Eigen::Index partner = MostCorrelated(covariance, worst);
+  const ParameterLayout::Coefficient& c = FreeCoefficient(layout, column);
+  std::string why = fmt::format(
+      "undetermined by these data: its standard uncertainty would be {}, {:.0f}% of a plausible {}", FormatValue(c, u * s.tau[column]),
+      100.0 * u, FormatValue(c, s.tau[column]));
+  if (kept.size() > 1) {
+    const double rho = covariance(worst, partner) / std::sqrt(covariance(partner, partner) * covariance(worst, worst));
+    why += fmt::format(" (correlation {:+.3f} with {})", rho, s.names[static_cast<size_t>(kept[static_cast<size_t>(partner)])]);
+  }
+  const ErrorTerm& term = GetErrorTerm(c.term);
+  if (term.kind == ErrorKind::kRotation && term.component != 2) why += "; pitch and roll need height changes";
+  return why;
+}
+
+// Weakly determined coefficients: fixes the worst while one's standard uncertainty, in units of its plausible
+// size, exceeds the limit. Normal equations on scaled columns are well enough conditioned here.
+KeptStart FixWeaklyDetermined(const ParameterLayout& layout, const ScaledLinearisation& s, const Eigen::MatrixXd& normal,
+                              int equations, bool weighted, const IdentificationOptions& options, std::vector<bool>& fixed,
+                              std::vector<FixedCoefficient>& named) {
+  KeptStart start;
+  while (true) {
+    std::vector<int> kept;
+    for (size_t c = 0; c < fixed.size(); ++c) {
+      if (!fixed[c]) kept.push_back(static_cast<int>(c));
+    }
+    const Eigen::Index k = static_cast<Eigen::Index>(kept.size());
+    if (k == 0) break;
+    Eigen::MatrixXd nk(k, k);
+    Eigen::VectorXd gk(k);
+    for (Eigen::Index a = 0; a < k; ++a) {
+      gk[a] = s.gradient[kept[static_cast<size_t>(a)]];
+      for (Eigen::Index b = 0; b < k; ++b) nk(a, b) = normal(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]);
+    }
+    const auto ldlt = Decompose<Eigen::LDLT<Eigen::MatrixXd>>(nk, "identification: the normal equations of the kept parameters");
+    const Eigen::VectorXd solution = -ldlt.solve(gk);
+    const double rss = std::max(0.0, s.r0_squared - gk.dot(ldlt.solve(gk)));
+    const double dof = std::max(1.0, static_cast<double>(equations - k));
+    const double sigma = VarianceFactor(weighted, options.noise_floor_mm, rss, dof);
+    const Eigen::MatrixXd covariance = sigma * sigma * ldlt.solve(Eigen::MatrixXd::Identity(k, k));
+    // Of the coefficients the data cannot determine, fix the one we would keep last (KeepingOrder): when
+    // pitch and a squareness term explain the same thing, the squareness stays. The pose is never fixed.
+    Eigen::Index worst = -1;
+    for (Eigen::Index a = 0; a < k; ++a) {
+      if (s.IsPose(kept[static_cast<size_t>(a)])) continue;
+      const double u = std::sqrt(std::max(0.0, covariance(a, a)));
+      if (!(u <= options.max_relative_uncertainty)) {
+        if (worst < 0 || s.rank_of[static_cast<size_t>(kept[static_cast<size_t>(a)])] >
+                             s.rank_of[static_cast<size_t>(kept[static_cast<size_t>(worst)])]) {
+          worst = a;
+        }
+      }
+    }
+    if (worst < 0) {
+      start.parameters.assign(solution.data(), solution.data() + solution.size());
+      start.normal = nk;
+      break;
+    }
+    const int column = kept[static_cast<size_t>(worst)];
+    named.push_back({s.names[static_cast<size_t>(column)], UndeterminedReason(layout, s, kept, covariance, worst)});
+    fixed[static_cast<size_t>(column)] = true;
+  }
+  return start;
+}
+
+// The rank treatment: what these data cannot determine is fixed at zero (result->fixed, and what the kept
+// coefficients absorb of it); returns where the solver starts.
+KeptStart TreatRank(const ParameterLayout& layout, const std::vector<Observation>& observations, const Prepared& prepared,
+                    const IdentificationOptions& options, int equations, int pose_count, IdentificationResult& result) {
+  const ScaledLinearisation s = LineariseScaled(layout, prepared, pose_count);
+  std::vector<bool> fixed(s.names.size(), false);
+  FixDependentColumns(s, observations, options, fixed, result.fixed);
+  const Eigen::MatrixXd normal = s.r_factor.transpose() * s.r_factor;
+  KeptStart start = FixWeaklyDetermined(layout, s, normal, equations, prepared.weighted, options, fixed, result.fixed);
+  result.calibration.undetermined = Absorbed(normal, start.normal, fixed, s.tau, s.names, s.n_coefficients);
+  return start;
+}
+
+// Levenberg-Marquardt over the coefficients and the pose correction, in units of their plausible sizes, from and
+// into `parameters` and `pose_parameters`; the solver's figures go into `result`.
+void SolveScaled(const ParameterLayout& layout, const std::vector<Observation>& observations, const Prepared& prepared,
+                 const IdentificationOptions& options, const Eigen::VectorXd& scale, std::vector<double>& parameters,
+                 std::vector<double>& pose_parameters, IdentificationResult& result) {
   const int n = layout.NumFree();
-  std::vector<double> parameters(start_parameters.begin(), start_parameters.end() - pose_count);
-  parameters.resize(static_cast<size_t>(n), 0.0);
-  std::vector<double> pose_parameters(start_parameters.end() - pose_count, start_parameters.end());
-  pose_parameters.resize(static_cast<size_t>(pose_count), 0.0);
+  const int pose_count = static_cast<int>(pose_parameters.size());
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -419,52 +469,109 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   }
   std::vector<double*> blocks_of_parameters;
   if (n > 0) blocks_of_parameters.push_back(parameters.data());
-  if (estimate_pose) blocks_of_parameters.push_back(pose_parameters.data());
+  if (pose_count > 0) blocks_of_parameters.push_back(pose_parameters.data());
+  if (blocks_of_parameters.empty()) {
+    result.converged = true;
+    return;
+  }
   for (auto& [key, block] : blocks) {
     ceres::LossFunction* loss = nullptr;
     if (options.loss == "huber") loss = new ceres::HuberLoss(options.loss_scale_mm);
     if (options.loss == "cauchy") loss = new ceres::CauchyLoss(options.loss_scale_mm);
-    if (!blocks_of_parameters.empty()) {
-      problem.AddResidualBlock(new BlockCost(layout, scale, std::move(block), prepared), loss, blocks_of_parameters);
-    } else {
-      delete loss;
-    }
+    problem.AddResidualBlock(new BlockCost(layout, scale, std::move(block), prepared), loss, blocks_of_parameters);
   }
-  if (!blocks_of_parameters.empty()) {
-    ceres::Solver::Options solver;
-    solver.minimizer_type = ceres::TRUST_REGION;
-    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-    solver.max_num_iterations = options.max_iterations;
-    // The start is the linearised least-squares solution and the model is nearly linear: begin as Gauss-Newton,
-    // or the default damping crawls along the weakly determined directions for a dozen iterations.
-    solver.initial_trust_region_radius = 1e12;
-    solver.num_threads =
-        options.num_threads > 0 ? options.num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    solver.function_tolerance = 1e-10;
-    solver.parameter_tolerance = 1e-10;
-    solver.gradient_tolerance = 1e-14;
-    // The iteration log reads the parameters as the solver leaves them after each step.
-    std::unique_ptr<ceres::IterationCallback> log;
-    if (options.on_iteration) {
-      log = std::make_unique<IterationLog>([&] {
-        std::vector<double> values(static_cast<size_t>(n));
-        for (int i = 0; i < n; ++i) values[static_cast<size_t>(i)] = scale[i] * parameters[static_cast<size_t>(i)];
-        std::array<double, kPoseParameters> pose6 = prepared.pose6;
-        for (int i = 0; i < pose_count; ++i) pose6[static_cast<size_t>(i)] += prepared.pose_scale[i] * pose_parameters[static_cast<size_t>(i)];
-        options.on_iteration(layout, values, Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])});
-      });
-      solver.update_state_every_iteration = true;
-      solver.callbacks.push_back(log.get());
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver, &problem, &summary);
-    result.iterations = static_cast<int>(summary.iterations.size());
-    result.converged = summary.termination_type == ceres::CONVERGENCE;
-    result.solver_report = summary.BriefReport();
-  } else {
-    result.converged = true;
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = options.max_iterations;
+  // The start is the linearised least-squares solution and the model is nearly linear: begin as Gauss-Newton,
+  // or the default damping crawls along the weakly determined directions for a dozen iterations.
+  solver.initial_trust_region_radius = 1e12;
+  solver.num_threads =
+      options.num_threads > 0 ? options.num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  solver.function_tolerance = 1e-10;
+  solver.parameter_tolerance = 1e-10;
+  solver.gradient_tolerance = 1e-14;
+  // The iteration log reads the parameters as the solver leaves them after each step.
+  std::unique_ptr<ceres::IterationCallback> log;
+  if (options.on_iteration) {
+    log = std::make_unique<IterationLog>([&] {
+      std::vector<double> values(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) values[static_cast<size_t>(i)] = scale[i] * parameters[static_cast<size_t>(i)];
+      std::array<double, kPoseParameters> pose6 = prepared.pose6;
+      for (int i = 0; i < pose_count; ++i) pose6[static_cast<size_t>(i)] += prepared.pose_scale[i] * pose_parameters[static_cast<size_t>(i)];
+      options.on_iteration(layout, values, Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])});
+    });
+    solver.update_state_every_iteration = true;
+    solver.callbacks.push_back(log.get());
   }
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  result.iterations = static_cast<int>(summary.iterations.size());
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.solver_report = summary.BriefReport();
+}
+
+// Residual statistics and noise at the solution. The covariance uses the Jacobian of the rank analysis (at zero
+// error): the model is linear in its coefficients to first order, and stage errors of 1e-3 change it by about
+// 0.1 %, far below what a covariance estimated from tens of centres can resolve.
+void JudgeSolution(const Prepared& prepared, const IdentificationOptions& options, const Eigen::VectorXd& scale,
+                   const Eigen::MatrixXd& kept_normal, const std::array<double, kPoseParameters>& pose6, int equations,
+                   int pose_count, IdentificationResult& result) {
+  const ParameterLayout& layout = result.calibration.layout;
+  const int n = layout.NumFree();
+  Eigen::VectorXd whitened;
+  Linearise(layout, result.calibration.values, pose6.data(), prepared, &whitened, nullptr);
+  for (size_t i = 0; i < prepared.observations.size(); ++i) {
+    const PreparedObservation& o = prepared.observations[i];
+    result.residuals.push_back(o.colour * whitened.segment<3>(3 * static_cast<Eigen::Index>(i)));  // unobserved coordinates: 0
+  }
+  result.residual_summary = Summarize(result.residuals);
+  const double dof = std::max(1.0, static_cast<double>(equations - n - pose_count));
+  double plain_squared = 0.0;
+  for (const Eigen::Vector3d& r : result.residuals) plain_squared += r.squaredNorm();
+  result.calibration.sigma_mm = std::max(std::sqrt(plain_squared / dof), options.noise_floor_mm);
+  result.weighted_rms = prepared.weighted ? std::sqrt(whitened.squaredNorm() / dof) : 0.0;
+  const double factor = VarianceFactor(prepared.weighted, options.noise_floor_mm, whitened.squaredNorm(), dof);
+  if (n + pose_count == 0) return;
+  const auto eigen = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(kept_normal, "identification: the condition of the normal equations");
+  const double lo = std::max(eigen.eigenvalues().minCoeff(), 0.0);
+  result.condition_number = lo > 0 ? std::sqrt(eigen.eigenvalues().maxCoeff() / lo) : INFINITY;
+  Eigen::VectorXd all_scale(n + pose_count);
+  all_scale << scale, prepared.pose_scale.head(pose_count);
+  const Eigen::MatrixXd covariance = factor * factor * (all_scale.asDiagonal() *
+                                                        Decompose<Eigen::LDLT<Eigen::MatrixXd>>(kept_normal, "identification: the parameters' covariance")
+                                                            .solve(Eigen::MatrixXd::Identity(n + pose_count, n + pose_count)) *
+                                                        all_scale.asDiagonal());
+  result.calibration.covariance = covariance.topLeftCorner(n, n);
+  if (pose_count > 0) result.pose_covariance = covariance.bottomRightCorner<kPoseParameters, kPoseParameters>();
+}
+
+}  // namespace
+
+IdentificationResult Identify(const ParameterLayout& input_layout, const std::vector<Observation>& observations,
+                              const IdentificationOptions& options) {
+  options.Check();
+  const bool estimate_pose = options.instrument == InstrumentPose::kEstimated;
+  const int pose_count = estimate_pose ? kPoseParameters : 0;
+  const int equations = CountEquations(input_layout, observations, options, pose_count);
+
+  IdentificationResult result(Calibration{"", input_layout, {}, {}, 0.0, std::nullopt, {}});
+  if (!options.anchors.empty()) result.calibration.frame_reference = options.anchors.front();
+  ParameterLayout& layout = result.calibration.layout;
+  Prepared prepared = Prepare(layout, observations, options);
+  const KeptStart start = TreatRank(layout, observations, prepared, options, equations, pose_count, result);
+  for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
+  prepared = Prepare(layout, observations, options);
+
+  const Eigen::VectorXd scale = PlausibleSizes(layout);
+  const int n = layout.NumFree();
+  std::vector<double> parameters(start.parameters.begin(), start.parameters.end() - pose_count);
+  parameters.resize(static_cast<size_t>(n), 0.0);
+  std::vector<double> pose_parameters(start.parameters.end() - pose_count, start.parameters.end());
+  pose_parameters.resize(static_cast<size_t>(pose_count), 0.0);
+  SolveScaled(layout, observations, prepared, options, scale, parameters, pose_parameters, result);
 
   std::vector<double>& values = result.calibration.values;
   values.resize(static_cast<size_t>(n));
@@ -474,36 +581,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   result.pose = options.instrument == InstrumentPose::kNone
                     ? Pose{}
                     : Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])};
-
-  // Residual statistics and noise at the solution. The covariance uses the Jacobian of the rank analysis (at
-  // zero error): the model is linear in its coefficients to first order, and stage errors of 1e-3 change it by
-  // about 0.1 %, far below what a covariance estimated from tens of centres can resolve.
-  Eigen::VectorXd whitened;
-  Linearise(layout, values, pose6.data(), prepared, &whitened, nullptr);
-  for (int i = 0; i < m; ++i) {
-    const PreparedObservation& o = prepared.observations[static_cast<size_t>(i)];
-    result.residuals.push_back(o.colour * whitened.segment<3>(3 * i));  // unobserved coordinates: 0
-  }
-  result.residual_summary = Summarize(result.residuals);
-  const double dof = std::max(1.0, static_cast<double>(equations - n - pose_count));
-  double plain_squared = 0.0;
-  for (const Eigen::Vector3d& r : result.residuals) plain_squared += r.squaredNorm();
-  result.calibration.sigma_mm = std::max(std::sqrt(plain_squared / dof), options.noise_floor_mm);
-  result.weighted_rms = prepared.weighted ? std::sqrt(whitened.squaredNorm() / dof) : 0.0;
-  const double factor = variance_factor(whitened.squaredNorm(), dof);
-  if (n + pose_count > 0) {
-    const auto eigen = Decompose<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>>(kept_normal, "identification: the condition of the normal equations");
-    const double lo = std::max(eigen.eigenvalues().minCoeff(), 0.0);
-    result.condition_number = lo > 0 ? std::sqrt(eigen.eigenvalues().maxCoeff() / lo) : INFINITY;
-    Eigen::VectorXd all_scale(n + pose_count);
-    all_scale << scale, prepared.pose_scale.head(pose_count);
-    const Eigen::MatrixXd covariance = factor * factor * (all_scale.asDiagonal() *
-                                                          Decompose<Eigen::LDLT<Eigen::MatrixXd>>(kept_normal, "identification: the parameters' covariance")
-                                                              .solve(Eigen::MatrixXd::Identity(n + pose_count, n + pose_count)) *
-                                                          all_scale.asDiagonal());
-    result.calibration.covariance = covariance.topLeftCorner(n, n);
-    if (estimate_pose) result.pose_covariance = covariance.bottomRightCorner<kPoseParameters, kPoseParameters>();
-  }
+  JudgeSolution(prepared, options, scale, start.normal, pose6, equations, pose_count, result);
   return result;
 }
 

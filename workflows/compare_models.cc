@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "artefacts/batch_observations.h"
+#include "core/input_error.h"
 #include "core/statistics.h"
 #include "stage/fvm_stage_models.h"
 
@@ -106,6 +107,23 @@ ModelComparison CompareModels(const artefacts::Batch& batch, const std::vector<s
   c.validation_placements = !batch.validate.empty();
   c.recommendation = Recommend(c.scores, batch.has_roles && !batch.validate.empty());
   return c;
+}
+
+void CompareOptions::Check() const {
+  if (models.empty()) throw InputError("--models: no model given; name one or more of " + JoinNames(stage::FvmModelNames()));
+  const std::vector<std::string> published = stage::FvmModelNames();
+  for (const std::string& m : models) {
+    if (std::find(published.begin(), published.end(), m) == published.end()) {
+      throw InputError(fmt::format("--models: '{}' is not one of {}", m, JoinNames(published)));
+    }
+  }
+  settings.Check();
+}
+
+ModelComparison CompareModels(const artefacts::Batch& batch, const CompareOptions& options,
+                              const std::function<void(const std::string&)>& on_model) {
+  options.Check();
+  return CompareModels(batch, options.models, options.settings, on_model);
 }
 
 }  // namespace fvm::workflows

@@ -6,11 +6,21 @@
 #include <vector>
 
 #include "artefacts/io/batch.h"
+#include "stage/fvm_stage_models.h"
 #include "stage/identification.h"
 #include "stage/validation.h"
 #include "workflows/model_choice.h"
+#include "workflows/summary.h"
 
 namespace fvm::workflows {
+
+// What `fvm compare` takes besides the batch, with its defaults.
+struct CompareOptions {
+  std::vector<std::string> models = stage::FvmModelNames();  // the published models
+  IdentifySettings settings;
+  // Throws InputError naming the option as the command line spells it (--models, --anchor, ...).
+  void Check() const;
+};
 
 struct ModelScore {
   std::string model;
@@ -35,5 +45,11 @@ struct ModelComparison {
 ModelComparison CompareModels(const artefacts::Batch& batch, const std::vector<std::string>& models,
                               const IdentifySettings& settings,
                               const std::function<void(const std::string& model)>& on_model = {});
+ModelComparison CompareModels(const artefacts::Batch& batch, const CompareOptions& options,
+                              const std::function<void(const std::string& model)>& on_model = {});
+
+// The --json document (without the batch's path, the front end's to add), the printed table (naming `batch_name`)
+// and no report.
+Summary Summarize(const ModelComparison& comparison, const CompareOptions& options, const std::string& batch_name);
 
 }  // namespace fvm::workflows

@@ -1,8 +1,13 @@
 #include "workflows/diagnose.h"
 
+#include <fmt/core.h>
+
+#include <algorithm>
 #include <map>
 
 #include "artefacts/batch_observations.h"
+#include "core/input_error.h"
+#include "stage/fvm_stage_models.h"
 
 namespace fvm::workflows {
 namespace {
@@ -23,7 +28,17 @@ std::vector<double> DistanceErrors(const stage::MeasurementSet& set, const std::
 
 }  // namespace
 
+void DiagnoseOptions::Check() const {
+  const std::vector<std::string> published = stage::FvmModelNames();
+  if (model.terms.empty() && std::find(published.begin(), published.end(), model.model) == published.end()) {
+    throw InputError(fmt::format("--model: '{}' is not one of {}; or give --terms", model.model, JoinNames(published)));
+  }
+  if (!(alpha >= 1e-6 && alpha <= 0.5)) throw InputError(fmt::format("--alpha: {} is outside 1e-06 .. 0.5", alpha));
+  settings.Check();
+}
+
 BatchDiagnosis DiagnoseBatch(const artefacts::Batch& batch, const DiagnoseOptions& options) {
+  options.Check();
   stage::MeasurementSet identify = artefacts::Observations(batch, batch.identify);
   stage::MeasurementSet validate = artefacts::Observations(batch, batch.validate);
   stage::DiagnosisOptions diagnosis;

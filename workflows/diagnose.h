@@ -2,11 +2,13 @@
 // The discrepancy workflow on a batch (`fvm diagnose`): which physical effect the stage model misses, added step
 // by step while held-out placements confirm it (stage/discrepancy.h).
 
+#include <string>
 #include <vector>
 
 #include "artefacts/io/batch.h"
 #include "stage/discrepancy.h"
 #include "workflows/model_choice.h"
+#include "workflows/summary.h"
 
 namespace fvm::workflows {
 
@@ -15,6 +17,8 @@ struct DiagnoseOptions {
   // Translated: the plainest convention, so that a turn of the stitched frame is found and named (frame_rotation).
   IdentifySettings settings{.stitched_frame = "translated"};
   double alpha = 0.01;  // significance of an effect's F test
+  // Throws InputError naming the option as the command line spells it (--model, --terms, --alpha, ...).
+  void Check() const;
 };
 
 struct BatchDiagnosis {
@@ -27,5 +31,9 @@ struct BatchDiagnosis {
 };
 
 BatchDiagnosis DiagnoseBatch(const artefacts::Batch& batch, const DiagnoseOptions& options);
+
+// The --json document (without the batch's path, the front end's to add), the printed text and the report's data
+// (residual maps before and after, the steps), naming `batch_name` where the command names its batch.
+Summary Summarize(const BatchDiagnosis& diagnosis, const DiagnoseOptions& options, const std::string& batch_name);
 
 }  // namespace fvm::workflows

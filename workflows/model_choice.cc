@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <initializer_list>
 #include <stdexcept>
 
 #include "core/input_error.h"
@@ -29,6 +30,22 @@ stage::IdentificationOptions IdentifySettings::ToOptions(const stage::Measuremen
   o.loss_scale_mm = loss_scale_um * 1e-3;
   o.num_threads = threads;
   return o;
+}
+
+void IdentifySettings::Check() const {
+  const auto one_of = [](const std::string& option, const std::string& value, std::initializer_list<const char*> names) {
+    for (const char* n : names) {
+      if (value == n) return;
+    }
+    throw InputError(fmt::format("{}: '{}' is not one of {}", option, value, fmt::join(names, ", ")));
+  };
+  one_of("--anchor", anchor, {"none", "first-tile"});
+  one_of("--loss", loss, {"none", "huber", "cauchy"});
+  one_of("--stitched-frame", stitched_frame, {"rotated", "translated"});
+  if (!(loss_scale_um >= 1e-3 && loss_scale_um <= 1e5)) {
+    throw InputError(fmt::format("--loss-scale-um: {} um is outside 0.001 .. 100000 um", loss_scale_um));
+  }
+  if (threads < 0) throw InputError(fmt::format("--threads: {} is negative; give 0 for all cores", threads));
 }
 
 stage::IdentificationResult IdentifyModel(const ModelChoice& model, const stage::MeasurementSet& set,

@@ -32,6 +32,8 @@ struct IdentifySettings {
 
   stage::IdentificationOptions ToOptions(const stage::MeasurementSet& set) const;
   stage::StitchedFrame Frame() const { return stage::ParseStitchedFrame(stitched_frame); }
+  // Throws core::InputError naming the option as the command line spells it (--anchor, --loss, ...).
+  void Check() const;
 };
 
 // The model identified on a set; a model the data cannot carry is refused as core::InputError naming the model.

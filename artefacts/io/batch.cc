@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -134,22 +133,10 @@ void ReadRoles(const std::filesystem::path& path, Batch& batch) {
       throw InputError(fmt::format("{}: unknown key \"{}\"; the keys are identify, validate and lens", where, key));
     }
   }
-  std::vector<std::string> all;
-  for (const Placement& p : batch.placements) all.push_back(p.name);
   const bool has_identify = roles.contains("identify");
-  batch.identify = ReadNameList(roles, "identify", where);
-  batch.validate = ReadNameList(roles, "validate", where);
-  for (const auto* list : {&batch.identify, &batch.validate}) {
-    for (const std::string& name : *list) {
-      if (std::find(all.begin(), all.end(), name) == all.end()) {
-        throw InputError(fmt::format("{}: placement '{}' has no {}{} / {}{} pair here; the placements are {}", where,
-                                     name, name, kStitchedSuffix, name, kFreeSuffix, fmt::join(all, ", ")));
-      }
-    }
-  }
-  std::optional<std::vector<std::string>> identify;
-  if (has_identify) identify = batch.identify;
-  AssignBatchRoles(batch, identify, batch.validate, where);
+  std::vector<std::string> identify = ReadNameList(roles, "identify", where);
+  std::vector<std::string> validate = ReadNameList(roles, "validate", where);
+  AssignBatchRoles(batch, has_identify ? std::optional(std::move(identify)) : std::nullopt, std::move(validate), where);
   if (const auto lens = roles.find("lens"); lens != roles.end()) {
     if (!lens->is_string()) {
       throw InputError(fmt::format("{}: \"lens\" must be a string such as \"5x\", found {}", where, lens->dump()));
@@ -217,23 +204,33 @@ Batch ReadBatch(const std::filesystem::path& dir) {
   return batch;
 }
 
-void AssignBatchRoles(Batch& batch, const std::optional<std::vector<std::string>>& identify,
-                      const std::vector<std::string>& validate, const std::string& where) {
-  for (const std::string& name : validate) {
-    if (identify && std::find(identify->begin(), identify->end(), name) != identify->end()) {
+void AssignBatchRoles(Batch& batch, std::optional<std::vector<std::string>> identify, std::vector<std::string> validate,
+                      const std::string& where) {
+  std::vector<std::string> all;
+  for (const Placement& p : batch.placements) all.push_back(p.name);
+  batch.identify = identify.value_or(std::vector<std::string>{});
+  batch.validate = std::move(validate);
+  for (const auto* list : {&batch.identify, &batch.validate}) {
+    for (const std::string& name : *list) {
+      if (std::find(all.begin(), all.end(), name) == all.end()) {
+        throw InputError(fmt::format("{}: placement '{}' has no {}{} / {}{} pair here; the placements are {}", where,
+                                     name, name, kStitchedSuffix, name, kFreeSuffix, fmt::join(all, ", ")));
+      }
+    }
+  }
+  for (const std::string& name : batch.validate) {
+    if (std::find(batch.identify.begin(), batch.identify.end(), name) != batch.identify.end()) {
       throw InputError(fmt::format("{}: placement '{}' is both in \"identify\" and \"validate\"; validation data "
                                    "must not enter the fit: keep it in one list",
                                    where, name));
     }
   }
-  batch.validate = validate;
-  if (identify) {
-    batch.identify = *identify;
-  } else {
+  if (!identify) {
     // Everything not held out for validation identifies, as without batch.json.
-    batch.identify.clear();
-    for (const Placement& p : batch.placements) {
-      if (std::find(validate.begin(), validate.end(), p.name) == validate.end()) batch.identify.push_back(p.name);
+    for (const std::string& name : all) {
+      if (std::find(batch.validate.begin(), batch.validate.end(), name) == batch.validate.end()) {
+        batch.identify.push_back(name);
+      }
     }
   }
   if (batch.identify.empty()) {

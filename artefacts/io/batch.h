@@ -1,6 +1,6 @@
 #pragma once
 // A batch directory: pairs <placement>.stitched.csv / <placement>.free.csv of the same calottes, and an optional
-// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (docs/formats.md).
+// batch.json {"identify": [...], "validate": [...], "lens": "5x"} (README, "The main job").
 
 #include <Eigen/Core>
 #include <filesystem>
@@ -46,12 +46,11 @@ Placement PairCentreExports(const std::string& name, const CentreExport& stitche
 // every placement identifies. ReadBatch calls it; so does a reader of raw exports (raw_export_batch.h).
 void ApplyBatchRoles(const std::filesystem::path& dir, Batch& batch);
 
-// The role rules batch.json and a batch given as arrays (Python's fvm.calibrate) share: no placement in both
-// lists (validation data never enters the fit), every placement not validated identifies when `identify` is not
-// given, and at least one identifies. Sets batch.identify and batch.validate; InputError messages start with
-// `where`. The names must already be placements of the batch.
-void AssignBatchRoles(Batch& batch, const std::optional<std::vector<std::string>>& identify,
-                      const std::vector<std::string>& validate, const std::string& where);
+// The role rules, for batch.json and a script's lists alike: `identify` when given, else every placement not in
+// `validate`. Throws InputError starting with `where` for a placement the batch lacks, one in both roles (validation
+// data never enters the fit), or no placement left to identify. Sets batch.identify and batch.validate.
+void AssignBatchRoles(Batch& batch, std::optional<std::vector<std::string>> identify, std::vector<std::string> validate,
+                      const std::string& where);
 
 // Writes a batch (pairs and, when roles are given, batch.json) atomically file by file.
 void WriteBatch(const std::filesystem::path& dir, const Batch& batch);

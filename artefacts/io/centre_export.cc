@@ -10,6 +10,7 @@
 #include "core/csv.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 
 namespace fvm::artefacts {
 namespace {
@@ -139,6 +140,26 @@ void WriteCentreExport(const std::filesystem::path& path, const CentreExport& da
     out += '\n';
   }
   WriteFileAtomically(path, out);
+}
+
+bool IsCentreExportFile(const std::filesystem::path& path) {
+  if (AsciiLower(path.extension().string()) != ".csv") return false;
+  const std::string head = ReadFileHead(path, 1 << 16);
+  std::size_t start = 0;
+  while (start < head.size()) {
+    const std::size_t end = std::min(head.find('\n', start), head.size());
+    const std::string_view line = TrimBlanks(std::string_view(head).substr(start, end - start));
+    start = end + 1;
+    if (line.empty() || line.front() == '#') continue;
+    std::size_t field_start = 0;
+    while (field_start <= line.size()) {
+      const std::size_t field_end = std::min(line.find_first_of(",;\t", field_start), line.size());
+      if (AsciiLower(TrimBlanks(line.substr(field_start, field_end - field_start))) == "id") return true;
+      field_start = field_end + 1;
+    }
+    return false;
+  }
+  return false;
 }
 
 }  // namespace fvm::artefacts

@@ -36,6 +36,10 @@ struct CentreExport {
 // micrometres (any |x|, |y|, |z| above 1000 mm: no FVM stage is a metre long).
 CentreExport ReadCentreExport(const std::filesystem::path& path);
 
+// Whether a file is a centre export rather than an XYZ/CSV point cloud: a .csv whose header (its first line that is
+// neither blank nor a # comment) names an id column.
+bool IsCentreExportFile(const std::filesystem::path& path);
+
 // Writes id,x,y,z[,t][,radius][,form_rms][,converged] with 6 decimals of mm (1 nm), comments first; atomically.
 void WriteCentreExport(const std::filesystem::path& path, const CentreExport& data);
 

@@ -206,4 +206,14 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
   }
 }
 
+bool IsMachineModelFile(const std::filesystem::path& path) {
+  nlohmann::json doc;
+  try {
+    doc = ReadJsonFile(path);
+  } catch (const InputError&) {
+    return false;
+  }
+  return doc.is_object() && (doc.contains("instrument_pose") || doc.contains("tool_offset_mm"));
+}
+
 }  // namespace fvm::stage

@@ -20,4 +20,9 @@ nlohmann::json CalibrationToJson(const IdentificationResult& result);
 // Rebuilds the calibration; throws InputError naming the file and the key that is wrong.
 Calibration ReadCalibration(const std::filesystem::path& path);
 
+// Whether the file holds a machine model, as `fvm verify -o` writes it: it names the tracker pose
+// (instrument_pose) or a tool offset (tool_offset_mm); a stage model of `fvm calibrate` has neither. False for a file
+// that is not a JSON object (ReadCalibration then says what is wrong with it).
+bool IsMachineModelFile(const std::filesystem::path& path);
+
 }  // namespace fvm::stage

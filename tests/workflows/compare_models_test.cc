@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "artefacts/simulation/fvm_batch_simulation.h"
+#include "core/input_error.h"
 
 namespace fvm::workflows {
 namespace {
@@ -37,6 +38,37 @@ TEST(CompareModels, LeavesEachPlacementOutWhenNoneAreHeldOut) {
   EXPECT_FALSE(c.validation_placements);
   EXPECT_EQ(c.scores[0].validation.count, static_cast<int>(17 * batch.batch.identify.size()));
   EXPECT_NE(c.recommendation.find("placements left out in turn"), std::string::npos) << c.recommendation;
+
+  // The summary: the --json document without the batch's path, the table naming it, no report.
+  CompareOptions options;
+  options.models = {"27"};
+  const Summary summary = Summarize(c, options, "my-batch");
+  EXPECT_EQ(summary.json["validation_by"], "leave-one-placement-out");
+  EXPECT_EQ(summary.json["models"][0]["validation"]["centres"].get<int>(), c.scores[0].validation.count);
+  EXPECT_EQ(summary.json["models"][0]["validation"]["rigid"]["rms_um"].get<double>(), c.scores[0].rigid.rms_mm * 1e3);
+  EXPECT_EQ(summary.json["recommendation"], c.recommendation);
+  EXPECT_FALSE(summary.json.contains("batch"));
+  EXPECT_EQ(summary.text.rfind("fvm compare: my-batch (validation: leave-one-placement-out)\n", 0), 0u) << summary.text;
+  EXPECT_NE(summary.text.find("\n  " + c.recommendation + "\n"), std::string::npos);
+  EXPECT_FALSE(summary.report.has_value());
+}
+
+// Options are checked naming the command line's spelling.
+TEST(CompareModels, OptionsNameTheCommandLinesOption) {
+  CompareOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.models = {"27", "28"};
+  EXPECT_THROW(options.Check(), InputError);
+  options.models.clear();
+  EXPECT_THROW(options.Check(), InputError);
+  options.models = {"27"};
+  options.settings.anchor = "last-tile";
+  try {
+    options.Check();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--anchor: 'last-tile'", 0), 0u) << e.what();
+  }
 }
 
 }  // namespace

@@ -31,6 +31,21 @@ TEST(DiagnoseBatch, NamesAHiddenScaleAndTheHeldOutPlacementsConfirmIt) {
   for (double e : d.distance_errors_after_mm) after = std::max(after, std::abs(e));
   EXPECT_GT(before * 1e3, 20.0);
   EXPECT_LT(after * 1e3, 5.0);
+
+  // The summary: the JSON contract's keys, the text naming the batch, and the report's data (a step per effect).
+  const Summary summary = Summarize(d, options, "scaled");
+  EXPECT_EQ(summary.json["effect"], "scale");
+  EXPECT_EQ(summary.json["effects"][0]["effect"], "scale");
+  EXPECT_EQ(summary.json["after"]["mean_um"].get<double>(), d.diagnosis.after.mean_mm * 1e3);
+  EXPECT_EQ(summary.json["model"], "15");
+  EXPECT_FALSE(summary.json.contains("batch"));
+  EXPECT_EQ(summary.text.rfind("fvm diagnose: model 15 on scaled (", 0), 0u) << summary.text;
+  ASSERT_TRUE(summary.report.has_value());
+  const auto& report = std::get<report::ReportData>(*summary.report);
+  EXPECT_EQ(report.title, "fvm diagnose: model 15 on scaled");
+  ASSERT_EQ(report.steps.size(), 1u + d.diagnosis.steps.size());
+  EXPECT_EQ(report.steps[1].label.rfind("+ scale", 0), 0u);
+  EXPECT_EQ(report.errors_before.size(), d.identification.observations.size());
 }
 
 // Three failed sphere fits (80 um) among the identification centres: flagged and taken out, so the residuals after

@@ -1,6 +1,7 @@
 // The machine-tool jobs' summaries (workflows/*_summary.h) and options: what the --json, the printed lines and the
 // report say is the result's own numbers, and each options struct refuses what no job takes, naming the option.
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
