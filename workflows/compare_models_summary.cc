@@ -65,12 +65,13 @@ std::string Table(const ModelComparison& c, const CompareOptions& options, const
 
 Summary Summarize(const ModelComparison& comparison, const CompareOptions& options, const std::string& batch_name) {
   Summary summary;
-  nlohmann::json& doc = summary.json;
+  nlohmann::json doc;  // sorted keys, as the command has always printed them
   doc["validation_by"] = ValidationBy(comparison);
   doc["stitched_frame"] = options.settings.stitched_frame;
   for (const ModelScore& s : comparison.scores) doc["models"].push_back(ScoreJson(s));
   doc["recommendation"] = comparison.recommendation;
   summary.text = Table(comparison, options, batch_name);
+  summary.json = doc;
   return summary;
 }
 

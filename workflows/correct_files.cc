@@ -38,7 +38,7 @@ CorrectedFiles CompensateMachine(const CorrectOptions& o, const stage::Calibrati
       o.version, o.calibration, cal.model, FormatShortest(tool.x()), FormatShortest(tool.y()), FormatShortest(tool.z()));
   csv += "id,x,y,z,xc,yc,zc,dx_um,dy_um,dz_um\n";
   CorrectedFiles out;
-  nlohmann::json& doc = out.summary.json;
+  nlohmann::json doc;  // sorted keys, as the command has always printed them
   double largest = 0.0;
   for (const CompensatedPoint& c : CompensationTable(cal, points, o.input)) {
     const artefacts::ListedPoint& p = *c.nominal;
@@ -57,6 +57,7 @@ CorrectedFiles CompensateMachine(const CorrectOptions& o, const stage::Calibrati
   out.summary.text = fmt::format("compensated {} points of {} with machine model {}; largest correction {:.1f} um; written to {}\n",
                                  points.size(), o.input, cal.model, largest, o.output);
   out.paths = {{"output", o.output}};
+  out.summary.json = doc;
   return out;
 }
 
@@ -97,7 +98,7 @@ CorrectedFiles CorrectCentreFile(const CorrectOptions& o, const stage::Calibrati
   if (has_t) csv += ",t";
   csv += "\n";
   CorrectedFiles out;
-  nlohmann::json& doc = out.summary.json;
+  nlohmann::json doc;  // sorted keys, as the command has always printed them
   doc = CentreFrameJson(o, frame);
   for (const CorrectedCentre& c : corrected.centres) {
     const artefacts::CentreRecord& r = *c.input;
@@ -114,6 +115,7 @@ CorrectedFiles CorrectCentreFile(const CorrectOptions& o, const stage::Calibrati
   out.summary.text = fmt::format("corrected {} centres of {} with model {} in the {} frame; largest shift {:.1f} um; written to {}\n",
                                  input.centres.size(), o.input, cal.model, o.frame, corrected.largest_shift_mm * 1e3, o.output);
   out.paths = {{"output", o.output}};
+  out.summary.json = doc;
   return out;
 }
 

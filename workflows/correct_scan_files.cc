@@ -136,7 +136,7 @@ CorrectedFiles CorrectScanFile(const CorrectOptions& o, const stage::Calibration
   }
 
   CorrectedFiles out;
-  nlohmann::json& doc = out.summary.json;
+  nlohmann::json doc;  // sorted keys, as the command has always printed them
   doc = FrameJson(options, corrector.first_tile() ? std::optional<Eigen::Vector3d>(corrector.first_tile()->frame().first_tile)
                                                   : std::nullopt);
   doc["points"] = summary.corrected + summary.invalid;
@@ -154,6 +154,7 @@ CorrectedFiles CorrectScanFile(const CorrectOptions& o, const stage::Calibration
   if (!corrected.outside.empty()) text += fmt::format("; {} points outside the calibrated travel extrapolated", corrected.outside.size());
   text += fmt::format("\n  written to {}; standard uncertainties in {}\n", o.output, uncertainty_where);
   out.paths = {{"input", o.input}, {"output", o.output}};
+  out.summary.json = doc;
   return out;
 }
 
@@ -209,7 +210,7 @@ CorrectedFiles CorrectTileFiles(const CorrectOptions& o, const stage::Calibratio
   CorrectedFiles out;
   stage::ScanCorrectionOptions stage_frame = job.options;
   stage_frame.origin_mm.setZero();  // layout positions are stage positions
-  nlohmann::json& doc = out.summary.json;
+  nlohmann::json doc;  // sorted keys, as the command has always printed them
   doc = FrameJson(stage_frame, corrected.first_tile_mm);
   doc["tiles"] = nlohmann::json::array();
   for (const TileShift& t : shifts) {
@@ -226,6 +227,7 @@ CorrectedFiles CorrectTileFiles(const CorrectOptions& o, const stage::Calibratio
                                  shifts.size(), o.layout, cal.model, FrameName(job.options), corrected.largest_per_point_mm * 1e3,
                                  o.output);
   out.paths = {{"layout", o.layout}, {"output", o.output}};
+  out.summary.json = doc;
   return out;
 }
 

@@ -53,8 +53,9 @@ Summary Summarize(const MachineProblem& problem, const VerifyMachineOptions& opt
                   const MachineVerification& verified, const std::string& model_file) {
   const OrderFit& chosen = verified.Chosen();
   Summary s;
-  s.json = VerificationJson(problem, options.machine, chosen.order, chosen.result, chosen.validation);
-  AddOrders(verified, s.json);
+  nlohmann::json doc = VerificationJson(problem, options.machine, chosen.order, chosen.result, chosen.validation);
+  AddOrders(verified, doc);
+  s.json = doc;  // sorted keys, as the command has always printed them
   s.text = Text(problem, options, verified, model_file);
   s.report = VerificationReport(fmt::format("fvm verify: {} order {} ({}) on {}", problem.chain.code, chosen.order,
                                             options.machine.basis, problem.readings.source),

@@ -105,7 +105,7 @@ TEST(PlanTiles, CalibrationScansAndTheirLayouts) {
   }
   EXPECT_EQ(summary.json["total"]["tiles"], tiles);
   EXPECT_THAT(summary.text, StartsWith("calibration scans: field 2.82 mm, overlap 25 %"));
-  EXPECT_THAT(summary.text, testing::Not(HasSubstr("give --scan-dir")));
+  EXPECT_THAT(summary.text, ::testing::Not(HasSubstr("give --scan-dir")));
   std::filesystem::remove_all(options.scan_dir);
 }
 
