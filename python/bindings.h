@@ -28,6 +28,7 @@ void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.c
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).
 py::object ToPython(const nlohmann::json& document);
+py::object ToPython(const nlohmann::ordered_json& document);  // keys in the document's order
 // An N x 3 array as points (mm). Throws InputError naming `what` for another shape or a non-finite coordinate when
 // `finite` is asked.
 std::vector<Eigen::Vector3d> PointsFrom(const DoubleArray& array, const std::string& what, bool finite = true);

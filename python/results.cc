@@ -18,6 +18,10 @@ py::object ToPython(const nlohmann::json& document) {
   return py::module_::import("json").attr("loads")(document.dump());
 }
 
+py::object ToPython(const nlohmann::ordered_json& document) {
+  return py::module_::import("json").attr("loads")(document.dump());
+}
+
 void BindResults(py::module_& m) {
   py::class_<workflows::Summary>(m, "Result",
                                  "What a job found: `summary` (a dict, the command's --json document), str() the text "

@@ -15,7 +15,7 @@
 namespace fvm::workflows {
 
 struct Summary {
-  nlohmann::json json;                   // the --json document
+  nlohmann::ordered_json json;           // the --json document, keys in the order the command prints them
   std::string text;                      // what the command prints, newline-terminated lines
   std::optional<report::Report> report;  // what --report DIR draws; empty for a job without a report
 };
