@@ -22,7 +22,7 @@ struct FitArgs {
   std::string file;
   std::string output;
   bool json = false;
-  SurfaceReadArgs read;  // as fvm info
+  workflows::SurfaceReadOptions read;  // as fvm info
   workflows::FitOptions options;
 };
 
@@ -97,7 +97,7 @@ void RegisterFit(CLI::App& app) {
                 "with --shape: find the shape among stray points (least median of squares over 4-point spheres or "
                 "3-point planes, seed 1, then refits without points beyond 3 robust standard deviations until "
                 "stable); the points left out are counted in \"outliers\", e.g. --shape sphere --robust");
-  args->read.AddOptions(*sub);
+  AddSurfaceReadOptions(*sub, args->read);
   sub->footer("Example: fvm fit grid.x3p --artefact grid6x6 -o grid.csv\n         fvm fit calotte.ply --json\n"
               "         fvm fit sph1.ds --shape sphere --json\n"
               "         fvm fit scan.xyz --shape sphere --unit m --robust");

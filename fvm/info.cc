@@ -16,7 +16,7 @@ namespace {
 struct InfoArgs {
   std::string file;
   bool json = false;
-  SurfaceReadArgs read;
+  workflows::SurfaceReadOptions read;
 };
 
 void RunInfo(const InfoArgs& args) {
@@ -41,7 +41,7 @@ void RegisterInfo(CLI::App& app) {
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"size_x\", \"size_y\", \"dx_mm\", \"dy_mm\", \"valid_points\", "
                 "\"z_min_mm\", \"z_max_mm\", ..., \"intensity\", \"notes\"}; values the file does not have are null");
-  args->read.AddOptions(*sub);
+  AddSurfaceReadOptions(*sub, args->read);
   sub->footer("Example: fvm info scan.x3p --json");
   sub->callback([args] { RunInfo(*args); });
 }

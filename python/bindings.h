@@ -24,6 +24,8 @@ void BindCalibration(py::module_& m);
 void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
 void BindFocus(py::module_& m);
+void BindDiff(py::module_& m);      // fvm.diff (diff.cc)
+void BindSimulate(py::module_& m);  // fvm.simulate_batch, fvm.simulate_scan (simulate.cc)
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 
 // A JSON document as Python dicts, lists, numbers, strings and None (results.cc).

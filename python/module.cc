@@ -29,4 +29,6 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindMachine(m);
   fvm::python::BindStitching(m);
   fvm::python::BindFocus(m);
+  fvm::python::BindDiff(m);
+  fvm::python::BindSimulate(m);
 }
