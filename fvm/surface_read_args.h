@@ -1,25 +1,18 @@
 #pragma once
-// The command-line options that say how to read a surface or cloud file (fvm info, fvm fit, ...): what an image
-// does not tell about its pixels and heights, and the unit of a point cloud.
+// The command-line options that say how to read a surface or cloud file (fvm info, fvm fit, ...), bound to
+// workflows::SurfaceReadOptions.
 
 #include <CLI/CLI.hpp>
-#include <optional>
-#include <string>
 
-#include "imaging/io/surface_file.h"
+#include "workflows/surface_read_options.h"
 
 namespace fvm::cli {
 
-struct SurfaceReadArgs {
-  double pixel_size_mm = 0.0;
-  double pixel_size_y_mm = 0.0;
-  double z_scale_mm = 0.0;
-  double z_offset_mm = 0.0;
-  std::optional<double> invalid;
-  std::string unit = "mm";
+void AddSurfaceReadOptions(CLI::App& app, workflows::SurfaceReadOptions& read);
 
-  void AddOptions(CLI::App& app);
-  imaging::SurfaceReadOptions ToOptions() const;
+// The same options with their binding, for a command that keeps them beside its own (fvm correct).
+struct SurfaceReadArgs : workflows::SurfaceReadOptions {
+  void AddOptions(CLI::App& app) { AddSurfaceReadOptions(app, *this); }
 };
 
 }  // namespace fvm::cli

@@ -13,6 +13,7 @@
 #include "core/input_error.h"
 #include "core/number_text.h"
 #include "core/statistics.h"
+#include "imaging/sample_consensus.h"
 #include "imaging/sphere_fit.h"
 
 namespace fvm::imaging {
@@ -212,33 +213,20 @@ PlaneSolution SolvePlane(std::span<const Eigen::Vector3d> points, const std::vec
 // Least median of squares over planes through 3 points (as kLeastMedian does for spheres), scored on at most
 // 2000 points; returns the points within 2.5 robust standard deviations of the best plane.
 std::vector<bool> LeastMedianPlane(std::span<const Eigen::Vector3d> points, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-  std::vector<std::size_t> subset;
-  for (std::size_t i = 0; i < std::min<std::size_t>(points.size(), 2000); ++i) {
-    subset.push_back(points.size() <= 2000 ? i : pick(rng));
-  }
-  double best = std::numeric_limits<double>::infinity();
-  Eigen::Vector3d best_point = Eigen::Vector3d::Zero(), best_normal = Eigen::Vector3d::UnitZ();
-  std::vector<double> squared;
-  for (int it = 0; it < 1000; ++it) {
-    const Eigen::Vector3d a = points[pick(rng)], b = points[pick(rng)], c = points[pick(rng)];
-    const Eigen::Vector3d cross = (b - a).cross(c - a);
-    if (!(cross.norm() > 0)) continue;
-    const Eigen::Vector3d normal = cross.normalized();
-    squared.clear();
-    for (const std::size_t i : subset) squared.push_back(std::pow(normal.dot(points[i] - a), 2));
-    const double median = HighMedianInPlace(squared);
-    if (median < best) best = median, best_point = a, best_normal = normal;
-  }
+  struct Plane {
+    Eigen::Vector3d point, normal;
+  };
+  const auto through = [](const std::array<Eigen::Vector3d, 3>& p) -> std::optional<Plane> {
+    const Eigen::Vector3d cross = (p[1] - p[0]).cross(p[2] - p[0]);
+    if (!(cross.norm() > 0)) return std::nullopt;
+    return Plane{p[0], cross.normalized()};
+  };
+  const auto distance = [](const Plane& plane, const Eigen::Vector3d& p) { return plane.normal.dot(p - plane.point); };
+  const ConsensusSearch<Plane> search = SearchConsensus<3, Plane>(points, seed, 1000, std::nullopt, through, distance);
   std::vector<bool> inlier(points.size(), true);
-  if (!std::isfinite(best)) return inlier;  // every triple collinear: the plane fit says so
-  const double n = static_cast<double>(subset.size());
-  const double threshold =
-      std::max(2.5 * 1.4826 * (1.0 + 5.0 / std::max(1.0, n - 3.0)) * std::sqrt(best), kMinThresholdMm);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    inlier[i] = std::abs(best_normal.dot(points[i] - best_point)) <= threshold;
-  }
+  if (!search.best) return inlier;  // every triple collinear: the plane fit says so
+  const double threshold = LeastMedianThreshold(search.score, search.scored_points, 3, kMinThresholdMm);
+  for (std::size_t i = 0; i < points.size(); ++i) inlier[i] = std::abs(distance(*search.best, points[i])) <= threshold;
   return inlier;
 }
 

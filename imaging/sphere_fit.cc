@@ -14,6 +14,7 @@
 #include "core/dense_decomposition.h"
 #include "core/input_error.h"
 #include "core/statistics.h"
+#include "imaging/sample_consensus.h"
 
 namespace fvm::imaging {
 namespace {
@@ -307,56 +308,31 @@ Algebraic AlgebraicFit(std::span<const Eigen::Vector3d> points, const std::vecto
 // 2000 points (the score only ranks hypotheses; the consensus set is then taken over all points).
 std::vector<bool> RansacInliers(std::span<const Eigen::Vector3d> points, const SphereFitOptions& options) {
   const bool least_median = options.outliers == SphereOutliers::kLeastMedian;
-  std::vector<double> squared;  // kLeastMedian: the subset's squared residuals
-  std::mt19937_64 rng(options.seed);
-  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-  std::vector<std::size_t> subset;
-  const std::size_t score_points = std::min<std::size_t>(points.size(), 2000);
-  for (std::size_t i = 0; i < score_points; ++i) subset.push_back(points.size() <= 2000 ? i : pick(rng));
-  double t = options.inlier_threshold_mm;
-  const double t2 = t * t;
-  Sphere best;
-  double best_score = std::numeric_limits<double>::infinity();
-  for (int it = 0; it < options.ransac_iterations; ++it) {
-    const Eigen::Vector3d sample[4] = {points[pick(rng)], points[pick(rng)], points[pick(rng)], points[pick(rng)]};
+  const auto through = [&](const std::array<Eigen::Vector3d, 4>& sample) -> std::optional<Sphere> {
     Sphere s;
     try {
       s = AlgebraicFit(sample, std::vector<bool>(4, true)).sphere;
     } catch (const InputError&) {
-      continue;  // a degenerate sample (coplanar points)
+      return std::nullopt;  // a degenerate sample (coplanar points)
     }
-    if (!std::isfinite(s.radius_mm)) continue;
-    if (options.fixed_radius_mm > 0 &&
-        std::abs(s.radius_mm - options.fixed_radius_mm) > 0.2 * options.fixed_radius_mm) {
-      continue;
+    if (!std::isfinite(s.radius_mm)) return std::nullopt;
+    if (options.fixed_radius_mm > 0 && std::abs(s.radius_mm - options.fixed_radius_mm) > 0.2 * options.fixed_radius_mm) {
+      return std::nullopt;
     }
-    double score = 0;
-    if (least_median) {
-      squared.clear();
-      for (const std::size_t i : subset) squared.push_back(std::pow((points[i] - s.centre_mm).norm() - s.radius_mm, 2));
-      score = HighMedianInPlace(squared);
-    } else {
-      for (const std::size_t i : subset) {
-        const double r = (points[i] - s.centre_mm).norm() - s.radius_mm;
-        score += std::min(r * r, t2);
-      }
-    }
-    if (score < best_score) best_score = score, best = s;
-  }
-  if (!std::isfinite(best_score)) {
+    return s;
+  };
+  const auto distance = [](const Sphere& s, const Eigen::Vector3d& p) { return (p - s.centre_mm).norm() - s.radius_mm; };
+  const ConsensusSearch<Sphere> search = SearchConsensus<4, Sphere>(
+      points, options.seed, options.ransac_iterations, least_median ? std::nullopt : std::optional<double>(options.inlier_threshold_mm), through,
+      distance);
+  if (!search.best) {
     throw InputError("sphere fit: no 4 of the points span a sphere; the points lie on a plane or a line");
   }
-  if (least_median) {
-    // The robust standard deviation of the best sphere's residuals, with Rousseeuw and Leroy's small-sample
-    // factor (1 + 5 / (n - p)); points within 2.5 of it are the consensus set.
-    const double n = static_cast<double>(subset.size());
-    const double sigma = 1.4826 * (1.0 + 5.0 / std::max(1.0, n - 4.0)) * std::sqrt(best_score);
-    t = std::max(2.5 * sigma, options.min_threshold_mm);
-  }
+  // Least median: points within 2.5 robust standard deviations of the best sphere are the consensus set.
+  const double t = least_median ? LeastMedianThreshold(search.score, search.scored_points, 4, options.min_threshold_mm)
+                                : options.inlier_threshold_mm;
   std::vector<bool> inlier(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    inlier[i] = std::abs((points[i] - best.centre_mm).norm() - best.radius_mm) <= t;
-  }
+  for (std::size_t i = 0; i < points.size(); ++i) inlier[i] = std::abs(distance(*search.best, points[i])) <= t;
   return inlier;
 }
 

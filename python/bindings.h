@@ -25,6 +25,8 @@ void BindMachine(py::module_& m);
 void BindStitching(py::module_& m);
 void BindTiles(py::module_& m);  // tiles_plan, tiles_simulate, tiles_synthesize (tiles.cc)
 void BindFocus(py::module_& m);
+void BindDiff(py::module_& m);      // fvm.diff (diff.cc)
+void BindSimulate(py::module_& m);  // fvm.simulate_batch, fvm.simulate_scan (simulate.cc)
 void BindResults(py::module_& m);  // fvm.Result and fvm.write_report (results.cc)
 void BindTestPiece(py::module_& m);
 void BindTracker(py::module_& m);

@@ -33,4 +33,6 @@ PYBIND11_MODULE(fvm, m) {
   fvm::python::BindTiles(m);
   fvm::python::BindFocus(m);
   fvm::python::BindStageJobs(m);
+  fvm::python::BindDiff(m);
+  fvm::python::BindSimulate(m);
 }

@@ -12,6 +12,9 @@
 #include "imaging/io/surface_file.h"
 #include "python/bindings.h"
 #include "workflows/find_calottes.h"
+#include "workflows/fit.h"
+#include "workflows/surface_info.h"
+#include "workflows/surface_read_options.h"
 
 namespace fvm::python {
 namespace {
@@ -100,9 +103,73 @@ py::dict FoundDict(const workflows::FoundCalottes& found) {
   return out;
 }
 
+// The reading options of fvm info and fvm fit, as their keywords give them.
+workflows::SurfaceReadOptions ReadOptions(double pixel_mm, double pixel_y_mm, double z_scale_mm, double z_offset_mm,
+                                          std::optional<double> invalid, const std::string& unit) {
+  return {pixel_mm, pixel_y_mm, z_scale_mm, z_offset_mm, invalid, unit};
+}
+
+constexpr const char* kReadDoc =
+    " Reading keywords as the command's options: pixel_mm, pixel_y_mm, z_scale_mm, z_offset_mm, invalid (images), "
+    "unit ('mm', 'um' or 'm': point clouds).";
+
+void BindSurfaceJobs(py::module_& m) {
+  const workflows::SurfaceReadOptions r;
+  m.def(
+      "info",
+      [](const std::filesystem::path& path, double pixel_mm, double pixel_y_mm, double z_scale_mm, double z_offset_mm,
+         std::optional<double> invalid, const std::string& unit) {
+        const imaging::SurfaceReadOptions read =
+            ReadOptions(pixel_mm, pixel_y_mm, z_scale_mm, z_offset_mm, invalid, unit).ToOptions();
+        py::gil_scoped_release release;
+        return workflows::Summarize(workflows::DescribeSurface(imaging::ReadSurface(path, read), path.string()),
+                                    path.string());
+      },
+      py::arg("path"), py::kw_only(), py::arg("pixel_mm") = r.pixel_mm, py::arg("pixel_y_mm") = r.pixel_y_mm,
+      py::arg("z_scale_mm") = r.z_scale_mm, py::arg("z_offset_mm") = r.z_offset_mm, py::arg("invalid") = r.invalid,
+      py::arg("unit") = r.unit,
+      (std::string("What a surface or point-cloud file holds, as `fvm info FILE`: an fvm.Result whose summary "
+                   "equals `fvm info --json` less the path (size_x, size_y, dx_mm, dy_mm, valid_points, z_min_mm, "
+                   "z_max_mm, format, ..., notes).") +
+       kReadDoc + "\n\nExample:\n    >>> fvm.info('scan.x3p')['valid_points']")
+          .c_str());
+  const workflows::FitOptions f;
+  m.def(
+      "fit",
+      [](const std::filesystem::path& path, std::optional<std::string> artefact, double radius_mm,
+         std::optional<double> rotation_deg, double min_diameter_mm, double max_diameter_mm, double min_depth_mm,
+         const std::string& residual, std::optional<std::string> shape, bool robust,
+         std::optional<std::filesystem::path> output, double pixel_mm, double pixel_y_mm, double z_scale_mm,
+         double z_offset_mm, std::optional<double> invalid, const std::string& unit) {
+        workflows::FitOptions o{artefact.value_or(""), radius_mm, rotation_deg, min_diameter_mm, max_diameter_mm,
+                                min_depth_mm, residual, shape.value_or(""), robust};
+        o.Check(output.has_value());
+        const imaging::SurfaceReadOptions read =
+            ReadOptions(pixel_mm, pixel_y_mm, z_scale_mm, z_offset_mm, invalid, unit).ToOptions();
+        py::gil_scoped_release release;
+        const workflows::FitResult result = workflows::FitFile(path.string(), read, o);
+        if (output) artefacts::WriteCentreExport(*output, workflows::FitCentreExport(result, output->string()));
+        return workflows::Summarize(result);
+      },
+      py::arg("path"), py::kw_only(), py::arg("artefact") = py::none(), py::arg("radius_mm") = f.radius_mm,
+      py::arg("rotation_deg") = f.rotation_deg, py::arg("min_diameter_mm") = f.min_diameter_mm,
+      py::arg("max_diameter_mm") = f.max_diameter_mm, py::arg("min_depth_mm") = f.min_depth_mm,
+      py::arg("residual") = f.residual, py::arg("shape") = py::none(), py::arg("robust") = f.robust,
+      py::arg("output") = py::none(), py::arg("pixel_mm") = r.pixel_mm, py::arg("pixel_y_mm") = r.pixel_y_mm,
+      py::arg("z_scale_mm") = r.z_scale_mm, py::arg("z_offset_mm") = r.z_offset_mm, py::arg("invalid") = r.invalid,
+      py::arg("unit") = r.unit,
+      (std::string("Finds the calottes in a file and fits a sphere to each, or with shape='sphere'|'plane' one "
+                   "shape to every point, as `fvm fit FILE` with the same options; output writes the centre export "
+                   "(CSV) as -o does. Returns an fvm.Result whose summary equals `fvm fit --json` less the paths.") +
+       kReadDoc + "\n\nExample:\n    >>> r = fvm.fit('bar.x3p', artefact='bar17', output='bar.csv')\n"
+                  "    >>> [c['id'] for c in r['calottes']]\n    >>> fvm.fit('sph1.ds', shape='sphere')['radius_mm']")
+          .c_str());
+}
+
 }  // namespace
 
 void BindSurfaces(py::module_& m) {
+  BindSurfaceJobs(m);
   py::class_<Surface>(m, "Surface",
                       "A measured surface: a height map on a regular grid (heights, mask, spacing) or a point cloud "
                       "(points).\n\nExample:\n    >>> import numpy as np\n"
@@ -157,6 +224,9 @@ void BindSurfaces(py::module_& m) {
       .def_property_readonly(
           "notes", [](const Surface& s) { return s.height_map ? s.height_map->notes : std::vector<std::string>{}; },
           "what the reader found unusual about the file and read anyway (an X3P zipped around its folder, ...)")
+      .def_property_readonly(
+          "summary", [](const Surface& s) { return ToPython(workflows::Summarize(workflows::DescribeSurface(s, "surface"), "surface").json); },
+          "What the surface holds, as `fvm info --json` tells it of a file (less the path)")
       .def("__repr__", [](const Surface& s) {
         if (s.cloud) return fmt::format("<fvm.Surface cloud of {} points>", s.cloud->points.size());
         const imaging::HeightMap& h = *s.height_map;
@@ -197,31 +267,25 @@ void BindSurfaces(py::module_& m) {
          std::optional<double> rotation_deg, double min_diameter_mm, double max_diameter_mm, double min_depth_mm,
          const std::string& residual, const std::string& name) {
         Surface copy = surface;  // the workflow takes its surface
-        workflows::FindCalottesOptions options;
-        if (artefact) options.artefact = artefacts::KnownArtefact(*artefact);
-        options.radius_mm = radius_mm;
-        options.rotation_deg = rotation_deg;
-        options.min_diameter_mm = min_diameter_mm;
-        options.max_diameter_mm = max_diameter_mm;
-        options.min_depth_mm = min_depth_mm;
-        if (residual != "height" && residual != "orthogonal") {
-          throw InputError("residual '" + residual + "': use height or orthogonal");
-        }
-        options.residual = residual == "height" ? imaging::SphereResidual::kHeight : imaging::SphereResidual::kOrthogonal;
-        workflows::FoundCalottes found;
+        workflows::FitResult result{name, {artefact.value_or(""), radius_mm, rotation_deg, min_diameter_mm,
+                                           max_diameter_mm, min_depth_mm, residual, "", false}, {}, {}};
+        result.options.Check();
+        const workflows::FindCalottesOptions options = result.options.CalotteSearch();
         {
           py::gil_scoped_release release;
-          found = workflows::FindCalottes(std::move(copy), options, name);
+          result.found = workflows::FindCalottes(std::move(copy), options, name);
         }
-        return FoundDict(found);
+        py::dict out = FoundDict(*result.found);
+        out["summary"] = ToPython(workflows::Summarize(result).json);
+        return out;
       },
       py::arg("surface"), py::arg("artefact") = std::nullopt, py::arg("radius_mm") = 0.0,
       py::arg("rotation_deg") = std::nullopt, py::arg("min_diameter_mm") = 0.0, py::arg("max_diameter_mm") = 0.0,
       py::arg("min_depth_mm") = 0.0, py::arg("residual") = "height", py::arg("name") = "surface",
       "Finds the calottes (spherical dimples) on a surface and fits a sphere to each, as `fvm fit FILE` does; with "
       "an artefact name (bar17, grid6x6, ...) numbers them by its layout. Returns a dict: calottes (id, centre, "
-      "radius, u_centre, form_rms_um, points, ...), rejected, method, face, layout. `name` prefixes every "
-      "refusal.\n\nExample:\n    >>> found = fvm.find_calottes(fvm.read_surface('bar.x3p'), artefact='bar17')\n"
+      "radius, u_centre, form_rms_um, points, ...), rejected, method, face, layout, and summary (the document of "
+      "`fvm fit --json` less the path). `name` prefixes every refusal.\n\nExample:\n    >>> found = fvm.find_calottes(fvm.read_surface('bar.x3p'), artefact='bar17')\n"
       "    >>> [c['centre'] for c in found['calottes']]");
 }
 

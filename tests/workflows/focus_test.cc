@@ -28,7 +28,7 @@ TEST(ReconstructFocus, ImagesGivenAsFilesGiveSliceUnitsOrMillimetres) {
     imaging::WriteStackImage(files.back(), stack.images[k]);
   }
   FocusOptions options;
-  options.focus.dx_mm = 0.001;
+  options.pixel_mm = 0.001;
   int images = 0;
   const FocusSummary slices = ReconstructFocus(imaging::ResolveFocusStack(files, std::nullopt), options, [&] { ++images; });
   EXPECT_EQ(images, 20);
@@ -49,7 +49,7 @@ TEST(ReconstructFocus, ImagesGivenAsFilesGiveSliceUnitsOrMillimetres) {
   EXPECT_LT(std::sqrt(sum_mm / n), 0.2e-3);
   EXPECT_LT(std::sqrt(sum_slices / n), 0.2);
   EXPECT_GT(mm.median_u, 0.0);
-  EXPECT_GT(mm.median_valid_quality, options.focus.min_quality);
+  EXPECT_GT(mm.median_valid_quality, options.min_quality);
 }
 
 }  // namespace
