@@ -9,6 +9,7 @@
 #include "core/file_io.h"
 #include "imaging/io/digital_surf_sur.h"
 #include "imaging/io/gelsight_tmd.h"
+#include "imaging/io/keyence_vk4.h"
 #include "imaging/io/metropro_dat.h"
 #include "imaging/io/nms_file.h"
 #include "imaging/io/sdf.h"
@@ -48,6 +49,7 @@ std::optional<SurfaceFormat> FromContent(std::string_view head) {
   if (HasWykoOpdDirectory(std::string(head.substr(0, 12)))) return SurfaceFormat::kOpd;
   if (StartsWith(head, "DIGITAL SURF") || StartsWith(head, "DSCOMPRESSED")) return SurfaceFormat::kSur;
   if (StartsWith(head, "Binary TrueMap Data File")) return SurfaceFormat::kTmd;
+  if (HasKeyenceVk4Magic(std::string(head.substr(0, 12)))) return SurfaceFormat::kVk4;
   if (StartsWithPluDate(head)) return SurfaceFormat::kPlu;
   if (StartsWith(head, "II*\0"sv) || StartsWith(head, "MM\0*"sv) || StartsWith(head, "\x76\x2f\x31\x01"sv) ||
       StartsWith(head, "\x89PNG"sv)) {
@@ -86,6 +88,7 @@ std::optional<SurfaceFormat> ReadOnlyFromExtension(const std::filesystem::path& 
   if (extension == ".nms") return SurfaceFormat::kNms;
   if (extension == ".tmd") return SurfaceFormat::kTmd;
   if (extension == ".plux") return SurfaceFormat::kPlux;
+  if (extension == ".vk4") return SurfaceFormat::kVk4;
   return std::nullopt;
 }
 
@@ -127,6 +130,8 @@ std::string FormatName(SurfaceFormat format) {
       return "tmd";
     case SurfaceFormat::kPlux:
       return "plux";
+    case SurfaceFormat::kVk4:
+      return "vk4";
     default:
       return "xyz";
   }
@@ -164,7 +169,7 @@ SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
                    ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU and "
-                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, height-map images (TIFF, "
+                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Keyence VK4, height-map images (TIFF, "
                    "EXR, PNG), PCD, PLY and XYZ/CSV text");
 }
 
@@ -207,6 +212,9 @@ Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions&
       break;
     case SurfaceFormat::kPlux:
       surface.height_map = ReadSensofarPlux(path);
+      break;
+    case SurfaceFormat::kVk4:
+      surface.height_map = ReadKeyenceVk4(path);
       break;
     case SurfaceFormat::kImage:
       surface.height_map = ReadHeightMapImage(path, options.image);

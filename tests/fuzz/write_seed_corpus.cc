@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
   for (double& z : all_valid.z_mm) z = std::isfinite(z) ? z : 0.0;
   WriteBytes(out / "nms" / "height.nms", instrument::BuildNms(all_valid, -20.0, 20.0));
   WriteBytes(out / "tmd" / "v2.tmd", fvm::imaging::BuildGelSightTmd(map));
+  WriteBytes(out / "vk4" / "single.vk4", instrument::BuildVk4(map));
   std::filesystem::create_directories(out / "height_map_image");
   fvm::imaging::WriteHeightMapImage(out / "height_map_image" / "sample.tif", map);
   std::filesystem::create_directories(out / "tile_image");
