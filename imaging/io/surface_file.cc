@@ -17,6 +17,7 @@
 #include "imaging/io/sensofar_plux.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/x3p.h"
+#include "imaging/io/zygo_datx.h"
 
 namespace fvm::imaging {
 namespace {
@@ -50,6 +51,7 @@ std::optional<SurfaceFormat> FromContent(std::string_view head) {
   if (StartsWith(head, "DIGITAL SURF") || StartsWith(head, "DSCOMPRESSED")) return SurfaceFormat::kSur;
   if (StartsWith(head, "Binary TrueMap Data File")) return SurfaceFormat::kTmd;
   if (HasKeyenceVk4Magic(std::string(head.substr(0, 12)))) return SurfaceFormat::kVk4;
+  if (HasHdf5Signature(std::string(head.substr(0, 8)))) return SurfaceFormat::kDatx;
   if (StartsWithPluDate(head)) return SurfaceFormat::kPlu;
   if (StartsWith(head, "II*\0"sv) || StartsWith(head, "MM\0*"sv) || StartsWith(head, "\x76\x2f\x31\x01"sv) ||
       StartsWith(head, "\x89PNG"sv)) {
@@ -89,6 +91,7 @@ std::optional<SurfaceFormat> ReadOnlyFromExtension(const std::filesystem::path& 
   if (extension == ".tmd") return SurfaceFormat::kTmd;
   if (extension == ".plux") return SurfaceFormat::kPlux;
   if (extension == ".vk4") return SurfaceFormat::kVk4;
+  if (extension == ".datx") return SurfaceFormat::kDatx;
   return std::nullopt;
 }
 
@@ -132,6 +135,8 @@ std::string FormatName(SurfaceFormat format) {
       return "plux";
     case SurfaceFormat::kVk4:
       return "vk4";
+    case SurfaceFormat::kDatx:
+      return "datx";
     default:
       return "xyz";
   }
@@ -169,7 +174,7 @@ SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
                    ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU and "
-                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Keyence VK4, height-map images (TIFF, "
+                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Keyence VK4, Zygo DATX, height-map images (TIFF, "
                    "EXR, PNG), PCD, PLY and XYZ/CSV text");
 }
 
@@ -215,6 +220,9 @@ Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions&
       break;
     case SurfaceFormat::kVk4:
       surface.height_map = ReadKeyenceVk4(path);
+      break;
+    case SurfaceFormat::kDatx:
+      surface.height_map = ReadZygoDatx(path);
       break;
     case SurfaceFormat::kImage:
       surface.height_map = ReadHeightMapImage(path, options.image);

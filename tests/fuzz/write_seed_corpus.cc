@@ -18,6 +18,7 @@
 #include "imaging/io/x3p.h"
 #include "imaging/io/zip_archive.h"
 #include "imaging/point_cloud.h"
+#include "tests/support/datx_files.h"
 #include "tests/support/instrument_files.h"
 #include "tests/support/surface_samples.h"
 
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
   WriteBytes(out / "nms" / "height.nms", instrument::BuildNms(all_valid, -20.0, 20.0));
   WriteBytes(out / "tmd" / "v2.tmd", fvm::imaging::BuildGelSightTmd(map));
   WriteBytes(out / "vk4" / "single.vk4", instrument::BuildVk4(map));
+  WriteBytes(out / "datx" / "nanometres.datx", instrument::BuildDatx(map));
   std::filesystem::create_directories(out / "height_map_image");
   fvm::imaging::WriteHeightMapImage(out / "height_map_image" / "sample.tif", map);
   std::filesystem::create_directories(out / "tile_image");

@@ -13,6 +13,8 @@
 #include "core/input_error.h"
 #include "imaging/io/keyence_vk4.h"
 #include "imaging/io/surface_file.h"
+#include "imaging/io/zygo_datx.h"
+#include "tests/support/datx_files.h"
 #include "tests/support/instrument_files.h"
 #include "tests/support/surface_samples.h"
 #include "tests/support/test_support.h"
@@ -85,6 +87,68 @@ TEST(KeyenceVk4, TruncatedAbsurdAndForeignFilesAreRefusedNamingTheField) {
   assembled[8] = 1;
   EXPECT_NE(Refusal(ParseKeyenceVk4, assembled, "a.vk4").find("file type"), std::string::npos);
   EXPECT_NE(Refusal(ParseKeyenceVk4, std::string(4096, 'x'), "a.vk4").find("'VK4_'"), std::string::npos);
+}
+
+// The heights of a DATX are float32 nanometres (or fringes): they read back to float32's rounding.
+void ExpectDatxReadBack(const HeightMap& written, const HeightMap& read) {
+  ASSERT_EQ(read.size_x, written.size_x);
+  ASSERT_EQ(read.size_y, written.size_y);
+  EXPECT_DOUBLE_EQ(read.dx_mm, written.dx_mm);
+  EXPECT_DOUBLE_EQ(read.dy_mm, written.dy_mm);
+  for (std::size_t i = 0; i < written.z_mm.size(); ++i) {
+    if (std::isnan(written.z_mm[i])) {
+      EXPECT_TRUE(std::isnan(read.z_mm[i])) << "point " << i << " was invalid";
+    } else {
+      EXPECT_NEAR(read.z_mm[i], written.z_mm[i], 1e-7 * std::fabs(written.z_mm[i]) + 1e-15) << "point " << i;
+    }
+  }
+}
+
+TEST(ZygoDatx, ReadsNanometresAndFringesWithNoDataAndIntensity) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap read = ParseZygoDatx(testing::BuildDatx(map), "a.datx");
+  ExpectDatxReadBack(map, read);
+  ASSERT_EQ(read.intensity.size(), map.z_mm.size());
+  for (std::size_t i = 0; i < read.intensity.size(); ++i) EXPECT_EQ(read.intensity[i], testing::GreyOf(i));
+  EXPECT_NE(read.source.find("/Data/Surface/{"), std::string::npos) << read.source;
+
+  testing::DatxWriteOptions fringes;
+  fringes.unit = testing::DatxUnit::kFringes;
+  fringes.intensity = false;
+  const HeightMap in_fringes = ParseZygoDatx(testing::BuildDatx(map, fringes), "b.datx");
+  ExpectDatxReadBack(map, in_fringes);
+  EXPECT_TRUE(in_fringes.intensity.empty());
+
+  testing::DatxWriteOptions nx2;
+  nx2.nx2_layout = true;
+  ExpectDatxReadBack(map, ParseZygoDatx(testing::BuildDatx(map, nx2), "c.datx"));
+
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "scan.h5", testing::BuildDatx(map));  // found by its HDF5 signature
+  const Surface surface = ReadSurface(dir.path() / "scan.h5");
+  EXPECT_EQ(surface.format, SurfaceFormat::kDatx);
+  EXPECT_EQ(FormatName(surface.format), "datx");
+}
+
+TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
+  const HeightMap map = SampleMap(6, 4);
+  const std::string good = testing::BuildDatx(map);
+  for (std::size_t size = 0; size < good.size(); size += 1 + size / 5) {
+    const std::string message = Refusal(ParseZygoDatx, good.substr(0, size), "cut.datx");
+    EXPECT_NE(message.find("cut.datx"), std::string::npos) << "cut at " << size << ": " << message;
+  }
+  EXPECT_NE(Refusal(ParseZygoDatx, std::string(4096, 'x'), "a.datx").find("HDF5's signature"), std::string::npos);
+  // An HDF5 file that is not a DATX: no surface.
+  std::string other = good;
+  for (std::size_t at = other.find("Surface"); at != std::string::npos; at = other.find("Surface", at)) {
+    other.replace(at, 7, "Surfacx");
+  }
+  EXPECT_NE(Refusal(ParseZygoDatx, other, "b.datx").find("/Data/Surface"), std::string::npos);
+  // No lateral calibration: the pixel is 0.
+  HeightMap uncalibrated = map;
+  uncalibrated.dx_mm = 0.0;
+  EXPECT_NE(Refusal(ParseZygoDatx, testing::BuildDatx(uncalibrated), "c.datx").find("X Converter"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -17,6 +17,8 @@
 #include "imaging/io/digital_surf_sur.h"
 #include "imaging/io/gelsight_tmd.h"
 #include "imaging/io/keyence_vk4.h"
+#include "imaging/io/zygo_datx.h"
+#include "tests/support/datx_files.h"
 #include "imaging/io/metropro_dat.h"
 #include "imaging/io/nms_file.h"
 #include "imaging/io/sensofar_plu.h"
@@ -144,6 +146,7 @@ TEST(ReaderFuzz, InstrumentExports) {
       {ParseWykoOpd, testing::BuildOpd(map)},            {ParseDigitalSurfSur, testing::BuildSur(map)},
       {ParseDigitalSurfSur, testing::BuildSur(map, true)}, {ParseNms, testing::BuildNms(all_valid, -20, 20)},
       {ParseGelSightTmd, BuildGelSightTmd(map)},         {ParseKeyenceVk4, testing::BuildVk4(map)},
+      {ParseZygoDatx, testing::BuildDatx(map)},
       {[](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); }, testing::BuildPlux(map)}};
   std::mt19937 random(11);
   for (const auto& [parse, valid] : formats) {
