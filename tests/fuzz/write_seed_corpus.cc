@@ -20,6 +20,7 @@
 #include "imaging/point_cloud.h"
 #include "tests/support/datx_files.h"
 #include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
 #include "tests/support/surface_samples.h"
 
 namespace {
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
   WriteBytes(out / "tmd" / "v2.tmd", fvm::imaging::BuildGelSightTmd(map));
   WriteBytes(out / "vk4" / "single.vk4", instrument::BuildVk4(map));
   WriteBytes(out / "datx" / "nanometres.datx", instrument::BuildDatx(map));
+  WriteBytes(out / "lext" / "ols4000.lext", instrument::BuildLext(map));
   std::filesystem::create_directories(out / "height_map_image");
   fvm::imaging::WriteHeightMapImage(out / "height_map_image" / "sample.tif", map);
   std::filesystem::create_directories(out / "tile_image");

@@ -12,10 +12,12 @@
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "imaging/io/keyence_vk4.h"
+#include "imaging/io/olympus_lext.h"
 #include "imaging/io/surface_file.h"
 #include "imaging/io/zygo_datx.h"
 #include "tests/support/datx_files.h"
 #include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
 #include "tests/support/surface_samples.h"
 #include "tests/support/test_support.h"
 
@@ -149,6 +151,54 @@ TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
   uncalibrated.dx_mm = 0.0;
   EXPECT_NE(Refusal(ParseZygoDatx, testing::BuildDatx(uncalibrated), "c.datx").find("X Converter"),
             std::string::npos);
+}
+
+TEST(OlympusLext, ReadsTheHeightPageWithItsInvalidMaskAndIntensity) {
+  const HeightMap map = SampleMap(11, 5);  // 11 columns: the INVALID page's rows end inside a byte
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "a.lext", testing::BuildLext(map));
+  const Surface surface = ReadSurface(dir.path() / "a.lext");
+  ASSERT_EQ(surface.format, SurfaceFormat::kLext);
+  const HeightMap& read = *surface.height_map;
+  ASSERT_EQ(read.size_x, 11);
+  ASSERT_EQ(read.size_y, 5);
+  EXPECT_DOUBLE_EQ(read.dx_mm, testing::kLextDxMm);
+  EXPECT_DOUBLE_EQ(read.dy_mm, testing::kLextDyMm);
+  const double lowest = Lowest(map);
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isnan(map.z_mm[i])) {
+      EXPECT_TRUE(std::isnan(read.z_mm[i])) << "point " << i << " was invalid";
+    } else {
+      EXPECT_NEAR(read.z_mm[i], map.z_mm[i] - lowest, 0.5 * testing::kLextStepMm + 1e-15) << "point " << i;
+    }
+  }
+  ASSERT_EQ(read.intensity.size(), map.z_mm.size());
+  for (std::size_t i = 0; i < read.intensity.size(); ++i) EXPECT_EQ(read.intensity[i], testing::GreyOf(i));
+}
+
+TEST(OlympusLext, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
+  const TempDir dir;
+  const std::string good = testing::BuildLext(SampleMap(6, 4));
+  const auto refusal = [&](const std::string& bytes, const std::string& file) {
+    WriteFileAtomically(dir.path() / file, bytes);
+    return Refusal([&](const std::string&, const std::string&) { return ReadOlympusLext(dir.path() / file); },
+                   bytes, file);
+  };
+  for (std::size_t size = 1; size < good.size(); size += 1 + size / 3) {
+    const std::string message = refusal(good.substr(0, size), "cut.lext");
+    EXPECT_NE(message.find("cut.lext"), std::string::npos) << "cut at " << size << ": " << message;
+  }
+  std::string no_pixel = good;
+  const std::size_t at = no_pixel.find("125000</HeightDataPerPixelX>");
+  ASSERT_NE(at, std::string::npos);
+  no_pixel.replace(at, 6, "000000");
+  EXPECT_NE(refusal(no_pixel, "a.lext").find("HeightDataPerPixelX"), std::string::npos);
+  std::string no_heights = good;
+  no_heights.replace(no_heights.find("HEIGHT"), 6, "HEIGHX");
+  EXPECT_NE(refusal(no_heights, "b.lext").find("HEIGHT"), std::string::npos);
+  std::string foreign = good;
+  foreign.replace(foreign.find("<TiffTagDescData"), 16, "<SomethingElse_X");
+  EXPECT_NE(refusal(foreign, "c.lext").find("TiffTagDescData"), std::string::npos);
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include "core/file_io.h"
 #include "imaging/io/surface_file.h"
 #include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
 #include "tests/support/surface_samples.h"
 #include "tests/support/test_support.h"
 
@@ -155,6 +156,36 @@ TEST(GwyddionComparison, SyntheticVk4) {
     EXPECT_NEAR(map.z_mm[i], heights.values[i] * 1000.0, 1e-12 * std::fabs(map.z_mm[i])) << "point " << i;
     EXPECT_EQ(map.intensity[i] / 65536.0, light.values[i]) << "light at point " << i;
   }
+}
+
+// LEXT: Gwyddion's lextfile.c reads the colour page as three channels, then Intensity and Height; the same pixel
+// (HeightDataPerPixelX, Y) and heights. It leaves the INVALID page unread: where fvm marks a point invalid,
+// Gwyddion shows the count written there (0).
+TEST(GwyddionComparison, SyntheticLext) {
+  if (kGwyddionDump.empty()) GTEST_SKIP() << "gwyddion_dump was not built (no libgwyddion20-dev)";
+  const fvm::testing::TempDir home;
+  WriteFileAtomically(home.path() / "a.lext", testing::BuildLext(testing::SampleMap(11, 5)));
+  const std::vector<GwyddionChannel> gwyddion = ReadWithGwyddion(home.path() / "a.lext", home.path());
+  ASSERT_EQ(gwyddion.size(), 5u) << "Gwyddion reads red, green, blue, intensity and height";
+  const GwyddionChannel& heights = gwyddion[4];
+  ASSERT_EQ(heights.title, " Height");
+  ASSERT_EQ(heights.unit_z, "m");
+  const HeightMap map = *ReadSurface(home.path() / "a.lext").height_map;
+  ASSERT_EQ(map.size_x, heights.xres);
+  ASSERT_EQ(map.size_y, heights.yres);
+  const double ulp4 = 4 * std::numeric_limits<double>::epsilon();
+  EXPECT_NEAR(map.dx_mm, heights.dx_m * 1000.0, ulp4 * map.dx_mm);
+  EXPECT_NEAR(map.dy_mm, heights.dy_m * 1000.0, ulp4 * map.dy_mm);
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isnan(map.z_mm[i])) {
+      EXPECT_EQ(heights.values[i], 0.0) << "point " << i;
+      continue;
+    }
+    EXPECT_NEAR(map.z_mm[i], heights.values[i] * 1000.0, 1e-12 * std::fabs(map.z_mm[i])) << "point " << i;
+    ++compared;
+  }
+  EXPECT_EQ(compared, ComputeStats(map).valid_points);
 }
 
 }  // namespace
