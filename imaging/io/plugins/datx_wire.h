@@ -19,7 +19,7 @@ inline void Put(std::string& out, const std::string& text) {
 }
 inline void Put(std::string& out, const std::vector<double>& values) {
   Put(out, static_cast<std::uint64_t>(values.size()));
-  out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double));
+  if (!values.empty()) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double));
 }
 inline void Put(std::string& out, const DatxDataset& d) {
   Put(out, d.path);
@@ -55,7 +55,7 @@ class Reader {
     std::uint64_t n = 0;
     if (!Get(n) || (in_.size() - at_) / sizeof(double) < n) return false;
     values.resize(n);
-    std::memcpy(values.data(), in_.data() + at_, n * sizeof(double));
+    if (n > 0) std::memcpy(values.data(), in_.data() + at_, n * sizeof(double));  // an empty vector's data() may be null
     at_ += n * sizeof(double);
     return true;
   }
