@@ -19,7 +19,7 @@ what="${1:-sample}"
 packages=(cmake ninja-build ccache g++ pkg-config clang libclang-rt-14-dev
   libeigen3-dev libceres-dev libopencv-dev libpcl-dev libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libfmt-dev libboost-dev libplplot-dev
-  libzip-dev libpugixml-dev libssl-dev zlib1g-dev libtbb-dev librsvg2-bin
+  libzip-dev libpugixml-dev libssl-dev zlib1g-dev libhdf5-dev libtbb-dev librsvg2-bin
   gwyddion libgwyddion20-dev libgtk2.0-dev libgtkglext1-dev libfftw3-dev
   python3-dev python3-numpy python3-pytest python3-pybind11 pybind11-dev
   python3-sphinx python3-myst-parser dpkg-dev man-db)

@@ -68,6 +68,10 @@ struct ImageCodec {
   // Writes `data` (in `data_type`, interleaved) to `path`, the format chosen by the path's extension.
   ImageWriteResult (*write)(const std::filesystem::path& path, const ImageWriteSpec& spec, PixelType data_type,
                             const void* data, std::string* error);
+  // The image `subimage` (0 first) of a multi-image file (the pages of a TIFF); nullptr and `error` set when the
+  // file cannot be opened or has no such image.
+  std::unique_ptr<ImageFileReader> (*open_subimage)(const std::filesystem::path& path, int subimage,
+                                                    std::string* error);
 };
 
 // The codec, loading the plugin on first use. `action` says what needed it ("reading scan.tif"); when the

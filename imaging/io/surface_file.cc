@@ -9,13 +9,16 @@
 #include "core/file_io.h"
 #include "imaging/io/digital_surf_sur.h"
 #include "imaging/io/gelsight_tmd.h"
+#include "imaging/io/keyence_vk4.h"
 #include "imaging/io/metropro_dat.h"
 #include "imaging/io/nms_file.h"
+#include "imaging/io/olympus_lext.h"
 #include "imaging/io/sdf.h"
 #include "imaging/io/sensofar_plu.h"
 #include "imaging/io/sensofar_plux.h"
 #include "imaging/io/wyko_opd.h"
 #include "imaging/io/x3p.h"
+#include "imaging/io/zygo_datx.h"
 
 namespace fvm::imaging {
 namespace {
@@ -48,6 +51,8 @@ std::optional<SurfaceFormat> FromContent(std::string_view head) {
   if (HasWykoOpdDirectory(std::string(head.substr(0, 12)))) return SurfaceFormat::kOpd;
   if (StartsWith(head, "DIGITAL SURF") || StartsWith(head, "DSCOMPRESSED")) return SurfaceFormat::kSur;
   if (StartsWith(head, "Binary TrueMap Data File")) return SurfaceFormat::kTmd;
+  if (HasKeyenceVk4Magic(std::string(head.substr(0, 12)))) return SurfaceFormat::kVk4;
+  if (HasHdf5Signature(std::string(head.substr(0, 8)))) return SurfaceFormat::kDatx;
   if (StartsWithPluDate(head)) return SurfaceFormat::kPlu;
   if (StartsWith(head, "II*\0"sv) || StartsWith(head, "MM\0*"sv) || StartsWith(head, "\x76\x2f\x31\x01"sv) ||
       StartsWith(head, "\x89PNG"sv)) {
@@ -86,6 +91,9 @@ std::optional<SurfaceFormat> ReadOnlyFromExtension(const std::filesystem::path& 
   if (extension == ".nms") return SurfaceFormat::kNms;
   if (extension == ".tmd") return SurfaceFormat::kTmd;
   if (extension == ".plux") return SurfaceFormat::kPlux;
+  if (extension == ".vk4") return SurfaceFormat::kVk4;
+  if (extension == ".datx") return SurfaceFormat::kDatx;
+  if (extension == ".lext") return SurfaceFormat::kLext;
   return std::nullopt;
 }
 
@@ -127,6 +135,12 @@ std::string FormatName(SurfaceFormat format) {
       return "tmd";
     case SurfaceFormat::kPlux:
       return "plux";
+    case SurfaceFormat::kVk4:
+      return "vk4";
+    case SurfaceFormat::kDatx:
+      return "datx";
+    case SurfaceFormat::kLext:
+      return "lext";
     default:
       return "xyz";
   }
@@ -155,16 +169,19 @@ SurfaceFormat DetectSurfaceFormat(const std::filesystem::path& path) {
   const std::string head = ReadFileHead(path, 64);
   if (head.empty()) throw InputError(path.string() + ": the file is empty; export or copy it again");
   if (const std::optional<SurfaceFormat> by_content = FromContent(head)) {
-    // A zip archive is an X3P, unless it is named as Sensofar's PLUx (index.xml and layers, no main.xml).
-    const bool plux = *by_content == SurfaceFormat::kX3p && ReadOnlyFromExtension(path) == SurfaceFormat::kPlux;
-    return plux ? SurfaceFormat::kPlux : *by_content;
+    // A zip archive is an X3P, unless it is named as Sensofar's PLUx (index.xml and layers, no main.xml); a TIFF
+    // is an image, unless it is named as Olympus' LEXT (pages named in their descriptions).
+    const std::optional<SurfaceFormat> named = ReadOnlyFromExtension(path);
+    if (*by_content == SurfaceFormat::kX3p && named == SurfaceFormat::kPlux) return SurfaceFormat::kPlux;
+    if (*by_content == SurfaceFormat::kImage && named == SurfaceFormat::kLext) return SurfaceFormat::kLext;
+    return *by_content;
   }
   if (const std::optional<SurfaceFormat> format = FromExtension(path)) return *format;
   if (const std::optional<SurfaceFormat> format = ReadOnlyFromExtension(path)) return *format;
   if (LooksLikeText(head)) return SurfaceFormat::kXyz;
   throw InputError(path.string() +
                    ": not a format fvm reads; it reads X3P, Alicona AL3D, ISO 25178-71 SDF, Sensofar PLU and "
-                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, height-map images (TIFF, "
+                   "PLUx, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS, GelSight TMD, Keyence VK4, Zygo DATX, Olympus LEXT, height-map images (TIFF, "
                    "EXR, PNG), PCD, PLY and XYZ/CSV text");
 }
 
@@ -207,6 +224,15 @@ Surface ReadSurface(const std::filesystem::path& path, const SurfaceReadOptions&
       break;
     case SurfaceFormat::kPlux:
       surface.height_map = ReadSensofarPlux(path);
+      break;
+    case SurfaceFormat::kVk4:
+      surface.height_map = ReadKeyenceVk4(path);
+      break;
+    case SurfaceFormat::kDatx:
+      surface.height_map = ReadZygoDatx(path);
+      break;
+    case SurfaceFormat::kLext:
+      surface.height_map = ReadOlympusLext(path);
       break;
     case SurfaceFormat::kImage:
       surface.height_map = ReadHeightMapImage(path, options.image);

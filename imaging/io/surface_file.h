@@ -1,7 +1,7 @@
 #pragma once
 // Any surface or point-cloud file fvm reads, recognised by its content first (zip for X3P, the AL3D
 // signature, ISO 25178-71 SDF's aISO-1.0 / bISO-1.0, the instrument signatures of Zygo MetroPro, Wyko OPD, Digital
-// Surf SUR, GelSight TMD and Sensofar PLU, TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read
+// Surf SUR, GelSight TMD, Sensofar PLU and Keyence VK4, HDF5's for Zygo DATX, .lext before TIFF/EXR/PNG magic, PCD and PLY headers) and its extension second, read
 // into a height map or a point cloud. The one entry point for commands that take "a measurement file" (fvm info,
 // fvm fit, fvm correct, fvm calibrate RAW, Python's read_surface).
 
@@ -19,11 +19,13 @@ namespace fvm::imaging {
 enum class SurfaceFormat {
   kX3p, kAl3d, kImage, kPcd, kPly, kXyz, kSdf,
   // Other instruments' exports, read only: Sensofar PLU, Zygo MetroPro DAT, Wyko OPD, Digital Surf SUR, NMS,
-  // GelSight TMD, Sensofar PLUx.
-  kPlu, kMetroPro, kOpd, kSur, kNms, kTmd, kPlux
+  // GelSight TMD, Sensofar PLUx, Keyence VK4, Zygo DATX, Olympus
+  // LEXT.
+  kPlu, kMetroPro, kOpd, kSur, kNms, kTmd, kPlux, kVk4, kDatx, kLext
 };
 
-// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf", "plu", "metropro", "opd", "sur", "nms", "tmd", "plux".
+// "x3p", "al3d", "image", "pcd", "ply", "xyz", "sdf", "plu", "metropro", "opd", "sur", "nms", "tmd", "plux", "vk4",
+// "datx", "lext".
 std::string FormatName(SurfaceFormat format);
 bool IsPointCloudFormat(SurfaceFormat format);
 

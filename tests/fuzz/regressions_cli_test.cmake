@@ -30,6 +30,8 @@ endfunction()
 
 refuses_all(pcd "" info @FILE@)
 refuses_all(ply "" info @FILE@)
+# DATX files on which HDF5 1.10 itself crashed and looped: its child process dies or is stopped, fvm refuses them.
+refuses_all(datx "" info @FILE@)
 refuses_all(tile_layout ${WORK}/positions.csv stitch --layout @FILE@ --overlap 20 -o ${WORK}/positions.csv)
 refuses_all(height_map_image "" info @FILE@ --pixel-mm 0.001)
 refuses_all(tile_image "" info @FILE@ --pixel-mm 0.001)

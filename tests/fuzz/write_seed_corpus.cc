@@ -18,7 +18,9 @@
 #include "imaging/io/x3p.h"
 #include "imaging/io/zip_archive.h"
 #include "imaging/point_cloud.h"
+#include "tests/support/datx_files.h"
 #include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
 #include "tests/support/surface_samples.h"
 
 namespace {
@@ -71,6 +73,9 @@ int main(int argc, char** argv) {
   for (double& z : all_valid.z_mm) z = std::isfinite(z) ? z : 0.0;
   WriteBytes(out / "nms" / "height.nms", instrument::BuildNms(all_valid, -20.0, 20.0));
   WriteBytes(out / "tmd" / "v2.tmd", fvm::imaging::BuildGelSightTmd(map));
+  WriteBytes(out / "vk4" / "single.vk4", instrument::BuildVk4(map));
+  WriteBytes(out / "datx" / "nanometres.datx", instrument::BuildDatx(map));
+  WriteBytes(out / "lext" / "ols4000.lext", instrument::BuildLext(map));
   std::filesystem::create_directories(out / "height_map_image");
   fvm::imaging::WriteHeightMapImage(out / "height_map_image" / "sample.tif", map);
   std::filesystem::create_directories(out / "tile_image");

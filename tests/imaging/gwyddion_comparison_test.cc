@@ -17,7 +17,11 @@
 #include <vector>
 
 #include "imaging/height_map.h"
+#include "core/file_io.h"
 #include "imaging/io/surface_file.h"
+#include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
+#include "tests/support/surface_samples.h"
 #include "tests/support/test_support.h"
 
 namespace fvm::imaging {
@@ -124,6 +128,64 @@ TEST(GwyddionComparison, GwyddionReadsNeitherTheNmsNorTheTmd) {
     EXPECT_TRUE(ReadWithGwyddion(kVendors / name, home.path()).empty()) << name;
     EXPECT_TRUE(ReadSurface(kVendors / name).height_map.has_value()) << name;
   }
+}
+
+// The formats with no instrument file here, on files written as their descriptions say (described_formats_test.cc):
+// Gwyddion reads the same grid and heights. VK4: Gwyddion spreads the field over width - 1 pixels (keyence.c, "from
+// comparison with original software"), so its pixel is (width - 1) / width of the file's x_length_per_pixel, which
+// fvm keeps; its light channel (the second) is the counts over 2^16.
+TEST(GwyddionComparison, SyntheticVk4) {
+  if (kGwyddionDump.empty()) GTEST_SKIP() << "gwyddion_dump was not built (no libgwyddion20-dev)";
+  const fvm::testing::TempDir home;
+  const HeightMap written = testing::SampleMap(7, 5);
+  WriteFileAtomically(home.path() / "a.vk4", testing::BuildVk4(written));
+  const std::vector<GwyddionChannel> gwyddion = ReadWithGwyddion(home.path() / "a.vk4", home.path());
+  ASSERT_EQ(gwyddion.size(), 2u) << "Gwyddion reads the height and the light image";
+  const GwyddionChannel& heights = gwyddion[0];
+  const GwyddionChannel& light = gwyddion[1];
+  ASSERT_EQ(light.title, " Light 0");
+  ASSERT_EQ(heights.unit_z, "m");
+  const HeightMap map = *ReadSurface(home.path() / "a.vk4").height_map;
+  ASSERT_EQ(map.size_x, heights.xres);
+  ASSERT_EQ(map.size_y, heights.yres);
+  const double ulp4 = 4 * std::numeric_limits<double>::epsilon();
+  EXPECT_NEAR(map.dx_mm * (map.size_x - 1) / map.size_x, heights.dx_m * 1000.0, ulp4 * map.dx_mm);
+  EXPECT_NEAR(map.dy_mm * (map.size_y - 1) / map.size_y, heights.dy_m * 1000.0, ulp4 * map.dy_mm);
+  EXPECT_EQ(heights.masked, 0u);
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    EXPECT_NEAR(map.z_mm[i], heights.values[i] * 1000.0, 1e-12 * std::fabs(map.z_mm[i])) << "point " << i;
+    EXPECT_EQ(map.intensity[i] / 65536.0, light.values[i]) << "light at point " << i;
+  }
+}
+
+// LEXT: Gwyddion's lextfile.c reads the colour page as three channels, then Intensity and Height; the same pixel
+// (HeightDataPerPixelX, Y) and heights. It leaves the INVALID page unread: where fvm marks a point invalid,
+// Gwyddion shows the count written there (0).
+TEST(GwyddionComparison, SyntheticLext) {
+  if (kGwyddionDump.empty()) GTEST_SKIP() << "gwyddion_dump was not built (no libgwyddion20-dev)";
+  const fvm::testing::TempDir home;
+  WriteFileAtomically(home.path() / "a.lext", testing::BuildLext(testing::SampleMap(11, 5)));
+  const std::vector<GwyddionChannel> gwyddion = ReadWithGwyddion(home.path() / "a.lext", home.path());
+  ASSERT_EQ(gwyddion.size(), 5u) << "Gwyddion reads red, green, blue, intensity and height";
+  const GwyddionChannel& heights = gwyddion[4];
+  ASSERT_EQ(heights.title, " Height");
+  ASSERT_EQ(heights.unit_z, "m");
+  const HeightMap map = *ReadSurface(home.path() / "a.lext").height_map;
+  ASSERT_EQ(map.size_x, heights.xres);
+  ASSERT_EQ(map.size_y, heights.yres);
+  const double ulp4 = 4 * std::numeric_limits<double>::epsilon();
+  EXPECT_NEAR(map.dx_mm, heights.dx_m * 1000.0, ulp4 * map.dx_mm);
+  EXPECT_NEAR(map.dy_mm, heights.dy_m * 1000.0, ulp4 * map.dy_mm);
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isnan(map.z_mm[i])) {
+      EXPECT_EQ(heights.values[i], 0.0) << "point " << i;
+      continue;
+    }
+    EXPECT_NEAR(map.z_mm[i], heights.values[i] * 1000.0, 1e-12 * std::fabs(map.z_mm[i])) << "point " << i;
+    ++compared;
+  }
+  EXPECT_EQ(compared, ComputeStats(map).valid_points);
 }
 
 }  // namespace

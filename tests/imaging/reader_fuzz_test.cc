@@ -16,6 +16,9 @@
 #include "imaging/io/al3d.h"
 #include "imaging/io/digital_surf_sur.h"
 #include "imaging/io/gelsight_tmd.h"
+#include "imaging/io/keyence_vk4.h"
+#include "imaging/io/zygo_datx.h"
+#include "tests/support/datx_files.h"
 #include "imaging/io/metropro_dat.h"
 #include "imaging/io/nms_file.h"
 #include "imaging/io/sensofar_plu.h"
@@ -142,7 +145,8 @@ TEST(ReaderFuzz, InstrumentExports) {
       {ParseSensofarPlu, testing::BuildPlu(map)},        {ParseMetroProDat, testing::BuildMetroPro(map)},
       {ParseWykoOpd, testing::BuildOpd(map)},            {ParseDigitalSurfSur, testing::BuildSur(map)},
       {ParseDigitalSurfSur, testing::BuildSur(map, true)}, {ParseNms, testing::BuildNms(all_valid, -20, 20)},
-      {ParseGelSightTmd, BuildGelSightTmd(map)},
+      {ParseGelSightTmd, BuildGelSightTmd(map)},         {ParseKeyenceVk4, testing::BuildVk4(map)},
+      {ParseZygoDatx, testing::BuildDatx(map)},
       {[](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); }, testing::BuildPlux(map)}};
   std::mt19937 random(11);
   for (const auto& [parse, valid] : formats) {

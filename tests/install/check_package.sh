@@ -36,6 +36,11 @@ fvm simulate fvm-batch -o raw --seed 3 --surfaces tif --validation-placements 0 
 plugin_loaded() { LD_DEBUG=files "$@" 2>&1 >/dev/null | grep -o "file=[^ ]*libfvm_image_oiio.so" | head -n 1; }
 loaded="$(plugin_loaded fvm info raw/id-x.free.tif --pixel-mm 0.2 --json)"
 [[ "$loaded" == "file=/usr/lib/fvm/libfvm_image_oiio.so" ]] || fail "fvm info on a TIFF loaded '$loaded'"
+# A Zygo DATX needs the HDF5 plugin, the installed one; the command itself links no HDF5.
+loaded="$(LD_DEBUG=files fvm info "$root/tests/fuzz/corpus/datx/nanometres.datx" --json 2>&1 >/dev/null |
+  grep -o "file=[^ ]*libfvm_datx_hdf5.so" | head -n 1)"
+[[ "$loaded" == "file=/usr/lib/fvm/libfvm_datx_hdf5.so" ]] || fail "fvm info on a DATX loaded '$loaded'"
+! ldd /usr/bin/fvm | grep -q libhdf5 || fail "/usr/bin/fvm links HDF5 (it belongs in the DATX plugin)"
 # Calottes found in images need the OpenCV plugin, a report the report plugin: both the installed ones.
 loaded="$(LD_DEBUG=files fvm calibrate raw --model 9 --pixel-mm 0.2 -o raw-calibration.json --report report 2>&1 >/dev/null |
   grep -o "file=[^ ]*libfvm_\(imaging_opencv\|report\)\.so" | sort -u | tr '\n' ' ')"

@@ -1,7 +1,7 @@
 #pragma once
 // Small files in the layouts of other instruments' exports, written the way the instruments write them (the
 // layouts their readers document: imaging/io/sensofar_plu.h, metropro_dat.h, wyko_opd.h, digital_surf_sur.h,
-// nms_file.h; gelsight_tmd.h has its own writer), for the readers' tests and the fuzzers' seeds. Test-only: fvm
+// nms_file.h, keyence_vk4.h; gelsight_tmd.h has its own writer), for the readers' tests and the fuzzers' seeds. Test-only: fvm
 // writes none of these formats. Heights are quantised as the instruments quantise them (counts of a step); each
 // builder says its step so that a test can hold a read-back to half of it.
 
@@ -250,6 +250,59 @@ inline std::string BuildNms(const HeightMap& map, double z_low_um, double z_high
     PutLe<std::uint16_t>(b, 3468 + 2 * i, static_cast<std::uint16_t>(std::clamp(count, 0.0, 65535.0)));
   }
   for (std::size_t i = 0; i < n; ++i) PutLe<unsigned char>(b, 3468 + 2 * n + i, GreyOf(i));
+  return b;
+}
+
+// Keyence VK4 as a VK-X writes a single measurement: header, offset table, a 304-byte measurement-conditions block
+// (pixel 0.5 um x 0.75 um, z 1 nm per digit, stated in picometres), the light image (16-bit, the grey levels) and
+// the height image (32-bit counts of 1 nm: heights are counted from the map's lowest point, as the instrument
+// counts from the bottom of its scan; invalid points, which VK4 cannot mark, become count 0), then the title and
+// the lens name as UTF-16 strings. `map` gives the grid; its dx, dy are ignored.
+inline constexpr double kVk4DxMm = 0.0005, kVk4DyMm = 0.00075, kVk4StepMm = 1e-6;
+inline std::string BuildVk4(const HeightMap& map) {
+  const std::size_t n = map.z_mm.size();
+  std::string b;
+  PutText(b, 0, "VK4_");
+  PutLe<std::uint32_t>(b, 4, 0x01000003u);
+  PutLe<std::uint32_t>(b, 8, 0u);
+  const std::uint32_t conditions = 84, light = conditions + 304, height = light + 796 + 2 * static_cast<std::uint32_t>(n);
+  const std::uint32_t strings = height + 796 + 4 * static_cast<std::uint32_t>(n);
+  PutLe<std::uint32_t>(b, 12, conditions);
+  PutLe<std::uint32_t>(b, 12 + 4 * 3, light);
+  PutLe<std::uint32_t>(b, 12 + 4 * 6, height);
+  PutLe<std::uint32_t>(b, 12 + 4 * 16, strings);
+  PutLe<std::uint32_t>(b, conditions, 304u);
+  PutLe<std::uint32_t>(b, conditions + 4, 2024u);
+  PutLe<std::uint32_t>(b, conditions + 168, 500000u);
+  PutLe<std::uint32_t>(b, conditions + 172, 750000u);
+  PutLe<std::uint32_t>(b, conditions + 176, 1000u);
+  const auto image_header = [&](std::uint32_t at, std::uint32_t bits) {
+    PutLe<std::uint32_t>(b, at, static_cast<std::uint32_t>(map.size_x));
+    PutLe<std::uint32_t>(b, at + 4, static_cast<std::uint32_t>(map.size_y));
+    PutLe<std::uint32_t>(b, at + 8, bits);
+    PutLe<std::uint32_t>(b, at + 12, 0u);
+    PutLe<std::uint32_t>(b, at + 16, static_cast<std::uint32_t>(n * bits / 8));
+    PutLe<std::uint32_t>(b, at + 24, bits == 16 ? 65535u : 0xFFFFFFFFu);
+  };
+  image_header(light, 16);
+  for (std::size_t i = 0; i < n; ++i) PutLe<std::uint16_t>(b, light + 796 + 2 * i, GreyOf(i));
+  image_header(height, 32);
+  double lowest = INFINITY;
+  for (const double z : map.z_mm) lowest = std::isfinite(z) ? std::min(lowest, z) : lowest;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double z = map.z_mm[i];
+    const double count = std::isfinite(z) ? std::round((z - lowest) / kVk4StepMm) : 0.0;
+    PutLe<std::uint32_t>(b, height + 796 + 4 * i, static_cast<std::uint32_t>(count));
+  }
+  std::size_t at = strings;
+  for (const std::string_view text : {std::string_view("calotte"), std::string_view("50x")}) {
+    PutLe<std::uint32_t>(b, at, static_cast<std::uint32_t>(text.size()));
+    at += 4;
+    for (const char c : text) {
+      PutLe<std::uint16_t>(b, at, static_cast<std::uint16_t>(c));
+      at += 2;
+    }
+  }
   return b;
 }
 

@@ -42,7 +42,8 @@ PixelType FromOiio(OIIO::TypeDesc type) {
 
 class OiioReader final : public ImageFileReader {
  public:
-  explicit OiioReader(std::unique_ptr<OIIO::ImageInput> input) : input_(std::move(input)) {
+  explicit OiioReader(std::unique_ptr<OIIO::ImageInput> input, int subimage = 0)
+      : input_(std::move(input)), subimage_(subimage) {
     const OIIO::ImageSpec& spec = input_->spec();
     header_.width = spec.width;
     header_.height = spec.height;
@@ -64,7 +65,7 @@ class OiioReader final : public ImageFileReader {
 
   bool ReadPixels(int first_channel, int end_channel, PixelType as, void* data, std::string* error) override {
     try {
-      const bool read = input_->read_image(0, 0, first_channel, end_channel, ToOiio(as), data);
+      const bool read = input_->read_image(subimage_, 0, first_channel, end_channel, ToOiio(as), data);
       *error = input_->geterror();
       return read;
     } catch (const std::exception& e) {
@@ -75,6 +76,7 @@ class OiioReader final : public ImageFileReader {
 
  private:
   std::unique_ptr<OIIO::ImageInput> input_;
+  int subimage_;
   ImageHeader header_;
 };
 
@@ -86,6 +88,25 @@ std::unique_ptr<ImageFileReader> Open(const std::filesystem::path& path, std::st
       return nullptr;
     }
     return std::make_unique<OiioReader>(std::move(input));
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return nullptr;
+  }
+}
+
+std::unique_ptr<ImageFileReader> OpenSubimage(const std::filesystem::path& path, int subimage, std::string* error) {
+  try {
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path.string());
+    if (!input) {
+      *error = OIIO::geterror();
+      return nullptr;
+    }
+    if (!input->seek_subimage(subimage, 0)) {
+      *error = "no image " + std::to_string(subimage) + " in the file";
+      input->close();
+      return nullptr;
+    }
+    return std::make_unique<OiioReader>(std::move(input), subimage);
   } catch (const std::exception& e) {
     *error = e.what();
     return nullptr;
@@ -119,7 +140,7 @@ ImageWriteResult Write(const std::filesystem::path& path, const ImageWriteSpec& 
   }
 }
 
-constexpr ImageCodec kCodec{&Open, &Write};
+constexpr ImageCodec kCodec{&Open, &Write, &OpenSubimage};
 
 }  // namespace
 }  // namespace fvm::imaging

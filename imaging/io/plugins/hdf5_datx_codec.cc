@@ -1,0 +1,364 @@
+// The Zygo DATX codec on HDF5's C library, built as the plugin libfvm_datx_hdf5.so (see imaging/io/datx_codec.h).
+// The file is opened from memory (HDF5's core driver over the bytes fvm read), every dataset and attribute is
+// checked for its class, rank and size before anything is allocated, and every failure comes back as text. HDF5's
+// own error printing is turned off: fvm says what was wrong.
+//
+// HDF5 1.10 is not safe on damaged files: three changed header bytes made it read through wild pointers (in
+// H5Aopen_by_idx, in its global heap under H5Aread). So the reading runs in a child process (fork), which sends
+// what it read back through a pipe (datx_wire.h): a damaged file that crashes or hangs HDF5 kills the child, and
+// fvm refuses the file instead of crashing. HDF5 (Debian's serial build) is not thread-safe either: one read at a
+// time.
+
+#include <hdf5.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "imaging/io/datx_codec.h"
+#include "imaging/io/plugins/datx_wire.h"
+
+namespace fvm::imaging {
+namespace {
+
+// Attributes beyond these sizes are not what DATX stores; they are skipped, never read.
+constexpr hssize_t kLargestAttribute = 64;
+constexpr std::size_t kLongestText = 4096;
+
+// Closes an HDF5 identifier when it goes out of scope.
+class Handle {
+ public:
+  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  hid_t get() const { return id_; }
+  bool ok() const { return id_ >= 0; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+// The number of elements of a dataspace, or -1 when it is not simple.
+hssize_t Points(hid_t space) { return H5Sis_simple(space) > 0 ? H5Sget_simple_extent_npoints(space) : -1; }
+
+// The first string of a string attribute (fixed or variable length).
+bool ReadText(hid_t attribute, hid_t type, hid_t space, std::string* text) {
+  const hssize_t n = Points(space);
+  if (n < 1 || n > kLargestAttribute) return false;
+  Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
+  if (H5Tis_variable_str(type) > 0) {
+    if (H5Tset_size(memory.get(), H5T_VARIABLE) < 0) return false;
+    std::vector<char*> strings(static_cast<std::size_t>(n), nullptr);
+    if (H5Aread(attribute, memory.get(), strings.data()) < 0) return false;
+    if (strings[0]) *text = std::string(strings[0], strnlen(strings[0], kLongestText));
+    H5Dvlen_reclaim(memory.get(), space, H5P_DEFAULT, strings.data());
+    return true;
+  }
+  const std::size_t size = H5Tget_size(type);
+  if (size == 0 || size > kLongestText || H5Tset_size(memory.get(), size) < 0) return false;
+  std::vector<char> buffer(size * static_cast<std::size_t>(n));
+  if (H5Aread(attribute, memory.get(), buffer.data()) < 0) return false;
+  *text = std::string(buffer.data(), strnlen(buffer.data(), size));
+  return true;
+}
+
+// A converter: the compound's Category and BaseUnit strings and its Parameters (variable-length doubles), each
+// read only when the file's compound has it in a form read here.
+bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* converter) {
+  const hssize_t n = Points(space);
+  if (n < 1 || n > kLargestAttribute) return false;
+  struct Member {
+    const char* name;
+    bool variable = false;
+    std::size_t size = 0, offset = 0;
+    bool present = false;
+  };
+  Member members[3] = {{"Category"}, {"BaseUnit"}, {"Parameters"}};
+  Handle memory(H5Tcreate(H5T_COMPOUND, 1024), H5Tclose);
+  std::size_t offset = 0;
+  std::vector<hid_t> member_types;
+  for (Member& m : members) {
+    const int index = H5Tget_member_index(type, m.name);
+    if (index < 0) continue;
+    const hid_t file_member = H5Tget_member_type(type, static_cast<unsigned>(index));
+    if (file_member < 0) continue;
+    const H5T_class_t member_class = H5Tget_class(file_member);
+    hid_t memory_member = -1;
+    if (member_class == H5T_STRING) {
+      memory_member = H5Tcopy(H5T_C_S1);
+      m.variable = H5Tis_variable_str(file_member) > 0;
+      m.size = m.variable ? sizeof(char*) : H5Tget_size(file_member);
+      if (m.size == 0 || m.size > 256 || H5Tset_size(memory_member, m.variable ? H5T_VARIABLE : m.size) < 0) {
+        H5Tclose(memory_member);
+        memory_member = -1;
+      }
+    } else if (member_class == H5T_VLEN && std::strcmp(m.name, "Parameters") == 0) {
+      memory_member = H5Tvlen_create(H5T_NATIVE_DOUBLE);
+      m.size = sizeof(hvl_t);
+    }
+    H5Tclose(file_member);
+    if (memory_member < 0) continue;
+    offset = (offset + 7) / 8 * 8;
+    m.offset = offset;
+    m.present = H5Tinsert(memory.get(), m.name, offset, memory_member) >= 0;
+    offset += m.size;
+    member_types.push_back(memory_member);
+  }
+  bool read = false;
+  if (offset > 0 && H5Tset_size(memory.get(), (offset + 7) / 8 * 8) >= 0) {
+    const std::size_t record = (offset + 7) / 8 * 8;
+    std::vector<unsigned char> buffer(record * static_cast<std::size_t>(n), 0);
+    if (H5Aread(attribute, memory.get(), buffer.data()) >= 0) {
+      read = true;
+      for (const Member& m : members) {
+        if (!m.present) continue;
+        const unsigned char* p = buffer.data() + m.offset;
+        if (std::strcmp(m.name, "Parameters") == 0) {
+          hvl_t vl;
+          std::memcpy(&vl, p, sizeof vl);
+          const double* values = static_cast<const double*>(vl.p);
+          if (values && vl.len <= static_cast<std::size_t>(kLargestAttribute)) {
+            converter->parameters.assign(values, values + vl.len);
+          }
+          continue;
+        }
+        std::string text;
+        if (m.variable) {
+          const char* s = nullptr;
+          std::memcpy(&s, p, sizeof s);
+          if (s) text.assign(s, strnlen(s, kLongestText));
+        } else {
+          text.assign(reinterpret_cast<const char*>(p), strnlen(reinterpret_cast<const char*>(p), m.size));
+        }
+        (std::strcmp(m.name, "Category") == 0 ? converter->category : converter->base_unit) = text;
+      }
+      H5Dvlen_reclaim(memory.get(), space, H5P_DEFAULT, buffer.data());
+    }
+  }
+  for (const hid_t t : member_types) H5Tclose(t);
+  return read;
+}
+
+// The attributes DATX gives a surface, each read when present in a form read here: numbers, strings, converters.
+// They are opened by name: HDF5 1.10's walk over all attributes by index crashed on damaged attribute tables.
+void ReadAttributes(hid_t dataset, DatxDataset* out) {
+  static constexpr const char* kNames[] = {"Unit",       "No Data",          "X Converter",
+                                           "Y Converter", "Z Converter",     "Wavelength",
+                                           "Interferometric Scale Factor",   "Obliquity Factor"};
+  for (const char* name : kNames) {
+    if (H5Aexists(dataset, name) <= 0) continue;
+    Handle attribute(H5Aopen(dataset, name, H5P_DEFAULT), H5Aclose);
+    if (!attribute.ok()) continue;
+    Handle type(H5Aget_type(attribute.get()), H5Tclose);
+    Handle space(H5Aget_space(attribute.get()), H5Sclose);
+    if (!type.ok() || !space.ok()) continue;
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    if (type_class == H5T_INTEGER || type_class == H5T_FLOAT) {
+      const hssize_t n = Points(space.get());
+      if (n < 1 || n > kLargestAttribute) continue;
+      std::vector<double> values(static_cast<std::size_t>(n));
+      if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()) >= 0) out->numbers[name] = std::move(values);
+    } else if (type_class == H5T_STRING) {
+      std::string text;
+      if (ReadText(attribute.get(), type.get(), space.get(), &text)) out->texts[name] = std::move(text);
+    } else if (type_class == H5T_COMPOUND) {
+      DatxConverter converter;
+      if (ReadConverter(attribute.get(), type.get(), space.get(), &converter)) out->converters[name] = converter;
+    }
+  }
+}
+
+std::string TypeName(hid_t type) {
+  const H5T_class_t type_class = H5Tget_class(type);
+  const std::size_t bits = 8 * H5Tget_size(type);
+  if (type_class == H5T_FLOAT) return "float" + std::to_string(bits);
+  if (type_class == H5T_INTEGER) return (H5Tget_sign(type) == H5T_SGN_NONE ? "uint" : "int") + std::to_string(bits);
+  return "not a number";
+}
+
+// The dataset at `path`, two-dimensional and numeric, of at most `max_points` values.
+bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, DatxDataset* out, std::string* error) {
+  Handle dataset(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!dataset.ok()) {
+    *error = path + " cannot be opened as a dataset";
+    return false;
+  }
+  out->path = path;
+  Handle type(H5Dget_type(dataset.get()), H5Tclose);
+  Handle space(H5Dget_space(dataset.get()), H5Sclose);
+  if (!type.ok() || !space.ok()) {
+    *error = path + " has an unreadable type or shape";
+    return false;
+  }
+  out->type_name = TypeName(type.get());
+  const H5T_class_t type_class = H5Tget_class(type.get());
+  if (type_class != H5T_INTEGER && type_class != H5T_FLOAT) {
+    *error = path + " holds " + out->type_name + ", not numbers";
+    return false;
+  }
+  hsize_t dims[2] = {0, 0};
+  if (H5Sis_simple(space.get()) <= 0 || H5Sget_simple_extent_ndims(space.get()) != 2 ||
+      H5Sget_simple_extent_dims(space.get(), dims, nullptr) != 2) {
+    *error = path + " is not a two-dimensional dataset";
+    return false;
+  }
+  out->rows = dims[0];
+  out->cols = dims[1];
+  if (dims[0] == 0 || dims[1] == 0 || dims[0] > max_points || dims[1] > max_points / dims[0]) {
+    *error = path + " says " + std::to_string(dims[1]) + " x " + std::to_string(dims[0]) +
+             " points, more than fvm reads from a file of this size (" + std::to_string(max_points) + ")";
+    return false;
+  }
+  ReadAttributes(dataset.get(), out);
+  out->values.resize(static_cast<std::size_t>(dims[0] * dims[1]));
+  if (H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->values.data()) < 0) {
+    *error = path + ": its " + std::to_string(dims[1]) + " x " + std::to_string(dims[0]) + " values cannot be read";
+    out->values.clear();
+    return false;
+  }
+  return true;
+}
+
+bool IsGroup(hid_t file, const char* path) {
+  H5O_info_t info;
+  return H5Lexists(file, path, H5P_DEFAULT) > 0 && H5Oget_info_by_name2(file, path, &info, H5O_INFO_BASIC,
+                                                                         H5P_DEFAULT) >= 0 && info.type == H5O_TYPE_GROUP;
+}
+
+// Where the channel `what` ("Surface", "Intensity") is: the first link of /Data/<what> by name, else
+// /Measurement/<what>; empty when neither exists.
+std::string ChannelPath(hid_t file, const std::string& what) {
+  const std::string group = "/Data/" + what;
+  if (IsGroup(file, "/Data") && IsGroup(file, group.c_str())) {
+    char name[512] = {};
+    if (H5Lget_name_by_idx(file, group.c_str(), H5_INDEX_NAME, H5_ITER_INC, 0, name, sizeof name, H5P_DEFAULT) > 0 &&
+        std::strlen(name) < sizeof name - 1) {
+      return group + "/" + name;
+    }
+  }
+  const std::string nx2 = "/Measurement/" + what;
+  if (IsGroup(file, "/Measurement") && H5Lexists(file, nx2.c_str(), H5P_DEFAULT) > 0) return nx2;
+  return {};
+}
+
+bool ReadHere(const std::string& bytes, std::uint64_t max_points, DatxContent* content, std::string* error) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  Handle access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  if (!access.ok() || H5Pset_fapl_core(access.get(), 1 << 16, 0) < 0 ||
+      H5Pset_file_image(access.get(), const_cast<char*>(bytes.data()), bytes.size()) < 0) {
+    *error = "HDF5 could not take the file's bytes";
+    return false;
+  }
+  Handle file(H5Fopen("datx", H5F_ACC_RDONLY, access.get()), H5Fclose);
+  if (!file.ok()) {
+    *error = "HDF5 cannot open it (a damaged HDF5 file)";
+    return false;
+  }
+  const std::string surface = ChannelPath(file.get(), "Surface");
+  if (surface.empty()) {
+    *error = "has neither a /Data/Surface group nor a /Measurement/Surface dataset: an HDF5 file, not a Zygo DATX";
+    return false;
+  }
+  if (!ReadDataset(file.get(), surface, max_points, &content->surface, error)) return false;
+  const std::string intensity = ChannelPath(file.get(), "Intensity");
+  if (!intensity.empty()) {
+    DatxDataset image;
+    std::string ignored;
+    if (ReadDataset(file.get(), intensity, max_points, &image, &ignored)) content->intensity = std::move(image);
+  }
+  return true;
+}
+
+// A read that takes longer than 5 s and 1 s per 4 MB of file is taken for HDF5 caught in a loop by a damaged file
+// (Mx's largest exports, 16 MB, read in well under a second).
+int LongestReadMs(std::size_t file_bytes) { return 5000 + static_cast<int>(file_bytes / (4u << 20)) * 1000; }
+
+// ReadHere in a child process: its answer (or its error) comes back through a pipe.
+bool Read(const std::string& bytes, std::uint64_t max_points, DatxContent* content, std::string* error) {
+  static std::mutex hdf5_mutex;
+  const std::lock_guard<std::mutex> lock(hdf5_mutex);
+  // Initialised once here, so that every child starts with the library ready, quiet about errors.
+  static const bool initialised = H5open() >= 0 && H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr) >= 0;
+  if (!initialised) {
+    *error = "the HDF5 library could not be initialised";
+    return false;
+  }
+  const int longest_ms = LongestReadMs(bytes.size());
+  int fds[2];
+  if (pipe(fds) != 0) {
+    *error = "no pipe for the HDF5 reader (too many open files?)";
+    return false;
+  }
+  const pid_t child = fork();
+  if (child < 0) {
+    close(fds[0]), close(fds[1]);
+    *error = "no process for the HDF5 reader (fork failed)";
+    return false;
+  }
+  if (child == 0) {
+    close(fds[0]);
+    DatxContent read;
+    std::string read_error;
+    const bool ok = ReadHere(bytes, max_points, &read, &read_error);
+    const std::string answer = ok ? EncodeDatx(read) : std::string(1, '\0') + read_error;
+    for (std::size_t sent = 0; sent < answer.size();) {
+      const ssize_t n = write(fds[1], answer.data() + sent, answer.size() - sent);
+      if (n <= 0) _exit(2);
+      sent += static_cast<std::size_t>(n);
+    }
+    _exit(0);  // no exit handlers: they belong to the parent
+  }
+  close(fds[1]);
+  std::string answer;
+  bool timed_out = false;
+  char buffer[1 << 16];
+  for (;;) {
+    pollfd ready{fds[0], POLLIN, 0};
+    const int polled = poll(&ready, 1, longest_ms);
+    if (polled == 0) {
+      timed_out = true;
+      kill(child, SIGKILL);
+      break;
+    }
+    if (polled < 0) continue;  // interrupted by a signal
+    const ssize_t n = read(fds[0], buffer, sizeof buffer);
+    if (n <= 0) break;
+    answer.append(buffer, static_cast<std::size_t>(n));
+  }
+  close(fds[0]);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0) {
+  }
+  if (timed_out || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    *error = timed_out ? "HDF5 did not finish reading it in " + std::to_string(longest_ms / 1000) +
+                             " s (a damaged HDF5 file)"
+                       : "HDF5 failed on it (the HDF5 library crashed reading a damaged HDF5 file)";
+    return false;
+  }
+  if (!answer.empty() && answer[0] == '\0') {
+    *error = answer.substr(1);
+    return false;
+  }
+  if (!DecodeDatx(answer, content)) {
+    *error = "the HDF5 reader's answer was cut short";
+    return false;
+  }
+  return true;
+}
+
+constexpr DatxCodec kCodec{&Read};
+
+}  // namespace
+}  // namespace fvm::imaging
+
+extern "C" __attribute__((visibility("default"))) const void* fvm_datx_codec_v1() { return &fvm::imaging::kCodec; }

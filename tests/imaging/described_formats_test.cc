@@ -1,0 +1,205 @@
+// The readers written from published descriptions alone, with no instrument file at hand (Keyence VK4, Zygo DATX,
+// Olympus LEXT): files laid out the way the descriptions say the instruments write them read back to half a
+// quantisation step, with their pixel sizes, invalid points and intensity; truncated files, absurd dimensions and
+// wrong signatures are refused naming the file and the field. Gwyddion's reading of the same files is compared in
+// gwyddion_comparison_test.cc.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/file_io.h"
+#include "core/input_error.h"
+#include "imaging/io/keyence_vk4.h"
+#include "imaging/io/olympus_lext.h"
+#include "imaging/io/surface_file.h"
+#include "imaging/io/zygo_datx.h"
+#include "tests/support/datx_files.h"
+#include "tests/support/instrument_files.h"
+#include "tests/support/lext_files.h"
+#include "tests/support/surface_samples.h"
+#include "tests/support/test_support.h"
+
+namespace fvm::imaging {
+namespace {
+
+using fvm::testing::TempDir;
+using testing::SampleMap;
+
+template <typename Parse>
+std::string Refusal(Parse parse, const std::string& bytes, const std::string& name) {
+  try {
+    parse(bytes, name);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << name << ": read without an error";
+  return {};
+}
+
+double Lowest(const HeightMap& map) {
+  double lowest = INFINITY;
+  for (const double z : map.z_mm) lowest = std::isfinite(z) ? std::min(lowest, z) : lowest;
+  return lowest;
+}
+
+TEST(KeyenceVk4, ReadsHeightCountsTimesTheDigitWithTheLightImage) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap read = ParseKeyenceVk4(testing::BuildVk4(map), "a.vk4");
+  ASSERT_EQ(read.size_x, 7);
+  ASSERT_EQ(read.size_y, 5);
+  EXPECT_DOUBLE_EQ(read.dx_mm, testing::kVk4DxMm);
+  EXPECT_DOUBLE_EQ(read.dy_mm, testing::kVk4DyMm);
+  const double lowest = Lowest(map);
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    // VK4 marks no invalid point: the writer's count 0 reads as the lowest height, 0.
+    const double expected = std::isfinite(map.z_mm[i]) ? map.z_mm[i] - lowest : 0.0;
+    EXPECT_NEAR(read.z_mm[i], expected, 0.5 * testing::kVk4StepMm + 1e-15) << "point " << i;
+  }
+  ASSERT_EQ(read.intensity.size(), map.z_mm.size());
+  for (std::size_t i = 0; i < read.intensity.size(); ++i) EXPECT_EQ(read.intensity[i], testing::GreyOf(i));
+  EXPECT_EQ(read.source, "Keyence VK4, calotte");
+
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "scan.bin", testing::BuildVk4(map));  // found by content, not by name
+  EXPECT_EQ(ReadSurface(dir.path() / "scan.bin").format, SurfaceFormat::kVk4);
+}
+
+TEST(KeyenceVk4, TruncatedAbsurdAndForeignFilesAreRefusedNamingTheField) {
+  const std::string good = testing::BuildVk4(SampleMap(6, 4));
+  const std::size_t strings = 84 + 304 + 796 + 2 * 24 + 796 + 4 * 24;  // the title is optional
+  for (std::size_t size = 0; size < strings; size += 1 + size / 7) {
+    const std::string message = Refusal(ParseKeyenceVk4, good.substr(0, size), "cut.vk4");
+    EXPECT_NE(message.find("cut.vk4"), std::string::npos) << "cut at " << size << ": " << message;
+  }
+  std::string wide = good;
+  testing::PutLe<std::uint32_t>(wide, 84 + 304 + 796 + 48, 0xFFFFFFFFu);  // the height image's width
+  EXPECT_NE(Refusal(ParseKeyenceVk4, wide, "a.vk4").find("height image says 4294967295 x 4"), std::string::npos);
+  std::string depth = good;
+  testing::PutLe<std::uint32_t>(depth, 84 + 304 + 796 + 48 + 8, 12u);
+  EXPECT_NE(Refusal(ParseKeyenceVk4, depth, "a.vk4").find("bit depth 12"), std::string::npos);
+  std::string pixel = good;
+  testing::PutLe<std::uint32_t>(pixel, 84 + 168, 0u);
+  EXPECT_NE(Refusal(ParseKeyenceVk4, pixel, "a.vk4").find("x_length_per_pixel"), std::string::npos);
+  std::string offset = good;
+  testing::PutLe<std::uint32_t>(offset, 12 + 24, 0x7FFFFFFFu);
+  EXPECT_NE(Refusal(ParseKeyenceVk4, offset, "a.vk4").find("offset table's height entry"), std::string::npos);
+  std::string assembled = good;
+  assembled[8] = 1;
+  EXPECT_NE(Refusal(ParseKeyenceVk4, assembled, "a.vk4").find("file type"), std::string::npos);
+  EXPECT_NE(Refusal(ParseKeyenceVk4, std::string(4096, 'x'), "a.vk4").find("'VK4_'"), std::string::npos);
+}
+
+// The heights of a DATX are float32 nanometres (or fringes): they read back to float32's rounding.
+void ExpectDatxReadBack(const HeightMap& written, const HeightMap& read) {
+  ASSERT_EQ(read.size_x, written.size_x);
+  ASSERT_EQ(read.size_y, written.size_y);
+  EXPECT_DOUBLE_EQ(read.dx_mm, written.dx_mm);
+  EXPECT_DOUBLE_EQ(read.dy_mm, written.dy_mm);
+  for (std::size_t i = 0; i < written.z_mm.size(); ++i) {
+    if (std::isnan(written.z_mm[i])) {
+      EXPECT_TRUE(std::isnan(read.z_mm[i])) << "point " << i << " was invalid";
+    } else {
+      EXPECT_NEAR(read.z_mm[i], written.z_mm[i], 1e-7 * std::fabs(written.z_mm[i]) + 1e-15) << "point " << i;
+    }
+  }
+}
+
+TEST(ZygoDatx, ReadsNanometresAndFringesWithNoDataAndIntensity) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap read = ParseZygoDatx(testing::BuildDatx(map), "a.datx");
+  ExpectDatxReadBack(map, read);
+  ASSERT_EQ(read.intensity.size(), map.z_mm.size());
+  for (std::size_t i = 0; i < read.intensity.size(); ++i) EXPECT_EQ(read.intensity[i], testing::GreyOf(i));
+  EXPECT_NE(read.source.find("/Data/Surface/{"), std::string::npos) << read.source;
+
+  testing::DatxWriteOptions fringes;
+  fringes.unit = testing::DatxUnit::kFringes;
+  fringes.intensity = false;
+  const HeightMap in_fringes = ParseZygoDatx(testing::BuildDatx(map, fringes), "b.datx");
+  ExpectDatxReadBack(map, in_fringes);
+  EXPECT_TRUE(in_fringes.intensity.empty());
+
+  testing::DatxWriteOptions nx2;
+  nx2.nx2_layout = true;
+  ExpectDatxReadBack(map, ParseZygoDatx(testing::BuildDatx(map, nx2), "c.datx"));
+
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "scan.h5", testing::BuildDatx(map));  // found by its HDF5 signature
+  const Surface surface = ReadSurface(dir.path() / "scan.h5");
+  EXPECT_EQ(surface.format, SurfaceFormat::kDatx);
+  EXPECT_EQ(FormatName(surface.format), "datx");
+}
+
+TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
+  const HeightMap map = SampleMap(6, 4);
+  const std::string good = testing::BuildDatx(map);
+  for (std::size_t size = 0; size < good.size(); size += 1 + size / 5) {
+    const std::string message = Refusal(ParseZygoDatx, good.substr(0, size), "cut.datx");
+    EXPECT_NE(message.find("cut.datx"), std::string::npos) << "cut at " << size << ": " << message;
+  }
+  EXPECT_NE(Refusal(ParseZygoDatx, std::string(4096, 'x'), "a.datx").find("HDF5's signature"), std::string::npos);
+  // An HDF5 file that is not a DATX: no surface.
+  std::string other = good;
+  for (std::size_t at = other.find("Surface"); at != std::string::npos; at = other.find("Surface", at)) {
+    other.replace(at, 7, "Surfacx");
+  }
+  EXPECT_NE(Refusal(ParseZygoDatx, other, "b.datx").find("/Data/Surface"), std::string::npos);
+  // No lateral calibration: the pixel is 0.
+  HeightMap uncalibrated = map;
+  uncalibrated.dx_mm = 0.0;
+  EXPECT_NE(Refusal(ParseZygoDatx, testing::BuildDatx(uncalibrated), "c.datx").find("X Converter"),
+            std::string::npos);
+}
+
+TEST(OlympusLext, ReadsTheHeightPageWithItsInvalidMaskAndIntensity) {
+  const HeightMap map = SampleMap(11, 5);  // 11 columns: the INVALID page's rows end inside a byte
+  const TempDir dir;
+  WriteFileAtomically(dir.path() / "a.lext", testing::BuildLext(map));
+  const Surface surface = ReadSurface(dir.path() / "a.lext");
+  ASSERT_EQ(surface.format, SurfaceFormat::kLext);
+  const HeightMap& read = *surface.height_map;
+  ASSERT_EQ(read.size_x, 11);
+  ASSERT_EQ(read.size_y, 5);
+  EXPECT_DOUBLE_EQ(read.dx_mm, testing::kLextDxMm);
+  EXPECT_DOUBLE_EQ(read.dy_mm, testing::kLextDyMm);
+  const double lowest = Lowest(map);
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isnan(map.z_mm[i])) {
+      EXPECT_TRUE(std::isnan(read.z_mm[i])) << "point " << i << " was invalid";
+    } else {
+      EXPECT_NEAR(read.z_mm[i], map.z_mm[i] - lowest, 0.5 * testing::kLextStepMm + 1e-15) << "point " << i;
+    }
+  }
+  ASSERT_EQ(read.intensity.size(), map.z_mm.size());
+  for (std::size_t i = 0; i < read.intensity.size(); ++i) EXPECT_EQ(read.intensity[i], testing::GreyOf(i));
+}
+
+TEST(OlympusLext, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
+  const TempDir dir;
+  const std::string good = testing::BuildLext(SampleMap(6, 4));
+  const auto refusal = [&](const std::string& bytes, const std::string& file) {
+    WriteFileAtomically(dir.path() / file, bytes);
+    return Refusal([&](const std::string&, const std::string&) { return ReadOlympusLext(dir.path() / file); },
+                   bytes, file);
+  };
+  for (std::size_t size = 1; size < good.size(); size += 1 + size / 3) {
+    const std::string message = refusal(good.substr(0, size), "cut.lext");
+    EXPECT_NE(message.find("cut.lext"), std::string::npos) << "cut at " << size << ": " << message;
+  }
+  std::string no_pixel = good;
+  const std::size_t at = no_pixel.find("125000</HeightDataPerPixelX>");
+  ASSERT_NE(at, std::string::npos);
+  no_pixel.replace(at, 6, "000000");
+  EXPECT_NE(refusal(no_pixel, "a.lext").find("HeightDataPerPixelX"), std::string::npos);
+  std::string no_heights = good;
+  no_heights.replace(no_heights.find("HEIGHT"), 6, "HEIGHX");
+  EXPECT_NE(refusal(no_heights, "b.lext").find("HEIGHT"), std::string::npos);
+  std::string foreign = good;
+  foreign.replace(foreign.find("<TiffTagDescData"), 16, "<SomethingElse_X");
+  EXPECT_NE(refusal(foreign, "c.lext").find("TiffTagDescData"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace fvm::imaging
