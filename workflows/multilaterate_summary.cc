@@ -40,7 +40,7 @@ nlohmann::json StationsJson(const Multilateration& m, const MultilaterateOptions
   return stations;
 }
 
-nlohmann::json Json(const Multilateration& m, const MultilaterateOptions& o,
+nlohmann::json MultilaterationJson(const Multilateration& m, const MultilaterateOptions& o,
                     const std::optional<stage::ResidualSummary>& truth_error) {
   const stage::MultilaterationResult& result = m.result;
   const stage::NetworkGeometry& g = result.geometry;
@@ -104,7 +104,7 @@ std::string Text(const Multilateration& m, const MultilaterateOptions& o,
 Summary Summarize(const Multilateration& m, const MultilaterateOptions& options,
                   const std::optional<stage::ResidualSummary>& truth_error, const std::string& truth_file,
                   const std::string& written) {
-  return {Json(m, options, truth_error), Text(m, options, truth_error, truth_file, written), std::nullopt};
+  return {MultilaterationJson(m, options, truth_error), Text(m, options, truth_error, truth_file, written), std::nullopt};
 }
 
 std::vector<std::string> PointsFileComments(const Multilateration& m, const MultilaterateOptions& o) {
