@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "artefacts/io/batch.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/identify_options.h"
 #include "stage/fvm_stage_models.h"
@@ -26,7 +27,7 @@ void Run(const CompareArgs& args) {
   });
   workflows::Summary summary = workflows::Summarize(comparison, options, args.batch);
   if (args.json) {
-    summary.json["batch"] = args.batch;
+    AddSortedPath(summary.json, "batch", args.batch);
     fmt::print("{}\n", summary.json.dump(2));
   } else {
     fmt::print("{}", summary.text);

@@ -3,6 +3,7 @@
 
 #include <fmt/core.h>
 
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/option_parsing.h"
 #include "fvm/surface_read_args.h"
@@ -29,7 +30,7 @@ void Run(const CorrectArgs& args) {
     fmt::print("{}", corrected.summary.text);
     return;
   }
-  for (const auto& [key, path] : corrected.paths) corrected.summary.json[key] = path;
+  for (const auto& [key, path] : corrected.paths) AddSortedPath(corrected.summary.json, key, path);
   fmt::print("{}\n", corrected.summary.json.dump(2));
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "artefacts/io/batch.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/identify_options.h"
 #include "report/report.h"
@@ -25,7 +26,7 @@ void Run(const DiagnoseArgs& args) {
   workflows::Summary summary = workflows::Summarize(workflows::DiagnoseBatch(batch, options), options, args.batch);
   if (!args.report.empty()) report::Write(args.report, *summary.report);
   if (args.json) {
-    summary.json["batch"] = args.batch;
+    AddSortedPath(summary.json, "batch", args.batch);
     fmt::print("{}\n", summary.json.dump(2));
     return;
   }

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "core/exit_codes.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "stage/tracker.h"
 #include "workflows/multilaterate_summary.h"
@@ -37,7 +38,7 @@ void Run(const MultilaterateCommand& c) {
   std::string written = c.output;
   if (for_verify) written += (written.empty() ? "" : " and ") + c.verify_readings + " (for fvm verify)";
   workflows::Summary summary = workflows::Summarize(m, o, truth_error, o.truth, written);
-  summary.json["readings"] = o.readings;
+  AddSortedPath(summary.json, "readings", o.readings);
   fmt::print("{}", c.json ? summary.json.dump(2) + "\n" : summary.text);
   if (!m.result.converged) {
     throw NotConvergedError(fmt::format("multilateration did not converge in {} iterations", m.result.iterations));

@@ -19,6 +19,12 @@ nlohmann::ordered_json WithPaths(const nlohmann::ordered_json& document, const s
   return out;
 }
 
+void AddSortedPath(nlohmann::ordered_json& document, const std::string& key, const std::string& path) {
+  nlohmann::json sorted = document;
+  sorted[key] = path;
+  document = sorted;
+}
+
 void PrintSummary(const workflows::Summary& summary, bool json, const std::vector<PathKey>& paths) {
   if (json) {
     fmt::print("{}\n", WithPaths(summary.json, paths).dump(2));

@@ -20,6 +20,10 @@ struct PathKey {
 // The summary's document with the paths added.
 nlohmann::ordered_json WithPaths(const nlohmann::ordered_json& document, const std::vector<PathKey>& paths);
 
+// Adds the path of one of the user's files to a document the job built with sorted keys (nlohmann::json), in its
+// sorted place, as the command has always printed it.
+void AddSortedPath(nlohmann::ordered_json& document, const std::string& key, const std::string& path);
+
 // Prints the summary's document (with the paths, indented by 2) when `json`, else its text.
 void PrintSummary(const workflows::Summary& summary, bool json, const std::vector<PathKey>& paths = {});
 

@@ -11,6 +11,7 @@
 #include "core/exit_codes.h"
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/machine_options.h"
 #include "fvm/option_parsing.h"
@@ -59,7 +60,7 @@ void RunPieceVerify(PieceVerifyCommand c) {
   const workflows::MachineProblem problem = workflows::LoadMachineProblem(options.machine);
   const workflows::MachinedPieceVerifyResult verified = workflows::VerifyMachinedPiece(problem, options);
   workflows::Summary summary = workflows::Summarize(problem, options, verified);
-  summary.json["data"] = options.machine.data;
+  AddSortedPath(summary.json, "data", options.machine.data);
   if (!c.report.empty()) report::Write(c.report, *summary.report);
   fmt::print("{}", c.json ? summary.json.dump(2) + "\n" : summary.text);
   const stage::IdentificationResult& r = verified.verification.result.identified;
@@ -77,7 +78,7 @@ void RunPieceSimulate(const PieceSimulateCommand& c) {
   const workflows::SimulatedTestPiece simulated = workflows::SimulateTestPiece(c.options);
   workflows::WriteFiles(simulated, c.output);
   workflows::Summary summary = workflows::Summarize(simulated, c.options, c.output);
-  summary.json["output"] = c.output;
+  AddSortedPath(summary.json, "output", c.output);
   fmt::print("{}", c.json ? summary.json.dump(2) + "\n" : summary.text);
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/input_error.h"
 #include "core/progress.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/identify_options.h"
 #include "fvm/machine_options.h"
@@ -25,7 +26,7 @@ struct UncertaintyCommand {
 
 // Writes the summary's report when asked and prints it, its JSON naming DATA.
 void ShowUncertainty(const UncertaintyCommand& c, workflows::Summary summary) {
-  summary.json["data"] = c.options.machine.data;
+  AddSortedPath(summary.json, "data", c.options.machine.data);
   if (!c.report.empty() && summary.report) report::Write(c.report, *summary.report);
   fmt::print("{}", c.json ? summary.json.dump(2) + "\n" : summary.text);
 }

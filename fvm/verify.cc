@@ -5,6 +5,7 @@
 
 #include "core/exit_codes.h"
 #include "core/file_io.h"
+#include "fvm/summary_output.h"
 #include "fvm/commands.h"
 #include "fvm/machine_options.h"
 #include "workflows/verify_summary.h"
@@ -25,7 +26,7 @@ void Run(VerifyCommand command) {
   const workflows::MachineProblem problem = workflows::LoadMachineProblem(options.machine);
   const workflows::MachineVerification verified = workflows::VerifyMachine(problem, options);
   workflows::Summary summary = workflows::Summarize(problem, options, verified, command.output);
-  summary.json["data"] = options.machine.data;
+  AddSortedPath(summary.json, "data", options.machine.data);
   if (!command.report.empty()) report::Write(command.report, *summary.report);
   if (!command.output.empty()) {
     nlohmann::json model = workflows::MachineModelJson(problem, options, verified);

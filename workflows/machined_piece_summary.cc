@@ -147,7 +147,7 @@ Summary SummarizeDesign(const artefacts::MachinedPieceDescription& piece, const 
     ++per_kind[std::string(artefacts::FeatureKindName(p.kind))];
   }
   Summary s;
-  s.json = {{"points", points.size()}, {"features", piece.features.size()},
+  s.json = nlohmann::json{{"points", points.size()}, {"features", piece.features.size()},
             {"envelope_mm", {piece.envelope.x(), piece.envelope.y(), piece.envelope.z()}},
             {"series", per_series}, {"points_by_kind", per_kind}};
   s.text = fmt::format("test piece {:.0f} x {:.0f} x {:.0f} mm: {} features, {} probe points{}\n", piece.envelope.x(),

@@ -125,7 +125,7 @@ void WriteFiles(const SimulatedTestPiece& simulated, const std::filesystem::path
 
 Summary Summarize(const SimulatedTestPiece& simulated, const SimulateTestPieceOptions& o, const std::string& output) {
   Summary s;
-  s.json = {{"points", simulated.measured.points.size()}, {"errors", ErrorsName(o)},
+  s.json = nlohmann::json{{"points", simulated.measured.points.size()}, {"errors", ErrorsName(o)},
             {"cmm_noise_um", o.noise_um}, {"seed", o.seed}, {"datum", PoseJson(o.datum, nullptr)}};
   s.text = fmt::format("simulated the test piece into {}: {} points ({}), errors {}, CMM noise {} um, seed {}\n", output,
                        simulated.measured.points.size(), o.points, ErrorsName(o), o.noise_um, o.seed);
