@@ -1,5 +1,6 @@
 #include "imaging/io/x3p.h"
 
+#include <algorithm>
 #include <bit>
 #include <cctype>
 #include <chrono>
@@ -192,6 +193,108 @@ std::string Describe(const pugi::xml_node& root) {
 
 }  // namespace
 
+// A surface's values as the file holds them, before Offset and Increment, and its validity bits (empty: all valid).
+struct X3pPoints {
+  std::vector<double> raw;
+  std::vector<bool> valid;
+};
+
+// The heights of a <DataLink>: the binary point file (and the validity bits, when linked), sizes and MD5 sums
+// checked against main.xml.
+X3pPoints ReadX3pLinkedPoints(const std::string& name, const ZipReader& zip, const X3pArchiveLayout& layout,
+                              const pugi::xml_node link, const Axis& cz, std::size_t n, const std::string& points_said,
+                              std::vector<std::string>& notes) {
+  std::vector<double> raw;
+  std::vector<bool> valid;
+  const std::string data_file =
+      layout.Entry(zip, std::string(Text(Required(name, link, "PointDataLink", "Record3/DataLink"))));
+  if (!zip.Has(data_file))
+    FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
+  const std::size_t type_size = TypeSize(cz.data_type);
+  const std::size_t expected = n * type_size;
+  if (zip.DeclaredSize(data_file) != expected) {
+    FailReading(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
+                          " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
+                          " bytes; " + kX3pReexport);
+  }
+  const std::string data = zip.Read(data_file, expected);
+  if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData");
+      X3pElementGiven(md5, "Record3/DataLink", notes)) {
+    VerifyMd5(name, data, Text(md5), data_file, "main.xml <MD5ChecksumPointData>");
+  }
+  raw.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const char* p = data.data() + i * type_size;
+    switch (cz.data_type) {
+      case 'I':
+        raw[i] = LoadBytes<std::int16_t>(p);
+        break;
+      case 'L':
+        raw[i] = LoadBytes<std::int32_t>(p);
+        break;
+      case 'F':
+        raw[i] = LoadBytes<float>(p);
+        break;
+      default:
+        raw[i] = LoadBytes<double>(p);
+        break;
+    }
+  }
+  if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink");
+      X3pElementGiven(valid_link, "Record3/DataLink", notes)) {
+    const std::string valid_file = layout.Entry(zip, std::string(Text(valid_link)));
+    if (!zip.Has(valid_file))
+      FailReading(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
+    const std::size_t needed = (n + 7) / 8;
+    const std::size_t declared = zip.DeclaredSize(valid_file);
+    // A few writers pad the bit file; more than twice the size it needs is a lie about the sizes.
+    if (declared < needed || declared > 2 * needed + 64) {
+      FailReading(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
+                            " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
+    }
+    const std::string bits = zip.Read(valid_file, declared);
+    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints");
+        X3pElementGiven(md5, "Record3/DataLink", notes)) {
+      VerifyMd5(name, bits, Text(md5), valid_file, "main.xml <MD5ChecksumValidPoints>");
+    }
+    valid.resize(n);
+    // Point i is bit (i % 8) of byte i / 8, least significant bit first.
+    for (std::size_t i = 0; i < n; ++i) valid[i] = (static_cast<unsigned char>(bits[i / 8]) >> (i % 8)) & 1u;
+  }
+  return {std::move(raw), std::move(valid)};
+}
+
+// The heights of a <DataList>: one <Datum> per point, empty for an invalid one.
+std::vector<double> ReadX3pDataList(const std::string& name, const pugi::xml_node list, std::size_t n,
+                                    const std::string& points_said) {
+  std::vector<double> raw;
+  std::size_t count = 0;
+  for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
+    if (datum.type() == pugi::node_element && LocalName(datum) == "Datum") ++count;
+  }
+  if (count != n) {
+    FailReading(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " +
+                          kX3pReexport);
+  }
+  raw.resize(n);
+  std::size_t i = 0;
+  for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
+    if (datum.type() != pugi::node_element || LocalName(datum) != "Datum") continue;
+    const std::string_view text = Text(datum);
+    if (text.empty()) {  // an empty Datum is an invalid point
+      raw[i++] = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
+    const std::optional<double> value = ParseDouble(text);
+    if (!value) {
+      FailReading(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
+                            "', not a number; " + kX3pReexport);
+    }
+    raw[i++] = *value;
+  }
+  return raw;
+}
+
 HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const ZipReader zip(std::move(bytes), name);
   const X3pArchiveLayout layout = LocateX3pMainXml(zip, name);
@@ -257,89 +360,11 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   const std::string points_said = "MatrixDimension says " + std::to_string(size_x) + " x " + std::to_string(size_y) +
                                   " = " + std::to_string(n) + " points";
 
-  std::vector<double> raw;  // the file's values, before Offset and Increment
-  std::vector<bool> valid;
+  X3pPoints points;
   if (const pugi::xml_node link = Child(record3, "DataLink")) {
-    const std::string data_file =
-        layout.Entry(zip, std::string(Text(Required(name, link, "PointDataLink", "Record3/DataLink"))));
-    if (!zip.Has(data_file))
-      FailReading(name, "main.xml links point data '" + data_file + "', which the archive lacks");
-    const std::size_t type_size = TypeSize(cz.data_type);
-    const std::size_t expected = n * type_size;
-    if (zip.DeclaredSize(data_file) != expected) {
-      FailReading(name, points_said + " of type " + std::string(1, cz.data_type) + " (" + std::to_string(expected) +
-                            " bytes), but " + data_file + " holds " + std::to_string(zip.DeclaredSize(data_file)) +
-                            " bytes; " + kX3pReexport);
-    }
-    const std::string data = zip.Read(data_file, expected);
-    if (const pugi::xml_node md5 = Child(link, "MD5ChecksumPointData");
-        X3pElementGiven(md5, "Record3/DataLink", notes)) {
-      VerifyMd5(name, data, Text(md5), data_file, "main.xml <MD5ChecksumPointData>");
-    }
-    raw.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const char* p = data.data() + i * type_size;
-      switch (cz.data_type) {
-        case 'I':
-          raw[i] = LoadBytes<std::int16_t>(p);
-          break;
-        case 'L':
-          raw[i] = LoadBytes<std::int32_t>(p);
-          break;
-        case 'F':
-          raw[i] = LoadBytes<float>(p);
-          break;
-        default:
-          raw[i] = LoadBytes<double>(p);
-          break;
-      }
-    }
-    if (const pugi::xml_node valid_link = Child(link, "ValidPointsLink");
-        X3pElementGiven(valid_link, "Record3/DataLink", notes)) {
-      const std::string valid_file = layout.Entry(zip, std::string(Text(valid_link)));
-      if (!zip.Has(valid_file))
-        FailReading(name, "main.xml links validity bits '" + valid_file + "', which the archive lacks");
-      const std::size_t needed = (n + 7) / 8;
-      const std::size_t declared = zip.DeclaredSize(valid_file);
-      // A few writers pad the bit file; more than twice the size it needs is a lie about the sizes.
-      if (declared < needed || declared > 2 * needed + 64) {
-        FailReading(name, points_said + " (" + std::to_string(needed) + " bytes of validity bits), but " + valid_file +
-                              " holds " + std::to_string(declared) + " bytes; " + kX3pReexport);
-      }
-      const std::string bits = zip.Read(valid_file, declared);
-      if (const pugi::xml_node md5 = Child(link, "MD5ChecksumValidPoints");
-          X3pElementGiven(md5, "Record3/DataLink", notes)) {
-        VerifyMd5(name, bits, Text(md5), valid_file, "main.xml <MD5ChecksumValidPoints>");
-      }
-      valid.resize(n);
-      // Point i is bit (i % 8) of byte i / 8, least significant bit first.
-      for (std::size_t i = 0; i < n; ++i) valid[i] = (static_cast<unsigned char>(bits[i / 8]) >> (i % 8)) & 1u;
-    }
+    points = ReadX3pLinkedPoints(name, zip, layout, link, cz, n, points_said, notes);
   } else if (const pugi::xml_node list = Child(record3, "DataList")) {
-    std::size_t count = 0;
-    for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
-      if (datum.type() == pugi::node_element && LocalName(datum) == "Datum") ++count;
-    }
-    if (count != n) {
-      FailReading(name, points_said + ", but its DataList holds " + std::to_string(count) + " <Datum> elements; " +
-                            kX3pReexport);
-    }
-    raw.resize(n);
-    std::size_t i = 0;
-    for (pugi::xml_node datum = list.first_child(); datum; datum = datum.next_sibling()) {
-      if (datum.type() != pugi::node_element || LocalName(datum) != "Datum") continue;
-      const std::string_view text = Text(datum);
-      if (text.empty()) {  // an empty Datum is an invalid point
-        raw[i++] = std::numeric_limits<double>::quiet_NaN();
-        continue;
-      }
-      const std::optional<double> value = ParseDouble(text);
-      if (!value) {
-        FailReading(name, "main.xml <Datum> " + std::to_string(i + 1) + " is '" + std::string(text.substr(0, 40)) +
-                              "', not a number; " + kX3pReexport);
-      }
-      raw[i++] = *value;
-    }
+    points.raw = ReadX3pDataList(name, list, n, points_said);
   } else {
     FailReading(name, "main.xml <Record3> has neither a DataLink nor a DataList: the file holds no heights; " +
                           std::string(kX3pReexport));
@@ -357,8 +382,8 @@ HeightMap ParseX3p(std::string bytes, const std::string& name) {
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     // [ISO 5436-2] scales every type the same way; floats usually carry increment 1 and offset 0.
-    const double z_m = cz.offset + cz.increment * raw[i];
-    const bool ok = (valid.empty() || valid[i]) && std::isfinite(z_m);
+    const double z_m = cz.offset + cz.increment * points.raw[i];
+    const bool ok = (points.valid.empty() || points.valid[i]) && std::isfinite(z_m);
     map.z_mm[i] = ok ? z_m * kMmPerMetre : std::numeric_limits<double>::quiet_NaN();
   }
   return map;
@@ -439,23 +464,18 @@ double MetresReadingBackAs(double z_mm) {
 
 }  // namespace
 
-std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
-  options.Check();
-  CheckMap(map);
+// The heights of `map` as an X3P of options.z_type holds them: metres for F and D, counts of the increment for I
+// and L (refused beyond the type's range); valid[i] false where the height is not finite.
+X3pPoints X3pFileValues(const HeightMap& map, const X3pWriteOptions& options) {
   const std::size_t n = map.z_mm.size();
   const char code = TypeCode(options.z_type);
-  const double z_increment_m = IsInteger(options.z_type) ? options.z_increment_mm / kMmPerMetre : 1.0;
-
-  // Heights as the file holds them: metres for F and D, counts of the increment for I and L.
   std::vector<bool> valid(n);
   std::vector<double> value(n, 0.0);
   std::int64_t lowest = 0, highest = 0;
   if (options.z_type == X3pDataType::kInt16) lowest = INT16_MIN, highest = INT16_MAX;
   if (options.z_type == X3pDataType::kInt32) lowest = INT32_MIN, highest = INT32_MAX;
-  bool any_invalid = false;
   for (std::size_t i = 0; i < n; ++i) {
     valid[i] = std::isfinite(map.z_mm[i]);
-    any_invalid = any_invalid || !valid[i];
     if (!valid[i]) continue;
     const double z_m = MetresReadingBackAs(map.z_mm[i]);
     if (IsInteger(options.z_type)) {
@@ -470,6 +490,21 @@ std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
       value[i] = z_m;
     }
   }
+  return {std::move(value), std::move(valid)};
+}
+
+std::string BuildX3p(const HeightMap& map, const X3pWriteOptions& options) {
+  options.Check();
+  CheckMap(map);
+  const std::size_t n = map.z_mm.size();
+  const char code = TypeCode(options.z_type);
+  const double z_increment_m = IsInteger(options.z_type) ? options.z_increment_mm / kMmPerMetre : 1.0;
+
+  // Heights as the file holds them: metres for F and D, counts of the increment for I and L.
+  const X3pPoints points = X3pFileValues(map, options);
+  const std::vector<double>& value = points.raw;
+  const std::vector<bool>& valid = points.valid;
+  const bool any_invalid = std::find(valid.begin(), valid.end(), false) != valid.end();
 
   std::string data;
   std::string bits;
