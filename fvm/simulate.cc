@@ -82,7 +82,7 @@ void RegisterSimulate(CLI::App& app) {
   sub->add_option("--period-mm", args->options.batch.period_mm, "its period")->check(Within(kStepMm))->capture_default_str();
   sub->add_option("--height-step-mm", args->options.batch.height_step_mm,
                   "the bar lies on a wedge rising by -step, 0, +step over its length, placement by placement")
-      ->check(Within(-100.0, 100.0, "mm"))
+      ->check(Within(0.0, 100.0, "mm"))
       ->capture_default_str();
   sub->add_flag("--serpentine", args->options.batch.serpentine,
                 "measure every other placement from its last calotte back to its first, so that a drift shows at the "

@@ -114,9 +114,12 @@ bool FvmBatchOptions::Hides(std::string_view effect) const {
 
 void FvmBatchOptions::Check() const {
   if (!(periodic_um >= 0) || !(period_mm > 0)) throw std::invalid_argument("the periodic error must be >= 0 um over a period > 0 mm");
-  if (!(mean_error_um >= 0) || !(noise_um >= 0) || !(pitch_error_um >= 0) || validation_placements < 0 ||
-      !(height_step_mm >= 0) || !(effect_size >= 0) || !(drift_tau_min >= 0)) {
-    throw std::invalid_argument("simulation sizes must be non-negative");
+  const std::pair<const char*, double> sizes[] = {
+      {"--mean-error-um", mean_error_um},   {"--noise-um", noise_um},       {"--pitch-error-um", pitch_error_um},
+      {"--validation-placements", double(validation_placements)},          {"--height-step-mm", height_step_mm},
+      {"--effect-size", effect_size},       {"--drift-tau-min", drift_tau_min}};
+  for (const auto& [option, value] : sizes) {
+    if (!(value >= 0)) throw std::invalid_argument(fmt::format("{} is {}: simulation sizes must be non-negative", option, value));
   }
   const std::vector<std::string> names = HiddenEffectNames();
   std::stringstream list(hidden_effect);

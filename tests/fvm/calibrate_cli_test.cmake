@@ -216,6 +216,7 @@ if(NOT "${e0};${e1}" MATCHES "scale" OR NOT "${e0};${e1}" MATCHES "z_coupling" O
   message(FATAL_ERROR "diagnose --terms on a serpentine wedge: ${e0}, ${e1}; truth ${model} (${serpentine}), diagnosed ${diagnosed}")
 endif()
 fails_naming("unknown hidden effect 'bogus'" simulate fvm-batch -o ${WORK}/bogus --hidden-effect thermal_drift,bogus)
+fails_naming("--height-step-mm" simulate fvm-batch -o ${WORK}/wedge --height-step-mm -1)
 
 # 7. The published stitching strategies under the calibrated stage: a is exact, b = e = f is the whole error of
 #    the row, and c < d grow with the distance to the last tile placed by the encoders.
