@@ -84,6 +84,7 @@ struct Prepared {
   std::array<double, kPoseParameters> pose6{};  // held pose, or where the estimated one starts
   bool has_pose = false;
   Eigen::Matrix<double, kPoseParameters, 1> pose_scale;
+  int threads = 1;  // Linearise's threads (IdentificationOptions::num_threads; 0: all cores)
 };
 
 // The stitched frame of one anchored measurement at the current coefficients (stitched_frame.h): a point the
@@ -115,5 +116,10 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
 // Throws std::invalid_argument naming an observation whose covariance is not positive definite.
 Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& observations,
                  const IdentificationOptions& options);
+
+// `p`, prepared for `before`, made what Prepare gives for `after`: the same layout with some free coefficients
+// fixed (the rank treatment's). Their derivative entries go, the others move to their new slots; the values are
+// the ones Prepare computes, without evaluating every basis and whitening every observation again.
+void Reslot(Prepared& p, const ParameterLayout& before, const ParameterLayout& after);
 
 }  // namespace fvm::stage
