@@ -72,13 +72,30 @@ Eigen::Matrix3d ObservedInformation(const Eigen::Matrix3d& covariance, int index
   return w.whiten.transpose() * w.whiten;
 }
 
+InstrumentMap::InstrumentMap(const double* pose6) : active_(true) {
+  std::copy(pose6, pose6 + kPoseParameters, pose6_.begin());
+  rotation_transposed_ =
+      Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])}.Rotation().transpose();
+  // ToPosedFrame rotates p - t by the rotation vector's negative; differentiated at each unit vector, once.
+  using Jet = ceres::Jet<double, 3>;
+  const Jet minus[3] = {-Jet(pose6[3], 0), -Jet(pose6[4], 1), -Jet(pose6[5], 2)};
+  for (int axis = 0; axis < 3; ++axis) {
+    Jet unit[3] = {Jet(0.0), Jet(0.0), Jet(0.0)};
+    unit[axis] = Jet(1.0);
+    Jet out[3];
+    ceres::AngleAxisRotatePoint(minus, unit, out);
+    for (int r = 0; r < 3; ++r) {
+      translation_derivative_(r, axis) = -out[r].a;
+      rotation_derivative_[static_cast<size_t>(axis)].row(r) = out[r].v.transpose();
+    }
+  }
+}
+
 Eigen::Matrix<double, 3, kPoseParameters> InstrumentMap::PoseJacobian(const Eigen::Vector3d& p) const {
-  using Jet = ceres::Jet<double, kPoseParameters>;
-  Jet pose[kPoseParameters];
-  for (int i = 0; i < kPoseParameters; ++i) pose[i] = Jet(pose6_[static_cast<size_t>(i)], i);
-  const Eigen::Matrix<Jet, 3, 1> out = ToPosedFrame(pose, Eigen::Matrix<Jet, 3, 1>(Jet(p[0]), Jet(p[1]), Jet(p[2])));
+  const Eigen::Vector3d shifted = p - Eigen::Vector3d(pose6_[0], pose6_[1], pose6_[2]);
   Eigen::Matrix<double, 3, kPoseParameters> j;
-  for (int r = 0; r < 3; ++r) j.row(r) = out[r].v.transpose();
+  j.leftCols<3>() = translation_derivative_;
+  j.rightCols<3>() = shifted[0] * rotation_derivative_[0] + shifted[1] * rotation_derivative_[1] + shifted[2] * rotation_derivative_[2];
   return j;
 }
 
@@ -164,6 +181,7 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
   p.frame = options.frame;
   if (!options.anchors.empty()) p.frame_reference = options.anchors.front();
   for (const Observation& o : observations) p.weighted = p.weighted || !o.covariance.isZero(0.0);
+  p.observations.reserve(observations.size());
   for (size_t i = 0; i < observations.size(); ++i) {
     const Observation& o = observations[i];
     PreparedObservation po;

@@ -167,8 +167,11 @@ TEST(ParameterLayout, TermJacobianIsTheDerivativeOfTheForwardModel) {
       // Axes left out of `moving_axes` get no derivative; the others the same one.
       const Eigen::Matrix<double, 3, kNumErrorTerms> y_only = TermJacobian(chain, e, q, nullptr, 0b010);
       for (int t = 0; t < kNumErrorTerms; ++t) {
-        if (chain.ArgumentAxis(t) == Axis::kY) EXPECT_EQ(y_only.col(t), j.col(t)) << code << " term " << t;
-        if (chain.ArgumentAxis(t) != Axis::kY) EXPECT_TRUE(y_only.col(t).isZero()) << code << " term " << t;
+        if (chain.ArgumentAxis(t) == Axis::kY) {
+          EXPECT_EQ(y_only.col(t), j.col(t)) << code << " term " << t;
+        } else {
+          EXPECT_TRUE(y_only.col(t).isZero()) << code << " term " << t;
+        }
       }
     }
   }
