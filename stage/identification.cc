@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 #include <fmt/core.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -277,6 +279,34 @@ struct ScaledLinearisation {
   bool IsPose(int column) const { return column >= n_coefficients; }
 };
 
+// R of J = QR, J overwritten. A tall J is cut in two row blocks, factored side by side, and their stacked R's once
+// more: its R is an R of J (R^T R = J^T J, the same column geometry: [Demmel 2012]'s TSQR). The cut does not
+// depend on the threads, so neither do the rounding errors.
+Eigen::MatrixXd UpperFactor(Eigen::MatrixXd& j, int threads) {
+  const char* what = "identification: the Jacobian of the model and the pose";
+  const Eigen::Index n = j.cols(), m = j.rows();
+  if (m < 4096 || m < 16 * n) {
+    const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(j), what);
+    return qr.matrixQR().topRows(std::min(n, m)).triangularView<Eigen::Upper>();
+  }
+  constexpr Eigen::Index kParts = 2;
+  Eigen::MatrixXd stacked(kParts * n, n);
+  const auto factor = [&](Eigen::Index part) {
+    const Eigen::Index begin = part * (m / kParts), end = part + 1 == kParts ? m : begin + m / kParts;
+    Eigen::Ref<Eigen::MatrixXd> rows = j.middleRows(begin, end - begin);
+    const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(rows, what);
+    stacked.middleRows(part * n, n) = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+  };
+  if (threads == 1) {
+    for (Eigen::Index part = 0; part < kParts; ++part) factor(part);
+  } else {
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    arena.execute([&] { tbb::parallel_for(Eigen::Index{0}, kParts, factor); });
+  }
+  const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(stacked), what);
+  return qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+}
+
 ScaledLinearisation LineariseScaled(const ParameterLayout& layout, const Prepared& prepared, int pose_count) {
   const std::vector<double> zeros(static_cast<size_t>(layout.NumFree()), 0.0);
   Eigen::VectorXd r0;
@@ -296,9 +326,7 @@ ScaledLinearisation LineariseScaled(const ParameterLayout& layout, const Prepare
   s.gradient = j.transpose() * r0;
   s.r0_squared = r0.squaredNorm();
   // Dependences are searched and normal equations formed on R. (In place: j is large, 3 rows per point.)
-  const Eigen::Index n_all = j.cols();
-  const auto qr = Decompose<Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>>>(Eigen::Ref<Eigen::MatrixXd>(j), "identification: the Jacobian of the model and the pose");
-  s.r_factor = qr.matrixQR().topRows(std::min(n_all, j.rows())).triangularView<Eigen::Upper>();
+  s.r_factor = UpperFactor(j, prepared.threads);
   s.names = layout.FreeNames();
   for (int i = 0; i < pose_count; ++i) s.names.push_back(PoseParameterNames()[static_cast<size_t>(i)]);
   // The pose comes first: it is never fixed, and coefficients that only move the whole point set (constant
@@ -462,9 +490,15 @@ void SolveScaled(const ParameterLayout& layout, const std::vector<Observation>& 
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  std::map<int, std::vector<const PreparedObservation*>> blocks;  // by group, or one per observation
+  // Blocks by group, cut into pieces that the solver's threads evaluate side by side (a tracker's thousands of
+  // readings are one group), or one per observation.
+  constexpr size_t kBlockSize = 256;
+  std::map<std::pair<int, size_t>, std::vector<const PreparedObservation*>> blocks;
+  std::map<int, size_t> group_size;
   for (size_t i = 0; i < prepared.observations.size(); ++i) {
-    const int key = options.loss == "none" ? observations[i].group : static_cast<int>(i);
+    const int group = observations[i].group;
+    const std::pair<int, size_t> key = options.loss == "none" ? std::make_pair(group, group_size[group]++ / kBlockSize)
+                                                              : std::make_pair(static_cast<int>(i), size_t{0});
     blocks[key].push_back(&prepared.observations[i]);
   }
   std::vector<double*> blocks_of_parameters;
@@ -563,7 +597,7 @@ IdentificationResult Identify(const ParameterLayout& input_layout, const std::ve
   Prepared prepared = Prepare(layout, observations, options);
   const KeptStart start = TreatRank(layout, observations, prepared, options, equations, pose_count, result);
   for (const FixedCoefficient& f : result.fixed) layout.Fix(f.name, 0.0);
-  prepared = Prepare(layout, observations, options);
+  Reslot(prepared, input_layout, layout);
 
   const Eigen::VectorXd scale = PlausibleSizes(layout);
   const int n = layout.NumFree();

@@ -2,6 +2,9 @@
 
 #include <ceres/jet.h>
 #include <fmt/core.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Cholesky>
 #include <cmath>
@@ -19,6 +22,20 @@ struct Whitened {
   int components = 0;
 };
 Whitened Whitening(const Eigen::Matrix3d& covariance, int index) {
+  const auto not_positive = [&] {
+    return std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
+  };
+  if (!covariance.diagonal().array().isInf().any()) {
+    // Every coordinate observed (a tracker's reading): the same factors as below, on a fixed-size matrix.
+    if (!covariance.allFinite()) throw not_positive();
+    const auto llt = Decompose<Eigen::LLT<Eigen::Matrix3d>>(covariance, "the covariance of an observation");
+    if (llt.info() != Eigen::Success) throw not_positive();
+    Whitened w;
+    w.colour = llt.matrixL();
+    w.whiten = w.colour.triangularView<Eigen::Lower>().solve(Eigen::Matrix3d::Identity());
+    w.components = 3;
+    return w;
+  }
   std::vector<int> observed;
   for (int c = 0; c < 3; ++c) {
     if (!std::isinf(covariance(c, c))) observed.push_back(c);
@@ -32,9 +49,6 @@ Whitened Whitening(const Eigen::Matrix3d& covariance, int index) {
   for (int a = 0; a < 3; ++a) {
     for (int b = 0; b < 3; ++b) crossed = crossed || (a != b && std::isinf(covariance(a, a)) && covariance(a, b) != 0.0);
   }
-  const auto not_positive = [&] {
-    return std::invalid_argument(fmt::format("observation {}: its covariance is not positive definite", index + 1));
-  };
   if (k == 0 || !block.allFinite() || crossed) throw not_positive();
   const auto llt = Decompose<Eigen::LLT<Eigen::MatrixXd>>(block, fmt::format("the covariance of observation {}", index + 1));
   if (llt.info() != Eigen::Success) throw not_positive();
@@ -58,13 +72,30 @@ Eigen::Matrix3d ObservedInformation(const Eigen::Matrix3d& covariance, int index
   return w.whiten.transpose() * w.whiten;
 }
 
+InstrumentMap::InstrumentMap(const double* pose6) : active_(true) {
+  std::copy(pose6, pose6 + kPoseParameters, pose6_.begin());
+  rotation_transposed_ =
+      Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])}.Rotation().transpose();
+  // ToPosedFrame rotates p - t by the rotation vector's negative; differentiated at each unit vector, once.
+  using Jet = ceres::Jet<double, 3>;
+  const Jet minus[3] = {-Jet(pose6[3], 0), -Jet(pose6[4], 1), -Jet(pose6[5], 2)};
+  for (int axis = 0; axis < 3; ++axis) {
+    Jet unit[3] = {Jet(0.0), Jet(0.0), Jet(0.0)};
+    unit[axis] = Jet(1.0);
+    Jet out[3];
+    ceres::AngleAxisRotatePoint(minus, unit, out);
+    for (int r = 0; r < 3; ++r) {
+      translation_derivative_(r, axis) = -out[r].a;
+      rotation_derivative_[static_cast<size_t>(axis)].row(r) = out[r].v.transpose();
+    }
+  }
+}
+
 Eigen::Matrix<double, 3, kPoseParameters> InstrumentMap::PoseJacobian(const Eigen::Vector3d& p) const {
-  using Jet = ceres::Jet<double, kPoseParameters>;
-  Jet pose[kPoseParameters];
-  for (int i = 0; i < kPoseParameters; ++i) pose[i] = Jet(pose6_[static_cast<size_t>(i)], i);
-  const Eigen::Matrix<Jet, 3, 1> out = ToPosedFrame(pose, Eigen::Matrix<Jet, 3, 1>(Jet(p[0]), Jet(p[1]), Jet(p[2])));
+  const Eigen::Vector3d shifted = p - Eigen::Vector3d(pose6_[0], pose6_[1], pose6_[2]);
   Eigen::Matrix<double, 3, kPoseParameters> j;
-  for (int r = 0; r < 3; ++r) j.row(r) = out[r].v.transpose();
+  j.leftCols<3>() = translation_derivative_;
+  j.rightCols<3>() = shifted[0] * rotation_derivative_[0] + shifted[1] * rotation_derivative_[1] + shifted[2] * rotation_derivative_[2];
   return j;
 }
 
@@ -101,7 +132,7 @@ Eigen::Vector3d ObservationResidual(const ParameterLayout& layout, const double*
                                     const Prepared& p, const InstrumentMap& instrument, const PreparedObservation& o,
                                     const AnchorFrame* anchor, Eigen::Matrix3Xd* jacobian,
                                     Eigen::Matrix<double, 3, kPoseParameters>* pose_jacobian) {
-  Eigen::Matrix3Xd j;
+  thread_local Eigen::Matrix3Xd j;  // kept between calls: one allocation per thread, not one per observation
   Eigen::Vector3d part = EvaluatePoint(layout, *o.chain, all, o.command, o.derivative, jacobian ? &j : nullptr);
   if (o.from) {
     // A displacement seen in the camera's frame: T (F(b) - F(a)) with T the mean turn of its two ends. The overlap
@@ -150,6 +181,7 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
   p.frame = options.frame;
   if (!options.anchors.empty()) p.frame_reference = options.anchors.front();
   for (const Observation& o : observations) p.weighted = p.weighted || !o.covariance.isZero(0.0);
+  p.observations.reserve(observations.size());
   for (size_t i = 0; i < observations.size(); ++i) {
     const Observation& o = observations[i];
     PreparedObservation po;
@@ -177,7 +209,22 @@ Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& 
   p.pose6 = {t[0], t[1], t[2], r[0], r[1], r[2]};
   p.pose_scale << kPoseTranslationSize, kPoseTranslationSize, kPoseTranslationSize, kPoseRotationSize, kPoseRotationSize,
       kPoseRotationSize;
+  p.threads = options.num_threads;
   return p;
+}
+
+void Reslot(Prepared& p, const ParameterLayout& before, const ParameterLayout& after) {
+  std::vector<int> slot;  // new slot of each old one, -1 when fixed now
+  for (const std::string& name : before.FreeNames()) slot.push_back(after.FreeIndexOf(name));
+  const auto move = [&](SparseTermDerivative& d) {
+    std::erase_if(d, [&](const ParameterLayout::TermDerivativeEntry& e) { return slot[static_cast<size_t>(e.slot)] < 0; });
+    for (ParameterLayout::TermDerivativeEntry& e : d) e.slot = slot[static_cast<size_t>(e.slot)];
+  };
+  for (PreparedObservation& o : p.observations) {
+    move(o.derivative);
+    move(o.from_derivative);
+  }
+  for (PreparedAnchor& a : p.anchors) move(a.derivative);
 }
 
 // Stacked (whitened) residuals and, unless `jacobian` is null, their Jacobian (unscaled) at the given
@@ -195,17 +242,27 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
   for (const PreparedAnchor& a : p.anchors) {
     anchors.push_back(EvaluateAnchor(layout, p.chains.front(), free.data(), all.data(), p, a, jacobian != nullptr));
   }
-  Eigen::Matrix3Xd j;
-  Eigen::Matrix<double, 3, kPoseParameters> pose_j;
-  for (Eigen::Index i = 0; i < m; ++i) {
-    const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
-    residual->segment<3>(3 * i) = ObservationResidual(
-        layout, free.data(), all.data(), p, instrument, o, o.anchor >= 0 ? &anchors[static_cast<size_t>(o.anchor)] : nullptr,
-        jacobian ? &j : nullptr, jacobian && p.estimate_pose ? &pose_j : nullptr);
-    if (!jacobian) continue;
-    jacobian->block(3 * i, 0, 3, n) = j;
-    if (p.estimate_pose) jacobian->block<3, kPoseParameters>(3 * i, n) = pose_j;
-  }
+  // Each observation fills its own rows: in parallel, the same numbers as in turn.
+  const auto evaluate = [&](Eigen::Index begin, Eigen::Index end) {
+    Eigen::Matrix3Xd j;
+    Eigen::Matrix<double, 3, kPoseParameters> pose_j;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const PreparedObservation& o = p.observations[static_cast<size_t>(i)];
+      residual->segment<3>(3 * i) = ObservationResidual(
+          layout, free.data(), all.data(), p, instrument, o, o.anchor >= 0 ? &anchors[static_cast<size_t>(o.anchor)] : nullptr,
+          jacobian ? &j : nullptr, jacobian && p.estimate_pose ? &pose_j : nullptr);
+      if (!jacobian) continue;
+      jacobian->block(3 * i, 0, 3, n) = j;
+      if (p.estimate_pose) jacobian->block<3, kPoseParameters>(3 * i, n) = pose_j;
+    }
+  };
+  constexpr Eigen::Index kChunk = 512;  // observations per task: a few per thread on tracker meshes of thousands
+  if (p.threads == 1 || m < 2 * kChunk) return evaluate(0, m);
+  tbb::task_arena arena(p.threads > 0 ? p.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, m, kChunk),
+                      [&](const tbb::blocked_range<Eigen::Index>& r) { evaluate(r.begin(), r.end()); });
+  });
 }
 
 }  // namespace fvm::stage

@@ -34,25 +34,23 @@ Eigen::Vector3d EvaluatePoint(const ParameterLayout& layout, const AxisChain& ch
 // The map from the part frame into the instrument's: identity, or R^T (p - t) at a pose.
 class InstrumentMap {
  public:
-  InstrumentMap() = default;
-  explicit InstrumentMap(const double* pose6) : active_(true) {
-    std::copy(pose6, pose6 + kPoseParameters, pose6_.begin());
-    rotation_transposed_ = Pose{Eigen::Vector3d(pose6[0], pose6[1], pose6[2]), Eigen::Vector3d(pose6[3], pose6[4], pose6[5])}
-                               .Rotation()
-                               .transpose();
-  }
+  InstrumentMap() : InstrumentMap(std::array<double, kPoseParameters>{}.data()) { active_ = false; }
+  explicit InstrumentMap(const double* pose6);
   Eigen::Vector3d Apply(const Eigen::Vector3d& p) const {
     return active_ ? Eigen::Vector3d(rotation_transposed_ * (p - Eigen::Vector3d(pose6_[0], pose6_[1], pose6_[2]))) : p;
   }
   // d(instrument coordinates) / d(part coordinates).
   Eigen::Matrix3d Linear() const { return active_ ? rotation_transposed_ : Eigen::Matrix3d::Identity(); }
-  // d(instrument coordinates) / d(pose6) at part-frame point p (automatic differentiation of ToPosedFrame).
+  // d(instrument coordinates) / d(pose6) at part-frame point p: ToPosedFrame's derivative, from the derivatives
+  // taken once at the axes' unit vectors (R^T (p - t) is linear in p - t).
   Eigen::Matrix<double, 3, kPoseParameters> PoseJacobian(const Eigen::Vector3d& p) const;
 
  private:
   bool active_ = false;
   std::array<double, kPoseParameters> pose6_{};
   Eigen::Matrix3d rotation_transposed_ = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d translation_derivative_ = -Eigen::Matrix3d::Identity();  // d/dt: -R^T
+  std::array<Eigen::Matrix3d, 3> rotation_derivative_{};  // [j]: d(R^T e_j) / d(rotation vector)
 };
 
 struct PreparedObservation {
@@ -84,6 +82,7 @@ struct Prepared {
   std::array<double, kPoseParameters> pose6{};  // held pose, or where the estimated one starts
   bool has_pose = false;
   Eigen::Matrix<double, kPoseParameters, 1> pose_scale;
+  int threads = 1;  // Linearise's threads (IdentificationOptions::num_threads; 0: all cores)
 };
 
 // The stitched frame of one anchored measurement at the current coefficients (stitched_frame.h): a point the
@@ -115,5 +114,10 @@ void Linearise(const ParameterLayout& layout, const std::vector<double>& free, c
 // Throws std::invalid_argument naming an observation whose covariance is not positive definite.
 Prepared Prepare(const ParameterLayout& layout, const std::vector<Observation>& observations,
                  const IdentificationOptions& options);
+
+// `p`, prepared for `before`, made what Prepare gives for `after`: the same layout with some free coefficients
+// fixed (the rank treatment's). Their derivative entries go, the others move to their new slots; the values are
+// the ones Prepare computes, without evaluating every basis and whitening every observation again.
+void Reslot(Prepared& p, const ParameterLayout& before, const ParameterLayout& after);
 
 }  // namespace fvm::stage

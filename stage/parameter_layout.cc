@@ -187,15 +187,16 @@ std::vector<std::string> ParameterLayout::FreeNames() const {
 
 std::vector<ParameterLayout::TermDerivativeEntry> ParameterLayout::TermDerivativeEntries(const Eigen::Vector3d& q) const {
   std::vector<TermDerivativeEntry> entries;
-  double basis[kMaxOrder + 1];
+  entries.reserve(coefficients_.size());
+  AxisBases<double> bases;
+  const double* basis = nullptr;
   int evaluated_term = -1;
   for (size_t i = 0; i < coefficients_.size(); ++i) {
     const Coefficient& c = coefficients_[i];
     if (c.state == State::kFixed) continue;
     if (c.term != evaluated_term) {
-      const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
       const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
-      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]), basis);
+      basis = bases.At(terms_[static_cast<size_t>(c.term)], axis, travel_[static_cast<size_t>(axis)], q[axis]);
       evaluated_term = c.term;
     }
     const double factor = c.state == State::kFree ? 1.0 : c.value;
@@ -264,6 +265,58 @@ Eigen::Matrix<double, 3, kMotionErrors> MotionJacobian(const AxisChain& chain, c
   return j;
 }
 
+// The same derivative by hand for the small-angle chain without an instrument frame. The chain is a composition of
+// one map per axis, w -> T + (I + [e]x) w on the tool side and w -> (I + [e]x)^-1 (w - T) on the part side, so the
+// derivative w.r.t. an axis' T and e is that of its own map, carried to the end by the derivatives (w.r.t. w) of
+// the maps after it. Equal to automatic differentiation up to rounding, at a fraction of the work of 18-wide Jets.
+Eigen::Matrix<double, 3, kMotionErrors> SmallAngleMotionJacobian(const AxisChain& chain, const double* motion,
+                                                                 const Eigen::Vector3d& q, unsigned moving_axes) {
+  struct AxisMap {
+    Axis axis;
+    bool tool_side;
+    Eigen::Vector3d input;
+  };
+  std::vector<AxisMap> maps;
+  maps.reserve(3);
+  Eigen::Vector3d w = chain.tool_offset;
+  for (auto it = chain.tool_axes.rbegin(); it != chain.tool_axes.rend(); ++it) {
+    maps.push_back({*it, true, w});
+    w = internal::AxisTranslation(chain, *it, motion, q) +
+        internal::Rotate(RotationModel::kSmallAngle, internal::AxisRotation(*it, motion), w);
+  }
+  for (Axis axis : chain.part_axes) {
+    maps.push_back({axis, false, w});
+    w = internal::RotateInverse(RotationModel::kSmallAngle, internal::AxisRotation(axis, motion),
+                                Eigen::Vector3d(w - internal::AxisTranslation(chain, axis, motion, q)));
+  }
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 3, kMotionErrors> j = Eigen::Matrix<double, 3, kMotionErrors>::Zero();
+  Eigen::Matrix3d carry = identity;  // d(part coordinates) / d(the output of the map at hand)
+  for (auto m = maps.rbegin(); m != maps.rend(); ++m) {
+    const int k = static_cast<int>(m->axis);
+    const Eigen::Vector3d e = internal::AxisRotation(m->axis, motion);
+    Eigen::Matrix3d d_input, d_translation, d_rotation;
+    if (m->tool_side) {  // T + w + e x w
+      d_input = identity + Skew(e);
+      d_translation = identity;
+      d_rotation = -Skew(m->input);
+    } else {  // g = (v - e x v + e (e.v)) / (1 + e.e) with v = w - T
+      const Eigen::Vector3d v = m->input - internal::AxisTranslation(chain, m->axis, motion, q);
+      const double scale = 1.0 / (1.0 + e.squaredNorm());
+      const Eigen::Vector3d g = scale * (v - internal::Cross(e, v) + e * e.dot(v));
+      d_input = scale * (identity - Skew(e) + e * e.transpose());
+      d_translation = -d_input;
+      d_rotation = scale * (Skew(v) + e * v.transpose() + e.dot(v) * identity) - 2.0 * scale * g * e.transpose();
+    }
+    if ((moving_axes >> k) & 1u) {
+      j.block<3, 3>(0, 6 * k) = carry * d_translation;
+      j.block<3, 3>(0, 6 * k + 3) = carry * d_rotation;
+    }
+    carry = carry * d_input;
+  }
+  return j;
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
@@ -272,11 +325,17 @@ Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, co
   double motion[kMotionErrors];
   MotionErrors(chain, e, q, motion);
   Eigen::Matrix<double, 3, kMotionErrors> jm;
-  switch (std::popcount(moving_axes & 0b111u)) {  // Jets only as wide as the moving axes need
-    case 0: jm.setZero(); if (value) *value = ChainForwardFromMotions(chain, motion, q); break;
-    case 1: jm = MotionJacobian<6>(chain, motion, q, moving_axes, value); break;
-    case 2: jm = MotionJacobian<12>(chain, motion, q, moving_axes, value); break;
-    default: jm = MotionJacobian<18>(chain, motion, q, moving_axes, value); break;
+  const int moving = std::popcount(moving_axes & 0b111u);
+  if (moving > 0 && chain.rotation_model == RotationModel::kSmallAngle && !chain.instrument) {
+    jm = SmallAngleMotionJacobian(chain, motion, q, moving_axes);
+    if (value) *value = ChainForwardFromMotions(chain, motion, q);
+  } else {
+    switch (moving) {  // Jets only as wide as the moving axes need
+      case 0: jm.setZero(); if (value) *value = ChainForwardFromMotions(chain, motion, q); break;
+      case 1: jm = MotionJacobian<6>(chain, motion, q, moving_axes, value); break;
+      case 2: jm = MotionJacobian<12>(chain, motion, q, moving_axes, value); break;
+      default: jm = MotionJacobian<18>(chain, motion, q, moving_axes, value); break;
+    }
   }
   // Terms -> motions is linear: T and R terms feed their own slot; a squareness term feeds -q_k times the
   // carrier's translation slot in the other axis' direction.

@@ -121,9 +121,10 @@ Eigen::Matrix<T, 3, 1> Forward(const ParameterLayout& layout, const T* free, con
                                const T* instrument_pose6 = nullptr);
 Eigen::Vector3d Forward(const ParameterLayout& layout, const std::vector<double>& free, const Eigen::Vector3d& q);
 
-// d(part coordinates) / d(21 term values) at q, optionally the value. Automatic differentiation (ceres::Jet)
-// through the chain w.r.t. the motion errors of the axes in `moving_axes` (bit k for axis k: the others have
-// no error terms, so their derivatives are not needed), then the exact linear map from terms to motions.
+// d(part coordinates) / d(21 term values) at q, optionally the value. The derivative w.r.t. the motion errors of
+// the axes in `moving_axes` (bit k for axis k: the others have no error terms, so their derivatives are not
+// needed): by hand for the small-angle chain (axis map by axis map), else automatic differentiation (ceres::Jet);
+// then the exact linear map from terms to motions.
 Eigen::Matrix<double, 3, kNumErrorTerms> TermJacobian(const AxisChain& chain, const double* e,
                                                       const Eigen::Vector3d& q, Eigen::Vector3d* value = nullptr,
                                                       unsigned moving_axes = 0b111);
@@ -145,18 +146,38 @@ void ParameterLayout::Expand(const T* free, T* all) const {
   }
 }
 
+// The basis functions at a command, evaluated once per axis for the terms that share its basis (the seven terms
+// of an axis usually do): a basis of lower order is a prefix of the same basis of higher order.
+template <typename T>
+class AxisBases {
+ public:
+  const T* At(const TermSpec& spec, int axis, const Travel& travel, const T& q) {
+    const size_t a = static_cast<size_t>(axis);
+    if (order_[a] < spec.order || basis_[a] != spec.basis) {
+      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel, q), values_[a]);
+      order_[a] = spec.order;
+      basis_[a] = spec.basis;
+    }
+    return values_[a];
+  }
+
+ private:
+  T values_[3][kMaxOrder + 1];
+  int order_[3] = {-1, -1, -1};
+  Basis basis_[3] = {};
+};
+
 template <typename T>
 void ParameterLayout::TermValues(const T* all, const Eigen::Matrix<T, 3, 1>& q, T* e) const {
   for (int t = 0; t < kNumErrorTerms; ++t) e[t] = T(0.0);
-  T basis[kMaxOrder + 1];
+  AxisBases<T> bases;
+  const T* basis = nullptr;
   int previous_term = -1;
   for (size_t i = 0; i < coefficients_.size(); ++i) {
     const Coefficient& c = coefficients_[i];
     if (c.term != previous_term) {
-      const TermSpec& spec = terms_[static_cast<size_t>(c.term)];
       const int axis = static_cast<int>(chain_.ArgumentAxis(c.term));
-      EvaluateBasis(spec.basis, spec.order, NormalisedCoordinate(spec.basis, travel_[static_cast<size_t>(axis)], q[axis]),
-                    basis);
+      basis = bases.At(terms_[static_cast<size_t>(c.term)], axis, travel_[static_cast<size_t>(axis)], q[axis]);
       previous_term = c.term;
     }
     e[c.term] += all[i] * basis[c.power];

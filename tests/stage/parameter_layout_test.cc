@@ -3,7 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <ceres/jet.h>
+
 #include <cmath>
+#include <random>
 
 #include "tests/support/test_models.h"
 
@@ -134,6 +137,44 @@ TEST(ParameterLayout, RefusesTiesThatWouldLeaveAFollowerWithoutASlot) {
   const double free2[1] = {0.5};
   layout.Expand(free2, all.data());
   EXPECT_THAT(all, ElementsAre(-0.5, 0.5, 0.001));
+}
+
+// TermJacobian differentiates the small-angle chain by hand: it must agree with automatic differentiation of the
+// forward model itself to rounding, on every chain, with errors far larger than any machine's (0.05 rad turns the
+// small-angle inverse's second-order terms on) and a tool offset that gives every rotation a lever arm.
+TEST(ParameterLayout, TermJacobianIsTheDerivativeOfTheForwardModel) {
+  using Jet = ceres::Jet<double, kNumErrorTerms>;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coord(-800.0, 800.0), size(-1.0, 1.0);
+  for (const char* code : {"FXYZ", "XFYZ", "XYFZ", "XYZF", "YXFZ", "ZYXF", "YFXZ"}) {
+    AxisChain chain = AxisChain::Parse(code);
+    chain.tool_offset = Eigen::Vector3d(30, -20, 100);
+    for (int i = 0; i < 20; ++i) {
+      const Eigen::Vector3d q(coord(rng), coord(rng), coord(rng));
+      double e[kNumErrorTerms];
+      Jet ej[kNumErrorTerms];
+      for (int t = 0; t < kNumErrorTerms; ++t) {
+        e[t] = (GetErrorTerm(t).kind == ErrorKind::kTranslation ? 0.5 : 0.05) * size(rng);
+        ej[t] = Jet(e[t], t);
+      }
+      Eigen::Vector3d value;
+      const Eigen::Matrix<double, 3, kNumErrorTerms> j = TermJacobian(chain, e, q, &value);
+      const Eigen::Matrix<Jet, 3, 1> p = ChainForward(chain, ej, Eigen::Matrix<Jet, 3, 1>(q.cast<Jet>()));
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_EQ(value[r], ChainForward(chain, e, q)[r]) << code;
+        for (int t = 0; t < kNumErrorTerms; ++t) EXPECT_NEAR(j(r, t), p[r].v[t], 1e-12 * (1.0 + std::abs(q[r]))) << code << " term " << t;
+      }
+      // Axes left out of `moving_axes` get no derivative; the others the same one.
+      const Eigen::Matrix<double, 3, kNumErrorTerms> y_only = TermJacobian(chain, e, q, nullptr, 0b010);
+      for (int t = 0; t < kNumErrorTerms; ++t) {
+        if (chain.ArgumentAxis(t) == Axis::kY) {
+          EXPECT_EQ(y_only.col(t), j.col(t)) << code << " term " << t;
+        } else {
+          EXPECT_TRUE(y_only.col(t).isZero()) << code << " term " << t;
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
