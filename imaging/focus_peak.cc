@@ -73,11 +73,10 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2) 
 // the vertex when one measure moves by sigma, linearised in the transform (dP = power P sigma / f), summed in
 // quadrature over the points.
 double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
-                   double sigma, double* u_noise, double* u_shape) {
+                   double sigma, double* u_noise) {
   for (double& v : f) v -= floor;
   const double z1 = z[std::size_t(k)];
   if (u_noise) *u_noise = 0.0;
-  if (u_shape) *u_shape = 0.0;
   if (!(f[2] > 0.0)) return z1;
   const double scale = std::abs(z[std::size_t(k) + 1] - z[std::size_t(k) - 1]) / 2.0;
   const double lo = std::min(z[std::size_t(k) - 1], z[std::size_t(k) + 1]);
@@ -140,12 +139,6 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
     // The measure moves by sigma.
     const double variance = vertex_variance([&](int j) { return sigma / f[std::size_t(j)]; });
     *u_noise = std::sqrt(variance) * MisfitRatio(s, t, det, weight, u, p, inverse_variance, f[2] / (power * sigma));
-  }
-  if (u_shape) {
-    // Each measure off the model by a share of itself (dP = power P share), by a small share, scaled to 1.
-    constexpr double kShare = 1e-3;
-    const double variance = vertex_variance([](int) { return kShare; });
-    *u_shape = std::sqrt(variance) / kShare;
   }
   return z0;
 }

@@ -18,11 +18,7 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2);
 // between the best image's neighbours. With `u_noise`, also the vertex's standard deviation for a noise `sigma`
 // on each measure (linearised in the transform, summed in quadrature over the points), scaled up by the fit's
 // misfit where the points scatter about the parabola more than `sigma` explains (4 or 5 points).
-// With `u_shape`, also the vertex's standard deviation when each measure above the floor departs from the model
-// by an independent share of itself of standard deviation 1 (linearised): what a focus curve whose shape is not
-// the model's (a random texture's own curve, a PSF with a floor) does to the vertex, largest where the curve is
-// flat over the points fitted.
 double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
-                   double sigma = 0.0, double* u_noise = nullptr, double* u_shape = nullptr);
+                   double sigma = 0.0, double* u_noise = nullptr);
 
 }  // namespace fvm::imaging

@@ -57,24 +57,30 @@ constexpr double kNarrowShare = 0.05;
 // peak above the floor samples the curve more coarsely than its width (steps longer than the depth of field):
 // every peak is then fitted as a narrow one (see CoarselySampled).
 constexpr double kCoarseShoulder = 0.6;
-// The uncertainty model (see Finish and FitPeak), calibrated for 95 % coverage of 1.96 u_z on the rendered stacks
-// of focus_accuracy_test.cc (z steps 0.5 to 2 um, NA 0.5 to 0.9) and on the independent stacks of
-// ../shared/bench/focusgen.py (NA 0.3 to 0.9, diffraction floor 0.3 to 0.8 um, texture correlation 0.7 to 1.5 px):
-// the measure's noise per pixel over its floor (scaled by the power fit's misfit, focus_peak.cc); a share of each
-// measure by which a real focus curve departs from the model (a random texture's own curve, a PSF with a floor:
-// 1 %), which counts most where the curve is flat over the images fitted (small apertures, coarse texture); the
-// share of the step the interpolation leaves; the share of the heights' local scatter; for a curve too narrow for
-// the power fit (the 3-point log fit's error between images) a share of the step; and on a slope what the
-// window's centroid correction leaves (a share of a pixel times the slope: 0.08 px, a third of the error it
-// removes).
+// The uncertainty model (see Finish and FitPeak). A pixel's height comes from a window of 5 or 9 px, so its
+// error is shared by its neighbours: on the independent stacks of ../shared/bench/focusgen.py the errors
+// correlate 0.7-0.8 three pixels apart, and farther where the texture is coarse (2 px) or the blur grows linearly
+// from a large diffraction floor (NA 0.9, 0.8 um: a focus curve with a sharp top, whose peak the fit pulls
+// towards the nearest image by up to 0.15 step). What such errors leave in the height map is its roughness at the
+// window's own scale: the Laplacian of the heights smoothed over 2 px, times half the window's variance (the
+// second-order term of a window's mean on a curved surface, which also holds the real bias where the surface
+// bends: a calotte's rim). Their scatter about the smooth local mean (the model before) saw only the part that
+// changes from pixel to pixel: 25-60 % of the error, depending on the optics and the texture (u_z covered 75-88 %
+// at a 2 px texture and at NA 0.9 with a 0.8 um floor). The model, calibrated for 95 % coverage of 1.96 u_z on
+// focusgen.py seed 11 (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to 2 px) and checked on seed
+// 12: the measure's noise per pixel over its floor propagated through the fit (scaled by the power fit's
+// misfit, focus_peak.cc) at half weight, since the roughness term sees the noise's share of the error too; the
+// roughness, kRoughnessScale times the window-scale Laplacian term; what the window's centroid correction leaves
+// on a slope (a share of a pixel times the slope); a floor of a share of the step; and for a curve too narrow
+// for the power fit (the 3-point log fit's error between images) a share of the step.
 constexpr double kNoiseScale = 0.128;
+constexpr double kNoiseShare = 0.5;
 constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.027;
-constexpr double kScatterScale = 1.16;
-constexpr double kShapeShare = 0.0107;
+constexpr double kStepFraction = 0.005;
+constexpr double kRoughnessScale = 10.4;
+constexpr double kWindowSigmaShare = 0.3;  // a Gaussian window's sigma over its width (WindowTaps)
 constexpr double kNarrowStepFraction = 0.12;
-constexpr int kScatterWindowPx = 9;
-constexpr double kSlopePx = 0.085;
+constexpr double kSlopePx = 0.02;
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -279,9 +285,8 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
   const bool narrow = coarse || std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
   if (options.peak_fit == PeakFit::kPower && !narrow) {
     const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
-    double u_shape = 0.0;
-    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u, &u_shape);
-    out.u = std::hypot(out.u, kShapeShare * u_shape);
+    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u);
+    out.u *= kNoiseShare;
     return out;
   }
   // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
@@ -293,24 +298,20 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
     return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
   };
   out.z = vertex(f);
-  double variance = 0.0, shape = 0.0;
-  constexpr double kShare = 1e-3;
+  double variance = 0.0;
   for (std::size_t j = 1; j < 4; ++j) {
     if (!std::isfinite(f[j])) continue;
     std::array<double, 5> g = f;
     g[j] += sigma;
     const double d = vertex(g) - out.z;
     variance += d * d;
-    g[j] = f[j] + kShare * std::max(f[j] - floor_i, 0.0);
-    const double e = (vertex(g) - out.z) / kShare;
-    shape += e * e;
   }
 
   // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
-  out.u = std::hypot(narrow ? std::hypot(std::sqrt(variance),
-                                         kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
-                            : std::sqrt(variance),
-                     kShapeShare * std::sqrt(shape));
+  out.u = narrow ? std::hypot(std::sqrt(variance),
+                              kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
+                 : std::sqrt(variance);
+  out.u *= kNoiseShare;
   return out;
 }
 
@@ -408,33 +409,16 @@ Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buf
   return slope;
 }
 
-// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 5).
-cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
-  HoleyMap map(z, origin, buffers);
-  cv::Mat residual = buffers[3], scatter = buffers[5];
+// The Laplacian of the smoothed heights (height change per pixel squared, mm), from their slope (in buffer 0).
+cv::Mat LaplacianPerPixel(const Slope& slope, MapBuffers& buffers) {
+  cv::Mat laplacian = buffers[0], dyy = buffers[1];
   buffers.Pass([&](int r0, int r1) {
-    map.Smooth(kSlopeSmoothingPx, r0, r1, residual);
-    for (int r = r0; r < r1; ++r) {
-      float* o = residual.ptr<float>(r);
-      const float* h = map.heights.ptr<float>(r);
-      const float* v = map.valid.ptr<float>(r);
-      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
-    }
+    cv::Mat xx = laplacian.rowRange(r0, r1), yy = dyy.rowRange(r0, r1);
+    cv::Sobel(slope.x.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Sobel(slope.y.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    xx += yy;
   });
-  const cv::Size box(kScatterWindowPx, kScatterWindowPx);
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat s_rows = scatter.rowRange(r0, r1), count_rows = map.work.rowRange(r0, r1);
-    cv::boxFilter(residual.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-    cv::boxFilter(map.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
-                  cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* o = scatter.ptr<float>(r);
-      const float* count = map.work.ptr<float>(r);
-      for (int col = 0; col < scatter.cols; ++col)
-        o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
-    }
-  });
-  return scatter;
+  return laplacian;
 }
 
 }  // namespace
@@ -538,21 +522,23 @@ FocusResult FocusAccumulator::Finish() const {
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
-  // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
-  // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
-  // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
-  const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
+  // The errors no single focus curve shows, shared by the pixels of a window: the heights' roughness at the
+  // window's scale (see kRoughnessScale), and on a slope what the centroid correction leaves.
+  const cv::Mat laplacian = LaplacianPerPixel(final_slope, buffers);
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
-      const float* scatter_row = scatter.ptr<float>(r);
+      const float* laplacian_row = laplacian.ptr<float>(r);
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
-        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
+        const double u_noise = result.u_z_mm[i];
+        const double window_sigma = kWindowSigmaShare * result.window_px[i];
+        const double u_roughness =
+            kRoughnessScale * 0.5 * window_sigma * window_sigma * std::abs(double(laplacian_row[col]));
         const double u_slope = kSlopePx * final_slope.Magnitude(r, col);
         result.u_z_mm[i] = static_cast<float>(
-            std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step + u_slope * u_slope));
+            std::sqrt(u_noise * u_noise + u_roughness * u_roughness + u_step * u_step + u_slope * u_slope));
       }
     }
   });
