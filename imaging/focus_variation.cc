@@ -61,26 +61,30 @@ constexpr double kCoarseShoulder = 0.6;
 // error is shared by its neighbours: on the independent stacks of ../shared/bench/focusgen.py the errors
 // correlate 0.7-0.8 three pixels apart, and farther where the texture is coarse (2 px) or the blur grows linearly
 // from a large diffraction floor (NA 0.9, 0.8 um: a focus curve with a sharp top, whose peak the fit pulls
-// towards the nearest image by up to 0.15 step). What such errors leave in the height map is its roughness at the
-// window's own scale: the Laplacian of the heights smoothed over 2 px, times half the window's variance (the
-// second-order term of a window's mean on a curved surface, which also holds the real bias where the surface
-// bends: a calotte's rim). Their scatter about the smooth local mean (the model before) saw only the part that
-// changes from pixel to pixel: 25-60 % of the error, depending on the optics and the texture (u_z covered 75-88 %
-// at a 2 px texture and at NA 0.9 with a 0.8 um floor). The model, calibrated for 95 % coverage of 1.96 u_z on
-// focusgen.py seed 11 (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to 2 px) and checked on seed
-// 12: the measure's noise per pixel over its floor propagated through the fit (scaled by the power fit's
-// misfit, focus_peak.cc) at half weight, since the roughness term sees the noise's share of the error too; the
-// roughness, kRoughnessScale times the window-scale Laplacian term; what the window's centroid correction leaves
-// on a slope (a share of a pixel times the slope); a floor of a share of the step; and for a curve too narrow
-// for the power fit (the 3-point log fit's error between images) a share of the step.
+// towards the nearest image by up to 0.15 step, which changes slowly over a tilted face). The heights' scatter
+// about their 2 px local mean (the model's only such term before) sees 25-60 % of these errors depending on the
+// optics and the texture, so u_z covered 75-88 % at a 2 px texture and at NA 0.9 with a 0.8 um floor. What they
+// leave in the map is roughness at the window's scale: the Laplacian of the heights smoothed over 2 px, less its
+// own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px; times
+// 9 px^2 (about half a 9 px window's variance: the second-order term of a window's mean, which also covers the
+// real bias where the surface bends sharply, a calotte's rim). The terms, calibrated for 95 % coverage of
+// 1.96 u_z on focusgen.py seed 11 (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to 2 px), checked
+// on seed 12 and on the rendered stacks of focus_accuracy_test.cc: the measure's noise per pixel over its floor
+// propagated through the fit (scaled by the power fit's misfit, focus_peak.cc); the roughness; a share of the
+// heights' scatter about their local mean; what the window's centroid correction leaves on a slope (a share of a
+// pixel times the slope); a floor of a share of the step; and for a curve too narrow for the power fit (the
+// 3-point log fit's error between images) a share of the step.
 constexpr double kNoiseScale = 0.128;
-constexpr double kNoiseShare = 0.5;
+constexpr double kNoiseShare = 1.15;  // the propagated noise's weight (its linearisation misses a little)
 constexpr double kFloorShare = 1.0;
 constexpr double kStepFraction = 0.005;
-constexpr double kRoughnessScale = 10.4;
-constexpr double kWindowSigmaShare = 0.3;  // a Gaussian window's sigma over its width (WindowTaps)
-constexpr double kNarrowStepFraction = 0.12;
-constexpr double kSlopePx = 0.02;
+constexpr double kRoughnessPx2 = 9.0;
+constexpr double kScatterScale = 0.36;
+constexpr int kScatterWindowPx = 9;
+constexpr double kCurvatureSmoothingPx = 6.0;
+constexpr int kRoughnessBoxPx = 15;
+constexpr double kNarrowStepFraction = 0.11;
+constexpr double kSlopePx = 0.005;
 
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
@@ -308,10 +312,8 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
   }
 
   // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
-  out.u = narrow ? std::hypot(std::sqrt(variance),
-                              kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
-                 : std::sqrt(variance);
-  out.u *= kNoiseShare;
+  out.u = kNoiseShare * std::sqrt(variance);
+  if (narrow) out.u = std::hypot(out.u, kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]));
   return out;
 }
 
@@ -344,7 +346,7 @@ bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quali
 struct MapBuffers {
   int width = 0, height = 0;
   bool parallel = true;
-  HugeVector<float> storage[7];
+  HugeVector<float> storage[8];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];
@@ -409,16 +411,90 @@ Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buf
   return slope;
 }
 
-// The Laplacian of the smoothed heights (height change per pixel squared, mm), from their slope (in buffer 0).
-cv::Mat LaplacianPerPixel(const Slope& slope, MapBuffers& buffers) {
-  cv::Mat laplacian = buffers[0], dyy = buffers[1];
+// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 5).
+cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
+  HoleyMap map(z, origin, buffers);
+  cv::Mat residual = buffers[3], scatter = buffers[5];
   buffers.Pass([&](int r0, int r1) {
-    cv::Mat xx = laplacian.rowRange(r0, r1), yy = dyy.rowRange(r0, r1);
+    map.Smooth(kSlopeSmoothingPx, r0, r1, residual);
+    for (int r = r0; r < r1; ++r) {
+      float* o = residual.ptr<float>(r);
+      const float* h = map.heights.ptr<float>(r);
+      const float* v = map.valid.ptr<float>(r);
+      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+    }
+  });
+  const cv::Size box(kScatterWindowPx, kScatterWindowPx);
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat s_rows = scatter.rowRange(r0, r1), count_rows = map.work.rowRange(r0, r1);
+    cv::boxFilter(residual.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::boxFilter(map.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
+                  cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
+      float* o = scatter.ptr<float>(r);
+      const float* count = map.work.ptr<float>(r);
+      for (int col = 0; col < scatter.cols; ++col)
+        o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
+    }
+  });
+  return scatter;
+}
+
+// The heights' roughness at the window's scale (buffer 3): the rms over kRoughnessBoxPx of the Laplacian of the
+// smoothed heights less its own smooth local mean (the real surface's curvature, which changes slowly; what is
+// left are errors shared over a window, and the bends of the surface sharper than kCurvatureSmoothingPx: a
+// calotte's rim). From the slope of the map (buffers 4 and 6).
+cv::Mat WindowScaleRoughness(const std::vector<double>& z, const Slope& slope, MapBuffers& buffers) {
+  cv::Mat laplacian = buffers[0], valid = buffers[1], work = buffers[2], roughness = buffers[3], mean = buffers[7];
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat xx = laplacian.rowRange(r0, r1), yy = work.rowRange(r0, r1);
     cv::Sobel(slope.x.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
     cv::Sobel(slope.y.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    xx += yy;
+    for (int r = r0; r < r1; ++r) {
+      float* l = laplacian.ptr<float>(r);
+      float* v = valid.ptr<float>(r);
+      const float* y = work.ptr<float>(r);
+      const double* row = z.data() + std::size_t(r) * std::size_t(laplacian.cols);
+      for (int col = 0; col < laplacian.cols; ++col) {
+        v[col] = std::isfinite(row[col]) ? 1.0f : 0.0f;
+        l[col] = (l[col] + y[col]) * v[col];
+      }
+    }
   });
-  return laplacian;
+  // The local mean of the Laplacian over the valid points, and the squared departures from it.
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat m_rows = mean.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
+    cv::GaussianBlur(laplacian.rowRange(r0, r1), m_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+  });
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      const float* l = laplacian.ptr<float>(r);
+      const float* m = mean.ptr<float>(r);
+      const float* w = work.ptr<float>(r);
+      const float* v = valid.ptr<float>(r);
+      float* d = roughness.ptr<float>(r);
+      for (int col = 0; col < laplacian.cols; ++col) {
+        const float departure = l[col] - m[col] / std::max(w[col], 1e-6f);
+        d[col] = departure * departure * v[col];
+      }
+    }
+  });
+  const cv::Size box(kRoughnessBoxPx, kRoughnessBoxPx);
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat s_rows = mean.rowRange(r0, r1), count_rows = work.rowRange(r0, r1);
+    cv::boxFilter(roughness.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::boxFilter(valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  });
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      const float* sum = mean.ptr<float>(r);
+      const float* count = work.ptr<float>(r);
+      float* o = roughness.ptr<float>(r);
+      for (int col = 0; col < roughness.cols; ++col) o[col] = std::sqrt(std::max(sum[col], 0.0f) / std::max(count[col], 1.0f));
+    }
+  });
+  return roughness;
 }
 
 }  // namespace
@@ -522,23 +598,26 @@ FocusResult FocusAccumulator::Finish() const {
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
-  // The errors no single focus curve shows, shared by the pixels of a window: the heights' roughness at the
-  // window's scale (see kRoughnessScale), and on a slope what the centroid correction leaves.
-  const cv::Mat laplacian = LaplacianPerPixel(final_slope, buffers);
+  // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
+  // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
+  // correction leaves. Both from the corrected heights.
+  const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
+  const Slope corrected_slope = SlopePerPixel(map.z_mm, origin, buffers);
+  const cv::Mat roughness = WindowScaleRoughness(map.z_mm, corrected_slope, buffers);
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
-      const float* laplacian_row = laplacian.ptr<float>(r);
+      const float* roughness_row = roughness.ptr<float>(r);
+      const float* scatter_row = scatter.ptr<float>(r);
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
-        const double u_noise = result.u_z_mm[i];
-        const double window_sigma = kWindowSigmaShare * result.window_px[i];
-        const double u_roughness =
-            kRoughnessScale * 0.5 * window_sigma * window_sigma * std::abs(double(laplacian_row[col]));
-        const double u_slope = kSlopePx * final_slope.Magnitude(r, col);
-        result.u_z_mm[i] = static_cast<float>(
-            std::sqrt(u_noise * u_noise + u_roughness * u_roughness + u_step * u_step + u_slope * u_slope));
+        const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
+        const double u_roughness = kRoughnessPx2 * roughness_row[col];
+        const double u_slope = kSlopePx * corrected_slope.Magnitude(r, col);
+        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter +
+                                                        u_roughness * u_roughness + u_step * u_step +
+                                                        u_slope * u_slope));
       }
     }
   });
