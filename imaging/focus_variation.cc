@@ -56,7 +56,7 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 // correlate 0.7-0.8 three pixels apart, and farther where the texture is coarse (2 px) or the blur grows linearly
 // from a large diffraction floor (NA 0.9, 0.8 um: a focus curve with a sharp top, whose peak the fit pulls
 // towards the nearest image by up to 0.15 step, which changes slowly over a tilted face). The heights' scatter
-// about their 2 px local mean (the model's only such term before) sees 25-60 % of these errors depending on the
+// about their 2 px local mean (the model's only such term before) sees 35-65 % of these errors depending on the
 // optics and the texture, so u_z covered 75-88 % at a 2 px texture and at NA 0.9 with a 0.8 um floor. What they
 // leave in the map is roughness at the window's scale: the Laplacian of the heights smoothed over 2 px, less its
 // own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px; times
