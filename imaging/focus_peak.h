@@ -1,9 +1,15 @@
 #pragma once
 // The peak of a pixel's focus curve between the images of a stack: the vertex of a parabola through the measure
-// (or its log, or its power) at the best image and its neighbours. Used by focus_variation.cc.
+// (or its log, or its power) at the best image and its neighbours, and the part of its uncertainty the curve
+// itself shows (its noise). Used by focus_variation.cc.
 
 #include <array>
+#include <cstddef>
+#include <limits>
 #include <vector>
+
+#include "imaging/focus_stack_curves.h"
+#include "imaging/focus_variation.h"
 
 namespace fvm::imaging {
 
@@ -18,11 +24,24 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2);
 // between the best image's neighbours. With `u_noise`, also the vertex's standard deviation for a noise `sigma`
 // on each measure (linearised in the transform, summed in quadrature over the points), scaled up by the fit's
 // misfit where the points scatter about the parabola more than `sigma` explains (4 or 5 points).
-// With `u_shape`, also the vertex's standard deviation when each measure above the floor departs from the model
-// by an independent share of itself of standard deviation 1 (linearised): what a focus curve whose shape is not
-// the model's (a random texture's own curve, a PSF with a floor) does to the vertex, largest where the curve is
-// flat over the points fitted.
 double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
-                   double sigma = 0.0, double* u_noise = nullptr, double* u_shape = nullptr);
+                   double sigma = 0.0, double* u_noise = nullptr);
+
+// One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
+// change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
+// focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.
+struct Peak {
+  double z = std::numeric_limits<double>::quiet_NaN();
+  double u = std::numeric_limits<double>::quiet_NaN();
+  float quality = 0.0f;
+};
+
+// The peak of window curves `c` at pixel i, the images at z (mm); `coarse`: every curve fitted as a narrow one
+// (CoarselySampled).
+Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z, const FocusVariationOptions& options,
+             bool coarse);
+
+// Whether the stack samples its focus curves more coarsely than their width (see focus_peak.cc).
+bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quality);
 
 }  // namespace fvm::imaging

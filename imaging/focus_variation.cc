@@ -51,45 +51,30 @@ constexpr float kMaxIntensity = 1e15f;
 // the small window errs 0.2-0.3 step, the large one 0.3-0.55).
 constexpr double kSpreadLimitSteps = 2.4;
 constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
-// Neighbours less than this share of the peak above the floor: a narrow curve (see FitPeak).
-constexpr double kNarrowShare = 0.05;
-// A stack whose typical focus curve has its best image's two neighbours summing to less than this share of the
-// peak above the floor samples the curve more coarsely than its width (steps longer than the depth of field):
-// every peak is then fitted as a narrow one (see CoarselySampled).
-constexpr double kCoarseShoulder = 0.6;
-// The uncertainty model (see Finish and FitPeak), calibrated for 95 % coverage of 1.96 u_z on the rendered stacks
-// of focus_accuracy_test.cc (z steps 0.5 to 2 um, NA 0.5 to 0.9) and on the independent stacks of
-// ../shared/bench/focusgen.py (NA 0.3 to 0.9, diffraction floor 0.3 to 0.8 um, texture correlation 0.7 to 1.5 px):
-// the measure's noise per pixel over its floor (scaled by the power fit's misfit, focus_peak.cc); a share of each
-// measure by which a real focus curve departs from the model (a random texture's own curve, a PSF with a floor:
-// 1 %), which counts most where the curve is flat over the images fitted (small apertures, coarse texture); the
-// share of the step the interpolation leaves; the share of the heights' local scatter; for a curve too narrow for
-// the power fit (the 3-point log fit's error between images) a share of the step; and on a slope what the
-// window's centroid correction leaves (a share of a pixel times the slope: 0.08 px, a third of the error it
-// removes).
-constexpr double kNoiseScale = 0.128;
-constexpr double kFloorShare = 1.0;
-constexpr double kStepFraction = 0.027;
-constexpr double kScatterScale = 1.16;
-constexpr double kShapeShare = 0.0107;
-constexpr double kNarrowStepFraction = 0.12;
+// The uncertainty model (see Finish and FitPeak). A pixel's height comes from a window of 5 or 9 px, so its
+// error is shared by its neighbours: on the independent stacks of ../shared/bench/focusgen.py the errors
+// correlate 0.7-0.8 three pixels apart, and farther where the texture is coarse (2 px) or the blur grows linearly
+// from a large diffraction floor (NA 0.9, 0.8 um: a focus curve with a sharp top, whose peak the fit pulls
+// towards the nearest image by up to 0.15 step, which changes slowly over a tilted face). The heights' scatter
+// about their 2 px local mean (the model's only such term before) sees 35-65 % of these errors depending on the
+// optics and the texture, so u_z covered 75-88 % at a 2 px texture and at NA 0.9 with a 0.8 um floor. What they
+// leave in the map is roughness at the window's scale: the Laplacian of the heights smoothed over 2 px, less its
+// own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px; times
+// 9 px^2 (about half a 9 px window's variance: the second-order term of a window's mean, which also covers the
+// real bias where the surface bends sharply, a calotte's rim). The terms, calibrated for 95 % coverage of
+// 1.96 u_z on focusgen.py seed 11 (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to 2 px), checked
+// on seed 12 and on the rendered stacks of focus_accuracy_test.cc: the measure's noise per pixel over its floor
+// propagated through the fit (scaled by the power fit's misfit, focus_peak.cc); the roughness; a share of the
+// heights' scatter about their local mean; what the window's centroid correction leaves on a slope (a share of a
+// pixel times the slope); a floor of a share of the step; and for a curve too narrow for the power fit (the
+// 3-point log fit's error between images) a share of the step.
+constexpr double kStepFraction = 0.005;
+constexpr double kRoughnessPx2 = 9.0;
+constexpr double kScatterScale = 0.36;
 constexpr int kScatterWindowPx = 9;
-constexpr double kSlopePx = 0.085;
-
-// The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
-// modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
-// derivative (s^-4), the variance of a texture smoothed by s falls as s^-2.
-double BlurExponent(FocusMeasure measure) {
-  switch (measure) {
-    case FocusMeasure::kModifiedLaplacian:
-      return 3.0;
-    case FocusMeasure::kTenengrad:
-      return 4.0;
-    case FocusMeasure::kVariance:
-      return 2.0;
-  }
-  return 2.0;
-}
+constexpr double kCurvatureSmoothingPx = 6.0;
+constexpr int kRoughnessBoxPx = 15;
+constexpr double kSlopePx = 0.005;
 
 }  // namespace
 
@@ -246,95 +231,6 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
 
 namespace {
 
-// One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
-// change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
-// focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.
-struct Peak {
-  double z = std::numeric_limits<double>::quiet_NaN();
-  double u = std::numeric_limits<double>::quiet_NaN();
-  float quality = 0.0f;
-};
-
-Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
-             const FocusVariationOptions& options, bool coarse) {
-  const int n = static_cast<int>(z.size());
-  Peak out;
-  const float mean = c.sum[i] / static_cast<float>(n);
-  out.quality = mean > 0.0f ? c.best[i] / mean : 0.0f;
-  const int k = c.index[i];
-  if (!(out.quality >= static_cast<float>(options.min_quality))) return out;
-  // A peak at either end may lie beyond the stack: its height is unknown, not the end's z; unless the user asks
-  // for the end's z (a stack that stops at the surface's nearest or farthest part), with a whole step of
-  // uncertainty.
-  if (k == 0 || k == n - 1) {
-    if (options.keep_end_peaks) out.z = z[std::size_t(k)], out.u = std::abs(z[1] - z[0]);
-    return out;
-  }
-  const std::array<double, 5> f = {c.left2[i], c.left[i], c.best[i], c.right[i], c.right2[i]};
-  const double sigma = kNoiseScale / double(c.window) * std::max(double(c.floor[i]), 0.0);
-  const double floor_i = kFloorShare * c.floor[i];
-  // A curve so narrow that the best image's neighbours lie on its floor (steps coarse against the depth of
-  // field) leaves the power transform nothing but the floor's noise there: the log-Gaussian 3-point fit
-  // through the raw measures does better.
-  const bool narrow = coarse || std::min(f[1], f[3]) - floor_i < kNarrowShare * (f[2] - floor_i);
-  if (options.peak_fit == PeakFit::kPower && !narrow) {
-    const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
-    double u_shape = 0.0;
-    out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u, &u_shape);
-    out.u = std::hypot(out.u, kShapeShare * u_shape);
-    return out;
-  }
-  // The other fits through the best image and its neighbours; the noise by moving each measure in turn.
-  const auto vertex = [&](const std::array<double, 5>& g) {
-    std::array<double, 3> h = {g[1], g[2], g[3]};
-    if ((narrow || options.peak_fit == PeakFit::kGaussian) && h[0] > 0.0 && h[2] > 0.0) {
-      for (double& v : h) v = std::log(v);
-    }
-    return Vertex(z[std::size_t(k) - 1], z[std::size_t(k)], z[std::size_t(k) + 1], h[0], h[1], h[2]);
-  };
-  out.z = vertex(f);
-  double variance = 0.0, shape = 0.0;
-  constexpr double kShare = 1e-3;
-  for (std::size_t j = 1; j < 4; ++j) {
-    if (!std::isfinite(f[j])) continue;
-    std::array<double, 5> g = f;
-    g[j] += sigma;
-    const double d = vertex(g) - out.z;
-    variance += d * d;
-    g[j] = f[j] + kShare * std::max(f[j] - floor_i, 0.0);
-    const double e = (vertex(g) - out.z) / kShare;
-    shape += e * e;
-  }
-
-  // A narrow curve's 3-point fit errs by up to half a step between images, which no noise shows.
-  out.u = std::hypot(narrow ? std::hypot(std::sqrt(variance),
-                                         kNarrowStepFraction * std::abs(z[std::size_t(k) + 1] - z[std::size_t(k)]))
-                            : std::sqrt(variance),
-                     kShapeShare * std::sqrt(shape));
-  return out;
-}
-
-// Whether the stack samples its focus curves more coarsely than their width (z steps longer than the depth of
-// field): then the best image's neighbours lie on the curve's tails, where it departs from the power law most,
-// and the 3-point log fit does better than the power fit for every pixel, not only for the narrowest curves.
-// Judged on the median over a sample of the valid pixels of the neighbours' share of the peak above the floor
-// (on the stacks of focus_accuracy_test.cc: 0.36 at 2 um steps and NA 0.9, where the log fit gives 0.14 step rms
-// and the power fit 0.21; 0.86 at 1 um and NA 0.9, 1.4-1.8 at finer sampling, where the power fit is the better).
-bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quality) {
-  constexpr std::size_t kEvery = 61;  // a sample of the pixels, prime against the image's width
-  std::vector<float> shoulder;
-  for (std::size_t i = 0; i < c.best.size(); i += kEvery) {
-    const int k = c.index[i];
-    const float peak = c.best[i] - c.floor[i];
-    const bool valid = c.best[i] * float(images) >= float(min_quality) * c.sum[i];  // peak over mean
-    if (k == 0 || k + 1 >= int(images) || !(peak > 0.0f) || !valid) continue;
-    shoulder.push_back((c.left[i] + c.right[i] - 2.0f * c.floor[i]) / peak);
-  }
-  if (shoulder.empty()) return false;
-  std::nth_element(shoulder.begin(), shoulder.begin() + std::ptrdiff_t(shoulder.size() / 2), shoulder.end());
-  return shoulder[shoulder.size() / 2] < kCoarseShoulder;
-}
-
 // Float maps of the height map's size over memory in huge pages, reused from map to map: fresh 4 kB pages cost
 // more than the filters that fill them (a page fault per 4 kB on a virtual machine). The maps are filled and
 // filtered in stripes of rows in parallel (ForStripes): a filter applied to a stripe of a map reads the rows
@@ -343,7 +239,7 @@ bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quali
 struct MapBuffers {
   int width = 0, height = 0;
   bool parallel = true;
-  HugeVector<float> storage[7];
+  HugeVector<float> storage[8];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];
@@ -435,6 +331,63 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& bu
     }
   });
   return scatter;
+}
+
+// The heights' roughness at the window's scale (buffer 3): the rms over kRoughnessBoxPx of the Laplacian of the
+// smoothed heights less its own smooth local mean (the real surface's curvature, which changes slowly; what is
+// left are errors shared over a window, and the bends of the surface sharper than kCurvatureSmoothingPx: a
+// calotte's rim). From the slope of the map (buffers 4 and 6).
+cv::Mat WindowScaleRoughness(const std::vector<double>& z, const Slope& slope, MapBuffers& buffers) {
+  cv::Mat laplacian = buffers[0], valid = buffers[1], work = buffers[2], roughness = buffers[3], mean = buffers[7];
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat xx = laplacian.rowRange(r0, r1), yy = work.rowRange(r0, r1);
+    cv::Sobel(slope.x.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Sobel(slope.y.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
+      float* l = laplacian.ptr<float>(r);
+      float* v = valid.ptr<float>(r);
+      const float* y = work.ptr<float>(r);
+      const double* row = z.data() + std::size_t(r) * std::size_t(laplacian.cols);
+      for (int col = 0; col < laplacian.cols; ++col) {
+        v[col] = std::isfinite(row[col]) ? 1.0f : 0.0f;
+        l[col] = (l[col] + y[col]) * v[col];
+      }
+    }
+  });
+  // The local mean of the Laplacian over the valid points, and the squared departures from it.
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat m_rows = mean.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
+    cv::GaussianBlur(laplacian.rowRange(r0, r1), m_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+  });
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      const float* l = laplacian.ptr<float>(r);
+      const float* m = mean.ptr<float>(r);
+      const float* w = work.ptr<float>(r);
+      const float* v = valid.ptr<float>(r);
+      float* d = roughness.ptr<float>(r);
+      for (int col = 0; col < laplacian.cols; ++col) {
+        const float departure = l[col] - m[col] / std::max(w[col], 1e-6f);
+        d[col] = departure * departure * v[col];
+      }
+    }
+  });
+  const cv::Size box(kRoughnessBoxPx, kRoughnessBoxPx);
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat s_rows = mean.rowRange(r0, r1), count_rows = work.rowRange(r0, r1);
+    cv::boxFilter(roughness.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::boxFilter(valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+  });
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      const float* sum = mean.ptr<float>(r);
+      const float* count = work.ptr<float>(r);
+      float* o = roughness.ptr<float>(r);
+      for (int col = 0; col < roughness.cols; ++col) o[col] = std::sqrt(std::max(sum[col], 0.0f) / std::max(count[col], 1.0f));
+    }
+  });
+  return roughness;
 }
 
 }  // namespace
@@ -538,21 +491,26 @@ FocusResult FocusAccumulator::Finish() const {
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
-  // The model's part, which no single focus curve shows: the heights mixed in the window by the texture's
-  // weights, the interpolation between images. It shows as the heights' scatter about their smooth local mean
-  // (a surface is smooth over a few pixels, its errors are not), and a floor of a share of the step.
+  // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
+  // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
+  // correction leaves. Both from the corrected heights.
   const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
+  const Slope corrected_slope = SlopePerPixel(map.z_mm, origin, buffers);
+  const cv::Mat roughness = WindowScaleRoughness(map.z_mm, corrected_slope, buffers);
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
+      const float* roughness_row = roughness.ptr<float>(r);
       const float* scatter_row = scatter.ptr<float>(r);
       for (int col = 0; col < s.width; ++col) {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
         const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
-        const double u_slope = kSlopePx * final_slope.Magnitude(r, col);
-        result.u_z_mm[i] = static_cast<float>(
-            std::sqrt(u_noise * u_noise + u_scatter * u_scatter + u_step * u_step + u_slope * u_slope));
+        const double u_roughness = kRoughnessPx2 * roughness_row[col];
+        const double u_slope = kSlopePx * corrected_slope.Magnitude(r, col);
+        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter +
+                                                        u_roughness * u_roughness + u_step * u_step +
+                                                        u_slope * u_slope));
       }
     }
   });

@@ -30,15 +30,16 @@ def test_focus_stack_round_trip_recovers_two_known_heights():
         # Single pixels scatter by ~65 nm here, so the median of ~2000 of them has a standard error of ~2 nm: 20 nm
         # (1 % of a step) is ~8 of those, and a peak fit that snapped to images or leaned towards one fails it.
         assert abs(np.median(valid) - level) < 0.02e-3
-        # Each pixel's uncertainty says how far its height scatters: u less its floor of 2.5 % of the step (the
-        # interpolation between images on stacks the model does not fit exactly; this stack is the model itself,
-        # so no scatter shows it) within a factor 2 of the spread (1.4826 MAD, robust to the few wild pixels) the
-        # flat level shows. The floor alone is 50 nm here, about the scatter.
+        # Each pixel's uncertainty says how far its height scatters: u less its floor of 0.5 % of the step (the
+        # interpolation between images on stacks the model does not fit exactly; this stack is the model itself)
+        # within a factor 2 of the spread (1.4826 MAD, robust to the few wild pixels) the flat level shows: 44-54 nm
+        # against 31 nm (u also holds the heights' roughness at the window's scale, which the MAD of single pixels
+        # counts only in part).
         spread = 1.4826 * np.median(np.abs(valid - np.median(valid)))
         u = r["u"][8:56, columns]
-        u_scatter = np.sqrt(np.maximum(u * u - (0.025 * step) ** 2, 0.0))
+        u_scatter = np.sqrt(np.maximum(u * u - (0.005 * step) ** 2, 0.0))
         assert 0.5 * spread < np.nanmedian(u_scatter) < 2 * spread
-        assert np.nanmedian(u) >= 0.025 * step
+        assert np.nanmedian(u) >= 0.005 * step
     # The all-in-focus image is the sharp texture: correlation near 1 (the noise and the s0 blur keep it below).
     inner = np.s_[8:56, 8:120]
     assert np.corrcoef(r["image"][inner].ravel(), sharp[inner].ravel())[0, 1] > 0.95

@@ -136,11 +136,11 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, imaging::Foc
 
 // Tolerances: the goals, 0.1 step rms per region (walls included) and 95 % coverage of 1.96 u_z, at every
 // row but the 2 um one and the bench's optics. Measured with this seed (all / worst region / coverage): 1 um NA 0.9
-// 0.057 / 0.062 (wall) / 98.0 %, NA 0.7 0.057 / 0.064 / 97.8 %, NA 0.5 0.072 / 0.081 / 96.9 %, 0.5 um 0.086 / 0.104
-// (wall) / 98.9 %. The rms over ~150 000 pixels whose errors are correlated over the 9 px window (~2000
+// 0.057 / 0.062 (wall) / 97.1 %, NA 0.7 0.057 / 0.064 / 94.3 %, NA 0.5 0.072 / 0.081 / 98.0 %, 0.5 um 0.086 / 0.104
+// (wall) / 96.0 %. The rms over ~150 000 pixels whose errors are correlated over the 9 px window (~2000
 // independent patches) varies by ~2 % from seed to seed, the coverage by ~0.5 %. u_z is calibrated for 93-97 % on
 // the independent stacks of ../shared/bench/focusgen.py (tests/imaging/focus_independent_test.cc), whose noise
-// this renderer's 8-bit images exceed in some rows and fall short of in others: here it covers 97-99 %, held at
+// this renderer's 8-bit images exceed in some rows and fall short of in others: here it covers 94-98 %, held at
 // 93-99 %. At 0.5 um steps the 24 deg walls take the 5 px window (their heights span more than 2.4 steps over the
 // 9 px window's half-width): 0.104, held at 0.11. At 2 um steps with NA 0.9 the focus curve (0.7 um depth of field)
 // is undersampled: its top is flat over +-0.3 um and its neighbours lie on the tails, so the 3-point log fit pulls
@@ -149,7 +149,8 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, imaging::Foc
 // widens the curve) meets it: 0.084 step (flat 0.093); its u_z, calibrated on the modified Laplacian,
 // over-covers (99 %), so only the lower bound is held. The bench's optics in this renderer (a diffraction floor of
 // 0.6 px, a 1 px texture, NA 0.4) with its 8-bit noise (2.7 counts against a contrast of 40) fall short of the goal:
-// 0.125 step (flat 0.113, wall 0.142, bottom 0.107), u_z covering 86 %; held at what is measured plus ~15 %.
+// 0.125 step (flat 0.113, wall 0.142, bottom 0.107), held at what is measured plus ~15 %; u_z says so (94 %
+// coverage, 86 % before its roughness term), held at 90-97 %.
 struct Case {
   double step_um, na;
   double max_all, max_region, min_coverage, max_coverage;
@@ -181,7 +182,7 @@ INSTANTIATE_TEST_SUITE_P(StepsAndApertures, FocusAccuracy,
                                            Case{2.0, 0.9, 0.1, 0.1, 0.93, 1.0, imaging::FocusMeasure::kTenengrad},
                                            // The bench's optics (../shared/bench/focusgen.py's defaults) in this
                                            // renderer: a diffraction floor of 0.6 px, a texture of 1 px.
-                                           Case{1.0, 0.4, 0.145, 0.165, 0.82, 0.97,
+                                           Case{1.0, 0.4, 0.145, 0.165, 0.90, 0.97,
                                                 imaging::FocusMeasure::kModifiedLaplacian, 0.6, 1.0},
                                            Case{1.0, 0.9, 0.1, 0.1, 0.93, 0.99,
                                                 imaging::FocusMeasure::kModifiedLaplacian, 0.3, 0.7}),

@@ -37,6 +37,7 @@ bool BenchUsable() {
 struct RegionFigures {
   double rms_steps[3] = {0, 0, 0};  // flat, wall, bottom
   double coverage[3] = {0, 0, 0};
+  double standardised_rms[3] = {0, 0, 0};  // rms of error / u_z
   std::size_t count[3] = {0, 0, 0};
   double valid_share = 0.0;
 };
@@ -63,7 +64,7 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
   const double cy = truth["surface_info"]["centre_px"][1].get<double>();
   const double a = truth["surface_info"]["footprint_radius_px"].get<double>();
   RegionFigures f;
-  double sum[3] = {0, 0, 0};
+  double sum[3] = {0, 0, 0}, standardised[3] = {0, 0, 0};
   std::size_t covered[3] = {0, 0, 0}, compared = 0, valid = 0;
   constexpr int kBorder = 5;
   for (int y = kBorder; y < surface.size_y - kBorder; ++y) {
@@ -78,6 +79,7 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
       if (region < 0) continue;  // the rim's 3 px either side, as the bench leaves them out
       const double d = z - surface.z_mm[i];
       sum[region] += d * d;
+      standardised[region] += d * d / (double(r.u_z_mm[i]) * double(r.u_z_mm[i]));
       covered[region] += std::abs(d) <= 1.96 * r.u_z_mm[i];
       ++f.count[region];
     }
@@ -85,11 +87,14 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
   for (int k = 0; k < 3; ++k) {
     f.rms_steps[k] = std::sqrt(sum[k] / double(f.count[k])) / step_mm;
     f.coverage[k] = double(covered[k]) / double(f.count[k]);
+    f.standardised_rms[k] = std::sqrt(standardised[k] / double(f.count[k]));
   }
   f.valid_share = double(valid) / double(compared);
-  std::printf("focusgen.py %s: rms flat %.3f, wall %.3f, bottom %.3f step; coverage %.3f, %.3f, %.3f; valid %.4f\n",
-              arguments.c_str(), f.rms_steps[0], f.rms_steps[1], f.rms_steps[2], f.coverage[0], f.coverage[1],
-              f.coverage[2], f.valid_share);
+  std::printf(
+      "focusgen.py %s: rms flat %.3f, wall %.3f, bottom %.3f step; coverage %.3f, %.3f, %.3f; error / u_z rms %.2f, "
+      "%.2f, %.2f; valid %.4f\n",
+      arguments.c_str(), f.rms_steps[0], f.rms_steps[1], f.rms_steps[2], f.coverage[0], f.coverage[1], f.coverage[2],
+      f.standardised_rms[0], f.standardised_rms[1], f.standardised_rms[2], f.valid_share);
   return f;
 }
 
@@ -97,35 +102,46 @@ struct Condition {
   const char* name;
   std::string arguments;
   double max_rms_steps;  // per region
+  double min_valid_share = 0.99;
 };
 
 class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
 
-// Tolerances. Both scenes are held at the goal, 0.1 step rms in every region: the bench's own (NA 0.4,
-// sigma0 0.6 um, texture correlation 1 px; measured 0.053-0.057 flat, 0.081-0.082 wall, 0.054-0.057 bottom on
-// seeds 1-3) and a coarser texture under a wider aperture (NA 0.6, sigma0 0.45 um, 1.5 px; 0.056 / 0.082 /
-// 0.055 on seed 6; 0.070 / 0.079 / 0.058 on seed 8). u_z: 95 % coverage measured at 91-97 % per region on these;
-// a region here holds a few hundred independent patches (errors correlate over the 9 px window), so one seed's
-// coverage scatters by about 1.5 %: held at 90-98.5 %. Outside these conditions (a 2 px texture, or NA 0.9 with
-// an 0.8 um floor) the errors reach 0.1-0.2 step and u_z covers only 75-90 % (the table of docs/commands/focus.md).
+// Tolerances. The bench's own scene (NA 0.4, sigma0 0.6 um, texture correlation 1 px; measured 0.053-0.057 flat,
+// 0.081-0.082 wall, 0.054-0.057 bottom on seeds 1-3) and a coarser texture under a wider aperture (NA 0.6, sigma0
+// 0.45 um, 1.5 px; 0.056 / 0.082 / 0.055 on seed 6; 0.070 / 0.079 / 0.058 on seed 8) are held at the goal,
+// 0.1 step rms in every region. Two conditions where the physics limits the accuracy are held at what is measured
+// plus ~15 %, and their u_z must say so: NA 0.9 with an 0.8 um floor, where the blur grows linearly from the floor
+// and the focus curve's sharp top pulls peaks towards the nearest image (0.11-0.12 step on the flat, 0.11 on the
+// wall, seeds 11 and 12), and the same optics with a 2 px texture (0.12-0.15 step, 5-7 % of the pixels below
+// --min-quality 2). u_z: the 95 % coverage of 1.96 u_z measured at 93-98 % per region on the first two and at
+// 93.5-99 % on the last two (seeds 11 and 12; 78-84 % with the model before, which counted only the heights'
+// pixel-to-pixel scatter); a region here holds a few hundred independent patches (errors correlate over the 9 px
+// window), so one seed's coverage scatters by about 1.5 %: held at 90-99 %. The rms of error / u_z, measured
+// 0.76-1.06 on them, is held at 0.7-1.3.
 TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
   if (!BenchUsable()) GTEST_SKIP() << kBench << " or python3 with numpy, scipy and tifffile is absent";
   const Condition& c = GetParam();
   const testing::TempDir dir;
   const RegionFigures f = RenderAndMeasure(dir.path() / "stack", c.arguments);
-  EXPECT_GT(f.valid_share, 0.99);
+  EXPECT_GT(f.valid_share, c.min_valid_share);
   for (int k = 0; k < 3; ++k) {
     EXPECT_GT(f.count[k], 3000u) << "region " << k;
     EXPECT_LT(f.rms_steps[k], c.max_rms_steps) << "region " << k;
     EXPECT_GE(f.coverage[k], 0.90) << "region " << k;
-    EXPECT_LE(f.coverage[k], 0.985) << "region " << k;
+    EXPECT_LE(f.coverage[k], 0.99) << "region " << k;
+    EXPECT_GE(f.standardised_rms[k], 0.7) << "region " << k;
+    EXPECT_LE(f.standardised_rms[k], 1.3) << "region " << k;
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Focusgen, FocusIndependentStacks,
     ::testing::Values(Condition{"bench_scene", "--seed 7", 0.1},
-                      Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1}),
+                      Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1},
+                      Condition{"sharp_top_NA09_floor08", "--seed 9 --na 0.9 --sigma0-um 0.8 --texture-px 0.7", 0.14},
+                      Condition{"coarse_texture_NA09_floor08", "--seed 10 --na 0.9 --sigma0-um 0.8 --texture-px 2",
+                                0.17, 0.9}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
