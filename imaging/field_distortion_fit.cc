@@ -18,8 +18,9 @@ namespace fvm::imaging {
 
 void FieldDistortionFitOptions::Check() const {
   FieldDistortionTermNames(order);  // throws outside 2..kMaxDistortionOrder
-  if (!(max_field_sigma_px > 0.0) || min_pair_points < 3 || !(huber_sigmas > 0.0)) {
-    throw std::invalid_argument("field distortion fit: max field sigma > 0, at least 3 points a pair, Huber > 0");
+  if (!(max_field_sigma_px > 0.0) || min_pair_points < 3 || !(huber_sigmas > 0.0) || threads < 1) {
+    throw std::invalid_argument(
+        "field distortion fit: max field sigma > 0, at least 3 points a pair, Huber > 0, 1 thread or more");
   }
 }
 
@@ -292,7 +293,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
     solver.linear_solver_type = free_params + ks > 300 ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_NORMAL_CHOLESKY;
     solver.max_num_iterations = 50;
     solver.function_tolerance = 1e-12;
-    solver.num_threads = 2;
+    solver.num_threads = options.threads;
     ceres::Solver::Summary summary;
     ceres::Solve(solver, problem.get(), &summary);
     fit.iterations += static_cast<int>(summary.iterations.size());

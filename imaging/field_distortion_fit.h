@@ -40,6 +40,7 @@ struct FieldDistortionFitOptions {
   // Hold the terms that act on the overlaps as a stretch or shear of the mosaic (FieldDistortionStretchTerms,
   // kHeldStretchTerms) at 0: what a stitched grid needs, where nothing but the overlaps places the tiles.
   bool hold_stretch_terms = false;
+  int threads = 2;  // Ceres' threads for the solve (fvm stitch sets its --threads)
   void Check() const;  // throws std::invalid_argument
 };
 
