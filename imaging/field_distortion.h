@@ -38,14 +38,17 @@ inline constexpr const char* kFixedLinearPart =
 // it to a pixel or two, which moves the positions by as much per step. Held at 0, as Rouwane, Texier and
 // Passieux (2024) hold them on their real grids (their fields of the 3 x 4 and 4 x 4 confocal grids have no x^3
 // in d_x, no y^3 in d_y: arouwane/Distortion-correction, identif_case1.json, mx = [3, 5, 6, 7], my = [3, 4, 6, 7]),
-// the field keeps the convention of the optical centre: no displacement and the identity Jacobian at the tile
-// centre, and the nominal pixel size along the tile's two middle lines (the Brown 1966 / Conrady 1919 convention
-// for the linear part). The radial terms k1, k2 span x^3 (x^5) in d_x, so they are held with them: what remains of
-// a radial field is its cross part (x y^2 in d_x, x^2 y in d_y), which the overlaps see.
+// the field keeps the convention of the optical centre (no displacement and the identity Jacobian at the tile
+// centre: the Brown 1966 / Conrady 1919 convention for the linear part, and the authors' Projector, whose terms
+// start at degree 2 about the tile centre) and, beyond it, moves the two ends of the tile's middle row alike along
+// x and the two ends of its middle column alike along y: the pixel size holds from edge to edge along the tile's
+// middle lines. The radial terms k1, k2 span x^3 (x^5) in d_x, so they are held with them: what remains of a radial
+// field is its cross part (x y^2 in d_x, x^2 y in d_y), which the overlaps see; its own-axis part goes into the
+// positions as a scale, on real grids as in the authors' method.
 inline constexpr const char* kHeldStretchTerms =
     "the terms in an odd power of one coordinate alone (x^3, y^3, x^5, y^5 in dx or dy, and the radial k1, k2 "
     "that contain them) act on a grid's overlaps as a stretch or shear of the mosaic and are pinned only to second "
-    "order: held at 0 (the scale is the pixel size's along the tile's middle lines)";
+    "order: held at 0 (the pixel size holds from edge to edge along the tile's middle lines)";
 
 // Highest polynomial order any tile set is asked for; beyond it the terms change by less than a pixel's noise over
 // a 10-20 % overlap.
