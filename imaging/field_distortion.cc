@@ -98,6 +98,21 @@ const std::vector<std::string>& FieldDistortionTermNames(int order) {
   return names[static_cast<size_t>(order)];
 }
 
+std::vector<int> FieldDistortionStretchTerms(int order) {
+  const std::vector<FieldTerm>& terms = Terms(order);
+  std::vector<int> held;
+  for (size_t t = 0; t < terms.size(); ++t) {
+    for (const FieldMonomial& m : terms[t].monomials) {
+      const int power = m.i + m.j;
+      if (power >= 3 && power % 2 == 1 && (m.i == 0 || m.j == 0)) {
+        held.push_back(static_cast<int>(t));
+        break;
+      }
+    }
+  }
+  return held;
+}
+
 void FieldDistortion::Check() const {
   if (order == 0) return;
   const size_t k = Terms(order).size();

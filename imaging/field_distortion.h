@@ -29,6 +29,27 @@ inline constexpr const char* kFixedLinearPart =
     "the field's linear part (shift, scale, shear, turn: dx_x, dx_y, dy_x, dy_y) cannot be told from the stage "
     "steps and the pixel size using overlaps alone: fixed at 0";
 
+// The terms a grid's overlaps see only to second order, held at 0 when a grid of tiles is stitched
+// (FieldDistortionStretchTerms). An overlap sees d through d(u_a) - d(u_b) between points a step apart; for an odd
+// power of one coordinate alone (x^3 or y^3 in d_x or in d_y, x^5, y^5), taken across an overlap that sits
+// symmetrically about the tile centre, that difference is the same for every point to first order (x^3 - (x - s)^3
+// is stationary at the overlap's middle, x = s / 2): such a term acts on the overlaps as a stretch (x^n in d_x,
+// y^n in d_y) or a shear (y^n in d_x, x^n in d_y) of the whole mosaic, and the thin bands of a 10 % overlap pin
+// it to a pixel or two, which moves the positions by as much per step. Held at 0, as Rouwane, Texier and
+// Passieux (2024) hold them on their real grids (their fields of the 3 x 4 and 4 x 4 confocal grids have no x^3
+// in d_x, no y^3 in d_y: arouwane/Distortion-correction, identif_case1.json, mx = [3, 5, 6, 7], my = [3, 4, 6, 7]),
+// the field keeps the convention of the optical centre (no displacement and the identity Jacobian at the tile
+// centre: the Brown 1966 / Conrady 1919 convention for the linear part, and the authors' Projector, whose terms
+// start at degree 2 about the tile centre) and, beyond it, moves the two ends of the tile's middle row alike along
+// x and the two ends of its middle column alike along y: the pixel size holds from edge to edge along the tile's
+// middle lines. The radial terms k1, k2 span x^3 (x^5) in d_x, so they are held with them: what remains of a radial
+// field is its cross part (x y^2 in d_x, x^2 y in d_y), which the overlaps see; its own-axis part goes into the
+// positions as a scale, on real grids as in the authors' method.
+inline constexpr const char* kHeldStretchTerms =
+    "the terms in an odd power of one coordinate alone (x^3, y^3, x^5, y^5 in dx or dy, and the radial k1, k2 "
+    "that contain them) act on a grid's overlaps as a stretch or shear of the mosaic and are pinned only to second "
+    "order: held at 0 (the pixel size holds from edge to edge along the tile's middle lines)";
+
 // Highest polynomial order any tile set is asked for; beyond it the terms change by less than a pixel's noise over
 // a 10-20 % overlap.
 inline constexpr int kMaxDistortionOrder = 6;
@@ -36,6 +57,9 @@ inline constexpr int kMaxDistortionOrder = 6;
 // The names of the terms of `order` (2..kMaxDistortionOrder), in the order of the coefficients. Throws
 // std::invalid_argument outside that range.
 const std::vector<std::string>& FieldDistortionTermNames(int order);
+// The indices of the terms of `order` that kHeldStretchTerms holds: those whose monomials include an odd power >= 3
+// of one coordinate alone (in either component). Holding them at 0 holds exactly those monomials at 0.
+std::vector<int> FieldDistortionStretchTerms(int order);
 
 struct FieldDistortion {
   int width_px = 0, height_px = 0;  // the tiles it was identified on

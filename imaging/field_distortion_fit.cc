@@ -18,8 +18,9 @@ namespace fvm::imaging {
 
 void FieldDistortionFitOptions::Check() const {
   FieldDistortionTermNames(order);  // throws outside 2..kMaxDistortionOrder
-  if (!(max_field_sigma_px > 0.0) || min_pair_points < 3 || !(huber_sigmas > 0.0)) {
-    throw std::invalid_argument("field distortion fit: max field sigma > 0, at least 3 points a pair, Huber > 0");
+  if (!(max_field_sigma_px > 0.0) || min_pair_points < 3 || !(huber_sigmas > 0.0) || threads < 1) {
+    throw std::invalid_argument(
+        "field distortion fit: max field sigma > 0, at least 3 points a pair, Huber > 0, 1 thread or more");
   }
 }
 
@@ -216,24 +217,36 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
     if (!hold[static_cast<size_t>(i)]) column[static_cast<size_t>(i)] = free_params, free_params += 2;
   }
 
+  // The terms solved for (all but the held ones): each point's g has their columns only.
+  if (!known && options.hold_stretch_terms) fit.held_terms = FieldDistortionStretchTerms(fit.field.order);
+  std::vector<int> solved;
+  for (int t = 0; t < k; ++t) {
+    if (std::find(fit.held_terms.begin(), fit.held_terms.end(), t) == fit.held_terms.end()) solved.push_back(t);
+  }
+  const int ks = static_cast<int>(solved.size());
+  std::vector<std::string> solved_names;
+  for (int t : solved) solved_names.push_back(names[static_cast<size_t>(t)]);
   std::vector<FitPoint> points;
   for (size_t q = 0; q < used.size(); ++q) {
     const PairCorrespondences& p = *used[q];
     for (size_t m = 0; m < p.a_px.size(); ++m) {
-      points.push_back({static_cast<int>(q), p.a, p.b, p.a_px[m] - p.b_px[m],
-                        fit.field.Basis(p.a_px[m]) - fit.field.Basis(p.b_px[m])});
+      const Eigen::Matrix<double, 2, Eigen::Dynamic> g = fit.field.Basis(p.a_px[m]) - fit.field.Basis(p.b_px[m]);
+      Eigen::Matrix<double, 2, Eigen::Dynamic> gs(2, ks);
+      for (int s = 0; s < ks; ++s) gs.col(s) = g.col(solved[static_cast<size_t>(s)]);
+      points.push_back({static_cast<int>(q), p.a, p.b, p.a_px[m] - p.b_px[m], std::move(gs)});
     }
   }
   fit.points = static_cast<int>(points.size());
   fit.pairs_used = static_cast<int>(used.size());
   if (!known) {
     RefuseOneDirection(used, options.order);
-    RefuseUnseenTerms(points, column, free_params, k, names);
+    RefuseUnseenTerms(points, column, free_params, ks, solved_names);
   }
 
   std::vector<std::array<double, 2>> position(static_cast<size_t>(tiles));
   for (int i = 0; i < tiles; ++i) position[static_cast<size_t>(i)] = {initial_px[static_cast<size_t>(i)].x(), initial_px[static_cast<size_t>(i)].y()};
-  Eigen::VectorXd c = fit.field.coefficients;
+  Eigen::VectorXd c(ks);  // the solved terms' coefficients
+  for (int s = 0; s < ks; ++s) c(s) = fit.field.coefficients(solved[static_cast<size_t>(s)]);
   const auto residual_of = [&](const FitPoint& p) {
     const Eigen::Map<const Eigen::Vector2d> pa(position[static_cast<size_t>(p.a)].data()), pb(position[static_cast<size_t>(p.b)].data());
     return Eigen::Vector2d(pa - pb + p.delta_u + p.g * c);
@@ -275,10 +288,12 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
     }
     if (known) problem->SetParameterBlockConstant(c.data());
     ceres::Solver::Options solver;
-    solver.linear_solver_type = free_params + k > 300 ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
+    // The normal equations: a few dozen unknowns against tens of thousands of residuals, where QR of the whole
+    // Jacobian cost most of the solve.
+    solver.linear_solver_type = free_params + ks > 300 ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_NORMAL_CHOLESKY;
     solver.max_num_iterations = 50;
     solver.function_tolerance = 1e-12;
-    solver.num_threads = 2;
+    solver.num_threads = options.threads;
     ceres::Solver::Summary summary;
     ceres::Solve(solver, problem.get(), &summary);
     fit.iterations += static_cast<int>(summary.iterations.size());
@@ -341,8 +356,14 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
     fit.field = *known;
     return fit;
   }
-  fit.field.coefficients = c;
-  fit.field.covariance = covariance.bottomRightCorner(k, k);
+  fit.field.covariance = Eigen::MatrixXd::Zero(k, k);
+  for (int s = 0; s < ks; ++s) {
+    fit.field.coefficients(solved[static_cast<size_t>(s)]) = c(s);
+    for (int r = 0; r < ks; ++r) {
+      fit.field.covariance(solved[static_cast<size_t>(s)], solved[static_cast<size_t>(r)]) =
+          covariance(free_params + s, free_params + r);
+    }
+  }
 
   // Too high an order: terms the thin overlaps pin, but not to within max_field_sigma_px over the whole tile, from
   // the correspondences' own scatter (what the overlaps' geometry and texture allow; the pairs' misfit, which a
@@ -350,7 +371,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   FieldDistortion determined = fit.field;
   determined.covariance /= fit.pair_scatter_factor * fit.pair_scatter_factor;
   std::vector<int> loose;
-  for (int t = 0; t < k; ++t) {
+  for (int t : solved) {
     FieldDistortion alone = determined;
     alone.covariance = Eigen::MatrixXd::Zero(k, k);
     alone.covariance(t, t) = determined.covariance(t, t);

@@ -37,6 +37,10 @@ struct FieldDistortionFitOptions {
   // Pairs with fewer correspondences than this carry no weight (a texture-free overlap).
   int min_pair_points = 12;
   double huber_sigmas = 2.0;  // the robust loss's bend, in the correspondences' standard deviations
+  // Hold the terms that act on the overlaps as a stretch or shear of the mosaic (FieldDistortionStretchTerms,
+  // kHeldStretchTerms) at 0: what a stitched grid needs, where nothing but the overlaps places the tiles.
+  bool hold_stretch_terms = false;
+  int threads = 2;  // Ceres' threads for the solve (fvm stitch sets its --threads)
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -52,6 +56,7 @@ struct FieldDistortionFit {
   double pair_scatter_factor = 1.0;
   int points = 0, pairs_used = 0, pairs_without_texture = 0;
   int iterations = 0;
+  std::vector<int> held_terms;  // held at 0 (hold_stretch_terms): value and u 0
   std::string solver_report;  // Ceres' BriefReport of the last solve
 };
 

@@ -53,6 +53,8 @@ struct OpenCvImaging {
   decltype(&CorrespondenceOptions::Check) check_correspondence_options;
   decltype(&MatchOverlap) match_overlap;
   decltype(&MatchOverlaps) match_overlaps;
+  decltype(&PrepareTilesForMatching) prepare_tiles_for_matching;
+  decltype(&MatchPreparedOverlaps) match_prepared_overlaps;
 };
 
 // The table, loading the plugin on first use. `action` says what needed it ("registering tiles"); when the plugin

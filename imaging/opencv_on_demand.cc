@@ -120,4 +120,15 @@ std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& ima
   return LoadOpenCvImaging("matching overlaps").match_overlaps(images, overlaps, guess, options);
 }
 
+PreparedTiles PrepareTilesForMatching(const std::vector<TileImage>& images, const CorrespondenceOptions& options) {
+  return LoadOpenCvImaging("matching overlaps").prepare_tiles_for_matching(images, options);
+}
+
+std::vector<PairCorrespondences> MatchPreparedOverlaps(const PreparedTiles& tiles,
+                                                       const std::vector<OverlapToMatch>& overlaps,
+                                                       const FieldDistortion& guess,
+                                                       const CorrespondenceOptions& options) {
+  return LoadOpenCvImaging("matching overlaps").match_prepared_overlaps(tiles, overlaps, guess, options);
+}
+
 }  // namespace fvm::imaging

@@ -8,9 +8,23 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <memory>
 #include <stdexcept>
 
 namespace fvm::imaging {
+
+struct PreparedTileSet {
+  // A tile as the matching takes it: high-passed (shading and offsets out) in float, with its gradient, for the
+  // sub-pixel refinement; and stretched to 8 bits (128 +- 4 of the texture's standard deviations) for the tracker.
+  struct Tile {
+    cv::Mat u8, value, gx, gy;
+    // The tracker's pyramid of u8 with its derivatives (cv::buildOpticalFlowPyramid), built once: the tracker
+    // builds it on every call otherwise, for the whole tile, which cost more than the tracking.
+    std::vector<cv::Mat> pyramid;
+    int pyramid_window_px = 0, pyramid_levels = -1;
+  };
+  std::vector<Tile> tiles;
+};
 
 void CorrespondenceOptions::Check() const {
   if (grid_step_px < 2 || window_px < 5 || window_px % 2 == 0 || pyramid_levels < 0 || pyramid_levels > 6 ||
@@ -22,11 +36,8 @@ void CorrespondenceOptions::Check() const {
 
 namespace {
 
-// A tile as the matching takes it: high-passed (shading and offsets out) in float, with its gradient, for the
-// sub-pixel refinement; and stretched to 8 bits (128 +- 4 of the texture's standard deviations) for the tracker.
-struct TrackableTile {
-  cv::Mat u8, value, gx, gy;
-};
+using TrackableTile = PreparedTileSet::Tile;
+
 
 // The image less the least-squares polynomial of degree 4 in x and y (vignetting, uneven illumination), fitted on
 // every 4th pixel: a window's mean and gain are taken out in the refinement, not a slope across it.
@@ -53,12 +64,23 @@ cv::Mat LessShading(const cv::Mat& f) {
   for (size_t i = 0; i < rows.size(); ++i) a.row(static_cast<Eigen::Index>(i)) = rows[i], b(static_cast<Eigen::Index>(i)) = values[i];
   const Eigen::VectorXd c =
       Decompose<Eigen::ColPivHouseholderQR<Eigen::MatrixXd>>(a, "the shading polynomial of an overlap window").solve(b);
+  // Evaluated row by row: on one row the quartic is a polynomial in x alone, its 5 coefficients from c and y's
+  // powers (Horner across the row; the basis per pixel cost more than the rest of the tile's preparation).
   cv::Mat out(f.size(), CV_32F);
-  Eigen::RowVectorXd row(15);
   for (int y = 0; y < f.rows; ++y) {
+    const double yy = y * sy - 1.0;
+    const double yp[5] = {1.0, yy, yy * yy, yy * yy * yy, yy * yy * yy * yy};
+    std::array<double, 5> in_x{};  // coefficient of x^i on this row
+    int k = 0;
+    for (int degree = 0; degree <= 4; ++degree) {
+      for (int j = 0; j <= degree; ++j) in_x[static_cast<size_t>(degree - j)] += c(k++) * yp[j];
+    }
+    const float* source = f.ptr<float>(y);
+    float* target = out.ptr<float>(y);
     for (int x = 0; x < f.cols; ++x) {
-      basis(x * sx - 1.0, y * sy - 1.0, row);
-      out.at<float>(y, x) = static_cast<float>(f.at<float>(y, x) - row.dot(c));
+      const double xx = x * sx - 1.0;
+      const double shading = (((in_x[4] * xx + in_x[3]) * xx + in_x[2]) * xx + in_x[1]) * xx + in_x[0];
+      target[x] = static_cast<float>(source[x] - shading);
     }
   }
   return out;
@@ -82,8 +104,21 @@ TrackableTile TrackableImage(const TileImage& tile, double sigma) {
   cv::Sobel(out.value, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT);  // central differences
   cv::Sobel(out.value, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT);
   if (sigma > 0.0) {
-    cv::Mat low;
-    cv::GaussianBlur(f, low, cv::Size(), sigma, sigma, cv::BORDER_REFLECT);
+    // The low-pass at a quarter of the resolution, brought back bilinearly: it is smooth on the scale of 4 px,
+    // and the full-resolution blur of sigma 8 px (a 65-tap kernel) cost more than the rest of the tile's
+    // preparation. Each pyrDown blurs by 1 px of its own input (variance 1, 4 px^2 at full resolution: (f^2 - 1)
+    // / 3 after halving to 1 / f); the Gaussian at the reduced scale adds the rest. It only steadies the tracker's
+    // start; each point is refined on `value`.
+    cv::Mat low = f;
+    int factor = 1;
+    while (factor < 4 && sigma / (2 * factor) >= 1.0 && low.cols >= 64 && low.rows >= 64) {
+      cv::pyrDown(low, low, cv::Size(), cv::BORDER_REFLECT);
+      factor *= 2;
+    }
+    const double done = (factor * factor - 1) / 3.0;  // full-resolution variance of the halvings
+    const double reduced = std::sqrt(std::max(sigma * sigma - done, 0.25)) / factor;
+    cv::GaussianBlur(low, low, cv::Size(), reduced, reduced, cv::BORDER_REFLECT);
+    if (factor > 1) cv::resize(low, low, f.size(), 0.0, 0.0, cv::INTER_LINEAR);
     f -= low;
   } else {
     f -= mean;
@@ -211,10 +246,20 @@ PairCorrespondences MatchPrepared(const TrackableTile& ta, const TrackableTile& 
   std::vector<unsigned char> status, back_status;
   std::vector<float> error, back_error;
   std::vector<cv::Point2f> back = from;
-  cv::calcOpticalFlowPyrLK(ia, ib, from, to, status, error, window, options.pyramid_levels, stop,
-                           cv::OPTFLOW_USE_INITIAL_FLOW);
-  cv::calcOpticalFlowPyrLK(ib, ia, to, back, back_status, back_error, window, options.pyramid_levels, stop,
-                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  // The prepared pyramids when they were built with a border for this window and reach as many levels (a
+  // pyramid of more levels serves fewer: the tracker starts at the level it is asked for).
+  const auto tracked = [&](const TrackableTile& t) {
+    const bool usable = t.pyramid_window_px >= options.window_px && t.pyramid_levels >= options.pyramid_levels;
+    return usable ? cv::InputArray(t.pyramid) : cv::InputArray(t.u8);
+  };
+  if (options.track) {
+    cv::calcOpticalFlowPyrLK(tracked(ta), tracked(tb), from, to, status, error, window, options.pyramid_levels, stop,
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+    cv::calcOpticalFlowPyrLK(tracked(tb), tracked(ta), to, back, back_status, back_error, window,
+                             options.pyramid_levels, stop, cv::OPTFLOW_USE_INITIAL_FLOW);
+  } else {
+    status.assign(from.size(), 1), back_status.assign(from.size(), 1);
+  }
   for (size_t k = 0; k < from.size(); ++k) {
     if (!status[k] || !back_status[k] || !inside(to[k], wb, hb)) continue;
     const double dx = back[k].x - from[k].x, dy = back[k].y - from[k].y;
@@ -241,21 +286,33 @@ PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_i
                        a_index, b_index, offset_px, guess, options);
 }
 
-std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
-                                               const std::vector<OverlapToMatch>& overlaps,
-                                               const FieldDistortion& guess, const CorrespondenceOptions& options) {
+PreparedTiles PrepareTilesForMatching(const std::vector<TileImage>& images, const CorrespondenceOptions& options) {
+  options.Check();
+  auto set = std::make_shared<PreparedTileSet>();
+  set->tiles.resize(images.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      PreparedTileSet::Tile& tile = set->tiles[static_cast<size_t>(i)];
+      tile = TrackableImage(images[static_cast<size_t>(i)], options.highpass_sigma_px);
+      tile.pyramid_levels = cv::buildOpticalFlowPyramid(tile.u8, tile.pyramid, cv::Size(options.window_px, options.window_px),
+                                                        options.pyramid_levels);
+      tile.pyramid_window_px = options.window_px;
+    }
+  });
+  return {std::move(set), static_cast<int>(images.size())};
+}
+
+std::vector<PairCorrespondences> MatchPreparedOverlaps(const PreparedTiles& tiles,
+                                                       const std::vector<OverlapToMatch>& overlaps,
+                                                       const FieldDistortion& guess,
+                                                       const CorrespondenceOptions& options) {
   options.Check();
   for (const OverlapToMatch& o : overlaps) {
-    if (o.a < 0 || o.b < 0 || o.a >= static_cast<int>(images.size()) || o.b >= static_cast<int>(images.size())) {
+    if (o.a < 0 || o.b < 0 || o.a >= tiles.size || o.b >= tiles.size || !tiles.set) {
       throw std::invalid_argument("MatchOverlaps: a tile index outside the images");
     }
   }
-  std::vector<TrackableTile> prepared(images.size());
-  cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      prepared[static_cast<size_t>(i)] = TrackableImage(images[static_cast<size_t>(i)], options.highpass_sigma_px);
-    }
-  });
+  const std::vector<PreparedTileSet::Tile>& prepared = tiles.set->tiles;
   std::vector<PairCorrespondences> out(overlaps.size());
   cv::parallel_for_(cv::Range(0, static_cast<int>(overlaps.size())), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
@@ -265,6 +322,12 @@ std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& ima
     }
   });
   return out;
+}
+
+std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
+                                               const std::vector<OverlapToMatch>& overlaps,
+                                               const FieldDistortion& guess, const CorrespondenceOptions& options) {
+  return MatchPreparedOverlaps(PrepareTilesForMatching(images, options), overlaps, guess, options);
 }
 
 }  // namespace fvm::imaging

@@ -8,6 +8,7 @@
 // Pixel frame as in tile_registration.h: x right, y down, an offset is b's top-left corner in a's frame.
 
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "imaging/field_distortion.h"
@@ -21,6 +22,10 @@ struct CorrespondenceOptions {
   int pyramid_levels = 3;  // reaches 4 (2^levels) window half-widths: the field's pull between two tiles' views
   double max_round_trip_px = 0.1;  // a -> b -> a must land this close to the start
   double highpass_sigma_px = 8.0;  // shading and vignetting out before tracking
+  // false: no tracker; each point refined from where the guess puts it, kept when it settles within half a pixel
+  // of there. For a guess good to a fraction of a pixel (the field and positions of an earlier round), where the
+  // tracker's search and its round trip only repeat what the guess already knows.
+  bool track = true;
   void Check() const;             // throws std::invalid_argument
 };
 
@@ -45,5 +50,20 @@ struct OverlapToMatch {
 std::vector<PairCorrespondences> MatchOverlaps(const std::vector<TileImage>& images,
                                                const std::vector<OverlapToMatch>& overlaps,
                                                const FieldDistortion& guess, const CorrespondenceOptions& options = {});
+
+// The tiles as the matching takes them (high-passed, with their gradients), prepared once, on OpenCV's thread pool,
+// for several rounds of matching on one tile set: preparing a tile costs more than matching its overlaps. An opaque
+// handle (OpenCV's images stay in the .cc), cheap to copy.
+struct PreparedTileSet;
+struct PreparedTiles {
+  std::shared_ptr<const PreparedTileSet> set;
+  int size = 0;
+};
+PreparedTiles PrepareTilesForMatching(const std::vector<TileImage>& images, const CorrespondenceOptions& options = {});
+// MatchOverlaps on tiles prepared before (with the same highpass_sigma_px).
+std::vector<PairCorrespondences> MatchPreparedOverlaps(const PreparedTiles& tiles,
+                                                       const std::vector<OverlapToMatch>& overlaps,
+                                                       const FieldDistortion& guess,
+                                                       const CorrespondenceOptions& options = {});
 
 }  // namespace fvm::imaging

@@ -68,6 +68,11 @@ std::string DistortionText(const imaging::FieldDistortionFit& fit, bool identifi
     text += fmt::format("    terms, px (standard uncertainty): {}\n", fmt::join(terms, ", "));
     text += fmt::format("    field uncertainty {:.3f} px rms over the tile; {}\n", field.DisplacementSigmaPx(),
                         imaging::kFixedLinearPart);
+    if (!fit.held_terms.empty()) {
+      std::vector<std::string> held;
+      for (int t : fit.held_terms) held.push_back(names[static_cast<size_t>(t)]);
+      text += fmt::format("    held at 0: {}: {}\n", fmt::join(held, ", "), imaging::kHeldStretchTerms);
+    }
   }
   return text;
 }
@@ -82,6 +87,12 @@ nlohmann::ordered_json DistortionJson(const imaging::FieldDistortionFit& fit, bo
   j["rigid_rms_px"] = fit.rigid_rms_px;
   j["residual_rms_px"] = fit.residual_rms_px;
   j["pair_scatter_factor"] = fit.pair_scatter_factor;
+  if (!fit.held_terms.empty()) {  // stitching: the terms that act on a grid's overlaps as a stretch or shear
+    nlohmann::ordered_json held = nlohmann::ordered_json::array();
+    for (int t : fit.held_terms) held.push_back(imaging::FieldDistortionTermNames(fit.field.order)[static_cast<size_t>(t)]);
+    j["held_terms"] = held;
+    j["held"] = imaging::kHeldStretchTerms;
+  }
   return j;
 }
 

@@ -48,11 +48,17 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   std::vector<Eigen::Vector2d> start = positions.positions_px;
   imaging::FieldDistortionFitOptions fit_options = options.fit;
   fit_options.order = options.known ? options.known->order : options.order;
-  // Twice: the first field starts the second round's correspondences where it puts them, so that the tracker
-  // no longer has to reach across the field's whole pull.
+  fit_options.hold_stretch_terms = options.hold_stretch_terms;
+  // Twice: the first round tracks a coarser grid of points (every other one along each axis) across the field's
+  // whole pull; its field and positions put the second round's points within a fraction of a pixel, where each
+  // is refined without the tracker, on the full grid. The tiles are prepared once for both.
+  const imaging::PreparedTiles prepared = imaging::PrepareTilesForMatching(images, options.matching);
   for (int round = 0; round < 2; ++round) {
+    imaging::CorrespondenceOptions matching = options.matching;
+    if (round == 0) matching.grid_step_px *= 2;
+    if (round > 0) matching.track = false;
     const std::vector<imaging::PairCorrespondences> matched =
-        imaging::MatchOverlaps(images, overlaps, guess, options.matching);
+        imaging::MatchPreparedOverlaps(prepared, overlaps, guess, matching);
     out.fit = imaging::FitFieldDistortion(matched, start, fixed, width, height, fit_options,
                                           options.known ? &*options.known : nullptr);
     guess = out.fit.field;

@@ -21,7 +21,10 @@ struct StitchDistortionOptions {
   int order = 3;                                // the field to identify (FieldDistortionTermNames)
   std::optional<imaging::FieldDistortion> known;  // a saved field of the same objective: not identified again
   imaging::CorrespondenceOptions matching;
-  imaging::FieldDistortionFitOptions fit;
+  imaging::FieldDistortionFitOptions fit;         // its order and hold_stretch_terms are set from the two above
+  // A grid is placed by its overlaps alone: the terms that act on them as a stretch or shear of the mosaic are held
+  // at 0 (imaging::kHeldStretchTerms), as the published method holds them.
+  bool hold_stretch_terms = true;
   void Check() const;  // throws std::invalid_argument
 };
 

@@ -45,7 +45,9 @@ StitchedLayout StitchLayout(const imaging::TileLayout& layout, const std::vector
   s.rigid = StitchTiles(layout, images, options.stitch, on_pair);
   if (options.distortion) {
     try {
-      s.field = StitchWithoutDistortion(s.rigid, images, *options.distortion);
+      StitchDistortionOptions distortion = *options.distortion;
+      if (options.stitch.threads > 0) distortion.fit.threads = options.stitch.threads;  // the solve's, as the pool's
+      s.field = StitchWithoutDistortion(s.rigid, images, distortion);
     } catch (const imaging::FieldDistortionUndeterminable& e) {
       throw InputError(fmt::format("--distortion, {}: {}", layout.source, e.what()));
     }

@@ -25,16 +25,24 @@ def tile_set(tmp_path_factory):
     return d
 
 
-@pytest.mark.parametrize("options", [[], ["--pixel-mm", "0.001"], ["--distortion", "2", "--pixel-mm", "0.001"]],
-                         ids=["grid", "pixel-mm", "distortion"])
+@pytest.mark.parametrize("options", [[], ["--pixel-mm", "0.001"], ["--distortion", "2", "--pixel-mm", "0.001"],
+                                     ["--pixel-mm", "0.001", "--distortion"]],
+                         ids=["grid", "pixel-mm", "distortion", "distortion-default-order"])
 def test_stitch_summary_equals_the_command_json(tile_set, tmp_path, options):
     layout = tile_set / "layout.csv"
     doc = cli_json("stitch", "--layout", layout, "--overlap", "20", "-o", tmp_path / "p.csv", *options)
     keywords = {"pixel_mm": 0.001} if "--pixel-mm" in options else {}
     if "--distortion" in options:
-        keywords["distortion"] = 2
+        keywords["distortion"] = 2 if "2" in options else True
     result = fvm.stitch(layout, overlap=20, **keywords)
     assert result.summary == doc
+    if "--distortion" in options and "2" not in options:
+        # The default order (3): the terms a grid's overlaps see only as a stretch or shear are held, and named.
+        field = result.summary["distortion"]
+        assert field["order"] == 3
+        assert field["held_terms"] == ["k1", "dx_x3", "dx_y3", "dy_x3"]
+        assert all(t["value_px"] == 0 and t["u_px"] == 0 for t in field["terms"] if t["name"] in field["held_terms"])
+        assert field["overlap_ncc_after"] > field["overlap_ncc_before"]
     # The arrays are the positions the command writes (4 decimals in its CSV).
     rows = np.genfromtxt(tmp_path / "p.csv", delimiter=",", names=True, dtype=None, encoding=None)
     np.testing.assert_allclose(result["positions"], np.c_[rows["x"], rows["y"]], atol=5e-5)

@@ -198,3 +198,37 @@ void BM_Verify5408VsScipyPeer(benchmark::State& state) {
 BENCHMARK(BM_Verify5408VsScipyPeer)->Unit(benchmark::kMillisecond)->Iterations(10);
 
 }  // namespace
+
+// Issue 43: `fvm stitch --distortion` on the real confocal grid of ../shared/realdata/tiles/confocal-3x4 (12 tiles
+// of 1024 px, 17 overlaps: the rigid registration, dense correspondences in two rounds, the joint solve of positions
+// and field, the tiles resampled without it), the whole process on every core against the same on one thread
+// (`fvm --threads 1`). Goal: under 5 s wall on 2 cores. Skipped where ../shared is absent.
+void BM_StitchConfocalDistortionVsOneThread(benchmark::State& state) {
+  const fs::path grid = kShared / ".." / "realdata" / "tiles" / "confocal-3x4";
+  if (!fs::exists(grid / "TileConfiguration.txt")) {
+    state.SkipWithError("../shared/realdata absent");
+    return;
+  }
+  const fs::path layout = Scratch() / "confocal_layout.csv";
+  if (!fs::exists(layout)) {
+    std::string text = "file,row,col\n";
+    for (int k = 0; k < 12; ++k) {  // serpentine: the middle row runs right to left
+      const int row = k / 4, col = row == 1 ? 3 - k % 4 : k % 4;
+      char name[64];
+      std::snprintf(name, sizeof name, "x100_epr-jerem_10pct_001_A%03d_I.tif", k + 1);
+      text += (grid / name).string() + "," + std::to_string(row) + "," + std::to_string(col) + "\n";
+    }
+    FILE* out = std::fopen(layout.c_str(), "w");
+    if (out == nullptr || std::fputs(text.c_str(), out) < 0 || std::fclose(out) != 0) {
+      state.SkipWithError("cannot write the layout");
+      return;
+    }
+  }
+  const std::vector<std::string> stitch = {"stitch", "--layout", layout.string(), "--overlap", "10", "--distortion",
+                                           "-o", (Scratch() / "confocal_positions.csv").string()};
+  std::vector<std::string> subject = {FVM_EXE}, baseline = {FVM_EXE, "--threads", "1"};
+  subject.insert(subject.end(), stitch.begin(), stitch.end());
+  baseline.insert(baseline.end(), stitch.begin(), stitch.end());
+  Paired(state, subject, baseline);
+}
+BENCHMARK(BM_StitchConfocalDistortionVsOneThread)->Unit(benchmark::kMillisecond)->Iterations(3);

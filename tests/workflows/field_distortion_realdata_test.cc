@@ -81,9 +81,10 @@ TEST(ConfocalGrid, UndistortedPositionsMatchTheAuthorsTranslations) {
              "overlap NCC {:.3f} -> {:.3f}; field {:.2f} px largest, u {:.3f} px\n",
              rigid_rms, rms, z_rms, r.mean_overlap_ncc_before, r.mean_overlap_ncc_after,
              r.fit.field.LargestDisplacementPx(), r.fit.field.DisplacementSigmaPx());
-  // The linear part of a field is what no overlap tells (imaging/field_distortion.h): the authors' field fixes it
-  // otherwise than fvm (at the tile centre), which turns the whole mosaic by a linear map (0.28 % along x here).
-  // After that map and the offset, the positions agree to a few hundredths of a pixel; the rigid ones less well.
+  // The linear part of a field, and the terms that act on a grid's overlaps as a stretch or shear of the mosaic,
+  // are what the overlaps do not tell (imaging/field_distortion.h); fvm holds them as the authors do (no x^3 in
+  // dx, no y^3 in dy), so the positions agree after the common offset alone: 0.023 px rms measured (4.67 px when
+  // the stretch terms were free, 0.4 % along x), and after a linear map to a hundredth of a pixel.
   const auto affine_rms = [&](const std::vector<Eigen::Vector2d>& mine) {
     Eigen::MatrixXd a(12, 3), b(12, 2);
     for (size_t i = 0; i < 12; ++i) {
@@ -95,12 +96,14 @@ TEST(ConfocalGrid, UndistortedPositionsMatchTheAuthorsTranslations) {
   };
   const double rigid_affine = affine_rms(rigid.registration.positions.positions_px);
   const double affine = affine_rms(r.fit.positions_px);
-  fmt::print("after the linear map no overlap tells: rigid {:.3f} px rms, undistorted {:.3f} px rms\n", rigid_affine,
-             affine);
+  fmt::print("after a linear map: rigid {:.3f} px rms, undistorted {:.3f} px rms\n", rigid_affine, affine);
   EXPECT_LT(affine, 0.05);
   EXPECT_LT(affine, rigid_affine);
-  EXPECT_LT(rms, 5.0);
-  // fvm's own overlap measure (bilinear); ../shared/bench/overlap_ncc.py reads 0.885 on the tiles fvm stitch
+  EXPECT_LT(rms, 0.5);
+  EXPECT_LT(rms, rigid_rms);
+  // Honest: the errors against the authors' (their own error included) within the stated u.
+  EXPECT_LE(z_rms, 1.25);
+  // fvm's own overlap measure (bilinear); ../shared/bench/overlap_ncc.py reads 0.887 on the tiles fvm stitch
   // --undistorted writes, where the authors' corrected tiles reach 0.876.
   EXPECT_GT(r.mean_overlap_ncc_after, 0.876);
   EXPECT_GT(r.mean_overlap_ncc_after, r.mean_overlap_ncc_before + 0.1);

@@ -100,6 +100,20 @@ TEST(FieldDistortion, TermsLeaveOutTheLinearPart) {
 
 // Undistorting a distorted tile gives the ideal image back (cubic resampling twice: under 1 % of the texture's
 // contrast rms, 5 % at worst), and a round trip of a pixel through the field is exact.
+// The terms stitching holds (imaging::kHeldStretchTerms): an odd power of one coordinate alone, and the radial
+// terms that contain one; an overlap at the middle of two tiles a step s apart sees x^3 - (x - s)^3 stationary there.
+TEST(FieldDistortion, StretchTermsAreTheOddPowersOfOneCoordinate) {
+  const auto named = [](int order) {
+    std::vector<std::string> out;
+    for (int t : imaging::FieldDistortionStretchTerms(order)) out.push_back(imaging::FieldDistortionTermNames(order)[t]);
+    return out;
+  };
+  EXPECT_TRUE(named(2).empty());
+  EXPECT_EQ(named(3), (std::vector<std::string>{"k1", "dx_x3", "dx_y3", "dy_x3"}));
+  EXPECT_EQ(named(4), named(3));
+  EXPECT_EQ(named(5), (std::vector<std::string>{"k1", "dx_x3", "dx_y3", "dy_x3", "k2", "dx_x5", "dx_y5", "dy_x5"}));
+}
+
 TEST(FieldDistortion, UndistortInvertsDistort) {
   const imaging::FieldDistortion f = Field(128, {{"k1", 3.0}, {"p2", 0.5}, {"dy_x2", -1.0}});
   const Eigen::Vector2d u(17.3, 101.9);
@@ -123,12 +137,16 @@ TEST(FieldDistortion, UndistortInvertsDistort) {
   EXPECT_LT(worst, 0.05 * camera.contrast);
 }
 
-// A 3 x 3 grid (20 % overlap) through radial, tangential and polynomial terms (up to 8 px): the field comes back
-// within 0.1 px rms over the tile (0.05 measured), the positions within 0.4 px of the truth (0.29 measured) where the
-// rigid registration is 10 px off. Their standardised errors read 1.8 rms here: the stated u is too small by about
-// that on so small a grid (nine tiles: the pairs' misfit is checked by four loops only); the bound says so.
+// A 3 x 3 grid (20 % overlap) through tangential and polynomial terms and the cross part of a radial one (k1 = 2.5
+// px less its x^3 in dx and y^3 in dy, which stitching holds: imaging::kHeldStretchTerms): the field comes back
+// within 0.1 px rms over the tile, the positions within 0.1 px of the truth where the rigid registration is 3 px
+// off (0.011 px and 0.027 px worst measured). Their standardised errors read 3.1 here: errors of a few hundredths
+// of a pixel, u of one hundredth; on so small a grid (nine tiles: the pairs' misfit is checked by four loops only)
+// nothing scales u up to what the rendering's interpolation leaves (on the real confocal grid they read 0.35). The
+// bound says so; a floor for it is open.
 TEST(StitchWithoutDistortion, RecoversAKnownFieldAndThePositions) {
-  const imaging::FieldDistortion truth = Field(384, {{"k1", 2.5}, {"p1", 0.4}, {"dx_x2", -0.6}, {"dy_xy2", 0.5}});
+  const imaging::FieldDistortion truth =
+      Field(384, {{"dx_xy2", 2.5}, {"dy_x2y", 2.5}, {"p1", 0.4}, {"dx_x2", -0.6}, {"dy_xy2", 0.5}});
   const DistortedGrid g = RenderGrid(3, 3, 384, truth, 11);
   const StitchResult rigid = Rigid(g);
   ASSERT_EQ(rigid.accepted, 12);
@@ -144,9 +162,9 @@ TEST(StitchWithoutDistortion, RecoversAKnownFieldAndThePositions) {
     worst = std::max(worst, e.norm());
     z2 += e.cwiseQuotient(r.sigma_px[i]).squaredNorm();
   }
-  EXPECT_LT(worst, 0.4);
+  EXPECT_LT(worst, 0.1);
   EXPECT_GT(rigid_worst, 10.0 * worst);
-  EXPECT_LT(std::sqrt(z2 / (2.0 * (g.images.size() - 1))), 2.5);
+  EXPECT_LT(std::sqrt(z2 / (2.0 * (g.images.size() - 1))), 3.5);
   EXPECT_GT(r.mean_overlap_ncc_after, r.mean_overlap_ncc_before);
   fmt::print("field error {:.4f} px rms (u {:.4f}); positions {:.3f} px worst (rigid {:.3f}); standardised rms {:.2f}; "
              "point sigma {:.3f} px, {} points\n",
@@ -158,6 +176,13 @@ TEST(StitchWithoutDistortion, RecoversAKnownFieldAndThePositions) {
   WriteFieldDistortion(file, r.fit.field);
   const imaging::FieldDistortion read = ReadFieldDistortion(file);
   EXPECT_LT(FieldDifferenceRms(read, r.fit.field), 1e-12);
+  // The held terms are 0 with no uncertainty, and named.
+  const std::vector<std::string>& names = imaging::FieldDistortionTermNames(3);
+  ASSERT_EQ(r.fit.held_terms, imaging::FieldDistortionStretchTerms(3));
+  for (int t : r.fit.held_terms) {
+    EXPECT_EQ(r.fit.field.coefficients(t), 0.0) << names[static_cast<size_t>(t)];
+    EXPECT_EQ(r.fit.field.covariance(t, t), 0.0) << names[static_cast<size_t>(t)];
+  }
   options.known = read;
   const StitchDistortionResult again = StitchWithoutDistortion(rigid, g.images, options);
   EXPECT_FALSE(again.identified);

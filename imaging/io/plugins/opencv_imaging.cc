@@ -29,6 +29,8 @@ constexpr OpenCvImaging kOpenCvImaging{
     &CorrespondenceOptions::Check,
     &MatchOverlap,
     &MatchOverlaps,
+    &PrepareTilesForMatching,
+    &MatchPreparedOverlaps,
 };
 
 }  // namespace
