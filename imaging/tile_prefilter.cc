@@ -110,8 +110,8 @@ Prepared HighPass(const cv::Mat& crop, double sigma, bool logarithm) {
 // linearly against its partner's logarithm, and the shading returned as a bias.
 bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
   for (const cv::Mat& crop : {crop_a, crop_b}) {
-    cv::Mat values;
-    crop.convertTo(values, CV_32F);
+    cv::Mat values = crop;  // tiles are float already: no copy of a whole tile per pair
+    if (crop.type() != CV_32F) crop.convertTo(values, CV_32F);
     const cv::Mat finite = values == values;
     if (cv::countNonZero(finite) == 0) return false;
     double low = 0.0, high = 0.0;

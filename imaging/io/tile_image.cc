@@ -13,6 +13,36 @@
 
 namespace fvm::imaging {
 
+namespace {
+
+// The pixels read as T and averaged over the colour channels (an alpha channel left out) into `image`: 8- and
+// 16-bit integers in their native counts; other types read as float (integers of other widths come back 0..1 from
+// the library, as they always did).
+template <typename T>
+void ReadGrey(ImageFileReader& input, const ImageHeader& spec, PixelType as, const std::filesystem::path& path,
+              TileImage& image) {
+  const int channels = spec.channels;
+  std::vector<T> pixels(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * static_cast<size_t>(channels));
+  std::string error;
+  if (!input.ReadPixels(0, channels, as, pixels.data(), &error)) {
+    throw InputError(path.string() + ": cannot read the pixels (" + error + "); is the file truncated?");
+  }
+  const int alpha = channels > 1 ? spec.alpha_channel : -1;
+  const int grey_channels = alpha >= 0 ? channels - 1 : channels;
+  const double factor = 1.0 / grey_channels;
+  float* out = image.data();
+  const T* p = pixels.data();
+  for (size_t i = 0, n = static_cast<size_t>(image.size()); i < n; ++i, p += channels) {
+    double sum = 0.0;
+    for (int c = 0; c < channels; ++c) {
+      if (c != alpha) sum += static_cast<double>(p[c]);
+    }
+    out[i] = static_cast<float>(sum * factor);
+  }
+}
+
+}  // namespace
+
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
   const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;
@@ -29,33 +59,17 @@ TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) 
     throw InputError(path.string() + ": a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
                      " x " + std::to_string(spec.depth) + " image is not a tile fvm can register");
   }
-  const int channels = spec.channels;
-  std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * channels);
-  // Reading as FLOAT converts integers to 0..1; scaling back keeps native counts, which reads better in messages
-  // and makes no difference to registration.
-  if (!input->ReadPixels(0, channels, PixelType::kFloat, pixels.data(), &error)) {
-    throw InputError(path.string() + ": cannot read the pixels (" + error + "); is the file truncated?");
-  }
-  double scale = 1.0;
   TilePixelType stored = TilePixelType::kFloat;
-  switch (spec.type) {
-    case PixelType::kUint8: scale = 255.0, stored = TilePixelType::kUint8; break;
-    case PixelType::kUint16: scale = 65535.0, stored = TilePixelType::kUint16; break;
-    default: break;
-  }
+  if (spec.type == PixelType::kUint8) stored = TilePixelType::kUint8;
+  if (spec.type == PixelType::kUint16) stored = TilePixelType::kUint16;
   if (type != nullptr) *type = stored;
-  const int alpha = spec.alpha_channel;
-  const int grey_channels = alpha >= 0 && channels > 1 ? channels - 1 : channels;
+  // 8- and 16-bit counts are read as they are stored (the library's conversion of every channel to float 0..1
+  // cost more than the decoding of an uncompressed colour tile) and averaged to grey here; other types as float.
   TileImage image(spec.height, spec.width);
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      const float* p = &pixels[(static_cast<size_t>(y) * spec.width + x) * channels];
-      double sum = 0.0;
-      for (int c = 0; c < channels; ++c) {
-        if (c != alpha || channels == 1) sum += p[c];
-      }
-      image(y, x) = static_cast<float>(sum / grey_channels * scale);
-    }
+  switch (stored) {
+    case TilePixelType::kUint8: ReadGrey<std::uint8_t>(*input, spec, PixelType::kUint8, path, image); break;
+    case TilePixelType::kUint16: ReadGrey<std::uint16_t>(*input, spec, PixelType::kUint16, path, image); break;
+    case TilePixelType::kFloat: ReadGrey<float>(*input, spec, PixelType::kFloat, path, image); break;
   }
   // NaN marks an invalid point, as focus-variation height maps export steep flanks; infinity marks nothing.
   if (image.array().isInf().any()) {
