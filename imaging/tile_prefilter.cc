@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "core/dense_decomposition.h"
@@ -112,11 +113,20 @@ bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
   for (const cv::Mat& crop : {crop_a, crop_b}) {
     cv::Mat values = crop;  // tiles are float already: no copy of a whole tile per pair
     if (crop.type() != CV_32F) crop.convertTo(values, CV_32F);
-    const cv::Mat finite = values == values;
-    if (cv::countNonZero(finite) == 0) return false;
-    double low = 0.0, high = 0.0;
-    cv::minMaxLoc(values, &low, &high, nullptr, nullptr, finite);
-    if (!(low >= 0.0 && high > 0.0)) return false;
+    // One pass over the valid (non-NaN) pixels: a negative one decides at once.
+    bool any = false;
+    float high = 0.0f;
+    for (int y = 0; y < values.rows; ++y) {
+      const float* row = values.ptr<float>(y);
+      for (int x = 0; x < values.cols; ++x) {
+        const float v = row[x];
+        if (std::isnan(v)) continue;
+        if (v < 0.0f) return false;
+        any = true;
+        high = std::max(high, v);
+      }
+    }
+    if (!any || !(high > 0.0f)) return false;
   }
   return true;
 }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/input_error.h"
@@ -30,14 +31,17 @@ void ReadGrey(ImageFileReader& input, const ImageHeader& spec, PixelType as, con
   const int alpha = channels > 1 ? spec.alpha_channel : -1;
   const int grey_channels = alpha >= 0 ? channels - 1 : channels;
   const double factor = 1.0 / grey_channels;
+  // Integers summed exactly; an alpha channel that is the last (as it almost always is) is simply not summed.
+  using Sum = std::conditional_t<std::is_integral_v<T>, std::uint32_t, double>;
+  const int summed = alpha < 0 || alpha == channels - 1 ? grey_channels : channels;
+  const int skipped = summed == channels ? alpha : -1;
   float* out = image.data();
   const T* p = pixels.data();
   for (size_t i = 0, n = static_cast<size_t>(image.size()); i < n; ++i, p += channels) {
-    double sum = 0.0;
-    for (int c = 0; c < channels; ++c) {
-      if (c != alpha) sum += static_cast<double>(p[c]);
-    }
-    out[i] = static_cast<float>(sum * factor);
+    Sum sum = 0;
+    for (int c = 0; c < summed; ++c) sum += static_cast<Sum>(p[c]);
+    if (skipped >= 0) sum -= static_cast<Sum>(p[skipped]);
+    out[i] = static_cast<float>(static_cast<double>(sum) * factor);
   }
 }
 
