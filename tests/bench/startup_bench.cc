@@ -198,3 +198,34 @@ void BM_Verify5408VsScipyPeer(benchmark::State& state) {
 BENCHMARK(BM_Verify5408VsScipyPeer)->Unit(benchmark::kMillisecond)->Iterations(10);
 
 }  // namespace
+
+// Issue 42: `fvm stitch --overlap 10` of the real confocal grid of ../shared/realdata/tiles/confocal-3x4 (12 colour
+// tiles of 1024 x 1024 px, 17 pairs; the layout as ../shared/bench/check builds it) as a whole process on all cores,
+// against the same process with --threads 1 (goal: under 1 s wall on 2 cores). Skipped where ../shared is absent.
+namespace {
+
+void BM_StitchConfocalVsOneThread(benchmark::State& state) {
+  const fs::path dir = fs::path(FVM_SOURCE_DIR) / ".." / "shared" / "realdata" / "tiles" / "confocal-3x4";
+  if (!fs::exists(dir)) {
+    state.SkipWithError("../shared/realdata absent");
+    return;
+  }
+  const fs::path layout = Scratch() / "confocal_layout.csv";
+  if (!fs::exists(layout)) {
+    FILE* out = std::fopen(layout.c_str(), "w");
+    std::fprintf(out, "file,row,col\n");
+    for (int k = 0; k < 12; ++k) {  // serpentine: the middle row runs right to left (its TileConfiguration.txt)
+      const int row = k / 4, col = row == 1 ? 3 - k % 4 : k % 4;
+      std::fprintf(out, "%s/x100_epr-jerem_10pct_001_A%03d_I.tif,%d,%d\n", fs::canonical(dir).c_str(), k + 1, row, col);
+    }
+    std::fclose(out);
+  }
+  const std::vector<std::string> stitch = {FVM_EXE, "stitch", "--layout", layout.string(), "--overlap", "10", "-o",
+                                           (Scratch() / "confocal_positions.csv").string()};
+  std::vector<std::string> one_thread = stitch;
+  one_thread.insert(one_thread.end(), {"--threads", "1"});
+  Paired(state, stitch, one_thread);
+}
+BENCHMARK(BM_StitchConfocalVsOneThread)->Unit(benchmark::kMillisecond)->Iterations(5);
+
+}  // namespace
