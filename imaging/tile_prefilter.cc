@@ -2,7 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/dense_decomposition.h"
@@ -113,20 +113,15 @@ bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
   for (const cv::Mat& crop : {crop_a, crop_b}) {
     cv::Mat values = crop;  // tiles are float already: no copy of a whole tile per pair
     if (crop.type() != CV_32F) crop.convertTo(values, CV_32F);
-    // One pass over the valid (non-NaN) pixels: a negative one decides at once.
-    bool any = false;
-    float high = 0.0f;
+    // The least and the greatest valid (non-NaN: every comparison with NaN is false) pixel, in one pass.
+    float low = std::numeric_limits<float>::infinity(), high = -low;
     for (int y = 0; y < values.rows; ++y) {
-      const float* row = values.ptr<float>(y);
-      for (int x = 0; x < values.cols; ++x) {
-        const float v = row[x];
-        if (std::isnan(v)) continue;
-        if (v < 0.0f) return false;
-        any = true;
-        high = std::max(high, v);
-      }
+      const Eigen::Map<const Eigen::ArrayXf> row(values.ptr<float>(y), values.cols);
+      const float row_low = row.minCoeff<Eigen::PropagateNumbers>(), row_high = row.maxCoeff<Eigen::PropagateNumbers>();
+      low = row_low < low ? row_low : low;  // a row of NaN only gives NaN, which compares false
+      high = row_high > high ? row_high : high;
     }
-    if (!any || !(high > 0.0f)) return false;
+    if (!(low <= high) || !(low >= 0.0f && high > 0.0f)) return false;
   }
   return true;
 }
