@@ -58,7 +58,7 @@ void RunStitch(StitchArgs& args) {
   args.job.Check();
   workflows::CheckMosaicPath(args.mosaic, args.job.stitch.pixel_mm);
   BindDistortion(args);
-  const workflows::LayoutTiles tiles = workflows::ReadLayoutTiles(args.layout);
+  const workflows::LayoutTiles tiles = workflows::ReadLayoutTiles(args.layout, args.job.stitch.threads);
   workflows::CheckMosaicTiles(args.mosaic, tiles.pixel_type);
   Progress pair_progress("registering pairs", workflows::StitchPairCount(tiles.layout, tiles.images, args.job.stitch),
                          ShowProgress());

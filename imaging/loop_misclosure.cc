@@ -219,6 +219,11 @@ int RecoverRejected(const std::vector<Eigen::Vector2d>& stage_px, double stage_s
 
 }  // namespace
 
+double UncertaintyScale(double birge_ratio, double dof) {
+  if (!(dof > 2.0)) return std::max(1.0, birge_ratio);
+  return birge_ratio * std::sqrt(dof / (dof - 2.0));
+}
+
 std::string OverruledPair::Text() const {
   char text[320];
   std::snprintf(text, sizeof text,
@@ -256,11 +261,9 @@ LoopCheck CheckPairsAgainstLoops(const std::vector<Eigen::Vector2d>& stage_px, d
     check.dof += tests[k].redundancy;
   }
   if (check.dof >= 1.0) check.birge_ratio = std::sqrt(chi_square / check.dof);
-  // Up always; down once the loops are enough to say (the ratio's own relative spread is 1 / sqrt(2 dof): 32 % at
-  // 5). A pair's information comes from its overlap's gradients and noise; on the cut real tiles of issue 42 it
-  // claimed 0.03-0.05 px where the loops and the truth showed 0.01 px.
-  check.uncertainty_scale =
-      check.dof >= options.min_dof_to_scale_down ? check.birge_ratio : std::max(1.0, check.birge_ratio);
+  // Up or down: a pair's information comes from its overlap's gradients and noise; on the cut real tiles of issue 42
+  // it claimed 0.03-0.05 px where the loops and the truth showed 0.01 px.
+  check.uncertainty_scale = UncertaintyScale(check.birge_ratio, check.dof);
   for (size_t k = 0; k < pairs.size(); ++k) {
     PairRegistration& pair = pairs[k];
     if (!pair.accepted) continue;

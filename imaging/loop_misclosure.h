@@ -37,10 +37,18 @@ struct LoopCheck {
   // the pairs' stated precision), and the degrees of freedom (the redundancy the loops give); 1 and 0 without loops.
   double birge_ratio = 1.0;
   double dof = 0.0;
-  // What the solve multiplies every pair's standard uncertainty by: the Birge ratio (at least 1 below
-  // LoopCheckOptions::min_dof_to_scale_down degrees of freedom). The pairs keep their own claims.
+  // What the solve multiplies every pair's standard uncertainty by: the Birge ratio, times sqrt(dof / (dof - 2))
+  // (UncertaintyScale). The pairs keep their own claims.
   double uncertainty_scale = 1.0;
 };
+
+// What the pairs' standard uncertainties are multiplied by, from the loops' Birge ratio R and their degrees of
+// freedom: a position's error over an uncertainty scaled by R, itself estimated from `dof` misclosures, follows
+// Student's t with dof degrees of freedom (the least-squares estimate and its residuals are independent), whose
+// rms is sqrt(dof / (dof - 2)): R times that, so that the standardised errors have an rms of 1 however few the loops.
+// With 2 degrees of freedom or fewer the t's variance is unbounded and R says nothing about how far to trust the
+// pairs: they are only ever scaled up, by R where it exceeds 1.
+double UncertaintyScale(double birge_ratio, double dof);
 
 // A pair searched again within window_px (per axis) of predicted_px; the caller has the images.
 using ResearchPair = std::function<PairRegistration(const PairRegistration& pair, const Eigen::Vector2d& predicted_px,
@@ -57,9 +65,6 @@ struct LoopCheckOptions {
   // A rejected pair is searched again where the loops put it when they place its two tiles to within this (px,
   // standard deviation): only images, not the stage alone, say where to look.
   double recover_within_px = 3.0;
-  // The loops' degrees of freedom from which the Birge ratio may also scale the pairs' uncertainties down (it
-  // always scales them up when the loops misclose by more than the pairs claim).
-  double min_dof_to_scale_down = 5.0;
   // Candidates of an ambiguous pair whose NCC lies within this of the best are places it could be
   // (RegistrationOptions::ambiguous_ncc).
   double ambiguous_ncc = 0.05;

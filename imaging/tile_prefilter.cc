@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <limits>
 #include <vector>
 
 #include "core/dense_decomposition.h"
@@ -110,13 +111,17 @@ Prepared HighPass(const cv::Mat& crop, double sigma, bool logarithm) {
 // linearly against its partner's logarithm, and the shading returned as a bias.
 bool MatchingDomain(const cv::Mat& crop_a, const cv::Mat& crop_b) {
   for (const cv::Mat& crop : {crop_a, crop_b}) {
-    cv::Mat values;
-    crop.convertTo(values, CV_32F);
-    const cv::Mat finite = values == values;
-    if (cv::countNonZero(finite) == 0) return false;
-    double low = 0.0, high = 0.0;
-    cv::minMaxLoc(values, &low, &high, nullptr, nullptr, finite);
-    if (!(low >= 0.0 && high > 0.0)) return false;
+    cv::Mat values = crop;  // tiles are float already: no copy of a whole tile per pair
+    if (crop.type() != CV_32F) crop.convertTo(values, CV_32F);
+    // The least and the greatest valid (non-NaN: every comparison with NaN is false) pixel, in one pass.
+    float low = std::numeric_limits<float>::infinity(), high = -low;
+    for (int y = 0; y < values.rows; ++y) {
+      const Eigen::Map<const Eigen::ArrayXf> row(values.ptr<float>(y), values.cols);
+      const float row_low = row.minCoeff<Eigen::PropagateNumbers>(), row_high = row.maxCoeff<Eigen::PropagateNumbers>();
+      low = row_low < low ? row_low : low;  // a row of NaN only gives NaN, which compares false
+      high = row_high > high ? row_high : high;
+    }
+    if (!(low <= high) || !(low >= 0.0f && high > 0.0f)) return false;
   }
   return true;
 }

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "imaging/overlap_correlation.h"
+#include "imaging/registration_information.h"
 
 namespace fvm::imaging {
 
@@ -364,15 +365,16 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // The stage prior as loose as the placed tiles show the stage to be (their spread about the model), where the
   // model's repeatability, from the spread of the pairs about the mean step, says less: a stage whose rows sit apart
   // by 20 px has pairs that agree with each other row by row, and a prior of a pixel would pull every tile.
-  // The pairs weighed as the loops show them (the Birge ratio; the pairs keep their own claims).
-  // And no pair better than kPairFloorPx: what neither a pair's noise nor the loops see, the shading of its two
-  // tiles shifting the match the same way in every pair of a tile (on issue 42's cut real tiles a tile 0.04 px off
-  // claimed 0.009 px without it).
-  constexpr double kPairFloorPx = 0.007;
+  // The pairs weighed as the loops show them (the Birge ratio; the pairs keep their own claims), and no pair better
+  // than the systematic floor of a pair's registration (detail::kSystematicPx, the rms error of noise-light
+  // synthetic pairs: Lanczos resampling, remnants of the shading), which the loops' scale must not take away: a
+  // loop misclosure sees each pair's noise, not what shifts every pair of a tile alike (on issue 42's cut real tiles
+  // a tile 0.04 px off claimed 0.009 px without a floor).
   std::vector<PairRegistration> weighed = result.pairs;
   for (auto& pair : weighed) {
     const Eigen::Matrix2d w = pair.information / (result.loops.uncertainty_scale * result.loops.uncertainty_scale);
-    const Eigen::Matrix2d floored = w * (Eigen::Matrix2d::Identity() + kPairFloorPx * kPairFloorPx * w).inverse();
+    const Eigen::Matrix2d floored =
+        w * (Eigen::Matrix2d::Identity() + detail::kSystematicPx * detail::kSystematicPx * w).inverse();
     pair.information = 0.5 * (floored + floored.transpose());
   }
   const TilePositions loose = SolveTilePositions(result.stage_positions_px, weighed, loose_stage_px, unregistered);

@@ -13,11 +13,11 @@ namespace fvm::workflows {
 
 void StitchLayoutOptions::Check() const { stitch.Check(); }
 
-LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout) {
+LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads) {
   LayoutTiles tiles;
   tiles.layout = imaging::ReadTileLayout(layout);
   imaging::CheckLayoutComplete(tiles.layout);
-  tiles.images = imaging::ReadLayoutImages(tiles.layout, layout.parent_path(), &tiles.pixel_type);
+  tiles.images = imaging::ReadLayoutImages(tiles.layout, layout.parent_path(), &tiles.pixel_type, threads);
   return tiles;
 }
 

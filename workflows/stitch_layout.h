@@ -32,8 +32,9 @@ struct LayoutTiles {
   std::vector<imaging::TileImage> images;
   imaging::TilePixelType pixel_type = imaging::TilePixelType::kFloat;  // the first tile's
 };
-// Throws InputError naming the layout's line and tile (imaging/io/tile_layout.h).
-LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout);
+// Throws InputError naming the layout's line and tile (imaging/io/tile_layout.h). The tiles decoded on `threads`
+// threads (0: all cores).
+LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads = 0);
 
 struct StitchedLayout {
   std::vector<std::string> files;  // the layout's tiles, in its order

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/input_error.h"
@@ -12,6 +14,39 @@
 #include "imaging/io/image_codec.h"
 
 namespace fvm::imaging {
+
+namespace {
+
+// The pixels read as T and averaged over the colour channels (an alpha channel left out) into `image`: 8- and
+// 16-bit integers in their native counts; other types read as float (integers of other widths come back 0..1 from
+// the library, as they always did).
+template <typename T>
+void ReadGrey(ImageFileReader& input, const ImageHeader& spec, PixelType as, const std::filesystem::path& path,
+              TileImage& image) {
+  const int channels = spec.channels;
+  std::vector<T> pixels(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * static_cast<size_t>(channels));
+  std::string error;
+  if (!input.ReadPixels(0, channels, as, pixels.data(), &error)) {
+    throw InputError(path.string() + ": cannot read the pixels (" + error + "); is the file truncated?");
+  }
+  const int alpha = channels > 1 ? spec.alpha_channel : -1;
+  const int grey_channels = alpha >= 0 ? channels - 1 : channels;
+  const double factor = 1.0 / grey_channels;
+  // Integers summed exactly; an alpha channel that is the last (as it almost always is) is simply not summed.
+  using Sum = std::conditional_t<std::is_integral_v<T>, std::uint32_t, double>;
+  const int summed = alpha < 0 || alpha == channels - 1 ? grey_channels : channels;
+  const int skipped = summed == channels ? alpha : -1;
+  float* out = image.data();
+  const T* p = pixels.data();
+  for (size_t i = 0, n = static_cast<size_t>(image.size()); i < n; ++i, p += channels) {
+    Sum sum = 0;
+    for (int c = 0; c < summed; ++c) sum += static_cast<Sum>(p[c]);
+    if (skipped >= 0) sum -= static_cast<Sum>(p[skipped]);
+    out[i] = static_cast<float>(static_cast<double>(sum) * factor);
+  }
+}
+
+}  // namespace
 
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
   const std::size_t file_bytes = CheckReadableFile(path);
@@ -29,39 +64,27 @@ TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) 
     throw InputError(path.string() + ": a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
                      " x " + std::to_string(spec.depth) + " image is not a tile fvm can register");
   }
-  const int channels = spec.channels;
-  std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * channels);
-  // Reading as FLOAT converts integers to 0..1; scaling back keeps native counts, which reads better in messages
-  // and makes no difference to registration.
-  if (!input->ReadPixels(0, channels, PixelType::kFloat, pixels.data(), &error)) {
-    throw InputError(path.string() + ": cannot read the pixels (" + error + "); is the file truncated?");
-  }
-  double scale = 1.0;
   TilePixelType stored = TilePixelType::kFloat;
-  switch (spec.type) {
-    case PixelType::kUint8: scale = 255.0, stored = TilePixelType::kUint8; break;
-    case PixelType::kUint16: scale = 65535.0, stored = TilePixelType::kUint16; break;
-    default: break;
-  }
+  if (spec.type == PixelType::kUint8) stored = TilePixelType::kUint8;
+  if (spec.type == PixelType::kUint16) stored = TilePixelType::kUint16;
   if (type != nullptr) *type = stored;
-  const int alpha = spec.alpha_channel;
-  const int grey_channels = alpha >= 0 && channels > 1 ? channels - 1 : channels;
+  // 8- and 16-bit counts are read as they are stored (the library's conversion of every channel to float 0..1
+  // cost more than the decoding of an uncompressed colour tile) and averaged to grey here; other types as float.
   TileImage image(spec.height, spec.width);
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      const float* p = &pixels[(static_cast<size_t>(y) * spec.width + x) * channels];
-      double sum = 0.0;
-      for (int c = 0; c < channels; ++c) {
-        if (c != alpha || channels == 1) sum += p[c];
-      }
-      image(y, x) = static_cast<float>(sum / grey_channels * scale);
-    }
+  switch (stored) {
+    case TilePixelType::kUint8: ReadGrey<std::uint8_t>(*input, spec, PixelType::kUint8, path, image); break;
+    case TilePixelType::kUint16: ReadGrey<std::uint16_t>(*input, spec, PixelType::kUint16, path, image); break;
+    case TilePixelType::kFloat: ReadGrey<float>(*input, spec, PixelType::kFloat, path, image); break;
   }
   // NaN marks an invalid point, as focus-variation height maps export steep flanks; infinity marks nothing.
-  if (image.array().isInf().any()) {
-    throw InputError(path.string() + ": holds infinite pixels; mark invalid points as NaN");
+  // One pass (the array expressions for the two tests cost more than the grey average).
+  bool infinite = false, valid = false;
+  for (const float v : std::span<const float>(image.data(), static_cast<size_t>(image.size()))) {
+    infinite = infinite || std::isinf(v);
+    valid = valid || !std::isnan(v);
   }
-  if (image.array().isNaN().all()) throw InputError(path.string() + ": holds no valid pixel");
+  if (infinite) throw InputError(path.string() + ": holds infinite pixels; mark invalid points as NaN");
+  if (!valid) throw InputError(path.string() + ": holds no valid pixel");
   return image;
 }
 

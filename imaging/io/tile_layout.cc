@@ -3,11 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <exception>
 #include <utility>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "core/csv.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
+#include "imaging/io/image_codec.h"
+#include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 
@@ -97,24 +103,45 @@ void CheckLayoutComplete(const TileLayout& layout) {
   }
 }
 
-std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir, TilePixelType* type) {
-  std::vector<TileImage> images;
-  for (const auto& tile : layout.tiles) {
-    const std::string where = layout.source + ":" + std::to_string(tile.line) + ": tile row " + std::to_string(tile.row) +
-                              " col " + std::to_string(tile.col) + ": ";
+std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir, TilePixelType* type,
+                                        int threads) {
+  const auto where = [&](const TileLayoutEntry& tile) {
+    return layout.source + ":" + std::to_string(tile.line) + ": tile row " + std::to_string(tile.row) + " col " +
+           std::to_string(tile.col) + ": ";
+  };
+  const size_t n = layout.tiles.size();
+  std::vector<TileImage> images(n);
+  std::vector<TilePixelType> types(n, TilePixelType::kFloat);
+  std::vector<std::exception_ptr> failures(n);
+  // Decoded side by side (a grid of megapixel colour tiles spent as long decoding as registering on one thread);
+  // the codec loaded first, once. What failed is reported for the first failing tile in layout order, as when
+  // they were read in turn.
+  if (n > 0) LoadImageCodec("reading " + (dir / layout.tiles.front().file).string());
+  const auto read = [&](size_t k) {
     try {
-      images.push_back(ReadTileImage(dir / tile.file, images.empty() ? type : nullptr));
+      images[k] = ReadTileImage(dir / layout.tiles[k].file, &types[k]);
+    } catch (...) {
+      failures[k] = std::current_exception();
+    }
+  };
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] { tbb::parallel_for(size_t{0}, n, read); });
+  for (size_t k = 0; k < n; ++k) {
+    const TileLayoutEntry& tile = layout.tiles[k];
+    try {
+      if (failures[k]) std::rethrow_exception(failures[k]);
     } catch (const InputError& e) {
-      throw InputError(where + e.what());
+      throw InputError(where(tile) + e.what());
     }
     const TileImage& first = images.front();
-    if (images.back().rows() != first.rows() || images.back().cols() != first.cols()) {
-      throw InputError(where + tile.file + " is " + std::to_string(images.back().cols()) + " x " +
-                       std::to_string(images.back().rows()) + " px but " + layout.tiles.front().file + " is " +
+    if (images[k].rows() != first.rows() || images[k].cols() != first.cols()) {
+      throw InputError(where(tile) + tile.file + " is " + std::to_string(images[k].cols()) + " x " +
+                       std::to_string(images[k].rows()) + " px but " + layout.tiles.front().file + " is " +
                        std::to_string(first.cols()) + " x " + std::to_string(first.rows()) +
                        "; all tiles of a layout come from one camera and lens: check the file");
     }
   }
+  if (type != nullptr && n > 0) *type = types.front();
   return images;
 }
 

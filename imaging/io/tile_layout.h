@@ -45,9 +45,10 @@ void CheckLayoutComplete(const TileLayout& layout);
 
 // The tiles' images in layout order, file names relative to `dir` (an absolute name replaces it); `type`, when
 // given, receives the first tile's pixel type. Throws InputError "LAYOUT:LINE: tile row R col C: ..." when one
-// cannot be read, or is not the size of the first (one camera and lens make every tile of a layout).
+// cannot be read (the first such tile in layout order), or is not the size of the first (one camera and lens make
+// every tile of a layout). The tiles are decoded on `threads` threads at once (0: all cores).
 std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir,
-                                        TilePixelType* type = nullptr);
+                                        TilePixelType* type = nullptr, int threads = 0);
 
 // The CSV text, 6 decimals of mm for x, y; file names quoted when they hold a comma or a quote.
 std::string FormatTileLayout(const std::vector<TileLayoutEntry>& tiles);

@@ -105,3 +105,86 @@ BENCHMARK_CAPTURE(BM_RegisterRealStrip, one_thread_baseline, false)
     ->Iterations(3);
 
 }  // namespace
+
+// Issue 42: the whole stitch of the real confocal grid of ../shared/realdata/tiles/confocal-3x4 (12 colour tiles of
+// 1024 x 1024 px, 17 pairs), as fvm stitch --overlap 10 does it after start-up: the tiles decoded from their files
+// and averaged to grey, then registered and placed (workflows::StitchTiles), on all cores; the baseline is the same
+// on one thread, timed in the same process before it. Counters: the ratio of the two (one thread's time over this
+// one's: how many times faster), and the mean overlap NCC at the positions. Skipped where ../shared is absent.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <vector>
+
+#include "imaging/io/tile_layout.h"
+#include "workflows/stitch.h"
+
+namespace {
+
+struct ConfocalLayout {
+  fvm::imaging::TileLayout layout;
+  std::filesystem::path dir;
+};
+
+const ConfocalLayout& ConfocalFiles() {
+  static const ConfocalLayout grid = [] {
+    ConfocalLayout g;
+    g.dir = std::filesystem::path(FVM_REALDATA_DIR) / "tiles" / "confocal-3x4";
+    if (!std::filesystem::exists(g.dir)) return g;
+    for (int k = 0; k < 12; ++k) {  // serpentine: the middle row runs right to left (its TileConfiguration.txt)
+      const int row = k / 4, col = row == 1 ? 3 - k % 4 : k % 4;
+      char file[64];
+      std::snprintf(file, sizeof file, "x100_epr-jerem_10pct_001_A%03d_I.tif", k + 1);
+      g.layout.tiles.push_back({file, row, col, std::nullopt, k + 2, std::nullopt});
+    }
+    g.layout.rows = 3, g.layout.cols = 4;
+    return g;
+  }();
+  return grid;
+}
+
+// Decodes and stitches the grid on `threads` threads (0: all cores); returns the mean overlap NCC.
+double StitchConfocal(int threads) {
+  const ConfocalLayout& g = ConfocalFiles();
+  fvm::workflows::StitchOptions options;
+  options.overlap = 0.1;
+  options.threads = threads;
+  const std::vector<fvm::imaging::TileImage> images = fvm::imaging::ReadLayoutImages(g.layout, g.dir, nullptr, threads);
+  return fvm::workflows::StitchTiles(g.layout, images, options).mean_overlap_ncc;
+}
+
+double SecondsOf(const std::function<void()>& run) {
+  const auto start = std::chrono::steady_clock::now();
+  run();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void BM_ConfocalWholeStitch(benchmark::State& state, int threads) {
+  if (ConfocalFiles().layout.tiles.empty()) {
+    state.SkipWithError("../shared/realdata absent");
+    return;
+  }
+  StitchConfocal(1);  // the plugins loaded and the caches warm before either is timed
+  // One thread and `threads` in turn, each iteration, so that both see the same machine.
+  std::vector<double> one, many;
+  double ncc = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    one.push_back(SecondsOf([] { StitchConfocal(1); }));
+    state.ResumeTiming();
+    many.push_back(SecondsOf([&] { ncc = StitchConfocal(threads); }));
+  }
+  std::sort(one.begin(), one.end());
+  std::sort(many.begin(), many.end());
+  state.counters["one_thread_ms"] = 1e3 * one[one.size() / 2];
+  state.counters["times_faster"] = one[one.size() / 2] / many[many.size() / 2];
+  state.counters["overlap_ncc"] = ncc;
+  fvm::imaging::SetImagingThreads(0);
+}
+
+BENCHMARK_CAPTURE(BM_ConfocalWholeStitch, all_cores, 0)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+BENCHMARK_CAPTURE(BM_ConfocalWholeStitch, two_threads, 2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
+}  // namespace

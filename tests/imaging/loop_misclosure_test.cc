@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <random>
 #include <vector>
 
 #include "imaging/tile_registration.h"
@@ -127,9 +129,48 @@ TEST(LoopMisclosure, MisclosuresBeyondThePairsPrecisionScaleIt) {
   EXPECT_NEAR(check.dof, 8.0, 0.01);
   EXPECT_GT(check.birge_ratio, 5.0);
   EXPECT_LT(check.birge_ratio, 16.0);
-  // The solve scales every pair's uncertainty by it; the pairs keep their own claims.
-  EXPECT_DOUBLE_EQ(check.uncertainty_scale, check.birge_ratio);
+  // The solve scales every pair's uncertainty by it (and by Student's sqrt(dof / (dof - 2)), UncertaintyScale); the
+  // pairs keep their own claims.
+  EXPECT_DOUBLE_EQ(check.uncertainty_scale, check.birge_ratio * std::sqrt(check.dof / (check.dof - 2.0)));
   EXPECT_DOUBLE_EQ(g.pairs[0].information(0, 0), 1e4);
+}
+
+
+TEST(LoopMisclosure, ScaledUncertaintiesGiveStandardisedErrorsOfUnitRmsOnFewLoops) {
+  // Every pair off by Gaussian noise of 0.1 px where it claims 0.01 px, on the 3 x 3 grid (8 degrees of freedom),
+  // 600 times: the positions' errors over their uncertainties scaled by the loops have an rms of 1. The Birge ratio
+  // alone, estimated from 8 misclosures, leaves Student's t with 8 degrees of freedom, whose rms is sqrt(8 / 6) =
+  // 1.15. (The rms of 600 grids' 16 errors is known to about 2 %: the grids' ratios are independent, their tiles'
+  // errors within a grid are not.)
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  double sum = 0.0, sum_birge_only = 0.0;
+  int count = 0;
+  for (int run = 0; run < 600; ++run) {
+    Grid3x3 g = MakeGrid();
+    for (auto& pair : g.pairs) pair.offset_px += Eigen::Vector2d(noise(rng), noise(rng));
+    const LoopCheck check = CheckPairsAgainstLoops(
+        g.stage, 1e3, g.pairs, [](const PairRegistration& pair, const Eigen::Vector2d&, const Eigen::Vector2d&) { return pair; });
+    ASSERT_TRUE(check.overruled.empty());
+    std::vector<PairRegistration> scaled = g.pairs;
+    for (auto& pair : scaled) pair.information /= check.uncertainty_scale * check.uncertainty_scale;
+    const TilePositions p = SolveTilePositions(g.stage, scaled, 1e3);
+    const double t_rms = std::sqrt(check.dof / (check.dof - 2.0));
+    for (size_t i = 1; i < g.truth.size(); ++i) {
+      const Eigen::Vector2d e = (p.positions_px[i] - p.positions_px[0]) - (g.truth[i] - g.truth[0]);
+      for (int k = 0; k < 2; ++k) {
+        const double z = e(k) / p.sigma_px[i](k);
+        sum += z * z, sum_birge_only += z * z * t_rms * t_rms, ++count;
+      }
+    }
+  }
+  const double rms = std::sqrt(sum / count), rms_birge_only = std::sqrt(sum_birge_only / count);
+  std::printf("standardised errors: rms %.3f scaled by the loops, %.3f by the Birge ratio alone\n", rms, rms_birge_only);
+  EXPECT_NEAR(rms, 1.0, 0.06);
+  EXPECT_GT(rms_birge_only, 1.08);
+  // Too few loops to trust the ratio: never scaled down.
+  EXPECT_DOUBLE_EQ(UncertaintyScale(0.3, 2.0), 1.0);
+  EXPECT_DOUBLE_EQ(UncertaintyScale(3.0, 1.0), 3.0);
 }
 
 }  // namespace
