@@ -2,10 +2,59 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
 #include "core/input_error.h"
+#include "imaging/tile_pair_registration.h"
+#include "imaging/tile_registration.h"
 #include "workflows/calibration_scans.h"
 
 namespace fvm::workflows {
+namespace {
+
+// A registered pair of one scan whose overlap gave the field fit too few correspondences to place its tiles (a
+// diagonal's corner overlap, a thin or texture-poor band): its offset is registered again on the undistorted tiles.
+struct PairToRegisterAgain {
+  size_t scan, pair;
+};
+
+// The pair registered again on its two tiles resampled without the field: the same registration as the rigid one,
+// so the undistorted offset and its information come from the whole overlap. Rejected (with the reason) when the
+// undistorted tiles do not register: better a pair missing from the calibration than one biased by the field.
+void RegisterUndistortedPair(const imaging::TileImage& a, const imaging::TileImage& b,
+                             const imaging::FieldDistortion& field, imaging::PairRegistration& pair) {
+  const imaging::PairRegistration again =
+      imaging::RegisterPair(imaging::UndistortTile(a, field), imaging::UndistortTile(b, field), pair.offset_px, {});
+  if (again.accepted) {
+    pair.offset_px = again.offset_px;
+    pair.information = again.information;
+    pair.quality = again.quality;
+  } else {
+    pair.accepted = false;
+    pair.rejection = "registered, but not once undistorted (" + again.rejection + ")";
+  }
+}
+
+// The matching for a scan whose narrowest accepted overlap is `band_px` wide: the correspondences' windows (and the
+// pyramid's reach) keep their centres half a window inside the band, so the default 15 px window leaves a 32 px band
+// (128 px tiles at 25 %) two columns of points 8 px apart, from which the field's change across the band, all a
+// chain of tiles shows of it, is extrapolated over the whole tile (k1 found 1.68 for 2 px, every step 0.15-0.43 px
+// short). Narrow bands get a window of a quarter of the band (at least 7 px), one pyramid level, and a grid of a
+// tenth of it (at least 2 px): eight columns over 22 px. Wide bands keep the options as given.
+imaging::CorrespondenceOptions MatchingForBand(imaging::CorrespondenceOptions matching, double band_px) {
+  if (band_px >= 4.0 * matching.window_px) return matching;
+  int window = static_cast<int>(std::floor(band_px / 4.0));
+  if (window % 2 == 0) --window;
+  matching.window_px = std::max(7, window);
+  matching.pyramid_levels = std::min(matching.pyramid_levels, 1);
+  matching.grid_step_px = std::max(2, std::min(matching.grid_step_px, static_cast<int>(std::floor(band_px / 10.0))));
+  return matching;
+}
+
+}  // namespace
 
 std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std::vector<std::string>& layouts,
                                                                        double pixel_mm, int threads, bool progress,
@@ -18,6 +67,11 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   std::vector<imaging::PairCorrespondences> matched;
   std::vector<Eigen::Vector2d> initial;
   std::vector<bool> fixed;
+  // Pairs the fit cannot place (fewer correspondences than it weighs), with their tiles kept for the second
+  // registration; the pairs it places, each scan's in a set.
+  std::vector<PairToRegisterAgain> again;
+  std::map<int, imaging::TileImage> kept;
+  size_t scan_index = 0;
   int width = 0, height = 0;
   std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(
       layouts, pixel_mm, threads, progress,
@@ -30,10 +84,23 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
         }
         const int base = static_cast<int>(initial.size());
         std::vector<imaging::OverlapToMatch> overlaps;
-        for (const imaging::PairRegistration& pair : scan.registration.pairs) {
-          if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
+        std::vector<size_t> pair_of_overlap;
+        for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
+          const imaging::PairRegistration& pair = scan.registration.pairs[q];
+          if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px}), pair_of_overlap.push_back(q);
         }
-        for (imaging::PairCorrespondences& p : imaging::MatchOverlaps(images, overlaps, guess, options.matching)) {
+        double band = std::numeric_limits<double>::infinity();
+        for (const imaging::OverlapToMatch& o : overlaps) {
+          band = std::min({band, width - std::abs(o.offset_px.x()), height - std::abs(o.offset_px.y())});
+        }
+        std::vector<imaging::PairCorrespondences> found =
+            imaging::MatchOverlaps(images, overlaps, guess, MatchingForBand(options.matching, band));
+        for (size_t m = 0; m < found.size(); ++m) {
+          imaging::PairCorrespondences& p = found[m];
+          if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
+            again.push_back({scan_index, pair_of_overlap[m]});
+            for (int t : {p.a, p.b}) kept.emplace(base + t, images[static_cast<size_t>(t)]);
+          }
           p.a += base, p.b += base;
           matched.push_back(std::move(p));
         }
@@ -41,6 +108,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
           initial.push_back(scan.registration.positions.positions_px[k]);
           fixed.push_back(k == 0 || !scan.registration.positions.registered[k]);
         }
+        ++scan_index;
       });
   try {
     imaging::FieldDistortionFitOptions fit_options = options.fit;
@@ -51,22 +119,33 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     throw InputError(std::string("--distortion: ") + e.what());
   }
   field->identified = !options.known;
+
+  // Every accepted pair's offset between the undistorted tiles: from the fit's positions where its correspondences
+  // placed them (both tiles then in one group of the fit, whose positions chain consistently), else registered again
+  // on the undistorted tiles. A pair the fit could not place keeps no rigid offset: a corner overlap sits where the
+  // field is largest (2 sqrt(2) times the edges' for a radial one), and one biased step would be taken for stage
+  // error, as would the jump between two groups of the fit each held at its rigid position.
+  std::vector<std::vector<bool>> register_again(scans.size());
+  for (size_t s = 0; s < scans.size(); ++s) register_again[s].assign(scans[s].registration.pairs.size(), false);
+  for (const PairToRegisterAgain& r : again) register_again[r.scan][r.pair] = true;
   int base = 0;
-  for (artefacts::RegisteredScan& scan : scans) {
-    imaging::TilePositions& positions = scan.registration.positions;
-    for (size_t k = 0; k < positions.positions_px.size(); ++k) {
-      const auto i = static_cast<size_t>(base) + k;
-      if (!positions.registered[k] && k > 0) continue;  // at its stage position, as before
-      positions.positions_px[k] = field->fit.positions_px[i];
-      positions.sigma_px[k] = field->fit.position_covariance_px2[i].diagonal().cwiseSqrt();
-    }
-    for (imaging::PairRegistration& pair : scan.registration.pairs) {
-      if (pair.accepted) {
+  for (size_t s = 0; s < scans.size(); ++s) {
+    artefacts::RegisteredScan& scan = scans[s];
+    for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
+      imaging::PairRegistration& pair = scan.registration.pairs[q];
+      if (!pair.accepted) continue;
+      if (register_again[s][q]) {
+        RegisterUndistortedPair(kept.at(base + pair.a), kept.at(base + pair.b), field->fit.field, pair);
+      } else {
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
       }
     }
-    base += static_cast<int>(positions.positions_px.size());
+    // The positions chained from the undistorted offsets as the rigid registration chains its own.
+    scan.registration.positions =
+        imaging::SolveTilePositions(artefacts::NominalOffsetsPx(scan.encoder_mm, pixel_mm), scan.registration.pairs,
+                                    imaging::RegistrationOptions{}.stage_sigma_px);
+    base += static_cast<int>(scan.encoder_mm.size());
   }
   return scans;
 }

@@ -5,7 +5,9 @@
 // of all scans' tile positions (each scan's first tile holds) and the one field they share
 // (imaging/field_distortion_fit.h). A row sees how the field changes along x, a column along y: together they
 // determine it, one direction alone does not (refused by name). Each pair's offset and the chained positions are
-// then those of the undistorted tiles, and the stage calibration reads them as it reads rigid ones.
+// then those of the undistorted tiles, and the stage calibration reads them as it reads rigid ones: a pair whose
+// overlap gave the fit too few correspondences (a diagonal's corner, a thin band of small tiles) is registered
+// again on its tiles resampled without the field.
 
 #include <optional>
 #include <string>
