@@ -54,6 +54,32 @@ imaging::CorrespondenceOptions MatchingForBand(imaging::CorrespondenceOptions ma
   return matching;
 }
 
+// How an offset between undistorted tiles moves with the field's coefficients: p_b - p_a = u_a - u_b + d(u_a) - d(u_b)
+// averaged over the points that placed it, so the mean of B(u_a) - B(u_b) over them (px per px of coefficient).
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivity(const imaging::FieldDistortion& field,
+                                                          const std::vector<Eigen::Vector2d>& a_px,
+                                                          const std::vector<Eigen::Vector2d>& b_px) {
+  Eigen::Matrix<double, 2, Eigen::Dynamic> sum = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, field.coefficients.size());
+  for (size_t m = 0; m < a_px.size(); ++m) sum += field.Basis(a_px[m]) - field.Basis(b_px[m]);
+  return a_px.empty() ? sum : Eigen::Matrix<double, 2, Eigen::Dynamic>(sum / static_cast<double>(a_px.size()));
+}
+
+// The same for a pair registered again on undistorted tiles: over a 9 x 9 grid of the overlap at `offset_px`.
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivityOverOverlap(const imaging::FieldDistortion& field,
+                                                                     const Eigen::Vector2d& offset_px) {
+  const Eigen::Vector2d low = offset_px.cwiseMax(0.0);
+  const Eigen::Vector2d high = (offset_px + Eigen::Vector2d(field.width_px - 1, field.height_px - 1))
+                                   .cwiseMin(Eigen::Vector2d(field.width_px - 1, field.height_px - 1));
+  std::vector<Eigen::Vector2d> a_px, b_px;
+  for (int j = 0; j <= 8; ++j) {
+    for (int i = 0; i <= 8; ++i) {
+      a_px.push_back(low + (high - low).cwiseProduct(Eigen::Vector2d(i, j) / 8.0));
+      b_px.push_back(a_px.back() - offset_px);
+    }
+  }
+  return FieldSensitivity(field, a_px, b_px);
+}
+
 }  // namespace
 
 std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std::vector<std::string>& layouts,
@@ -128,17 +154,27 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   std::vector<std::vector<bool>> register_again(scans.size());
   for (size_t s = 0; s < scans.size(); ++s) register_again[s].assign(scans[s].registration.pairs.size(), false);
   for (const PairToRegisterAgain& r : again) register_again[r.scan][r.pair] = true;
+  // Each scan's matched pairs in `matched` follow its accepted pairs in order.
   int base = 0;
+  size_t next_matched = 0;
+  const imaging::FieldDistortion& identified = field->fit.field;
   for (size_t s = 0; s < scans.size(); ++s) {
     artefacts::RegisteredScan& scan = scans[s];
+    const auto k = static_cast<Eigen::Index>(identified.coefficients.size());
+    scan.field_sensitivity.assign(scan.registration.pairs.size(), Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, k));
+    scan.field_covariance_px2 =
+        identified.covariance.size() > 0 ? identified.covariance : Eigen::MatrixXd(Eigen::MatrixXd::Zero(k, k));
     for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
       imaging::PairRegistration& pair = scan.registration.pairs[q];
       if (!pair.accepted) continue;
+      const imaging::PairCorrespondences& points = matched[next_matched++];
       if (register_again[s][q]) {
-        RegisterUndistortedPair(kept.at(base + pair.a), kept.at(base + pair.b), field->fit.field, pair);
+        RegisterUndistortedPair(kept.at(base + pair.a), kept.at(base + pair.b), identified, pair);
+        scan.field_sensitivity[q] = FieldSensitivityOverOverlap(identified, pair.offset_px);
       } else {
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
+        scan.field_sensitivity[q] = FieldSensitivity(identified, points.a_px, points.b_px);
       }
     }
     // The positions chained from the undistorted offsets as the rigid registration chains its own.
