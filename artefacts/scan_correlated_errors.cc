@@ -10,6 +10,43 @@
 
 namespace fvm::artefacts {
 
+namespace {
+
+// The displacements' Jacobian J_i weighted as the fit weighs them, J_i^T W_i (n x 3), and J_i itself.
+struct WeightedDisplacement {
+  Eigen::MatrixXd weighted, jacobian;
+};
+WeightedDisplacement WeighDisplacement(const stage::Calibration& calibration, const stage::Observation& o, int index) {
+  const Eigen::Vector3d from = o.from.value_or(o.command);
+  WeightedDisplacement w;
+  w.jacobian = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
+               stage::ForwardJacobian(calibration.layout, calibration.values.data(), from);
+  // The registrations' information as the fit weighs it: xy always, z where height-map tiles gave the pair a
+  // height step.
+  w.weighted = w.jacobian.transpose() * stage::ObservedInformation(o.covariance, index);
+  return w;
+}
+
+}  // namespace
+
+Eigen::MatrixXd FieldDistortionCovariance(const stage::Calibration& calibration, const stage::MeasurementSet& set,
+                                          const std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>& sensitivity_mm,
+                                          const Eigen::MatrixXd& field_covariance_px2) {
+  const auto n = static_cast<Eigen::Index>(calibration.values.size());
+  const Eigen::Index k = field_covariance_px2.rows();
+  if (n == 0 || set.observations.empty() || k == 0) return Eigen::MatrixXd::Zero(n, n);
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n), pulled = Eigen::MatrixXd::Zero(n, k);
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const WeightedDisplacement w = WeighDisplacement(calibration, set.observations[i], static_cast<int>(i));
+    normal += w.weighted * w.jacobian;
+    pulled += w.weighted * sensitivity_mm[i];
+  }
+  const Eigen::MatrixXd response =
+      Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(normal, "the scans' field distortion: the normal equations")
+          .solve(pulled);
+  return response * field_covariance_px2 * response.transpose();
+}
+
 ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& calibration, const stage::MeasurementSet& set,
                                                     const std::vector<Eigen::Vector3d>& residuals, double pixel_mm,
                                                     double gain_u) {
@@ -22,13 +59,9 @@ ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& ca
   std::vector<std::vector<size_t>> runs;  // runs of consecutive pairs: where a scan's residuals may be shifted
   for (size_t i = 0; i < m; ++i) {
     const stage::Observation& o = set.observations[i];
-    const Eigen::Vector3d from = o.from.value_or(o.command);
-    const Eigen::MatrixXd j = stage::ForwardJacobian(calibration.layout, calibration.values.data(), o.command) -
-                              stage::ForwardJacobian(calibration.layout, calibration.values.data(), from);
-    // The registrations' information as the fit weighs it: xy always, z where height-map tiles gave the pair a
-    // height step.
-    weighted.push_back(j.transpose() * stage::ObservedInformation(o.covariance, static_cast<int>(i)));
-    normal += weighted.back() * j;
+    const WeightedDisplacement w = WeighDisplacement(calibration, o, static_cast<int>(i));
+    weighted.push_back(w.weighted);
+    normal += w.weighted * w.jacobian;
     // The bias of a unit gain in each coordinate, in the displacement's millimetres (y up, the pixels' y down).
     const Eigen::Vector2d offset_px(o.measured.x() / pixel_mm, -o.measured.y() / pixel_mm);
     Eigen::Matrix<double, 3, 2> bias = Eigen::Matrix<double, 3, 2>::Zero();

@@ -44,4 +44,12 @@ ScanCorrelatedErrors ScanCorrelatedErrorCovariances(const stage::Calibration& ca
                                                     const std::vector<Eigen::Vector3d>& residuals, double pixel_mm,
                                                     double gain_u = kSubpixelGainU);
 
+// The objective's field distortion, identified from the overlaps and taken out of every pair's offset
+// (workflows/scan_distortion.h): an error dc of its coefficients moves displacement i by S_i dc, every pair at once,
+// so the coefficients' covariance gains R C R^T, R = (J^T W J)^-1 sum_i J_i^T W_i S_i, C the field's covariance.
+// `sensitivity_mm`: S_i in mm per px of coefficient (3 x K, z row 0), one per observation of `set`.
+Eigen::MatrixXd FieldDistortionCovariance(const stage::Calibration& calibration, const stage::MeasurementSet& set,
+                                          const std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>& sensitivity_mm,
+                                          const Eigen::MatrixXd& field_covariance_px2);
+
 }  // namespace fvm::artefacts

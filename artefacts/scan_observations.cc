@@ -60,7 +60,7 @@ RegisteredScan RegisterScan(std::string name, std::vector<Eigen::Vector3d> encod
                             const std::vector<imaging::TileImage>& tiles, double pixel_mm, bool height_maps,
                             const imaging::RegistrationOptions& options,
                             const std::function<void(int done, int total)>& on_pair) {
-  RegisteredScan scan{std::move(name), std::move(encoder_mm), {}, {}};
+  RegisteredScan scan{std::move(name), std::move(encoder_mm), {}, {}, {}, {}};
   scan.registration = imaging::RegisterTileChain(tiles, NominalOffsetsPx(scan.encoder_mm, pixel_mm), options, on_pair);
   if (height_maps) {
     for (const imaging::PairRegistration& pair : scan.registration.pairs) {
@@ -189,6 +189,26 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   // pixels, and what of the misfit the coefficients took up (scan_correlated_errors.h).
   const ScanCorrelatedErrors correlated = ScanCorrelatedErrorCovariances(cal, set, result.residuals, pixel_mm);
   cal.covariance += correlated.subpixel_bias + correlated.misfit;
+  // The field distortion's error, shared by every pair (scans undistorted by a field identified from their overlaps).
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> field_mm;
+  Eigen::MatrixXd field_covariance;
+  for (const RegisteredScan& scan : scans) {
+    if (scan.field_sensitivity.empty()) continue;
+    field_covariance = scan.field_covariance_px2;
+    for (size_t k = 0; k < scan.registration.pairs.size(); ++k) {
+      if (!scan.registration.pairs[k].accepted) continue;
+      const Eigen::Matrix<double, 2, Eigen::Dynamic>& px = scan.field_sensitivity[k];
+      Eigen::Matrix<double, 3, Eigen::Dynamic> mm = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, px.cols());
+      mm.row(0) = px.row(0) * pixel_mm, mm.row(1) = -px.row(1) * pixel_mm;  // y up, the pixels' y down
+      field_mm.push_back(mm);
+    }
+  }
+  if (field_covariance.size() > 0) {
+    if (field_mm.size() != set.observations.size()) {
+      throw std::invalid_argument("IdentifyFromScans: a field sensitivity for every registered pair of every scan, or none");
+    }
+    cal.covariance += FieldDistortionCovariance(cal, set, field_mm, field_covariance);
+  }
   if (pixel_u_mm > 0.0) {
     const stage::MeasurementSet scaled = ScanDisplacements(scans, pixel_mm + pixel_u_mm);
     const stage::IdentificationResult again = stage::Identify(cal.layout, scaled.observations, options);

@@ -21,6 +21,12 @@ struct RegisteredScan {
   // far the stage rose from a to b, imaging::OverlapHeightStep(a, b, offset); empty for grey tiles, which show no
   // height.
   std::vector<imaging::HeightStep> height_steps;
+  // Tiles undistorted by an objective's field identified from the overlaps (workflows/scan_distortion.h): how each
+  // pair's offset moves with the field's coefficients (px per px of coefficient, 2 x K; one per pair, empty without a
+  // field) and the coefficients' covariance (px^2). An error of the field moves every pair of every scan at once,
+  // which no pair's own covariance holds: IdentifyFromScans adds its share to the calibration's covariance.
+  std::vector<Eigen::Matrix<double, 2, Eigen::Dynamic>> field_sensitivity;
+  Eigen::MatrixXd field_covariance_px2;
 };
 
 // A scan's tiles registered as a chain from where the encoders say they are (the stage's mm turned into pixels,

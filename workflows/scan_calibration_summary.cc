@@ -49,7 +49,10 @@ nlohmann::json ScanJson(const ScanCalibrationRun& run) {
   doc["stitched_frame"] = options.settings.stitched_frame;
   doc["pixel_mm"] = options.pixel_mm;
   doc["pixel_u_mm"] = options.pixel_u_mm;
-  if (run.field) doc["distortion"] = DistortionJson(run.field->fit, run.field->identified, options.pixel_mm);
+  if (run.field) {
+    doc["distortion"] = DistortionJson(run.field->fit, run.field->identified, options.pixel_mm);
+    if (run.field->identified) doc["distortion"]["block_scatter_factor"] = run.field->block_scatter_factor;
+  }
   doc["scans"] = ScansJson(run.scans);
   // What no image of a scan can tell, whatever the rank analysis finds on these data (it takes the pixel size as
   // given): the scale of the pixels, and the camera's turn against the stage axes.
@@ -124,7 +127,13 @@ std::string ScanText(const ScanCalibrationRun& run) {
   std::string text = fmt::format("fvm calibrate: model {} ({} chain, eq. 1) on {}\n", cal.model, cal.layout.chain().code,
                                  ScanSource(run));
   text += RegistrationsText(run);
-  if (run.field) text += DistortionText(run.field->fit, run.field->identified, run.options.pixel_mm);
+  if (run.field) {
+    text += DistortionText(run.field->fit, run.field->identified, run.options.pixel_mm);
+    if (run.field->identified) {
+      text += fmt::format("    its u widened {:.2f} times: the overlaps' quarters scatter that much more than their points "
+                          "(no loop of the chains checks them)\n", run.field->block_scatter_factor);
+    }
+  }
   text += fmt::format("  solver: {} in {} iterations; condition number {:.3g}\n",
                       result.converged ? "converged" : "NOT converged", result.iterations, result.condition_number);
   text += ParameterTable(result) + ScanFitText(run);

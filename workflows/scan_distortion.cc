@@ -2,10 +2,126 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
 #include "core/input_error.h"
+#include "imaging/tile_pair_registration.h"
+#include "imaging/tile_registration.h"
 #include "workflows/calibration_scans.h"
 
 namespace fvm::workflows {
+namespace {
+
+// A registered pair of one scan whose overlap gave the field fit too few correspondences to place its tiles (a
+// diagonal's corner overlap, a thin or texture-poor band): its offset is registered again on the undistorted tiles.
+struct PairToRegisterAgain {
+  size_t scan, pair;
+};
+
+// The pair registered again on its two tiles resampled without the field: the same registration as the rigid one,
+// so the undistorted offset and its information come from the whole overlap. Rejected (with the reason) when the
+// undistorted tiles do not register: better a pair missing from the calibration than one biased by the field.
+void RegisterUndistortedPair(const imaging::TileImage& a, const imaging::TileImage& b,
+                             const imaging::FieldDistortion& field, imaging::PairRegistration& pair) {
+  const imaging::PairRegistration again =
+      imaging::RegisterPair(imaging::UndistortTile(a, field), imaging::UndistortTile(b, field), pair.offset_px, {});
+  if (again.accepted) {
+    pair.offset_px = again.offset_px;
+    pair.information = again.information;
+    pair.quality = again.quality;
+  } else {
+    pair.accepted = false;
+    pair.rejection = "registered, but not once undistorted (" + again.rejection + ")";
+  }
+}
+
+// The matching for a scan whose narrowest accepted overlap is `band_px` wide: the correspondences' windows (and the
+// pyramid's reach) keep their centres half a window inside the band, so the default 15 px window leaves a 32 px band
+// (128 px tiles at 25 %) two columns of points 8 px apart, from which the field's change across the band, all a
+// chain of tiles shows of it, is extrapolated over the whole tile (k1 found 1.68 for 2 px, every step 0.15-0.43 px
+// short). Narrow bands get a window of a quarter of the band (at least 7 px), one pyramid level, and a grid of a
+// tenth of it (at least 2 px): eight columns over 22 px. Wide bands keep the options as given.
+imaging::CorrespondenceOptions MatchingForBand(imaging::CorrespondenceOptions matching, double band_px) {
+  if (band_px >= 4.0 * matching.window_px) return matching;
+  int window = static_cast<int>(std::floor(band_px / 4.0));
+  if (window % 2 == 0) --window;
+  matching.window_px = std::max(7, window);
+  matching.pyramid_levels = std::min(matching.pyramid_levels, 1);
+  matching.grid_step_px = std::max(2, std::min(matching.grid_step_px, static_cast<int>(std::floor(band_px / 10.0))));
+  return matching;
+}
+
+// How an offset between undistorted tiles moves with the field's coefficients: p_b - p_a = u_a - u_b + d(u_a) - d(u_b)
+// averaged over the points that placed it, so the mean of B(u_a) - B(u_b) over them (px per px of coefficient).
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivity(const imaging::FieldDistortion& field,
+                                                          const std::vector<Eigen::Vector2d>& a_px,
+                                                          const std::vector<Eigen::Vector2d>& b_px) {
+  Eigen::Matrix<double, 2, Eigen::Dynamic> sum = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, field.coefficients.size());
+  for (size_t m = 0; m < a_px.size(); ++m) sum += field.Basis(a_px[m]) - field.Basis(b_px[m]);
+  return a_px.empty() ? sum : Eigen::Matrix<double, 2, Eigen::Dynamic>(sum / static_cast<double>(a_px.size()));
+}
+
+// The same for a pair registered again on undistorted tiles: over a 9 x 9 grid of the overlap at `offset_px`.
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivityOverOverlap(const imaging::FieldDistortion& field,
+                                                                     const Eigen::Vector2d& offset_px) {
+  const Eigen::Vector2d low = offset_px.cwiseMax(0.0);
+  const Eigen::Vector2d high = (offset_px + Eigen::Vector2d(field.width_px - 1, field.height_px - 1))
+                                   .cwiseMin(Eigen::Vector2d(field.width_px - 1, field.height_px - 1));
+  std::vector<Eigen::Vector2d> a_px, b_px;
+  for (int j = 0; j <= 8; ++j) {
+    for (int i = 0; i <= 8; ++i) {
+      a_px.push_back(low + (high - low).cwiseProduct(Eigen::Vector2d(i, j) / 8.0));
+      b_px.push_back(a_px.back() - offset_px);
+    }
+  }
+  return FieldSensitivity(field, a_px, b_px);
+}
+
+// How much more the correspondences' errors scatter at the scale of a quarter of an overlap than their own scatter
+// allows: each pair's inliers split into four blocks along the band, each block's mean residual about the pair's
+// (which the positions take up) against sigma^2 / n. In a chain of tiles no loop checks the pairs' mean residuals
+// (FieldDistortionFit::pair_scatter_factor stays 1), yet the points of one overlap share errors that move the field
+// (the texture's, at the windows' scale): on scangen's scans (512 px, 20 %) the blocks scatter 1.4-1.6 times the
+// points' sigma, and the field's coefficients missed their truth by 1.5-1.9 times their stated u. At least 1.
+double BlockScatterFactor(const std::vector<imaging::PairCorrespondences>& matched, const imaging::FieldDistortionFit& fit,
+                          int min_points) {
+  constexpr int kBlocks = 4;
+  const double sigma = fit.point_sigma_px;
+  double chi2 = 0.0;
+  int dof = 0;
+  for (const imaging::PairCorrespondences& p : matched) {
+    if (static_cast<int>(p.a_px.size()) < min_points) continue;
+    Eigen::Vector2d step = Eigen::Vector2d::Zero();
+    for (size_t m = 0; m < p.a_px.size(); ++m) step += p.a_px[m] - p.b_px[m];
+    const bool along_x = std::abs(step.x()) >= std::abs(step.y());
+    std::vector<std::pair<double, Eigen::Vector2d>> residuals;  // (place along the band, residual)
+    for (size_t m = 0; m < p.a_px.size(); ++m) {
+      const Eigen::Vector2d r = fit.positions_px[static_cast<size_t>(p.a)] - fit.positions_px[static_cast<size_t>(p.b)] +
+                                p.a_px[m] - p.b_px[m] + fit.field.Displacement(p.a_px[m]) - fit.field.Displacement(p.b_px[m]);
+      if (r.cwiseAbs().maxCoeff() <= 3.0 * sigma) residuals.emplace_back(along_x ? p.a_px[m].y() : p.a_px[m].x(), r);
+    }
+    const int n = static_cast<int>(residuals.size());
+    if (n < 2 * kBlocks) continue;
+    std::sort(residuals.begin(), residuals.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& [place, r] : residuals) mean += r;
+    mean /= n;
+    for (int b = 0; b < kBlocks; ++b) {
+      const int first = b * n / kBlocks, end = (b + 1) * n / kBlocks;
+      Eigen::Vector2d block = Eigen::Vector2d::Zero();
+      for (int m = first; m < end; ++m) block += residuals[static_cast<size_t>(m)].second;
+      block /= end - first;
+      chi2 += (block - mean).squaredNorm() * (end - first) / (sigma * sigma);
+    }
+    dof += 2 * (kBlocks - 1);
+  }
+  return dof > 0 && sigma > 0.0 ? std::max(1.0, std::sqrt(chi2 / dof)) : 1.0;
+}
+
+}  // namespace
 
 std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std::vector<std::string>& layouts,
                                                                        double pixel_mm, int threads, bool progress,
@@ -18,6 +134,11 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   std::vector<imaging::PairCorrespondences> matched;
   std::vector<Eigen::Vector2d> initial;
   std::vector<bool> fixed;
+  // Pairs the fit cannot place (fewer correspondences than it weighs), with their tiles kept for the second
+  // registration; the pairs it places, each scan's in a set.
+  std::vector<PairToRegisterAgain> again;
+  std::map<int, imaging::TileImage> kept;
+  size_t scan_index = 0;
   int width = 0, height = 0;
   std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(
       layouts, pixel_mm, threads, progress,
@@ -30,10 +151,23 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
         }
         const int base = static_cast<int>(initial.size());
         std::vector<imaging::OverlapToMatch> overlaps;
-        for (const imaging::PairRegistration& pair : scan.registration.pairs) {
-          if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
+        std::vector<size_t> pair_of_overlap;
+        for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
+          const imaging::PairRegistration& pair = scan.registration.pairs[q];
+          if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px}), pair_of_overlap.push_back(q);
         }
-        for (imaging::PairCorrespondences& p : imaging::MatchOverlaps(images, overlaps, guess, options.matching)) {
+        double band = std::numeric_limits<double>::infinity();
+        for (const imaging::OverlapToMatch& o : overlaps) {
+          band = std::min({band, width - std::abs(o.offset_px.x()), height - std::abs(o.offset_px.y())});
+        }
+        std::vector<imaging::PairCorrespondences> found =
+            imaging::MatchOverlaps(images, overlaps, guess, MatchingForBand(options.matching, band));
+        for (size_t m = 0; m < found.size(); ++m) {
+          imaging::PairCorrespondences& p = found[m];
+          if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
+            again.push_back({scan_index, pair_of_overlap[m]});
+            for (int t : {p.a, p.b}) kept.emplace(base + t, images[static_cast<size_t>(t)]);
+          }
           p.a += base, p.b += base;
           matched.push_back(std::move(p));
         }
@@ -41,6 +175,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
           initial.push_back(scan.registration.positions.positions_px[k]);
           fixed.push_back(k == 0 || !scan.registration.positions.registered[k]);
         }
+        ++scan_index;
       });
   try {
     imaging::FieldDistortionFitOptions fit_options = options.fit;
@@ -51,22 +186,50 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     throw InputError(std::string("--distortion: ") + e.what());
   }
   field->identified = !options.known;
+  if (field->identified) {
+    // The field's covariance (and the positions') widened by what the overlaps' blocks show: see BlockScatterFactor.
+    const double factor = BlockScatterFactor(matched, field->fit, options.fit.min_pair_points);
+    field->block_scatter_factor = factor;
+    field->fit.field.covariance *= factor * factor;
+    for (Eigen::Matrix2d& c : field->fit.position_covariance_px2) c *= factor * factor;
+  }
+
+  // Every accepted pair's offset between the undistorted tiles: from the fit's positions where its correspondences
+  // placed them (both tiles then in one group of the fit, whose positions chain consistently), else registered again
+  // on the undistorted tiles. A pair the fit could not place keeps no rigid offset: a corner overlap sits where the
+  // field is largest (2 sqrt(2) times the edges' for a radial one), and one biased step would be taken for stage
+  // error, as would the jump between two groups of the fit each held at its rigid position.
+  std::vector<std::vector<bool>> register_again(scans.size());
+  for (size_t s = 0; s < scans.size(); ++s) register_again[s].assign(scans[s].registration.pairs.size(), false);
+  for (const PairToRegisterAgain& r : again) register_again[r.scan][r.pair] = true;
+  // Each scan's matched pairs in `matched` follow its accepted pairs in order.
   int base = 0;
-  for (artefacts::RegisteredScan& scan : scans) {
-    imaging::TilePositions& positions = scan.registration.positions;
-    for (size_t k = 0; k < positions.positions_px.size(); ++k) {
-      const auto i = static_cast<size_t>(base) + k;
-      if (!positions.registered[k] && k > 0) continue;  // at its stage position, as before
-      positions.positions_px[k] = field->fit.positions_px[i];
-      positions.sigma_px[k] = field->fit.position_covariance_px2[i].diagonal().cwiseSqrt();
-    }
-    for (imaging::PairRegistration& pair : scan.registration.pairs) {
-      if (pair.accepted) {
+  size_t next_matched = 0;
+  const imaging::FieldDistortion& identified = field->fit.field;
+  for (size_t s = 0; s < scans.size(); ++s) {
+    artefacts::RegisteredScan& scan = scans[s];
+    const auto k = static_cast<Eigen::Index>(identified.coefficients.size());
+    scan.field_sensitivity.assign(scan.registration.pairs.size(), Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, k));
+    scan.field_covariance_px2 =
+        identified.covariance.size() > 0 ? identified.covariance : Eigen::MatrixXd(Eigen::MatrixXd::Zero(k, k));
+    for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
+      imaging::PairRegistration& pair = scan.registration.pairs[q];
+      if (!pair.accepted) continue;
+      const imaging::PairCorrespondences& points = matched[next_matched++];
+      if (register_again[s][q]) {
+        RegisterUndistortedPair(kept.at(base + pair.a), kept.at(base + pair.b), identified, pair);
+        scan.field_sensitivity[q] = FieldSensitivityOverOverlap(identified, pair.offset_px);
+      } else {
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
+        scan.field_sensitivity[q] = FieldSensitivity(identified, points.a_px, points.b_px);
       }
     }
-    base += static_cast<int>(positions.positions_px.size());
+    // The positions chained from the undistorted offsets as the rigid registration chains its own.
+    scan.registration.positions =
+        imaging::SolveTilePositions(artefacts::NominalOffsetsPx(scan.encoder_mm, pixel_mm), scan.registration.pairs,
+                                    imaging::RegistrationOptions{}.stage_sigma_px);
+    base += static_cast<int>(scan.encoder_mm.size());
   }
   return scans;
 }

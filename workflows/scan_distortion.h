@@ -5,7 +5,9 @@
 // of all scans' tile positions (each scan's first tile holds) and the one field they share
 // (imaging/field_distortion_fit.h). A row sees how the field changes along x, a column along y: together they
 // determine it, one direction alone does not (refused by name). Each pair's offset and the chained positions are
-// then those of the undistorted tiles, and the stage calibration reads them as it reads rigid ones.
+// then those of the undistorted tiles, and the stage calibration reads them as it reads rigid ones: a pair whose
+// overlap gave the fit too few correspondences (a diagonal's corner, a thin band of small tiles) is registered
+// again on its tiles resampled without the field.
 
 #include <optional>
 #include <string>
@@ -28,6 +30,9 @@ struct ScanDistortionOptions {
 struct ScanDistortion {
   imaging::FieldDistortionFit fit;  // positions_px: every scan's tiles in turn, each scan from its first tile
   bool identified = false;
+  // The field's covariance is widened by this (at least 1): how much more the correspondences scatter over a quarter
+  // of an overlap than their points' own scatter allows, which a chain of tiles has no loop to check.
+  double block_scatter_factor = 1.0;
 };
 
 // ReadAndRegisterScans, the field identified (or taken) and taken out of every pair's offset and every chained

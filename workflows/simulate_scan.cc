@@ -219,8 +219,9 @@ Summary Summarize(const SimulatedScans& s) {
   for (const auto& p : s.paths) layouts += fmt::format(" --scan {}", (s.dir / (p.name + ".csv")).string());
   summary.text = fmt::format("simulated {} scans ({} tiles of {} px, {} texture, pixel {:.6g} mm) into {}\n",
                              s.paths.size(), s.tiles, s.options.tile_px, s.options.texture, s.pixel_mm, s.dir.string());
-  summary.text += fmt::format("calibrate with:\n  fvm calibrate{} --pixel-mm {:.9g} --model 27 -o stage.json\n", layouts,
-                              s.pixel_mm);
+  // Tiles through a field: the command that identifies it too (without it, the field's scale passes for stage error).
+  summary.text += fmt::format("calibrate with:\n  fvm calibrate{} --pixel-mm {:.9g} --model 27{} -o stage.json\n", layouts,
+                              s.pixel_mm, s.options.distortion_px != 0.0 ? " --distortion" : "");
   return summary;
 }
 

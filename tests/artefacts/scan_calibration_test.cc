@@ -8,15 +8,18 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
+#include "artefacts/scan_correlated_errors.h"
 #include "artefacts/scan_observations.h"
 #include "artefacts/simulation/fvm_batch_simulation.h"
 #include "artefacts/simulation/scan_simulation.h"
 #include "stage/calibration.h"
 #include "stage/fvm_stage_models.h"
 #include "stage/identification.h"
+#include "stage/parameter_layout.h"
 
 namespace fvm::artefacts {
 namespace {
@@ -146,6 +149,47 @@ TEST(ScanCalibration, DisplacementsBetweenNeighboursRecoverTheStageInXY) {
   // The cycle of 0.3 um the model cannot take shows as misfit along the scans, of its size.
   EXPECT_GT(fit.split.misfit_mm * 1e3, 0.1);
   EXPECT_LT(fit.split.misfit_mm * 1e3, 0.4);
+}
+
+// The field distortion's share (issue 43): a field error that moves every displacement as the coefficients `a` would
+// (S_i = J_i a, one field term of variance s^2) moves every predicted displacement by exactly J_i a, with that
+// variance; whatever part of `a` the displacements cannot see (aliases) it leaves out, and nothing else.
+TEST(ScanCalibration, FieldDistortionErrorMovesTheCoefficientsAsItMovesTheDisplacements) {
+  const stage::ParameterLayout layout = stage::FvmModelLayout("27");
+  const stage::Calibration cal{"27", layout, std::vector<double>(static_cast<size_t>(layout.NumFree()), 0.0), {}, 0.0,
+                               std::nullopt, {}};
+  stage::MeasurementSet set;
+  for (int k = 0; k < 12; ++k) {  // a row and a column of 2 mm steps
+    for (const Eigen::Vector3d& step : {Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, -2, 0)}) {
+      stage::Observation o;
+      o.from = Eigen::Vector3d(-120, -80, -50) + k * step;
+      o.command = *o.from + step;
+      o.covariance = Eigen::Vector3d(1e-8, 1e-8, std::numeric_limits<double>::infinity()).asDiagonal();
+      set.observations.push_back(o);
+    }
+  }
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(cal.values.size()));
+  a(0) = 1e-4, a(a.size() - 1) = -2e-5, a(a.size() / 2) = 3e-6;
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> sensitivity;
+  std::vector<Eigen::Vector3d> moved;
+  for (const stage::Observation& o : set.observations) {
+    const Eigen::MatrixXd j = stage::ForwardJacobian(cal.layout, cal.values.data(), o.command) -
+                              stage::ForwardJacobian(cal.layout, cal.values.data(), *o.from);
+    moved.push_back(j * a);
+    moved.back().z() = 0.0;  // grey tiles: z unobserved
+    sensitivity.push_back(moved.back());
+  }
+  const double s = 0.01;  // px
+  const Eigen::MatrixXd covariance = FieldDistortionCovariance(cal, set, sensitivity, Eigen::MatrixXd::Constant(1, 1, s * s));
+  for (size_t i = 0; i < set.observations.size(); ++i) {
+    const stage::Observation& o = set.observations[i];
+    const Eigen::MatrixXd j = (stage::ForwardJacobian(cal.layout, cal.values.data(), o.command) -
+                               stage::ForwardJacobian(cal.layout, cal.values.data(), *o.from)).topRows(2);
+    const Eigen::Matrix2d predicted = j * covariance * j.transpose();
+    const Eigen::Matrix2d expected = s * s * moved[i].head<2>() * moved[i].head<2>().transpose();
+    EXPECT_LT((predicted - expected).norm(), 1e-9 * expected.norm() + 1e-30) << i;
+  }
+  EXPECT_GT(covariance.norm(), 0.0);
 }
 
 bool Fixed(const stage::IdentificationResult& r, const std::string& name);
