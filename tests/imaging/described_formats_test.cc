@@ -7,12 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "imaging/io/keyence_vk4.h"
 #include "imaging/io/olympus_lext.h"
+#include "imaging/io/reader_support.h"
 #include "imaging/io/surface_file.h"
 #include "imaging/io/zygo_datx.h"
 #include "tests/support/datx_files.h"
@@ -151,6 +153,35 @@ TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
   uncalibrated.dx_mm = 0.0;
   EXPECT_NE(Refusal(ParseZygoDatx, testing::BuildDatx(uncalibrated), "c.datx").find("X Converter"),
             std::string::npos);
+}
+
+// One damaged length in a small DATX once made the HDF5 child allocate and fill 2.3 GB before the file was refused:
+// a variable-length string stored as its length (4 bytes) and its place in the global heap (the collection's
+// address, 8 bytes; the object's index, 4), whose length says 1.5 GB. The child's memory cap (RLIMIT_AS) refuses it
+// at once, naming the cap and the attribute. A map of a million points still reads under the cap.
+TEST(ZygoDatx, AStringClaimingGigabytesIsRefusedByTheReadersMemoryCap) {
+  const HeightMap map = SampleMap(6, 4);
+  std::string damaged = testing::BuildDatx(map);
+  const std::size_t heap = damaged.find("GCOL");
+  ASSERT_NE(heap, std::string::npos) << "BuildDatx wrote no global heap";
+  std::string reference;  // "Unit" = "NanoMeters": 10 characters in the collection at `heap`
+  AppendBytes<std::uint32_t>(reference, 10);
+  AppendBytes<std::uint64_t>(reference, heap);
+  const std::size_t unit = damaged.find(reference);
+  ASSERT_NE(unit, std::string::npos) << "no 10-character string in the global heap";
+  damaged.replace(unit, 4, std::string("\x00\x00\x00\x60", 4));  // 0x60000000 characters: 1.5 GB
+  const std::string message = Refusal(ParseZygoDatx, damaged, "damaged.datx");
+  EXPECT_NE(message.find("damaged.datx"), std::string::npos) << message;
+#if !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer ends the child itself when an allocation fails
+  EXPECT_NE(message.find("RLIMIT_AS"), std::string::npos) << message;
+  EXPECT_NE(message.find("out of memory reading"), std::string::npos) << message;
+#endif
+
+  const HeightMap large = SampleMap(1000, 1000);
+  const HeightMap read = ParseZygoDatx(testing::BuildDatx(large), "large.datx");
+  EXPECT_EQ(read.size_x, 1000);
+  EXPECT_EQ(read.size_y, 1000);
+  EXPECT_EQ(read.intensity.size(), large.z_mm.size());
 }
 
 TEST(OlympusLext, ReadsTheHeightPageWithItsInvalidMaskAndIntensity) {

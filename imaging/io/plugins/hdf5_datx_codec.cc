@@ -7,17 +7,24 @@
 // H5Aopen_by_idx, in its global heap under H5Aread). So the reading runs in a child process (fork), which sends
 // what it read back through a pipe (datx_wire.h): a damaged file that crashes or hangs HDF5 kills the child, and
 // fvm refuses the file instead of crashing. HDF5 (Debian's serial build) is not thread-safe either: one read at a
-// time.
+// time. The child's address space is capped (RLIMIT_AS, MemoryCap below): one changed byte in a 12 KB file made HDF5
+// allocate and fill 2.3 GB for a string attribute; under the cap the allocation fails at once and the file is
+// refused with the cap named.
 
 #include <hdf5.h>
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -30,6 +37,66 @@ namespace {
 // Attributes beyond these sizes are not what DATX stores; they are skipped, never read.
 constexpr hssize_t kLargestAttribute = 64;
 constexpr std::size_t kLongestText = 4096;
+
+// The HDF5 child's address space, capped with RLIMIT_AS and raised as the read goes, so that a damaged header cannot
+// make HDF5 allocate what no DATX of this size needs. HDF5's work on a DATX's metadata (attributes of at most 64
+// values and strings of at most 4 KB, its metadata cache, the file's image copied into its core driver) stays within
+// kHdf5WorkingBytes and four times the file; a dataset's values, once its grid is known and checked against the
+// largest grid fvm accepts for a file of this size (max_points, zygo_datx.cc), add 24 bytes a value: the value as a
+// double, as much again for HDF5's chunk or conversion buffer, and its copy on the way to the pipe.
+class MemoryCap {
+ public:
+  static constexpr std::uint64_t kHdf5WorkingBytes = std::uint64_t{64} << 20;
+  static constexpr std::uint64_t kBytesPerValue = 24;
+
+  explicit MemoryCap(std::size_t file_bytes) : base_(kHdf5WorkingBytes + 4 * std::uint64_t{file_bytes}) { Allow(0); }
+
+  // Caps the address space at what is mapped now, the base allowance and `extra` bytes.
+  void Allow(std::uint64_t extra) {
+    allowance_ = base_ + extra;
+    rlimit limit{};
+    if (getrlimit(RLIMIT_AS, &limit) != 0) return;
+    const std::uint64_t wanted = MappedBytes() + allowance_;
+    limit.rlim_cur = limit.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, limit.rlim_max);
+    setrlimit(RLIMIT_AS, &limit);
+  }
+
+  // "the N MB the reader allows beyond what fvm had mapped (RLIMIT_AS)", for the refusal.
+  std::string Describe() const {
+    return std::to_string((allowance_ + (1u << 20) - 1) >> 20) +
+           " MB that fvm's HDF5 reader may map for a file of this size and grid (its cap, RLIMIT_AS)";
+  }
+
+ private:
+  // The bytes the process maps now: the first field of /proc/self/statm, in pages.
+  static std::uint64_t MappedBytes() {
+    char text[64] = {};
+    const int fd = open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return 0;
+    const ssize_t n = read(fd, text, sizeof text - 1);
+    close(fd);
+    if (n <= 0) return 0;
+    return std::strtoull(text, nullptr, 10) * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+  }
+
+  std::uint64_t base_;
+  std::uint64_t allowance_ = 0;
+};
+
+// Set when an HDF5 call failed for want of memory (the cap above, or the machine's).
+bool hdf5_out_of_memory = false;
+
+herr_t NoteAllocationFailure(unsigned, const H5E_error2_t* error, void*) {
+  if (error->min_num == H5E_NOSPACE || error->min_num == H5E_CANTALLOC) hdf5_out_of_memory = true;
+  return 0;
+}
+
+// Records whether HDF5's last call failed allocating memory; right after the failing call, before the next HDF5
+// call clears its error stack.
+herr_t Checked(herr_t status) {
+  if (status < 0) H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, NoteAllocationFailure, nullptr);
+  return status;
+}
 
 // Closes an HDF5 identifier when it goes out of scope.
 class Handle {
@@ -59,7 +126,7 @@ bool ReadText(hid_t attribute, hid_t type, hid_t space, std::string* text) {
   if (H5Tis_variable_str(type) > 0) {
     if (H5Tset_size(memory.get(), H5T_VARIABLE) < 0) return false;
     std::vector<char*> strings(static_cast<std::size_t>(n), nullptr);
-    if (H5Aread(attribute, memory.get(), strings.data()) < 0) return false;
+    if (Checked(H5Aread(attribute, memory.get(), strings.data())) < 0) return false;
     if (strings[0]) *text = std::string(strings[0], strnlen(strings[0], kLongestText));
     H5Dvlen_reclaim(memory.get(), space, H5P_DEFAULT, strings.data());
     return true;
@@ -67,7 +134,7 @@ bool ReadText(hid_t attribute, hid_t type, hid_t space, std::string* text) {
   const std::size_t size = H5Tget_size(type);
   if (size == 0 || size > kLongestText || H5Tset_size(memory.get(), size) < 0) return false;
   std::vector<char> buffer(size * static_cast<std::size_t>(n));
-  if (H5Aread(attribute, memory.get(), buffer.data()) < 0) return false;
+  if (Checked(H5Aread(attribute, memory.get(), buffer.data())) < 0) return false;
   *text = std::string(buffer.data(), strnlen(buffer.data(), size));
   return true;
 }
@@ -118,7 +185,7 @@ bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* conv
   if (offset > 0 && H5Tset_size(memory.get(), (offset + 7) / 8 * 8) >= 0) {
     const std::size_t record = (offset + 7) / 8 * 8;
     std::vector<unsigned char> buffer(record * static_cast<std::size_t>(n), 0);
-    if (H5Aread(attribute, memory.get(), buffer.data()) >= 0) {
+    if (Checked(H5Aread(attribute, memory.get(), buffer.data())) >= 0) {
       read = true;
       for (const Member& m : members) {
         if (!m.present) continue;
@@ -150,8 +217,10 @@ bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* conv
 }
 
 // The attributes DATX gives a surface, each read when present in a form read here: numbers, strings, converters.
-// They are opened by name: HDF5 1.10's walk over all attributes by index crashed on damaged attribute tables.
-void ReadAttributes(hid_t dataset, DatxDataset* out) {
+// They are opened by name: HDF5 1.10's walk over all attributes by index crashed on damaged attribute tables. One that
+// cannot be read is left out (zygo_datx.cc says which it needed), unless HDF5 ran out of memory reading it: false then,
+// with the attribute named.
+bool ReadAttributes(hid_t dataset, DatxDataset* out, std::string* error) {
   static constexpr const char* kNames[] = {"Unit",       "No Data",          "X Converter",
                                            "Y Converter", "Z Converter",     "Wavelength",
                                            "Interferometric Scale Factor",   "Obliquity Factor"};
@@ -167,7 +236,9 @@ void ReadAttributes(hid_t dataset, DatxDataset* out) {
       const hssize_t n = Points(space.get());
       if (n < 1 || n > kLargestAttribute) continue;
       std::vector<double> values(static_cast<std::size_t>(n));
-      if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()) >= 0) out->numbers[name] = std::move(values);
+      if (Checked(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data())) >= 0) {
+        out->numbers[name] = std::move(values);
+      }
     } else if (type_class == H5T_STRING) {
       std::string text;
       if (ReadText(attribute.get(), type.get(), space.get(), &text)) out->texts[name] = std::move(text);
@@ -175,7 +246,12 @@ void ReadAttributes(hid_t dataset, DatxDataset* out) {
       DatxConverter converter;
       if (ReadConverter(attribute.get(), type.get(), space.get(), &converter)) out->converters[name] = converter;
     }
+    if (hdf5_out_of_memory) {
+      *error = out->path + " attribute '" + name + "'";
+      return false;
+    }
   }
+  return true;
 }
 
 std::string TypeName(hid_t type) {
@@ -186,8 +262,10 @@ std::string TypeName(hid_t type) {
   return "not a number";
 }
 
-// The dataset at `path`, two-dimensional and numeric, of at most `max_points` values.
-bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, DatxDataset* out, std::string* error) {
+// The dataset at `path`, two-dimensional and numeric, of at most `max_points` values. When HDF5 runs out of memory,
+// `error` names what it was reading and hdf5_out_of_memory is set.
+bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, MemoryCap& cap, DatxDataset* out,
+                 std::string* error) {
   Handle dataset(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose);
   if (!dataset.ok()) {
     *error = path + " cannot be opened as a dataset";
@@ -219,10 +297,12 @@ bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, 
              " points, more than fvm reads from a file of this size (" + std::to_string(max_points) + ")";
     return false;
   }
-  ReadAttributes(dataset.get(), out);
+  if (!ReadAttributes(dataset.get(), out, error)) return false;
+  cap.Allow(MemoryCap::kBytesPerValue * dims[0] * dims[1]);
   out->values.resize(static_cast<std::size_t>(dims[0] * dims[1]));
-  if (H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->values.data()) < 0) {
-    *error = path + ": its " + std::to_string(dims[1]) + " x " + std::to_string(dims[0]) + " values cannot be read";
+  if (Checked(H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->values.data())) < 0) {
+    *error = path + (hdf5_out_of_memory ? " values" : ": its " + std::to_string(dims[1]) + " x " +
+                                                         std::to_string(dims[0]) + " values cannot be read");
     out->values.clear();
     return false;
   }
@@ -251,7 +331,8 @@ std::string ChannelPath(hid_t file, const std::string& what) {
   return {};
 }
 
-bool ReadHere(const std::string& bytes, std::uint64_t max_points, DatxContent* content, std::string* error) {
+bool ReadHere(const std::string& bytes, std::uint64_t max_points, MemoryCap& cap, DatxContent* content,
+              std::string* error) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   Handle access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   if (!access.ok() || H5Pset_fapl_core(access.get(), 1 << 16, 0) < 0 ||
@@ -269,14 +350,38 @@ bool ReadHere(const std::string& bytes, std::uint64_t max_points, DatxContent* c
     *error = "has neither a /Data/Surface group nor a /Measurement/Surface dataset: an HDF5 file, not a Zygo DATX";
     return false;
   }
-  if (!ReadDataset(file.get(), surface, max_points, &content->surface, error)) return false;
+  if (!ReadDataset(file.get(), surface, max_points, cap, &content->surface, error)) return false;
   const std::string intensity = ChannelPath(file.get(), "Intensity");
   if (!intensity.empty()) {
+    // An intensity that cannot be read is left out; one that exhausts the memory cap refuses the file.
     DatxDataset image;
-    std::string ignored;
-    if (ReadDataset(file.get(), intensity, max_points, &image, &ignored)) content->intensity = std::move(image);
+    std::string failure;
+    if (ReadDataset(file.get(), intensity, max_points, cap, &image, &failure)) {
+      content->intensity = std::move(image);
+    } else if (hdf5_out_of_memory) {
+      *error = failure;
+      return false;
+    }
   }
   return true;
+}
+
+// What the child sends back: EncodeDatx of what it read, or a 0 byte and the refusal. Running out of memory (HDF5's
+// allocations failing, or fvm's own) under the cap is a refusal that names the cap.
+std::string ChildAnswer(const std::string& bytes, std::uint64_t max_points) {
+  MemoryCap cap(bytes.size());
+  std::string what = "its values";
+  try {
+    DatxContent read;
+    if (ReadHere(bytes, max_points, cap, &read, &what)) {
+      cap.Allow(sizeof(double) * (read.surface.values.size() + (read.intensity ? read.intensity->values.size() : 0)));
+      return EncodeDatx(read);
+    }
+    if (!hdf5_out_of_memory) return std::string(1, '\0') + what;
+  } catch (const std::bad_alloc&) {
+  }
+  return std::string(1, '\0') + "HDF5 ran out of memory reading " + what + ": it needed more than the " +
+         cap.Describe() + ", which no intact DATX of this size needs";
 }
 
 // A read that takes longer than 5 s and 1 s per 4 MB of file is taken for HDF5 caught in a loop by a damaged file
@@ -307,10 +412,7 @@ bool Read(const std::string& bytes, std::uint64_t max_points, DatxContent* conte
   }
   if (child == 0) {
     close(fds[0]);
-    DatxContent read;
-    std::string read_error;
-    const bool ok = ReadHere(bytes, max_points, &read, &read_error);
-    const std::string answer = ok ? EncodeDatx(read) : std::string(1, '\0') + read_error;
+    const std::string answer = ChildAnswer(bytes, max_points);
     for (std::size_t sent = 0; sent < answer.size();) {
       const ssize_t n = write(fds[1], answer.data() + sent, answer.size() - sent);
       if (n <= 0) _exit(2);
