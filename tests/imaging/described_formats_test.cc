@@ -155,6 +155,32 @@ TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
             std::string::npos);
 }
 
+// A DATX saved again after processing may hold two datasets in /Data/Surface; /MetaData names the measurement's
+// (Root -Measurement-> -Surface-> -Path->), as SurfaceTopography reads it. The copy sorts first by name and is 1 um
+// higher: it is read only when the file has no /MetaData, by the fallback (the first by name). The converters'
+// Parameters may be a fixed array of doubles as well as a variable-length list.
+TEST(ZygoDatx, TheSurfaceIsTheOneMetaDataNames) {
+  const HeightMap map = SampleMap(6, 4);
+  testing::DatxWriteOptions two;
+  two.earlier_copy = true;
+  const HeightMap named = ParseZygoDatx(testing::BuildDatx(map, two), "two.datx");
+  ExpectDatxReadBack(map, named);
+  EXPECT_NE(named.source.find("{3B8D1D1C-"), std::string::npos) << named.source;
+
+  testing::DatxWriteOptions fixed;  // the converters' Parameters as a fixed array (HDF5's other way to store a list)
+  fixed.fixed_parameters = true;
+  ExpectDatxReadBack(map, ParseZygoDatx(testing::BuildDatx(map, fixed), "fixed.datx"));
+
+  two.metadata = false;
+  const HeightMap first = ParseZygoDatx(testing::BuildDatx(map, two), "no-metadata.datx");
+  EXPECT_NE(first.source.find("{0000C0DE-"), std::string::npos) << first.source;
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isfinite(map.z_mm[i])) {
+      EXPECT_NEAR(first.z_mm[i], map.z_mm[i] + 1e-3, 1e-7) << "point " << i;
+    }
+  }
+}
+
 // One damaged length in a small DATX once made the HDF5 child allocate and fill 2.3 GB before the file was refused:
 // a variable-length string stored as its length (4 bytes) and its place in the global heap (the collection's
 // address, 8 bytes; the object's index, 4), whose length says 1.5 GB. The child's memory cap (RLIMIT_AS) refuses it

@@ -31,14 +31,21 @@
 #include <vector>
 
 #include "imaging/io/datx_codec.h"
+#include "imaging/io/plugins/datx_metadata.h"
 #include "imaging/io/plugins/datx_wire.h"
+#include "imaging/io/plugins/hdf5_support.h"
 
 namespace fvm::imaging {
 namespace {
 
+using hdf5::Checked;
+using hdf5::Handle;
+using hdf5::MembersApart;
+using hdf5::Points;
+
 // Attributes beyond these sizes are not what DATX stores; they are skipped, never read.
 constexpr hssize_t kLargestAttribute = 64;
-constexpr std::size_t kLongestText = 4096;
+using hdf5::kLongestText;
 
 // The HDF5 child's address space, capped with RLIMIT_AS and raised as the read goes, so that a damaged header cannot
 // make HDF5 allocate what no DATX of this size needs. HDF5's work on a DATX's metadata (attributes of at most 64
@@ -85,41 +92,6 @@ class MemoryCap {
   std::uint64_t allowance_ = 0;
 };
 
-// Set when an HDF5 call failed for want of memory (the cap above, or the machine's).
-bool hdf5_out_of_memory = false;
-
-herr_t NoteAllocationFailure(unsigned, const H5E_error2_t* error, void*) {
-  if (error->min_num == H5E_NOSPACE || error->min_num == H5E_CANTALLOC) hdf5_out_of_memory = true;
-  return 0;
-}
-
-// Records whether HDF5's last call failed allocating memory; right after the failing call, before the next HDF5
-// call clears its error stack.
-herr_t Checked(herr_t status) {
-  if (status < 0) H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, NoteAllocationFailure, nullptr);
-  return status;
-}
-
-// Closes an HDF5 identifier when it goes out of scope.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  hid_t get() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-// The number of elements of a dataspace, or -1 when it is not simple.
-hssize_t Points(hid_t space) { return H5Sis_simple(space) > 0 ? H5Sget_simple_extent_npoints(space) : -1; }
-
 // The first string of a string attribute (fixed or variable length).
 bool ReadText(hid_t attribute, hid_t type, hid_t space, std::string* text) {
   const hssize_t n = Points(space);
@@ -141,28 +113,6 @@ bool ReadText(hid_t attribute, hid_t type, hid_t space, std::string* text) {
   return true;
 }
 
-// True when the compound's members lie inside it, none over another. HDF5 1.10.8 does not check: one damaged member
-// offset (found by the fuzzer) made it take part of the converter's Parameters for BaseUnit's string length and
-// allocate 2.3 GB for it.
-bool MembersApart(hid_t compound) {
-  const int count = H5Tget_nmembers(compound);
-  const std::size_t size = H5Tget_size(compound);
-  if (count < 1 || count > 64 || size == 0) return false;
-  std::vector<std::pair<std::size_t, std::size_t>> spans;  // [begin, end) of each member
-  for (int i = 0; i < count; ++i) {
-    Handle member(H5Tget_member_type(compound, static_cast<unsigned>(i)), H5Tclose);
-    const std::size_t member_size = member.ok() ? H5Tget_size(member.get()) : 0;
-    const std::size_t offset = H5Tget_member_offset(compound, static_cast<unsigned>(i));
-    if (member_size == 0 || offset > size || member_size > size - offset) return false;
-    spans.emplace_back(offset, offset + member_size);
-  }
-  std::sort(spans.begin(), spans.end());
-  for (std::size_t i = 1; i < spans.size(); ++i) {
-    if (spans[i].first < spans[i - 1].second) return false;
-  }
-  return true;
-}
-
 // A converter: the compound's Category and BaseUnit strings and its Parameters (variable-length doubles), each
 // read only when the file's compound has it in a form read here.
 bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* converter) {
@@ -173,9 +123,10 @@ bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* conv
     bool variable = false;
     std::size_t size = 0, offset = 0;
     bool present = false;
+    hsize_t array_count = 0;  // Parameters as a fixed array of numbers, not a variable-length list
   };
   Member members[3] = {{"Category"}, {"BaseUnit"}, {"Parameters"}};
-  Handle memory(H5Tcreate(H5T_COMPOUND, 1024), H5Tclose);
+  Handle memory(H5Tcreate(H5T_COMPOUND, 2048), H5Tclose);  // 2 strings of 256 bytes and 64 doubles at most
   std::size_t offset = 0;
   std::vector<hid_t> member_types;
   for (Member& m : members) {
@@ -196,6 +147,12 @@ bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* conv
     } else if (member_class == H5T_VLEN && std::strcmp(m.name, "Parameters") == 0) {
       memory_member = H5Tvlen_create(H5T_NATIVE_DOUBLE);
       m.size = sizeof(hvl_t);
+    } else if (member_class == H5T_ARRAY && std::strcmp(m.name, "Parameters") == 0 &&
+               H5Tget_array_ndims(file_member) == 1 && H5Tget_array_dims2(file_member, &m.array_count) == 1 &&
+               m.array_count >= 1 && m.array_count <= static_cast<hsize_t>(kLargestAttribute)) {
+      // The same numbers as a fixed-length array (h5py writes a list of equal lengths so).
+      memory_member = H5Tarray_create2(H5T_NATIVE_DOUBLE, 1, &m.array_count);
+      m.size = static_cast<std::size_t>(m.array_count) * sizeof(double);
     }
     H5Tclose(file_member);
     if (memory_member < 0) continue;
@@ -214,6 +171,11 @@ bool ReadConverter(hid_t attribute, hid_t type, hid_t space, DatxConverter* conv
       for (const Member& m : members) {
         if (!m.present) continue;
         const unsigned char* p = buffer.data() + m.offset;
+        if (m.array_count > 0) {
+          converter->parameters.resize(static_cast<std::size_t>(m.array_count));
+          std::memcpy(converter->parameters.data(), p, m.size);
+          continue;
+        }
         if (std::strcmp(m.name, "Parameters") == 0) {
           hvl_t vl;
           std::memcpy(&vl, p, sizeof vl);
@@ -270,7 +232,7 @@ bool ReadAttributes(hid_t dataset, DatxDataset* out, std::string* error) {
       DatxConverter converter;
       if (ReadConverter(attribute.get(), type.get(), space.get(), &converter)) out->converters[name] = converter;
     }
-    if (hdf5_out_of_memory) {
+    if (hdf5::out_of_memory) {
       *error = out->path + " attribute '" + name + "'";
       return false;
     }
@@ -287,7 +249,7 @@ std::string TypeName(hid_t type) {
 }
 
 // The dataset at `path`, two-dimensional and numeric, of at most `max_points` values. When HDF5 runs out of memory,
-// `error` names what it was reading and hdf5_out_of_memory is set.
+// `error` names what it was reading and hdf5::out_of_memory is set.
 bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, MemoryCap& cap, DatxDataset* out,
                  std::string* error) {
   Handle dataset(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose);
@@ -325,7 +287,7 @@ bool ReadDataset(hid_t file, const std::string& path, std::uint64_t max_points, 
   cap.Allow(MemoryCap::kBytesPerValue * dims[0] * dims[1]);
   out->values.resize(static_cast<std::size_t>(dims[0] * dims[1]));
   if (Checked(H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->values.data())) < 0) {
-    *error = path + (hdf5_out_of_memory ? " values" : ": its " + std::to_string(dims[1]) + " x " +
+    *error = path + (hdf5::out_of_memory ? " values" : ": its " + std::to_string(dims[1]) + " x " +
                                                          std::to_string(dims[0]) + " values cannot be read");
     out->values.clear();
     return false;
@@ -339,9 +301,10 @@ bool IsGroup(hid_t file, const char* path) {
                                                                          H5P_DEFAULT) >= 0 && info.type == H5O_TYPE_GROUP;
 }
 
-// Where the channel `what` ("Surface", "Intensity") is: the first link of /Data/<what> by name, else
-// /Measurement/<what>; empty when neither exists.
+// Where the channel `what` ("Surface", "Intensity") is: the dataset /MetaData names (datx_metadata.h), else the first
+// link of /Data/<what> by name, else /Measurement/<what>; empty when there is none.
 std::string ChannelPath(hid_t file, const std::string& what) {
+  if (std::string named = DatxMetaDataPath(file, what); !named.empty()) return named;
   const std::string group = "/Data/" + what;
   if (IsGroup(file, "/Data") && IsGroup(file, group.c_str())) {
     char name[512] = {};
@@ -370,19 +333,27 @@ bool ReadHere(const std::string& bytes, std::uint64_t max_points, MemoryCap& cap
     return false;
   }
   const std::string surface = ChannelPath(file.get(), "Surface");
+  if (hdf5::out_of_memory) {
+    *error = "/MetaData";
+    return false;
+  }
   if (surface.empty()) {
     *error = "has neither a /Data/Surface group nor a /Measurement/Surface dataset: an HDF5 file, not a Zygo DATX";
     return false;
   }
   if (!ReadDataset(file.get(), surface, max_points, cap, &content->surface, error)) return false;
   const std::string intensity = ChannelPath(file.get(), "Intensity");
+  if (hdf5::out_of_memory) {
+    *error = "/MetaData";
+    return false;
+  }
   if (!intensity.empty()) {
     // An intensity that cannot be read is left out; one that exhausts the memory cap refuses the file.
     DatxDataset image;
     std::string failure;
     if (ReadDataset(file.get(), intensity, max_points, cap, &image, &failure)) {
       content->intensity = std::move(image);
-    } else if (hdf5_out_of_memory) {
+    } else if (hdf5::out_of_memory) {
       *error = failure;
       return false;
     }
@@ -424,7 +395,7 @@ bool AnswerFromChild(const std::string& bytes, std::uint64_t max_points, int fd)
       EncodeDatx(read, out);
       return out.ok();
     }
-    if (!hdf5_out_of_memory) {
+    if (!hdf5::out_of_memory) {
       out.Refuse(what);
       return out.ok();
     }
