@@ -118,6 +118,20 @@ TEST(GelSightTmd, RoundTripsFloat32Heights) {
   EXPECT_FLOAT_EQ(read.x0_mm, map.x0_mm);
 }
 
+// The comment after the signature as a field of 24 bytes (SurfaceTopography's reading of TMD) rather than a NUL-ended
+// string: the header after the field, found because only there does the grid fill the file.
+TEST(GelSightTmd, ReadsACommentFieldOf24Bytes) {
+  const HeightMap map = SampleMap(7, 5);
+  std::string fixed = BuildGelSightTmd(map);  // signature (32 bytes), an empty comment (its NUL), the header
+  fixed.replace(32, 1, std::string("GelSight Mobile\0\0\0\0\0\0\0\0\0", 24));
+  const HeightMap read = ParseGelSightTmd(fixed, "field.tmd");
+  ExpectReadBack(map, read, 2e-9);
+  EXPECT_EQ(read.source, "GelSight TMD v2.0, GelSight Mobile");
+  std::string full = fixed;  // 24 characters, no NUL in the field
+  full.replace(32, 24, "GelSight Mobile 2 scan 7");
+  EXPECT_EQ(ParseGelSightTmd(full, "full.tmd").source, "GelSight TMD v2.0, GelSight Mobile 2 scan 7");
+}
+
 // Every format recognised by its content under a neutral name, except NMS, which has no signature.
 TEST(InstrumentFiles, AreRecognisedByTheirContent) {
   const TempDir dir;
