@@ -210,6 +210,38 @@ TEST(ZygoDatx, AStringClaimingGigabytesIsRefusedByTheReadersMemoryCap) {
   EXPECT_EQ(read.intensity.size(), large.z_mm.size());
 }
 
+// HDF5 1.10.8 walks a global heap collection without checking it: a free space of size 0 kept it walking for ever, an
+// object larger than its collection sent it past its buffers (both found by the fuzzer). Such collections are
+// refused from the file's bytes before HDF5 reads them, naming the collection's place.
+TEST(ZygoDatx, DamagedGlobalHeapCollectionsAreRefusedBeforeHdf5ReadsThem) {
+  const std::string good = testing::BuildDatx(SampleMap(6, 4));
+  const std::size_t heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  const std::size_t collection_size = LoadBytes<std::uint64_t>(good.data() + heap + 8);
+  std::size_t free_space = 0;  // the object of index 0, after the strings
+  for (std::size_t at = heap + 16; at + 16 <= heap + collection_size;) {
+    const auto index = LoadBytes<std::uint16_t>(good.data() + at);
+    const auto size = LoadBytes<std::uint64_t>(good.data() + at + 8);
+    if (index == 0) {
+      free_space = at;
+      break;
+    }
+    at += 16 + (size + 7) / 8 * 8;
+  }
+  ASSERT_NE(free_space, 0u) << "BuildDatx's collection has no free space";
+  const std::string where = "the global heap collection at byte " + std::to_string(heap);
+
+  std::string looping = good;
+  looping.replace(free_space + 8, 8, std::string(8, '\0'));
+  const std::string loop = Refusal(ParseZygoDatx, looping, "loop.datx");
+  EXPECT_NE(loop.find("loop.datx: " + where + ": its free space has size 0"), std::string::npos) << loop;
+
+  std::string overrunning = good;
+  overrunning[heap + 16 + 8 + 3] = 1;  // the first object's size grows by 16 MB
+  const std::string overrun = Refusal(ParseZygoDatx, overrunning, "overrun.datx");
+  EXPECT_NE(overrun.find("overrun.datx: " + where + ": object 1 says"), std::string::npos) << overrun;
+}
+
 TEST(OlympusLext, ReadsTheHeightPageWithItsInvalidMaskAndIntensity) {
   const HeightMap map = SampleMap(11, 5);  // 11 columns: the INVALID page's rows end inside a byte
   const TempDir dir;

@@ -33,6 +33,7 @@
 #include "imaging/io/datx_codec.h"
 #include "imaging/io/plugins/datx_metadata.h"
 #include "imaging/io/plugins/datx_wire.h"
+#include "imaging/io/plugins/hdf5_global_heap.h"
 #include "imaging/io/plugins/hdf5_support.h"
 
 namespace fvm::imaging {
@@ -434,6 +435,10 @@ bool Read(const std::string& bytes, std::uint64_t max_points, DatxContent* conte
   static const bool initialised = H5open() >= 0 && H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr) >= 0;
   if (!initialised) {
     *error = "the HDF5 library could not be initialised";
+    return false;
+  }
+  if (std::string damaged = DamagedGlobalHeap(bytes); !damaged.empty()) {
+    *error = damaged;  // refused before HDF5 loops or reads past its buffers on it
     return false;
   }
   const int longest_ms = LongestReadMs(bytes.size());
