@@ -97,6 +97,19 @@ TEST(WykoOpd, ReadsColumnsBottomUpWithItsImage) {
   ExpectGreyIntensity(read);
 }
 
+// The heights' block under Vision's other names, and a Mult above 32767 (a uint16, not a negative int16).
+TEST(WykoOpd, ReadsTheHeightsUnderTheirOtherNamesAndALargeMult) {
+  const HeightMap map = SampleMap(7, 5);
+  for (const char* block : {"RAW DATA", "OPD", "Raw"}) {
+    ExpectReadBack(map, ParseWykoOpd(testing::BuildOpd(map, block), "a.opd"), testing::OpdStepMm());
+  }
+  HeightMap flat = map;  // within int16 counts of 632.8 nm / 40000
+  for (double& z : flat.z_mm) z *= 1e-2;
+  const std::uint16_t mult = 40000;
+  ExpectReadBack(flat, ParseWykoOpd(testing::BuildOpd(flat, "RAW_DATA", mult), "b.opd"),
+                 static_cast<double>(632.8f) / mult * 1e-6);
+}
+
 TEST(DigitalSurfSur, ReadsPlainAndCompressedWithNonMeasuredPoints) {
   const HeightMap map = SampleMap(7, 5);
   ExpectReadBack(map, ParseDigitalSurfSur(testing::BuildSur(map), "a.sur"), testing::SurStepMm());

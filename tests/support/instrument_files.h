@@ -104,7 +104,10 @@ inline std::string BuildMetroPro(const HeightMap& map) {
 
 // Wyko OPD: int16 counts of 632.8 nm / 64 (about 9.9 nm), columns stored bottom row first, and an Image block.
 inline double OpdStepMm() { return static_cast<double>(632.8f) / 64.0 * 1e-6; }
-inline std::string BuildOpd(const HeightMap& map) {
+// `heights_block` names the heights' array ("RAW_DATA" in the files here; SurfaceTopography also knows "RAW DATA", "OPD"
+// and "Raw"); `mult` is the height divisor, a 2-byte block read unsigned.
+inline std::string BuildOpd(const HeightMap& map, const std::string& heights_block = "RAW_DATA",
+                            std::uint16_t mult = 64) {
   struct Entry {
     std::string name;
     std::int16_t type;
@@ -127,9 +130,9 @@ inline std::string BuildOpd(const HeightMap& map) {
     return d;
   };
   const float wavelength = 632.8f;
-  const double step_nm = static_cast<double>(wavelength) / 64.0;
+  const double step_nm = static_cast<double>(wavelength) / mult;
   std::vector<Entry> entries = {
-      {"RAW_DATA", 3,
+      {heights_block, 3,
        array(2,
              [&](std::string& d, std::size_t at, int ix, int iy) {
                const double z = map.at(ix, iy);
@@ -140,7 +143,7 @@ inline std::string BuildOpd(const HeightMap& map) {
        array(1, [&](std::string& d, std::size_t at, int ix,
                     int iy) { PutLe<unsigned char>(d, at, GreyOf(static_cast<std::size_t>(iy) * map.size_x + ix)); })},
       {"Wavelength", 7, number(wavelength)},
-      {"Mult", 6, number(std::int16_t{64})},
+      {"Mult", 6, number(mult)},
       {"Pixel_size", 7, number(static_cast<float>(map.dx_mm))},
       {"Aspect", 7, number(static_cast<float>(map.dy_mm / map.dx_mm))},
   };
