@@ -71,6 +71,17 @@ TEST(SensofarPlu, ReadsHeightsInvalidPointsAndTheColourImage) {
   ExpectGreyIntensity(read);
 }
 
+// A multi-layer measurement: the surface (layer 0) is read, and the colour image after the last layer, not the
+// second layer's bytes, is its intensity.
+TEST(SensofarPlu, ReadsTheSurfaceOfAMultiLayerMeasurement) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap read = ParseSensofarPlu(testing::BuildPlu(map, 3), "layers.plu");
+  ExpectReadBack(map, read, 2e-9);  // float32 micrometres, as above; the other layers are 5 and 10 um lower
+  ExpectGreyIntensity(read);
+  ASSERT_EQ(read.notes.size(), 1u);
+  EXPECT_NE(read.notes[0].find("3 layers"), std::string::npos) << read.notes[0];
+}
+
 TEST(SensofarPlux, ReadsTheFirstLayerNamedInItsIndex) {
   HeightMap map = SampleMap(7, 5);
   map.dx_mm = 0.00125, map.dy_mm = 0.0025;  // six decimals of micrometres in index.xml

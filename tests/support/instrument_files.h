@@ -42,7 +42,9 @@ inline void PutText(std::string& bytes, std::size_t at, std::string_view text) {
 inline unsigned char GreyOf(std::size_t i) { return static_cast<unsigned char>((37 * i + 11) % 251); }
 
 // Sensofar PLU, topography (type 3) with the S neox colour image after the heights. Heights as float32 um.
-inline std::string BuildPlu(const HeightMap& map) {
+// `layers` > 1 writes a multi-layer measurement: after the surface, layers of the same grid 5 um lower each, then
+// the colour image.
+inline std::string BuildPlu(const HeightMap& map, int layers = 1) {
   std::string b(500, '\0');
   PutText(b, 0, "Mon Apr 19 11:40:13 2021");
   PutLe<std::uint32_t>(b, 128, 1618832413u);
@@ -56,16 +58,20 @@ inline std::string BuildPlu(const HeightMap& map) {
   PutLe<std::uint32_t>(b, 428, 3u);  // topography
   PutLe<std::uint32_t>(b, 456, static_cast<std::uint32_t>(map.size_y));
   PutLe<std::uint32_t>(b, 460, static_cast<std::uint32_t>(map.size_x));
-  PutLe<std::uint32_t>(b, 500, static_cast<std::uint32_t>(map.size_y));
-  PutLe<std::uint32_t>(b, 504, static_cast<std::uint32_t>(map.size_x));
-  std::size_t at = 508;
-  for (const double z : map.z_mm) {
-    PutLe<float>(b, at, std::isfinite(z) ? static_cast<float>(z * 1000.0) : 1000001.0f);
-    at += 4;
+  b[489] = static_cast<char>(layers);  // num_layers
+  std::size_t at = 500;
+  for (int layer = 0; layer < layers; ++layer) {
+    PutLe<std::uint32_t>(b, at, static_cast<std::uint32_t>(map.size_y));
+    PutLe<std::uint32_t>(b, at + 4, static_cast<std::uint32_t>(map.size_x));
+    at += 8;
+    for (const double z : map.z_mm) {
+      PutLe<float>(b, at, std::isfinite(z) ? static_cast<float>(z * 1000.0 - 5.0 * layer) : 1000001.0f);
+      at += 4;
+    }
+    PutLe<float>(b, at, 1000001.0f);
+    PutLe<float>(b, at + 4, 1000001.0f);
+    at += 8;
   }
-  PutLe<float>(b, at, 1000001.0f);
-  PutLe<float>(b, at + 4, 1000001.0f);
-  at += 8;
   for (std::size_t i = 0; i < map.z_mm.size(); ++i, at += 3)
     PutText(b, at, std::string(3, static_cast<char>(GreyOf(i))));
   return b;
