@@ -121,6 +121,47 @@ TEST(WykoOpd, ReadsTheHeightsUnderTheirOtherNamesAndALargeMult) {
                  static_cast<double>(632.8f) / mult * 1e-6);
 }
 
+using Parser = std::function<HeightMap(const std::string&, const std::string&)>;
+
+// The message of the InputError `parse` throws on `bytes`, or a failure.
+std::string Refusal(const Parser& parse, const std::string& bytes, const std::string& name) {
+  try {
+    parse(bytes, name);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << name << ": read without an error";
+  return {};
+}
+
+// The inversion code (bytes 290-291) as Gwyddion 2.62 applies it (gwyddion_comparison_test.cc checks Gwyddion): 1
+// inverts the heights, 2 also mirrors the columns, 3 the rows; each with a note. Codes beyond 3 are refused.
+TEST(DigitalSurfSur, AppliesTheInversionCode) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap plain = ParseDigitalSurfSur(testing::BuildSur(map), "a.sur");
+  for (std::int16_t code = 1; code <= 3; ++code) {
+    std::string bytes = testing::BuildSur(map);
+    testing::PutLe<std::int16_t>(bytes, 290, code);
+    const HeightMap read = ParseDigitalSurfSur(bytes, "inverted.sur");
+    ASSERT_EQ(read.notes.size(), 1u);
+    EXPECT_NE(read.notes[0].find("inversion code is " + std::to_string(code)), std::string::npos) << read.notes[0];
+    for (int iy = 0; iy < map.size_y; ++iy) {
+      for (int ix = 0; ix < map.size_x; ++ix) {
+        const int from_x = code == 2 ? map.size_x - 1 - ix : ix, from_y = code == 3 ? map.size_y - 1 - iy : iy;
+        const double expected = -plain.at(from_x, from_y);
+        if (std::isnan(expected)) {
+          EXPECT_TRUE(std::isnan(read.at(ix, iy))) << "code " << code << " at " << ix << ", " << iy;
+        } else {
+          EXPECT_EQ(read.at(ix, iy), expected) << "code " << code << " at " << ix << ", " << iy;
+        }
+      }
+    }
+  }
+  std::string unknown = testing::BuildSur(map);
+  testing::PutLe<std::int16_t>(unknown, 290, 4);
+  EXPECT_NE(Refusal(ParseDigitalSurfSur, unknown, "a.sur").find("inversion code is 4"), std::string::npos);
+}
+
 TEST(DigitalSurfSur, ReadsPlainAndCompressedWithNonMeasuredPoints) {
   const HeightMap map = SampleMap(7, 5);
   ExpectReadBack(map, ParseDigitalSurfSur(testing::BuildSur(map), "a.sur"), testing::SurStepMm());
@@ -174,19 +215,6 @@ TEST(InstrumentFiles, AreRecognisedByTheirContent) {
   const Surface nms = ReadSurface(dir.path() / "export.nms");
   EXPECT_EQ(nms.format, SurfaceFormat::kNms);
   EXPECT_EQ(FormatName(nms.format), "nms");
-}
-
-using Parser = std::function<HeightMap(const std::string&, const std::string&)>;
-
-// The message of the InputError `parse` throws on `bytes`, or a failure.
-std::string Refusal(const Parser& parse, const std::string& bytes, const std::string& name) {
-  try {
-    parse(bytes, name);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << name << ": read without an error";
-  return {};
 }
 
 struct Format {
