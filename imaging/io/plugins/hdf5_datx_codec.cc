@@ -65,8 +65,9 @@ class MemoryCap {
   void Allow(std::uint64_t extra) {
     allowance_ = base_ + extra;
     rlimit limit{};
-    if (getrlimit(RLIMIT_AS, &limit) != 0) return;
-    const std::uint64_t wanted = MappedBytes() + allowance_;
+    const std::uint64_t mapped = MappedBytes();
+    if (mapped == 0 || getrlimit(RLIMIT_AS, &limit) != 0) return;  // without /proc, no cap rather than a wrong one
+    const std::uint64_t wanted = mapped + allowance_;
     limit.rlim_cur = limit.rlim_max == RLIM_INFINITY ? wanted : std::min<std::uint64_t>(wanted, limit.rlim_max);
     setrlimit(RLIMIT_AS, &limit);
   }
