@@ -110,8 +110,8 @@ inline std::string BuildMetroPro(const HeightMap& map) {
 
 // Wyko OPD: int16 counts of 632.8 nm / 64 (about 9.9 nm), columns stored bottom row first, and an Image block.
 inline double OpdStepMm() { return static_cast<double>(632.8f) / 64.0 * 1e-6; }
-// `heights_block` names the heights' array ("RAW_DATA" in the files here; SurfaceTopography also knows "RAW DATA", "OPD"
-// and "Raw"); `mult` is the height divisor, a 2-byte block read unsigned.
+// `heights_block` names the heights' array ("RAW_DATA" in the files here; SurfaceTopography also knows "RAW DATA",
+// "OPD" and "Raw"); `mult` is the height divisor, a 2-byte block read unsigned.
 inline std::string BuildOpd(const HeightMap& map, const std::string& heights_block = "RAW_DATA",
                             std::uint16_t mult = 64) {
   struct Entry {
