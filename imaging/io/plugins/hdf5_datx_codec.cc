@@ -53,7 +53,8 @@ using hdf5::kLongestText;
 // values and strings of at most 4 KB, its metadata cache, the file's image copied into its core driver) stays within
 // kHdf5WorkingBytes and four times the file; a dataset's values, once its grid is known and checked against the
 // largest grid fvm accepts for a file of this size (max_points, zygo_datx.cc), add 24 bytes a value: the value as a
-// double, as much again for HDF5's chunk or conversion buffer, and its copy on the way to the pipe.
+// double and twice as much for HDF5's chunk, conversion and decompression buffers (the answer is written to the pipe
+// from the values themselves, PipeOut, with no copy).
 class MemoryCap {
  public:
   static constexpr std::uint64_t kHdf5WorkingBytes = std::uint64_t{64} << 20;
