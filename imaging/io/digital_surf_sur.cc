@@ -132,9 +132,8 @@ HeightMap ParseDigitalSurfSur(const std::string& bytes, const std::string& name)
     FailReading(name, "the x, y, z spacings (" + FormatShortest(dx) + ", " + FormatShortest(dy) + ", " +
                           FormatShortest(dz) + ") or the z offset are not usable numbers; " + kSurReexport);
   }
-  if (inverted != 0) {
-    FailReading(name, "says its heights are inverted or mirrored (code " + std::to_string(inverted) +
-                          "); fvm reads SUR surfaces stored as measured: remove the inversion in MountainsMap");
+  if (inverted < 0 || inverted > 3) {
+    FailReading(name, "its inversion code is " + std::to_string(inverted) + ", not 0 to 3; " + kSurReexport);
   }
   const double mm_x = SurUnit(name, "the x step unit", p + 180);
   const double mm_y = SurUnit(name, "the y step unit", p + 196);
@@ -173,15 +172,28 @@ HeightMap ParseDigitalSurfSur(const std::string& bytes, const std::string& name)
                (object.empty() ? "" : ", " + object);
   if (objects > 1)
     map.notes.push_back("it holds " + std::to_string(objects) + " objects; the first, a surface, is read");
-  const double mm_per_count = dz * mm_z;
+  // The inversion code, as Gwyddion 2.62 (surffile.c) applies it: 1 the heights inverted, 2 also mirrored left to
+  // right, 3 also mirrored top to bottom. Gwyddion inverts about the map's mean; fvm negates the counts and keeps the
+  // file's z offset (the two differ by a constant height).
+  const double mm_per_count = (inverted != 0 ? -dz : dz) * mm_z;
   const double offset_mm = z_offset * mm_z;
   const std::int64_t invalid = static_cast<std::int64_t>(declared_min) - 2;
   map.z_mm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t count =
         bits == 16 ? LoadBytes<std::int16_t>(counts + 2 * i) : LoadBytes<std::int32_t>(counts + 4 * i);
-    map.z_mm[i] = (non_measured && count == invalid) ? std::numeric_limits<double>::quiet_NaN()
-                                                     : static_cast<double>(count) * mm_per_count + offset_mm;
+    const std::size_t col = i % static_cast<std::size_t>(per_line), row = i / static_cast<std::size_t>(per_line);
+    const std::size_t to_col = inverted == 2 ? static_cast<std::size_t>(per_line) - 1 - col : col;
+    const std::size_t to_row = inverted == 3 ? static_cast<std::size_t>(lines) - 1 - row : row;
+    map.z_mm[to_row * static_cast<std::size_t>(per_line) + to_col] =
+        (non_measured && count == invalid) ? std::numeric_limits<double>::quiet_NaN()
+                                           : static_cast<double>(count) * mm_per_count + offset_mm;
+  }
+  if (inverted != 0) {
+    static constexpr const char* kHow[] = {"", "inverted", "inverted and mirrored left to right",
+                                           "inverted and mirrored top to bottom"};
+    map.notes.push_back(std::string("its inversion code is ") + std::to_string(inverted) + ": the heights are read " +
+                        kHow[inverted] + ", as Gwyddion reads them");
   }
   return map;
 }

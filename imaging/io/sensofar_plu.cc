@@ -1,5 +1,6 @@
 #include "imaging/io/sensofar_plu.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -19,7 +20,8 @@ constexpr std::size_t kPluCalibrationAt = kPluDateSize + 4 + 256;  // after the 
 constexpr std::size_t kPluMeasurementAt = kPluCalibrationAt + 40;
 constexpr std::size_t kPluDataAt = kPluMeasurementAt + 72;
 constexpr float kPluNotMeasured = 1000001.0f;
-constexpr std::size_t kPluColourGap = 8;  // between the heights and the colour image
+constexpr std::size_t kPluLayersAt = kPluMeasurementAt + 61;  // num_layers, a byte (0 in the oldest files: one)
+constexpr std::size_t kPluLayerTail = 8;  // each layer's lowest and highest height (float32), before what follows
 constexpr const char* kPluReexport = "the file is damaged or incomplete: export it from the instrument again";
 
 }  // namespace
@@ -69,11 +71,32 @@ HeightMap ParseSensofarPlu(const std::string& bytes, const std::string& name) {
     map.z_mm[i] = (z_um == kPluNotMeasured || !std::isfinite(z_um)) ? std::numeric_limits<double>::quiet_NaN()
                                                                     : static_cast<double>(z_um) / kMmPerMetre;
   }
-  const std::uint64_t colour_at = heights_at + n * sizeof(float) + kPluColourGap;
-  if (bytes.size() >= colour_at && bytes.size() - colour_at >= 3 * n) {
+  // A multi-layer measurement (num_layers > 1: film thickness, a surface and the interfaces under it) stores each
+  // layer as rows, columns, heights and their range, one after another (Pastewka's SurfaceTopography, PLUReader):
+  // the first layer is the surface read here; the colour image follows the last layer.
+  const int layers = std::max(1, static_cast<int>(static_cast<unsigned char>(p[kPluLayersAt])));
+  std::uint64_t after = heights_at + n * sizeof(float) + kPluLayerTail;
+  for (int layer = 1; layer < layers && after <= bytes.size(); ++layer) {
+    if (bytes.size() - after < 8) {
+      after = bytes.size() + 1;
+      break;
+    }
+    const std::uint64_t layer_points = static_cast<std::uint64_t>(LoadBytes<std::uint32_t>(p + after)) *
+                                       LoadBytes<std::uint32_t>(p + after + 4);
+    if (layer_points > bytes.size() / sizeof(float)) {  // a layer the file cannot hold: no colour image found
+      after = bytes.size() + 1;
+      break;
+    }
+    after += 8 + layer_points * sizeof(float) + kPluLayerTail;
+  }
+  if (layers > 1) {
+    map.notes.push_back("it holds " + std::to_string(layers) + " layers (a multi-layer measurement); the first, the "
+                        "surface, is read");
+  }
+  if (after <= bytes.size() && bytes.size() - after >= 3 * n) {
     map.intensity.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const auto* rgb = reinterpret_cast<const unsigned char*>(p + colour_at + 3 * i);
+      const auto* rgb = reinterpret_cast<const unsigned char*>(p + after + 3 * i);
       map.intensity[i] = static_cast<float>(rgb[0] + rgb[1] + rgb[2]) / 3.0f;
     }
   }

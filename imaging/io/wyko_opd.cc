@@ -66,12 +66,14 @@ class OpdBlocks {
     return it == blocks_.end() ? nullptr : &it->second;
   }
 
-  // A number block (int16, int32, float32 or float64, by its type and length).
-  std::optional<double> Number(const std::string& block) const {
+  // A number block (int16, or uint16 when asked, int32, float32 or float64, by its type and length).
+  std::optional<double> Number(const std::string& block, bool unsigned_short = false) const {
     const OpdBlock* b = Find(block);
     if (!b) return std::nullopt;
     const char* p = bytes_.data() + b->at;
-    if (b->type == 6 && b->length == 2) return LoadBytes<std::int16_t>(p);
+    if (b->type == 6 && b->length == 2) {
+      return unsigned_short ? LoadBytes<std::uint16_t>(p) : LoadBytes<std::int16_t>(p);
+    }
     if (b->type == 12 && b->length == 4) return LoadBytes<std::int32_t>(p);
     if (b->type == 7 && b->length == 4) return LoadBytes<float>(p);
     if (b->type == 8 && b->length == 8) return LoadBytes<double>(p);
@@ -126,9 +128,21 @@ bool HasWykoOpdDirectory(const std::string& head) {
 
 HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
   const OpdBlocks blocks(bytes, name);
-  const OpdBlock* raw = blocks.Find("RAW_DATA");
-  if (!raw) FailReading(name, "has no RAW_DATA block: the file holds no heights; save the measurement again");
-  const OpdArray heights = ReadOpdArray(bytes, name, *raw, "RAW_DATA");
+  // The heights' block is RAW_DATA in the files here; Vision has also named it "RAW DATA", "OPD" and "Raw"
+  // (Pastewka's SurfaceTopography, 2021, OPDReader, reads all four).
+  const OpdBlock* raw = nullptr;
+  std::string raw_name;
+  for (const char* candidate : {"RAW_DATA", "RAW DATA", "OPD", "Raw"}) {
+    if ((raw = blocks.Find(candidate)) != nullptr) {
+      raw_name = candidate;
+      break;
+    }
+  }
+  if (!raw) {
+    FailReading(name, "has no RAW_DATA block (nor RAW DATA, OPD or Raw): the file holds no heights; save the "
+                      "measurement again");
+  }
+  const OpdArray heights = ReadOpdArray(bytes, name, *raw, raw_name);
   if (heights.size != 2 && heights.size != 4) {
     FailReading(name, "RAW_DATA holds values of " + std::to_string(heights.size) +
                           " bytes; fvm reads int16 (2) and float32 (4) heights");
@@ -137,7 +151,9 @@ HeightMap ParseWykoOpd(const std::string& bytes, const std::string& name) {
   if (!wavelength_nm || !(*wavelength_nm > 0.0) || !std::isfinite(*wavelength_nm)) {
     FailReading(name, "has no positive Wavelength block, the height scale; " + std::string(kOpdReexport));
   }
-  const double mult = blocks.Number("Mult").value_or(1.0);
+  // Mult, a positive multiplier, is a 2-byte block read unsigned (values above 32767 occur: SurfaceTopography reads
+  // it as uint16 too).
+  const double mult = blocks.Number("Mult", /*unsigned_short=*/true).value_or(1.0);
   if (!(mult > 0.0) || !std::isfinite(mult))
     FailReading(name, "block Mult is " + FormatShortest(mult) + ", not positive");
   const std::optional<double> pixel_mm = blocks.Number("Pixel_size");

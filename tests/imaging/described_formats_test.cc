@@ -7,12 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "core/file_io.h"
 #include "core/input_error.h"
 #include "imaging/io/keyence_vk4.h"
 #include "imaging/io/olympus_lext.h"
+#include "imaging/io/reader_support.h"
 #include "imaging/io/surface_file.h"
 #include "imaging/io/zygo_datx.h"
 #include "tests/support/datx_files.h"
@@ -151,6 +153,93 @@ TEST(ZygoDatx, DamagedAndForeignFilesAreRefusedNamingTheFileAndField) {
   uncalibrated.dx_mm = 0.0;
   EXPECT_NE(Refusal(ParseZygoDatx, testing::BuildDatx(uncalibrated), "c.datx").find("X Converter"),
             std::string::npos);
+}
+
+// A DATX saved again after processing may hold two datasets in /Data/Surface; /MetaData names the measurement's
+// (Root -Measurement-> -Surface-> -Path->), as SurfaceTopography reads it. The copy sorts first by name and is 1 um
+// higher: it is read only when the file has no /MetaData, by the fallback (the first by name). The converters'
+// Parameters may be a fixed array of doubles as well as a variable-length list.
+TEST(ZygoDatx, TheSurfaceIsTheOneMetaDataNames) {
+  const HeightMap map = SampleMap(6, 4);
+  testing::DatxWriteOptions two;
+  two.earlier_copy = true;
+  const HeightMap named = ParseZygoDatx(testing::BuildDatx(map, two), "two.datx");
+  ExpectDatxReadBack(map, named);
+  EXPECT_NE(named.source.find("{3B8D1D1C-"), std::string::npos) << named.source;
+
+  testing::DatxWriteOptions fixed;  // the converters' Parameters as a fixed array (HDF5's other way to store a list)
+  fixed.fixed_parameters = true;
+  ExpectDatxReadBack(map, ParseZygoDatx(testing::BuildDatx(map, fixed), "fixed.datx"));
+
+  two.metadata = false;
+  const HeightMap first = ParseZygoDatx(testing::BuildDatx(map, two), "no-metadata.datx");
+  EXPECT_NE(first.source.find("{0000C0DE-"), std::string::npos) << first.source;
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (std::isfinite(map.z_mm[i])) {
+      EXPECT_NEAR(first.z_mm[i], map.z_mm[i] + 1e-3, 1e-7) << "point " << i;
+    }
+  }
+}
+
+// One damaged length in a small DATX once made the HDF5 child allocate and fill 2.3 GB before the file was refused:
+// a variable-length string stored as its length (4 bytes) and its place in the global heap (the collection's
+// address, 8 bytes; the object's index, 4), whose length says 1.5 GB. The child's memory cap (RLIMIT_AS) refuses it
+// at once, naming the cap and the attribute. A map of a million points still reads under the cap.
+TEST(ZygoDatx, AStringClaimingGigabytesIsRefusedByTheReadersMemoryCap) {
+  const HeightMap map = SampleMap(6, 4);
+  std::string damaged = testing::BuildDatx(map);
+  const std::size_t heap = damaged.find("GCOL");
+  ASSERT_NE(heap, std::string::npos) << "BuildDatx wrote no global heap";
+  std::string reference;  // "Unit" = "NanoMeters": 10 characters in the collection at `heap`
+  AppendBytes<std::uint32_t>(reference, 10);
+  AppendBytes<std::uint64_t>(reference, heap);
+  const std::size_t unit = damaged.find(reference);
+  ASSERT_NE(unit, std::string::npos) << "no 10-character string in the global heap";
+  damaged.replace(unit, 4, std::string("\x00\x00\x00\x60", 4));  // 0x60000000 characters: 1.5 GB
+  const std::string message = Refusal(ParseZygoDatx, damaged, "damaged.datx");
+  EXPECT_NE(message.find("damaged.datx"), std::string::npos) << message;
+#if !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer ends the child itself when an allocation fails
+  EXPECT_NE(message.find("RLIMIT_AS"), std::string::npos) << message;
+  EXPECT_NE(message.find("out of memory reading"), std::string::npos) << message;
+#endif
+
+  const HeightMap large = SampleMap(1000, 1000);
+  const HeightMap read = ParseZygoDatx(testing::BuildDatx(large), "large.datx");
+  EXPECT_EQ(read.size_x, 1000);
+  EXPECT_EQ(read.size_y, 1000);
+  EXPECT_EQ(read.intensity.size(), large.z_mm.size());
+}
+
+// HDF5 1.10.8 walks a global heap collection without checking it: a free space of size 0 kept it walking for ever, an
+// object larger than its collection sent it past its buffers (both found by the fuzzer). Such collections are
+// refused from the file's bytes before HDF5 reads them, naming the collection's place.
+TEST(ZygoDatx, DamagedGlobalHeapCollectionsAreRefusedBeforeHdf5ReadsThem) {
+  const std::string good = testing::BuildDatx(SampleMap(6, 4));
+  const std::size_t heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  const std::size_t collection_size = LoadBytes<std::uint64_t>(good.data() + heap + 8);
+  std::size_t free_space = 0;  // the object of index 0, after the strings
+  for (std::size_t at = heap + 16; at + 16 <= heap + collection_size;) {
+    const auto index = LoadBytes<std::uint16_t>(good.data() + at);
+    const auto size = LoadBytes<std::uint64_t>(good.data() + at + 8);
+    if (index == 0) {
+      free_space = at;
+      break;
+    }
+    at += 16 + (size + 7) / 8 * 8;
+  }
+  ASSERT_NE(free_space, 0u) << "BuildDatx's collection has no free space";
+  const std::string where = "the global heap collection at byte " + std::to_string(heap);
+
+  std::string looping = good;
+  looping.replace(free_space + 8, 8, std::string(8, '\0'));
+  const std::string loop = Refusal(ParseZygoDatx, looping, "loop.datx");
+  EXPECT_NE(loop.find("loop.datx: " + where + ": its free space has size 0"), std::string::npos) << loop;
+
+  std::string overrunning = good;
+  overrunning[heap + 16 + 8 + 3] = 1;  // the first object's size grows by 16 MB
+  const std::string overrun = Refusal(ParseZygoDatx, overrunning, "overrun.datx");
+  EXPECT_NE(overrun.find("overrun.datx: " + where + ": object 1 says"), std::string::npos) << overrun;
 }
 
 TEST(OlympusLext, ReadsTheHeightPageWithItsInvalidMaskAndIntensity) {

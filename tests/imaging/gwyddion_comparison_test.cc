@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -186,6 +187,33 @@ TEST(GwyddionComparison, SyntheticLext) {
     ++compared;
   }
   EXPECT_EQ(compared, ComputeStats(map).valid_points);
+}
+
+// SUR's inversion code as Gwyddion 2.62 applies it: 1 inverts the heights, 2 also mirrors the columns, 3 the rows.
+// Gwyddion inverts about the map's mean and fvm negates the counts, so the two differ by one constant height: every
+// valid point's difference equals the first's. (Gwyddion leaves the non-measured points of these files unmasked:
+// they are compared where fvm has a height.)
+TEST(GwyddionComparison, SyntheticSurInversions) {
+  if (kGwyddionDump.empty()) GTEST_SKIP() << "gwyddion_dump was not built (no libgwyddion20-dev)";
+  const fvm::testing::TempDir home;
+  for (std::int16_t code = 1; code <= 3; ++code) {
+    std::string bytes = testing::BuildSur(testing::SampleMap(7, 5));
+    testing::PutLe<std::int16_t>(bytes, 290, code);
+    const std::filesystem::path file = home.path() / ("inverted" + std::to_string(code) + ".sur");
+    WriteFileAtomically(file, bytes);
+    const std::vector<GwyddionChannel> gwyddion = ReadWithGwyddion(file, home.path());
+    ASSERT_EQ(gwyddion.size(), 1u) << "code " << code;
+    const HeightMap map = *ReadSurface(file).height_map;
+    ASSERT_EQ(map.size_x, gwyddion[0].xres);
+    ASSERT_EQ(map.size_y, gwyddion[0].yres);
+    std::optional<double> shift;
+    for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+      if (std::isnan(map.z_mm[i])) continue;
+      const double difference = map.z_mm[i] - gwyddion[0].values[i] * 1000.0;
+      if (!shift) shift = difference;
+      EXPECT_NEAR(difference, *shift, 1e-12) << "code " << code << ", point " << i;
+    }
+  }
 }
 
 }  // namespace

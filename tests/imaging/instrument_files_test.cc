@@ -71,6 +71,17 @@ TEST(SensofarPlu, ReadsHeightsInvalidPointsAndTheColourImage) {
   ExpectGreyIntensity(read);
 }
 
+// A multi-layer measurement: the surface (layer 0) is read, and the colour image after the last layer, not the
+// second layer's bytes, is its intensity.
+TEST(SensofarPlu, ReadsTheSurfaceOfAMultiLayerMeasurement) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap read = ParseSensofarPlu(testing::BuildPlu(map, 3), "layers.plu");
+  ExpectReadBack(map, read, 2e-9);  // float32 micrometres, as above; the other layers are 5 and 10 um lower
+  ExpectGreyIntensity(read);
+  ASSERT_EQ(read.notes.size(), 1u);
+  EXPECT_NE(read.notes[0].find("3 layers"), std::string::npos) << read.notes[0];
+}
+
 TEST(SensofarPlux, ReadsTheFirstLayerNamedInItsIndex) {
   HeightMap map = SampleMap(7, 5);
   map.dx_mm = 0.00125, map.dy_mm = 0.0025;  // six decimals of micrometres in index.xml
@@ -97,6 +108,60 @@ TEST(WykoOpd, ReadsColumnsBottomUpWithItsImage) {
   ExpectGreyIntensity(read);
 }
 
+// The heights' block under Vision's other names, and a Mult above 32767 (a uint16, not a negative int16).
+TEST(WykoOpd, ReadsTheHeightsUnderTheirOtherNamesAndALargeMult) {
+  const HeightMap map = SampleMap(7, 5);
+  for (const char* block : {"RAW DATA", "OPD", "Raw"}) {
+    ExpectReadBack(map, ParseWykoOpd(testing::BuildOpd(map, block), "a.opd"), testing::OpdStepMm());
+  }
+  HeightMap flat = map;  // within int16 counts of 632.8 nm / 40000
+  for (double& z : flat.z_mm) z *= 1e-2;
+  const std::uint16_t mult = 40000;
+  ExpectReadBack(flat, ParseWykoOpd(testing::BuildOpd(flat, "RAW_DATA", mult), "b.opd"),
+                 static_cast<double>(632.8f) / mult * 1e-6);
+}
+
+using Parser = std::function<HeightMap(const std::string&, const std::string&)>;
+
+// The message of the InputError `parse` throws on `bytes`, or a failure.
+std::string Refusal(const Parser& parse, const std::string& bytes, const std::string& name) {
+  try {
+    parse(bytes, name);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << name << ": read without an error";
+  return {};
+}
+
+// The inversion code (bytes 290-291) as Gwyddion 2.62 applies it (gwyddion_comparison_test.cc checks Gwyddion): 1
+// inverts the heights, 2 also mirrors the columns, 3 the rows; each with a note. Codes beyond 3 are refused.
+TEST(DigitalSurfSur, AppliesTheInversionCode) {
+  const HeightMap map = SampleMap(7, 5);
+  const HeightMap plain = ParseDigitalSurfSur(testing::BuildSur(map), "a.sur");
+  for (std::int16_t code = 1; code <= 3; ++code) {
+    std::string bytes = testing::BuildSur(map);
+    testing::PutLe<std::int16_t>(bytes, 290, code);
+    const HeightMap read = ParseDigitalSurfSur(bytes, "inverted.sur");
+    ASSERT_EQ(read.notes.size(), 1u);
+    EXPECT_NE(read.notes[0].find("inversion code is " + std::to_string(code)), std::string::npos) << read.notes[0];
+    for (int iy = 0; iy < map.size_y; ++iy) {
+      for (int ix = 0; ix < map.size_x; ++ix) {
+        const int from_x = code == 2 ? map.size_x - 1 - ix : ix, from_y = code == 3 ? map.size_y - 1 - iy : iy;
+        const double expected = -plain.at(from_x, from_y);
+        if (std::isnan(expected)) {
+          EXPECT_TRUE(std::isnan(read.at(ix, iy))) << "code " << code << " at " << ix << ", " << iy;
+        } else {
+          EXPECT_EQ(read.at(ix, iy), expected) << "code " << code << " at " << ix << ", " << iy;
+        }
+      }
+    }
+  }
+  std::string unknown = testing::BuildSur(map);
+  testing::PutLe<std::int16_t>(unknown, 290, 4);
+  EXPECT_NE(Refusal(ParseDigitalSurfSur, unknown, "a.sur").find("inversion code is 4"), std::string::npos);
+}
+
 TEST(DigitalSurfSur, ReadsPlainAndCompressedWithNonMeasuredPoints) {
   const HeightMap map = SampleMap(7, 5);
   ExpectReadBack(map, ParseDigitalSurfSur(testing::BuildSur(map), "a.sur"), testing::SurStepMm());
@@ -118,6 +183,20 @@ TEST(GelSightTmd, RoundTripsFloat32Heights) {
   EXPECT_FLOAT_EQ(read.x0_mm, map.x0_mm);
 }
 
+// The comment after the signature as a field of 24 bytes (SurfaceTopography's reading of TMD) rather than a NUL-ended
+// string: the header after the field, found because only there does the grid fill the file.
+TEST(GelSightTmd, ReadsACommentFieldOf24Bytes) {
+  const HeightMap map = SampleMap(7, 5);
+  std::string fixed = BuildGelSightTmd(map);  // signature (32 bytes), an empty comment (its NUL), the header
+  fixed.replace(32, 1, std::string("GelSight Mobile\0\0\0\0\0\0\0\0\0", 24));
+  const HeightMap read = ParseGelSightTmd(fixed, "field.tmd");
+  ExpectReadBack(map, read, 2e-9);
+  EXPECT_EQ(read.source, "GelSight TMD v2.0, GelSight Mobile");
+  std::string full = fixed;  // 24 characters, no NUL in the field
+  full.replace(32, 24, "GelSight Mobile 2 scan 7");
+  EXPECT_EQ(ParseGelSightTmd(full, "full.tmd").source, "GelSight TMD v2.0, GelSight Mobile 2 scan 7");
+}
+
 // Every format recognised by its content under a neutral name, except NMS, which has no signature.
 TEST(InstrumentFiles, AreRecognisedByTheirContent) {
   const TempDir dir;
@@ -136,19 +215,6 @@ TEST(InstrumentFiles, AreRecognisedByTheirContent) {
   const Surface nms = ReadSurface(dir.path() / "export.nms");
   EXPECT_EQ(nms.format, SurfaceFormat::kNms);
   EXPECT_EQ(FormatName(nms.format), "nms");
-}
-
-using Parser = std::function<HeightMap(const std::string&, const std::string&)>;
-
-// The message of the InputError `parse` throws on `bytes`, or a failure.
-std::string Refusal(const Parser& parse, const std::string& bytes, const std::string& name) {
-  try {
-    parse(bytes, name);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << name << ": read without an error";
-  return {};
 }
 
 struct Format {

@@ -14,6 +14,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -29,6 +30,11 @@ struct DatxWriteOptions {
   DatxUnit unit = DatxUnit::kNanoMeters;
   bool intensity = true;
   bool nx2_layout = false;  // /Measurement/Surface instead of /Data/Surface/{GUID}
+  // A second dataset in /Data/Surface whose name sorts first, holding the heights plus 1 um: what a file saved again
+  // after processing may hold beside the measurement. /MetaData names the measurement, unless `metadata` is false.
+  bool earlier_copy = false;
+  bool metadata = true;
+  bool fixed_parameters = false;  // the converters' Parameters as a fixed array of doubles, not a variable-length list
 };
 
 inline constexpr double kDatxWavelengthM = 632.8e-9, kDatxScaleFactor = 0.5;
@@ -58,26 +64,34 @@ inline void PutNumber(hid_t object, const char* name, double value) {
   H5Aclose(attribute), H5Sclose(space);
 }
 
-struct Converter {
-  const char* category;
-  const char* base_unit;
-  hvl_t parameters;
-};
-
+// The converter compound; its Parameters a variable-length list of doubles, or with `fixed_array` a fixed array of
+// them (both are HDF5's ways of storing a list; the reader takes either).
 inline void PutConverter(hid_t object, const char* name, const char* category, const char* unit,
-                         std::vector<double> parameters) {
+                         std::vector<double> parameters, bool fixed_array = false) {
   const hid_t text = VariableString();
-  const hid_t doubles = H5Tvlen_create(H5T_NATIVE_DOUBLE);
-  const hid_t type = H5Tcreate(H5T_COMPOUND, sizeof(Converter));
-  H5Tinsert(type, "Category", HOFFSET(Converter, category), text);
-  H5Tinsert(type, "BaseUnit", HOFFSET(Converter, base_unit), text);
-  H5Tinsert(type, "Parameters", HOFFSET(Converter, parameters), doubles);
-  const Converter value{category, unit, {parameters.size(), parameters.data()}};
+  const hsize_t count = parameters.size();
+  const hid_t memory_doubles =
+      fixed_array ? H5Tarray_create2(H5T_NATIVE_DOUBLE, 1, &count) : H5Tvlen_create(H5T_NATIVE_DOUBLE);
+  const std::size_t parameters_at = 2 * sizeof(const char*);
+  const std::size_t parameters_size = fixed_array ? count * sizeof(double) : sizeof(hvl_t);
+  const hid_t type = H5Tcreate(H5T_COMPOUND, parameters_at + parameters_size);
+  H5Tinsert(type, "Category", 0, text);
+  H5Tinsert(type, "BaseUnit", sizeof(const char*), text);
+  H5Tinsert(type, "Parameters", parameters_at, memory_doubles);
+  std::vector<unsigned char> value(parameters_at + parameters_size);
+  std::memcpy(value.data(), &category, sizeof category);
+  std::memcpy(value.data() + sizeof(const char*), &unit, sizeof unit);
+  const hvl_t list{parameters.size(), parameters.data()};
+  if (fixed_array) {
+    std::memcpy(value.data() + parameters_at, parameters.data(), parameters_size);
+  } else {
+    std::memcpy(value.data() + parameters_at, &list, sizeof list);
+  }
   const hsize_t one = 1;
   const hid_t space = H5Screate_simple(1, &one, nullptr);
   const hid_t attribute = H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attribute, type, &value);
-  H5Aclose(attribute), H5Sclose(space), H5Tclose(type), H5Tclose(doubles), H5Tclose(text);
+  H5Awrite(attribute, type, value.data());
+  H5Aclose(attribute), H5Sclose(space), H5Tclose(type), H5Tclose(memory_doubles), H5Tclose(text);
 }
 
 inline hid_t Dataset(hid_t file, const std::string& path, hid_t file_type, hid_t memory_type, int rows, int cols,
@@ -106,7 +120,7 @@ inline std::string BuildDatx(const HeightMap& map, const DatxWriteOptions& optio
       options.nx2_layout ? "/Measurement/Surface" : "/Data/Surface/{3B8D1D1C-5A6E-4F52-9C3A-0F2B6E1D7A44}";
   const std::string intensity_path =
       options.nx2_layout ? "/Measurement/Intensity" : "/Data/Intensity/{9E21B0B4-77F1-4C0D-8F0E-5D2A3C4B1E90}";
-  {
+  if (options.metadata) {
     struct Row {
       const char* source;
       const char* link;
@@ -130,18 +144,27 @@ inline std::string BuildDatx(const HeightMap& map, const DatxWriteOptions& optio
   for (std::size_t i = 0; i < values.size(); ++i) {
     values[i] = std::isfinite(map.z_mm[i]) ? static_cast<float>(map.z_mm[i] / 1000.0 / metres_per_value) : FLT_MAX;
   }
-  const hid_t surface =
-      Dataset(file, surface_path, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, map.size_y, map.size_x, values.data());
-  PutText(surface, "Unit", options.unit == DatxUnit::kFringes ? "Fringes" : "NanoMeters");
-  PutNumber(surface, "No Data", FLT_MAX);
-  PutConverter(surface, "X Converter", "LateralCat", "Pixels", {0.0, map.dx_mm / 1000.0, 0.0, 0.0});
-  PutConverter(surface, "Y Converter", "LateralCat", "Pixels", {0.0, map.dy_mm / 1000.0, 0.0, 0.0});
-  PutConverter(surface, "Z Converter", "HeightCat", options.unit == DatxUnit::kFringes ? "Fringes" : "NanoMeters",
-               {kDatxWavelengthM, kDatxScaleFactor, 1.0});
-  PutNumber(surface, "Wavelength", kDatxWavelengthM);
-  PutNumber(surface, "Interferometric Scale Factor", kDatxScaleFactor);
-  PutNumber(surface, "Obliquity Factor", 1.0);
-  H5Dclose(surface);
+  const auto put_surface = [&](const std::string& path, const std::vector<float>& counts) {
+    const hid_t surface =
+        Dataset(file, path, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, map.size_y, map.size_x, counts.data());
+    PutText(surface, "Unit", options.unit == DatxUnit::kFringes ? "Fringes" : "NanoMeters");
+    PutNumber(surface, "No Data", FLT_MAX);
+    const bool fixed = options.fixed_parameters;
+    PutConverter(surface, "X Converter", "LateralCat", "Pixels", {0.0, map.dx_mm / 1000.0, 0.0, 0.0}, fixed);
+    PutConverter(surface, "Y Converter", "LateralCat", "Pixels", {0.0, map.dy_mm / 1000.0, 0.0, 0.0}, fixed);
+    PutConverter(surface, "Z Converter", "HeightCat", options.unit == DatxUnit::kFringes ? "Fringes" : "NanoMeters",
+                 {kDatxWavelengthM, kDatxScaleFactor, 1.0}, fixed);
+    PutNumber(surface, "Wavelength", kDatxWavelengthM);
+    PutNumber(surface, "Interferometric Scale Factor", kDatxScaleFactor);
+    PutNumber(surface, "Obliquity Factor", 1.0);
+    H5Dclose(surface);
+  };
+  if (options.earlier_copy) {
+    std::vector<float> copy(values);
+    for (float& v : copy) v = v == FLT_MAX ? v : v + static_cast<float>(1e-6 / metres_per_value);
+    put_surface("/Data/Surface/{0000C0DE-0000-0000-0000-000000000000}", copy);
+  }
+  put_surface(surface_path, values);
   if (options.intensity) {
     std::vector<std::uint16_t> grey(map.z_mm.size());
     for (std::size_t i = 0; i < grey.size(); ++i) grey[i] = GreyOf(i);

@@ -42,7 +42,9 @@ inline void PutText(std::string& bytes, std::size_t at, std::string_view text) {
 inline unsigned char GreyOf(std::size_t i) { return static_cast<unsigned char>((37 * i + 11) % 251); }
 
 // Sensofar PLU, topography (type 3) with the S neox colour image after the heights. Heights as float32 um.
-inline std::string BuildPlu(const HeightMap& map) {
+// `layers` > 1 writes a multi-layer measurement: after the surface, layers of the same grid 5 um lower each, then
+// the colour image.
+inline std::string BuildPlu(const HeightMap& map, int layers = 1) {
   std::string b(500, '\0');
   PutText(b, 0, "Mon Apr 19 11:40:13 2021");
   PutLe<std::uint32_t>(b, 128, 1618832413u);
@@ -56,16 +58,20 @@ inline std::string BuildPlu(const HeightMap& map) {
   PutLe<std::uint32_t>(b, 428, 3u);  // topography
   PutLe<std::uint32_t>(b, 456, static_cast<std::uint32_t>(map.size_y));
   PutLe<std::uint32_t>(b, 460, static_cast<std::uint32_t>(map.size_x));
-  PutLe<std::uint32_t>(b, 500, static_cast<std::uint32_t>(map.size_y));
-  PutLe<std::uint32_t>(b, 504, static_cast<std::uint32_t>(map.size_x));
-  std::size_t at = 508;
-  for (const double z : map.z_mm) {
-    PutLe<float>(b, at, std::isfinite(z) ? static_cast<float>(z * 1000.0) : 1000001.0f);
-    at += 4;
+  b[489] = static_cast<char>(layers);  // num_layers
+  std::size_t at = 500;
+  for (int layer = 0; layer < layers; ++layer) {
+    PutLe<std::uint32_t>(b, at, static_cast<std::uint32_t>(map.size_y));
+    PutLe<std::uint32_t>(b, at + 4, static_cast<std::uint32_t>(map.size_x));
+    at += 8;
+    for (const double z : map.z_mm) {
+      PutLe<float>(b, at, std::isfinite(z) ? static_cast<float>(z * 1000.0 - 5.0 * layer) : 1000001.0f);
+      at += 4;
+    }
+    PutLe<float>(b, at, 1000001.0f);
+    PutLe<float>(b, at + 4, 1000001.0f);
+    at += 8;
   }
-  PutLe<float>(b, at, 1000001.0f);
-  PutLe<float>(b, at + 4, 1000001.0f);
-  at += 8;
   for (std::size_t i = 0; i < map.z_mm.size(); ++i, at += 3)
     PutText(b, at, std::string(3, static_cast<char>(GreyOf(i))));
   return b;
@@ -104,7 +110,10 @@ inline std::string BuildMetroPro(const HeightMap& map) {
 
 // Wyko OPD: int16 counts of 632.8 nm / 64 (about 9.9 nm), columns stored bottom row first, and an Image block.
 inline double OpdStepMm() { return static_cast<double>(632.8f) / 64.0 * 1e-6; }
-inline std::string BuildOpd(const HeightMap& map) {
+// `heights_block` names the heights' array ("RAW_DATA" in the files here; SurfaceTopography also knows "RAW DATA",
+// "OPD" and "Raw"); `mult` is the height divisor, a 2-byte block read unsigned.
+inline std::string BuildOpd(const HeightMap& map, const std::string& heights_block = "RAW_DATA",
+                            std::uint16_t mult = 64) {
   struct Entry {
     std::string name;
     std::int16_t type;
@@ -127,9 +136,9 @@ inline std::string BuildOpd(const HeightMap& map) {
     return d;
   };
   const float wavelength = 632.8f;
-  const double step_nm = static_cast<double>(wavelength) / 64.0;
+  const double step_nm = static_cast<double>(wavelength) / mult;
   std::vector<Entry> entries = {
-      {"RAW_DATA", 3,
+      {heights_block, 3,
        array(2,
              [&](std::string& d, std::size_t at, int ix, int iy) {
                const double z = map.at(ix, iy);
@@ -140,7 +149,7 @@ inline std::string BuildOpd(const HeightMap& map) {
        array(1, [&](std::string& d, std::size_t at, int ix,
                     int iy) { PutLe<unsigned char>(d, at, GreyOf(static_cast<std::size_t>(iy) * map.size_x + ix)); })},
       {"Wavelength", 7, number(wavelength)},
-      {"Mult", 6, number(std::int16_t{64})},
+      {"Mult", 6, number(mult)},
       {"Pixel_size", 7, number(static_cast<float>(map.dx_mm))},
       {"Aspect", 7, number(static_cast<float>(map.dy_mm / map.dx_mm))},
   };

@@ -12,16 +12,24 @@
 namespace fvm::imaging {
 namespace datx_wire {
 
-inline void Put(std::string& out, std::uint64_t n) { out.append(reinterpret_cast<const char*>(&n), sizeof n); }
-inline void Put(std::string& out, const std::string& text) {
-  Put(out, static_cast<std::uint64_t>(text.size()));
-  out += text;
+// `Out` is anything with append(const char*, std::size_t): a std::string, or the HDF5 child's pipe, which then
+// receives the values straight from their vectors (no second copy of a large map in the child).
+template <typename Out>
+void Put(Out& out, std::uint64_t n) {
+  out.append(reinterpret_cast<const char*>(&n), sizeof n);
 }
-inline void Put(std::string& out, const std::vector<double>& values) {
+template <typename Out>
+void Put(Out& out, const std::string& text) {
+  Put(out, static_cast<std::uint64_t>(text.size()));
+  out.append(text.data(), text.size());
+}
+template <typename Out>
+void Put(Out& out, const std::vector<double>& values) {
   Put(out, static_cast<std::uint64_t>(values.size()));
   if (!values.empty()) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double));
 }
-inline void Put(std::string& out, const DatxDataset& d) {
+template <typename Out>
+void Put(Out& out, const DatxDataset& d) {
   Put(out, d.path);
   Put(out, d.rows);
   Put(out, d.cols);
@@ -91,11 +99,17 @@ class Reader {
 
 }  // namespace datx_wire
 
-inline std::string EncodeDatx(const DatxContent& content) {
-  std::string out(1, '\1');
+template <typename Out>
+void EncodeDatx(const DatxContent& content, Out& out) {
+  out.append("\1", 1);
   datx_wire::Put(out, content.surface);
   datx_wire::Put(out, static_cast<std::uint64_t>(content.intensity ? 1 : 0));
   if (content.intensity) datx_wire::Put(out, *content.intensity);
+}
+
+inline std::string EncodeDatx(const DatxContent& content) {
+  std::string out;
+  EncodeDatx(content, out);
   return out;
 }
 
