@@ -31,8 +31,8 @@ std::string ErrorOf(const std::filesystem::path& path) {
 }
 
 TEST(TileLayout, RoundTrip) {
-  std::vector<TileLayoutEntry> tiles = {{"a.tif", 0, 0, Eigen::Vector2d(1.5, 2.25), 0},
-                                        {"b.tif", 1, 0, Eigen::Vector2d(1.5, 1.0), 0}};
+  std::vector<TileLayoutEntry> tiles = {{"a.tif", 0, 0, Eigen::Vector2d(1.5, 2.25), 0, std::nullopt},
+                                        {"b.tif", 1, 0, Eigen::Vector2d(1.5, 1.0), 0, std::nullopt}};
   const auto path = Scratch("round.csv");
   Write(path, "# planned\n" + FormatTileLayout(tiles));
   const TileLayout layout = ReadTileLayout(path);
@@ -90,8 +90,8 @@ TEST(TileLayout, HugeIndicesAreRefusedNamingFileAndLine) {
 }
 
 TEST(TileLayout, FileNamesWithCommasAndQuotesRoundTrip) {
-  std::vector<TileLayoutEntry> tiles = {{"scan, day 1/a \"b\".tif", 0, 0, Eigen::Vector2d(-0.5, 1e-7), 0},
-                                        {"#2.tif", 0, 1, Eigen::Vector2d(1.25, 0), 0}};
+  std::vector<TileLayoutEntry> tiles = {{"scan, day 1/a \"b\".tif", 0, 0, Eigen::Vector2d(-0.5, 1e-7), 0, std::nullopt},
+                                        {"#2.tif", 0, 1, Eigen::Vector2d(1.25, 0), 0, std::nullopt}};
   const std::string text = FormatTileLayout(tiles);
   EXPECT_EQ(text, "file,row,col,x,y\n\"scan, day 1/a \"\"b\"\".tif\",0,0,-0.500000,0.000000\n\"#2.tif\",0,1,1.250000,"
                   "0.000000\n");
