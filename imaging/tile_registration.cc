@@ -430,11 +430,17 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   const TilePositions loose = SolveTilePositions(result.stage_positions_px, weighed, loose_stage_px, unregistered);
   // Where too few tiles are placed from the first one to show the stage's spread (sparse content: the pairs that
   // register fix one direction each, along edges and traces), nothing vouches for the model's positions closer than
-  // the plausible range: a tile that rests on the prior along a direction carries that range as its uncertainty
-  // (issue 42's sparse cut tiles of a circuit board: a block of tiles 59 px off a model learnt from sideways drifts
-  // that differ column by column, where the model's repeatability said 5 px).
+  // the plausible range: the model's repeatability comes from the pairs that registered, not from the tiles that
+  // rest on it (issue 42's sparse cut tiles of a circuit board: a block of tiles 59 px off a model learnt from
+  // sideways drifts that differ column by column, where the model's repeatability said 5 px). A tile that rests on
+  // the prior along a direction then carries that range as its uncertainty. The stage's declared sigma, where the
+  // pairs gave no repeatability (machining marks: no pair fixes the axis along them), stands as declared.
   const std::optional<Eigen::Vector2d> spread = StageSpread(loose, result.stage_positions_px);
-  result.stage_sigma_px = spread ? std::max(result.stage_sigma_px, spread->maxCoeff()) : std::max(result.stage_sigma_px, loose_stage_px);
+  if (spread) {
+    result.stage_sigma_px = std::max(result.stage_sigma_px, spread->maxCoeff());
+  } else if (repeatability.minCoeff() > 0.0) {
+    result.stage_sigma_px = std::max(result.stage_sigma_px, loose_stage_px);
+  }
   result.positions = SolveTilePositions(result.stage_positions_px, weighed, result.stage_sigma_px, unregistered);
   return result;
 }
