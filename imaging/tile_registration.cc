@@ -11,6 +11,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 #include <stdexcept>
@@ -237,8 +238,8 @@ TileGridSteps EstimateFromUnambiguous(const std::vector<GridTile>& tiles, std::v
 }
 
 // The spread (rms per axis, about their mean) of the placed tiles' positions about their stage positions, over the
-// tiles placed from the first one by images along both axes; zero with fewer than three.
-Eigen::Vector2d StageSpread(const TilePositions& positions, const std::vector<Eigen::Vector2d>& stage_px) {
+// tiles placed from the first one by images along both axes; none with fewer than three.
+std::optional<Eigen::Vector2d> StageSpread(const TilePositions& positions, const std::vector<Eigen::Vector2d>& stage_px) {
   std::vector<Eigen::Vector2d> off;
   for (size_t i = 1; i < stage_px.size(); ++i) {
     // Only tiles the images place along both axes: along machining marks a tile is wherever the loose prior let it.
@@ -246,11 +247,59 @@ Eigen::Vector2d StageSpread(const TilePositions& positions, const std::vector<Ei
       off.push_back(positions.positions_px[i] - stage_px[i]);
     }
   }
-  if (off.size() < 3) return Eigen::Vector2d::Zero();
+  if (off.size() < 3) return std::nullopt;
   Eigen::Vector2d mean = Eigen::Vector2d::Zero(), square = Eigen::Vector2d::Zero();
   for (const auto& d : off) mean += d / static_cast<double>(off.size());
   for (const auto& d : off) square += (d - mean).cwiseAbs2() / static_cast<double>(off.size() - 1);
   return square.cwiseSqrt();
+}
+
+// A stage steps along its scan axis by its encoders: a right neighbour's x step and a lower neighbour's y step vary by
+// the overlaps' spread (a few pixels), however far the rows or columns sit sideways (tens of pixels, which the loops
+// judge). A pair whose offset along its step lies farther from the median step of its direction than 5 robust
+// standard deviations of those steps, and than the first search's window along it (`window`: the uncertainty the
+// declared overlap leaves; the steps of one row boundary are all alike, so their spread alone may be nil), took a
+// repeat of a line pattern: parallel traces
+// or edges fix the step's axis locally and match a neighbour line as well as the true one (issue 42's sparse cut
+// tiles of a printed circuit board: a pair 37 px short of a 230 px step, quality 0.71, that no loop saw, its other
+// direction and its tile's other pair fixing one direction each). Such a pair is refused: it places nothing, the
+// loops may still find it where the other pairs put it, and a tile that hangs on it lands by the stage prior with the
+// stage's spread as its uncertainty. Needs TileGridSteps::kMinPairs steps of the direction whose information fixes
+// the step's axis to half a pixel; returns the pairs refused.
+int RefuseStepOutliers(const std::vector<GridTile>& tiles, std::vector<PairRegistration>& pairs, const Eigen::Vector2d& window) {
+  int refused = 0;
+  for (const int axis : {0, 1}) {  // 0: right neighbours, their x step; 1: lower ones, their y step
+    const auto of_direction = [&](const PairRegistration& pair) {
+      const GridTile& a = tiles[static_cast<size_t>(pair.a)];
+      const GridTile& b = tiles[static_cast<size_t>(pair.b)];
+      return axis == 0 ? (b.col - a.col == 1 && b.row == a.row) : (b.row - a.row == 1 && b.col == a.col);
+    };
+    const auto step = [&](const PairRegistration& pair) {
+      return pair.offset_px(axis) - (tiles[static_cast<size_t>(pair.b)].nominal_px - tiles[static_cast<size_t>(pair.a)].nominal_px)(axis);
+    };
+    std::vector<double> steps;
+    for (const auto& pair : pairs) {
+      if (pair.accepted && !pair.ambiguous && of_direction(pair) && pair.information(axis, axis) > 4.0) steps.push_back(step(pair));
+    }
+    if (static_cast<int>(steps.size()) < TileGridSteps::kMinPairs) continue;
+    const auto median_of = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
+    const double median = median_of(steps);
+    for (auto& d : steps) d = std::abs(d - median);
+    const double tolerance = std::max(window(axis), 5.0 * 1.4826 * median_of(steps) + 1.0);
+    for (auto& pair : pairs) {
+      if (!pair.accepted || !of_direction(pair) || !(std::abs(step(pair) - median) > tolerance)) continue;
+      pair.accepted = false;
+      char text[200];
+      std::snprintf(text, sizeof text, "its step lies %.1f px from the grid's median step along its scan axis, beyond the "
+                    "steps' tolerance of %.1f px: a repeat of a line pattern, refused", step(pair) - median, tolerance);
+      pair.rejection = text;
+      ++refused;
+    }
+  }
+  return refused;
 }
 
 }  // namespace
@@ -350,6 +399,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   const Eigen::Vector2d unregistered = (wide_window / std::sqrt(3.0)).cwiseMax(options.stage_sigma_px);
   // The loops decide between a pair and the rest of the grid: a pair they contradict is searched again where they
   // put it, or dropped; then their misclosures scale what the pairs claim.
+  if (search_again) RefuseStepOutliers(tiles, result.pairs, first_window);
   LoopCheckOptions loop_options;
   loop_options.ambiguous_ncc = options.ambiguous_ncc;
   const auto research = [&](const PairRegistration& pair, const Eigen::Vector2d& predicted, const Eigen::Vector2d& window) {
@@ -378,7 +428,19 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
     pair.information = 0.5 * (floored + floored.transpose());
   }
   const TilePositions loose = SolveTilePositions(result.stage_positions_px, weighed, loose_stage_px, unregistered);
-  result.stage_sigma_px = std::max(result.stage_sigma_px, StageSpread(loose, result.stage_positions_px).maxCoeff());
+  // Where too few tiles are placed from the first one to show the stage's spread (sparse content: the pairs that
+  // register fix one direction each, along edges and traces), nothing vouches for the model's positions closer than
+  // the plausible range: the model's repeatability comes from the pairs that registered, not from the tiles that
+  // rest on it (issue 42's sparse cut tiles of a circuit board: a block of tiles 59 px off a model learnt from
+  // sideways drifts that differ column by column, where the model's repeatability said 5 px). A tile that rests on
+  // the prior along a direction then carries that range as its uncertainty. The stage's declared sigma, where the
+  // pairs gave no repeatability (machining marks: no pair fixes the axis along them), stands as declared.
+  const std::optional<Eigen::Vector2d> spread = StageSpread(loose, result.stage_positions_px);
+  if (spread) {
+    result.stage_sigma_px = std::max(result.stage_sigma_px, spread->maxCoeff());
+  } else if (repeatability.minCoeff() > 0.0) {
+    result.stage_sigma_px = std::max(result.stage_sigma_px, loose_stage_px);
+  }
   result.positions = SolveTilePositions(result.stage_positions_px, weighed, result.stage_sigma_px, unregistered);
   return result;
 }

@@ -50,7 +50,8 @@ struct RegistrationResult {
   // The pairs the loops of the grid overruled (loop_misclosure.h), and how far the loops' misclosures exceed what
   // the pairs claim (the pairs' information is scaled by it before the solve).
   LoopCheck loops;
-  // Pairs that place nothing (rejected, or dropped by the loops). When a quarter or more of the pairs are, the
+  // Pairs that place nothing (rejected, refused for a step along their scan axis far from the grid's, or dropped by
+  // the loops). When a quarter or more of the pairs are, the
   // positions rest on the stage as much as on the images: the run says so.
   int pairs_unresolved = 0;
   bool MostlyUnresolved() const { return !pairs.empty() && 4 * pairs_unresolved >= static_cast<int>(pairs.size()); }
@@ -60,7 +61,8 @@ struct RegistrationResult {
 // options.search_fraction of the nominal offsets. From the accepted pairs it estimates the stage model; pairs that
 // failed, or that disagree with the model by more than its tolerance, are searched again within that tolerance of
 // the model's offset; what registers stands (the first match where the search found nothing), and pairs still
-// failing are searched over the whole plausible range. Then the loops of the grid judge every pair
+// failing are searched over the whole plausible range. A pair whose step along its scan axis lies farther from the
+// grid's median step than the first window is refused (a neighbouring trace of a line pattern). Then the loops of the grid judge every pair
 // (loop_misclosure.h: overruled pairs searched again where the loops put them or dropped, rejected ones searched
 // there, the weights scaled by the loops' Birge ratio), and it solves with the model's positions as the stage prior,
 // its sigma the placed tiles' spread about them (the model's repeatability at least). Tiles in scan order: index 0 is the anchor. images[i] belongs to tiles[i]. `on_pair_registered(done, total)`, when
