@@ -31,13 +31,8 @@ using testing::SampleMap;
 
 template <typename Parse>
 std::string Refusal(Parse parse, const std::string& bytes, const std::string& name) {
-  try {
-    parse(bytes, name);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << name << ": read without an error";
-  return {};
+  SCOPED_TRACE(name);
+  return fvm::testing::InputErrorOf([&] { parse(bytes, name); });
 }
 
 double Lowest(const HeightMap& map) {

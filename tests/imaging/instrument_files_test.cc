@@ -123,15 +123,10 @@ TEST(WykoOpd, ReadsTheHeightsUnderTheirOtherNamesAndALargeMult) {
 
 using Parser = std::function<HeightMap(const std::string&, const std::string&)>;
 
-// The message of the InputError `parse` throws on `bytes`, or a failure.
+// The message of the InputError `parse` throws on `bytes`, or a failure naming the file.
 std::string Refusal(const Parser& parse, const std::string& bytes, const std::string& name) {
-  try {
-    parse(bytes, name);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << name << ": read without an error";
-  return {};
+  SCOPED_TRACE(name);
+  return fvm::testing::InputErrorOf([&] { parse(bytes, name); });
 }
 
 // The inversion code (bytes 290-291) as Gwyddion 2.62 applies it (gwyddion_comparison_test.cc checks Gwyddion): 1
