@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/statistics.h"
 #include "imaging/overlap_correlation.h"
 #include "imaging/registration_information.h"
 
@@ -282,13 +283,9 @@ int RefuseStepOutliers(const std::vector<GridTile>& tiles, std::vector<PairRegis
       if (pair.accepted && !pair.ambiguous && of_direction(pair) && pair.information(axis, axis) > 4.0) steps.push_back(step(pair));
     }
     if (static_cast<int>(steps.size()) < TileGridSteps::kMinPairs) continue;
-    const auto median_of = [](std::vector<double> v) {
-      std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-      return v[v.size() / 2];
-    };
-    const double median = median_of(steps);
+    const double median = HighMedian(steps);
     for (auto& d : steps) d = std::abs(d - median);
-    const double tolerance = std::max(window(axis), 5.0 * 1.4826 * median_of(steps) + 1.0);
+    const double tolerance = std::max(window(axis), 5.0 * 1.4826 * HighMedian(steps) + 1.0);
     for (auto& pair : pairs) {
       if (!pair.accepted || !of_direction(pair) || !(std::abs(step(pair) - median) > tolerance)) continue;
       pair.accepted = false;
