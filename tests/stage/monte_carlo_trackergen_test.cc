@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -143,6 +144,100 @@ TEST(MachineMonteCarloTrackergen, PredictsRepeatsOfThreeMachinesFromAnyStart) {
       EXPECT_GT(simulated.sd / real.sd, 0.8) << "machine " << seed << ", from repeat " << start + 1;
       EXPECT_LT(simulated.sd / real.sd, 1.25) << "machine " << seed << ", from repeat " << start + 1;
     }
+  }
+}
+
+// The robust spread of n draws: 1.4826 x the median absolute deviation and the interquartile range / 1.349 (both the
+// sd for a normal sample, both blind to the few far repeats a skewed quantity has), and the 2.5 / 97.5 % quantiles.
+struct TrackergenCore {
+  double mean = 0, mad = 0, iqr = 0, p2_5 = 0, p97_5 = 0;
+};
+double TrackergenQuantile(const std::vector<double>& sorted, double p) {
+  const double at = p * static_cast<double>(sorted.size() - 1);
+  const size_t lo = static_cast<size_t>(at), hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (at - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+TrackergenCore CoreOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  TrackergenCore c;
+  for (double x : v) c.mean += x / static_cast<double>(v.size());
+  const double median = TrackergenQuantile(v, 0.5);
+  std::vector<double> deviations;
+  for (double x : v) deviations.push_back(std::abs(x - median));
+  std::sort(deviations.begin(), deviations.end());
+  c.mad = 1.4826 * TrackergenQuantile(deviations, 0.5);
+  c.iqr = (TrackergenQuantile(v, 0.75) - TrackergenQuantile(v, 0.25)) / 1.349;
+  c.p2_5 = TrackergenQuantile(v, 0.025);
+  c.p97_5 = TrackergenQuantile(v, 0.975);
+  return c;
+}
+
+// The core of the distribution, not only its sd, on a fourth machine (3): the sd of a skewed quantity leans on its
+// few far repeats (noise seed 41 gives 22 um on every machine, 5 sd above the mean: an estimation error along the
+// X axis' yaw, its scale and the tracker's x at once, the 3rd largest chi^2 of the 17 estimates over 400 repeats;
+// the validation mean error is a quadratic form of the estimates, hence the skew 0.9-1.2), so the Monte Carlo is
+// judged here by the robust spreads, which those repeats do not move, and by how many repeats its 95 % interval
+// holds. 160 repeats; the Monte Carlo (300 runs) from the first repeat and from the calmest and the hardest of
+// repeats 1-12. Against 400 repeats of each of machines 3-8 (tests/bench/uncertainty_repeats.sh) the ratios are
+// 0.97-1.02 (mean), 0.91-1.17 (MAD) and 0.94-1.19 (IQR), each machine's average over its starts; a Monte Carlo with
+// the machine's exact truth (started from noise-free readings, its exact residual field: the repeats' own process)
+// gives the same (0.92-1.15 for MAD and IQR): what is left is the repeats' own sampling. Bounds: the 0.8-1.25;
+// the 95 % interval must hold at least 87 % of the repeats: the binomial sd of 95 % on 160 repeats is 1.7 % and the
+// quantiles of 300 runs add about 1 % (2.5 sd: 90 %), and from the calmest start the interval sits low (mean 0.94 of
+// the repeats': a start whose model happens to be nearer the machine than most cannot tell the machine's unfollowed
+// part any better) and holds 89 %. It fails with the validation truth keeping the start's whole residual (its
+// estimation error with it, as two rounds ago: MAD 1.22 and 1.59 from repeats 1 and 8, intervals holding 53-66 %)
+// and with no unfollowed part in the truth (mean 0.56-0.58, MAD 1.48). About 10 s on 2 cores.
+TEST(MachineMonteCarloTrackergen, MatchesTheCoreOfRepeatsOfAFourthMachine) {
+  if (!TrackergenAvailable()) GTEST_SKIP() << kTrackergen << " or python3-numpy/scipy absent (no ../shared)";
+  constexpr int kRepeats = 160, kCandidates = 12, kSeed = 3;
+  fvm::testing::TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(Generate(dir.path(), {kSeed}, kRepeats));
+  const std::filesystem::path at = dir.path() / std::to_string(kSeed);
+  const Machine machine(at);
+  std::vector<double> observed;
+  std::vector<std::vector<Observation>> candidates;
+  std::vector<VerificationResult> verified;
+  for (int k = 1; k <= kRepeats; ++k) {
+    std::string name = "d";
+    name += std::to_string(k) + ".csv";
+    std::vector<Observation> readings = machine.Readings(at / name);
+    VerificationResult v = VerifyMachine(machine.layout, readings, machine.options);
+    observed.push_back(machine.ValidationMeanUm(v));
+    if (k <= kCandidates) candidates.push_back(std::move(readings)), verified.push_back(std::move(v));
+  }
+  const TrackergenCore real = CoreOf(observed);
+  const auto first12 = observed.begin() + kCandidates;
+  const int calmest = static_cast<int>(std::min_element(observed.begin(), first12) - observed.begin());
+  const int hardest = static_cast<int>(std::max_element(observed.begin(), first12) - observed.begin());
+  for (int start : {0, calmest, hardest}) {
+    MonteCarloOptions mc;
+    mc.runs = 300;
+    mc.seed = 1;
+    std::vector<double> predicted;
+    for (const MachineMonteCarloRun& r : MachineMonteCarlo(machine.layout, verified[static_cast<size_t>(start)],
+                                                           candidates[static_cast<size_t>(start)], machine.validation,
+                                                           machine.noise, machine.options, mc)) {
+      predicted.push_back(r.validation.mean_um());
+    }
+    const TrackergenCore simulated = CoreOf(predicted);
+    const double held = static_cast<double>(std::count_if(observed.begin(), observed.end(), [&](double v) {
+                          return v >= simulated.p2_5 && v <= simulated.p97_5;
+                        })) / kRepeats;
+    std::printf("trackergen --seed %d: %d repeats mean %.2f, MAD %.2f, IQR %.2f um; Monte Carlo from repeat %d (its own "
+                "%.2f um): ratios mean %.3f, MAD %.3f, IQR %.3f; its 95 %% interval %.2f-%.2f um holds %.1f %% of the "
+                "repeats\n",
+                kSeed, kRepeats, real.mean, real.mad, real.iqr, start + 1, observed[static_cast<size_t>(start)],
+                simulated.mean / real.mean, simulated.mad / real.mad, simulated.iqr / real.iqr, simulated.p2_5,
+                simulated.p97_5, 100 * held);
+    const std::string where = "from repeat " + std::to_string(start + 1);
+    EXPECT_GT(simulated.mean / real.mean, 0.8) << where;
+    EXPECT_LT(simulated.mean / real.mean, 1.25) << where;
+    EXPECT_GT(simulated.mad / real.mad, 0.8) << where;
+    EXPECT_LT(simulated.mad / real.mad, 1.25) << where;
+    EXPECT_GT(simulated.iqr / real.iqr, 0.8) << where;
+    EXPECT_LT(simulated.iqr / real.iqr, 1.25) << where;
+    EXPECT_GE(held, 0.87) << where;
   }
 }
 
