@@ -5,7 +5,8 @@
 #   any lower layer: fvm::artefacts, fvm::stage, fvm::imaging, fvm::core). tests/install/consumer is such a project.
 include(CMakePackageConfigHelpers)
 
-set(fvm_libraries fvm_core fvm_stage fvm_imaging fvm_imaging_opencv fvm_imaging_opencv_on_demand fvm_artefacts fvm_workflows)
+set(fvm_libraries fvm_core fvm_stage fvm_imaging fvm_imaging_opencv fvm_imaging_opencv_on_demand fvm_imaging_zip_xml
+  fvm_imaging_zip_xml_on_demand fvm_artefacts fvm_workflows)
 foreach(library ${fvm_libraries})
   string(REPLACE "fvm_" "" name ${library})
   set_target_properties(${library} PROPERTIES EXPORT_NAME ${name})

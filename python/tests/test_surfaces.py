@@ -56,7 +56,7 @@ def test_x3p_round_trip_keeps_float64_heights_bit_for_bit(tmp_path):
     assert s.format == "x3p" and s.spacing == (0.001, 0.002) and s.origin == (1.5, -2.0)
     np.testing.assert_array_equal(s.mask, np.isfinite(z))
     # X3P holds metres: the mm -> m conversion has an exact inverse for ~98 % of doubles, the rest read back one
-    # ulp away (imaging/io/x3p.cc says so); the mask exactly.
+    # ulp away (imaging/io/x3p_writer.cc says so); the mask exactly.
     np.testing.assert_array_max_ulp(s.heights[s.mask], z[s.mask], maxulp=1)
     # The command line reads the same file the same way.
     out, _ = run_cli("info", tmp_path / "s.x3p", "--json")

@@ -1,16 +1,19 @@
 # Commands that never meet an image or a PCD/PLY file must not load OpenImageIO, PCL or VTK (half a second and
 # 130 MB at start-up, issue 15), nor OpenCV and what its video module drags in (dnn, calib3d, protobuf, X11, GL:
-# 25 ms before main, issue 47), nor PLplot without a report: the dynamic loader's own log (LD_DEBUG=libs) lists
-# every library a process loads. The positive controls show the log does name them when a TIFF is read, tiles are
-# registered and a report is written, and that without the plugins a TIFF or a focus stack fails with a clear
-# message while an X3P still reads.
+# 25 ms before main, issue 47), nor libzip with the libcrypto and libbz2 it pulls, pugixml and OpenSSL's MD5 (the
+# X3P, PLUx and LEXT code: half the dynamic loader's relocations of a calibrate, issue 47), nor PLplot without a
+# report: the dynamic loader's own log (LD_DEBUG=libs) lists every library a process loads. The positive controls
+# show the log does name them when a TIFF or an X3P is read, tiles are registered and a report is written, and that
+# without the plugins a TIFF, an X3P or a focus stack fails with a clear message while an XYZ cloud still reads.
 # Variables: FVM, SAMPLES, WORK.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK}/ld ${WORK}/x3p ${WORK}/no-plugins)
 include(${CMAKE_CURRENT_LIST_DIR}/cli_support.cmake)
 
 # The libraries, and the plugins that load them on demand.
-set(heavy "libOpenImageIO|libpcl_|libvtk|libopencv_|libprotobuf|libX11|libGL|libplplot|libfvm_image_oiio|libfvm_cloud_pcl|libfvm_imaging_opencv|libfvm_report")
+set(heavy "libOpenImageIO|libpcl_|libvtk|libopencv_|libprotobuf|libX11|libGL|libplplot")
+string(APPEND heavy "|libzip|libcrypto|libbz2|libpugixml")
+string(APPEND heavy "|libfvm_image_oiio|libfvm_cloud_pcl|libfvm_imaging_opencv|libfvm_zip_xml_formats|libfvm_report")
 
 # Runs fvm with the loader's log in ${WORK}/ld/<tag>.<pid>; sets LOADED to the log's text.
 function(run_logged tag expected_code)
@@ -117,6 +120,16 @@ if(NOT code EQUAL 0)
   message(FATAL_ERROR "cannot zip the test X3P")
 endif()
 
+# Positive control: an X3P loads the plugin of the zip- and XML-based formats, and libzip, libcrypto and pugixml.
+run_logged(x3p 0 info ${WORK}/surface.x3p --json)
+heavy_in("${LOADED}" found)
+if(NOT found MATCHES "libfvm_zip_xml_formats.so" OR NOT found MATCHES "libzip" OR NOT found MATCHES "libcrypto"
+   OR NOT found MATCHES "libpugixml")
+  message(FATAL_ERROR "fvm info on an X3P: the loader log does not name the zip and XML formats' plugin, libzip, "
+                      "libcrypto and pugixml (found: ${found}); the check for light commands would pass whatever "
+                      "they load")
+endif()
+
 execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${tiff} --pixel-mm 0.001
                 RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT code EQUAL 1 OR NOT err MATCHES "reading [^\n]*\\.tif needs OpenImageIO: libfvm_image_oiio\\.so could not be loaded"
@@ -134,10 +147,20 @@ if(NOT code EQUAL 1 OR NOT err MATCHES "needs OpenCV: libfvm_imaging_opencv\\.so
 endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${WORK}/surface.x3p --json
                 RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT code EQUAL 0)
-  message(FATAL_ERROR "fvm info on an X3P without the plugins: exit ${code}\n${err}")
+if(NOT code EQUAL 1
+   OR NOT err MATCHES "reading [^\n]*surface\\.x3p needs libzip and pugixml: libfvm_zip_xml_formats\\.so could not"
+   OR NOT err MATCHES "install the Debian package libzip4")
+  message(FATAL_ERROR "fvm info on an X3P without the plugin: exit ${code}, expected 1 and a message naming the "
+                      "plugin and the package to install, got:\n${err}")
 endif()
-string(JSON size_x GET "${out}" size_x)
-if(NOT size_x EQUAL 2)
-  message(FATAL_ERROR "fvm info on an X3P without the plugins: size_x ${size_x}, expected 2")
+# A format that needs no plugin still reads without them.
+file(WRITE ${WORK}/cloud.xyz "0 0 0\n1 0 0\n0 1 0.5\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -E env FVM_PLUGIN_DIR=${WORK}/no-plugins ${FVM} info ${WORK}/cloud.xyz --json
+                RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "fvm info on an XYZ cloud without the plugins: exit ${code}\n${err}")
+endif()
+string(JSON points GET "${out}" points)
+if(NOT points EQUAL 3)
+  message(FATAL_ERROR "fvm info on an XYZ cloud without the plugins: points ${points}, expected 3")
 endif()

@@ -41,6 +41,13 @@ loaded="$(LD_DEBUG=files fvm info "$root/tests/fuzz/corpus/datx/nanometres.datx"
   grep -o "file=[^ ]*libfvm_datx_hdf5.so" | head -n 1)"
 [[ "$loaded" == "file=/usr/lib/fvm/libfvm_datx_hdf5.so" ]] || fail "fvm info on a DATX loaded '$loaded'"
 ! ldd /usr/bin/fvm | grep -q libhdf5 || fail "/usr/bin/fvm links HDF5 (it belongs in the DATX plugin)"
+# An X3P (like PLUx and LEXT) needs the plugin of the zip- and XML-based formats, the installed one; the command
+# itself links no libzip, libcrypto or pugixml.
+loaded="$(LD_DEBUG=files fvm info "$root/tests/fuzz/corpus/x3p/binary-d.x3p" --json 2>&1 >/dev/null |
+  grep -o "file=[^ ]*libfvm_zip_xml_formats.so" | head -n 1)"
+[[ "$loaded" == "file=/usr/lib/fvm/libfvm_zip_xml_formats.so" ]] || fail "fvm info on an X3P loaded '$loaded'"
+! ldd /usr/bin/fvm | grep -q "libzip\|libcrypto\|libpugixml" ||
+  fail "/usr/bin/fvm links libzip, libcrypto or pugixml (they belong in the plugin libfvm_zip_xml_formats.so)"
 # Calottes found in images need the OpenCV plugin, a report the report plugin: both the installed ones.
 loaded="$(LD_DEBUG=files fvm calibrate raw --model 9 --pixel-mm 0.2 -o raw-calibration.json --report report 2>&1 >/dev/null |
   grep -o "file=[^ ]*libfvm_\(imaging_opencv\|report\)\.so" | sort -u | tr '\n' ' ')"
@@ -80,4 +87,4 @@ while IFS= read -r path; do
   fi
 done < "$files"
 ((${#left[@]} == 0)) || fail "apt-get remove left ${#left[@]} paths behind: ${left[*]:0:10}"
-echo "check_package: $(grep -c . "$files") paths installed and removed; 8 checks passed"
+echo "check_package: $(grep -c . "$files") paths installed and removed; 9 checks passed"

@@ -35,7 +35,7 @@ inline HeightMap SampleMap(int size_x = 7, int size_y = 5) {
 }
 
 // Same grid, same invalid points, same heights to the last bit or two of a double: files hold metres and the map
-// mm, and z / 1000 * 1000 has no exact inverse for about 2 % of doubles (x3p.cc writes the one that reads back
+// mm, and z / 1000 * 1000 has no exact inverse for about 2 % of doubles (x3p_writer.cc writes the one that reads back
 // exactly whenever there is one).
 inline void ExpectSameHeights(const HeightMap& expected, const HeightMap& actual) {
   ASSERT_EQ(actual.size_x, expected.size_x);
