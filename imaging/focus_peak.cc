@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace fvm::imaging {
 namespace {
@@ -17,6 +18,9 @@ constexpr double kCoarseShoulder = 0.6;
 // the floor taken off the measures before the power transform, as a share of the smallest measure.
 constexpr double kNoiseScale = 0.128;
 constexpr double kNoiseShare = 1.15;  // the propagated noise's weight (its linearisation misses a little)
+// The power fit's: the errors the noise makes are shared by a window's pixels, so the heights' roughness and the
+// fits' disagreement (`model`, focus_variation.cc) show most of them too, and the terms add in quadrature.
+constexpr double kPowerNoiseShare = 0.46;
 constexpr double kFloorShare = 1.0;
 // A narrow curve's 3-point log fit errs between images by a share of the step which no noise shows.
 constexpr double kNarrowStepFraction = 0.11;
@@ -199,7 +203,9 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
   if (options.peak_fit == PeakFit::kPower && !narrow) {
     const double power = -2.0 / BlurExponent(options.measure);  // measure^(-2/p) ~ s^2
     out.z = PowerVertex(z, k, f, floor_i, power, sigma, &out.u);
-    out.u *= kNoiseShare;
+    out.u *= kPowerNoiseShare;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    out.model = std::abs(PowerVertex(z, k, {nan, f[1], f[2], f[3], nan}, floor_i, power) - out.z);
     return out;
   }
   // The other fits through the best image and its neighbours; the noise by moving each measure in turn.

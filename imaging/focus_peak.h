@@ -30,9 +30,13 @@ double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f,
 // One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
 // change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
 // focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.
+// `model`: how far the vertex moves when the power fit keeps only the best image and its two neighbours (mm; 0
+// for the other fits): the focus curve's departure from the fitted parabola near its top, which pulls the vertex
+// by a share of the step that depends on where the surface lies between two images and that no noise shows.
 struct Peak {
   double z = std::numeric_limits<double>::quiet_NaN();
   double u = std::numeric_limits<double>::quiet_NaN();
+  double model = 0.0;
   float quality = 0.0f;
 };
 

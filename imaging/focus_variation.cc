@@ -61,16 +61,25 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 // leave in the map is roughness at the window's scale: the Laplacian of the heights smoothed over 2 px, less its
 // own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px; times
 // 9 px^2 (about half a 9 px window's variance: the second-order term of a window's mean, which also covers the
-// real bias where the surface bends sharply, a calotte's rim). The terms, calibrated for 95 % coverage of
-// 1.96 u_z on focusgen.py seed 11 (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to 2 px), checked
-// on seed 12 and on the rendered stacks of focus_accuracy_test.cc: the measure's noise per pixel over its floor
-// propagated through the fit (scaled by the power fit's misfit, focus_peak.cc); the roughness; a share of the
-// heights' scatter about their local mean; what the window's centroid correction leaves on a slope (a share of a
-// pixel times the slope); a floor of a share of the step; and for a curve too narrow for the power fit (the
-// 3-point log fit's error between images) a share of the step.
+// real bias where the surface bends sharply, a calotte's rim). The fit's own model error: on a face tilted by
+// less than a step over a window the power fit errs by up to a tenth of a step depending on where the surface
+// lies between two images (a bias that changes slowly across the map, which no roughness shows: 0.02-0.09 step
+// rms on focusgen.py's flats, most at NA 0.9 with a 0.8 um floor and with a 2 px texture); the vertex's move when
+// the fit keeps only the top three images (Peak::model) measures the curve's departure from the parabola there;
+// on a slope the window's heights span steps and average that bias away, so the term falls as 1 / (1 + (slope
+// times kModelSpanPx over the step)^2). The terms overlap (the noise's errors show in the roughness and in the
+// fits' disagreement too) and add in quadrature, each at a weight calibrated for 95 % coverage of 1.96 u_z on
+// focusgen.py seeds 11 and 12 over 13 conditions (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to
+// 2 px; tests/bench/focus_conditions.py) and checked on seeds 13 and 14: the measure's noise per pixel over its
+// floor propagated through the fit (scaled by the power fit's misfit, focus_peak.cc); the roughness; a share of
+// the heights' scatter about their local mean; the model term; what the window's centroid correction leaves on
+// a slope (a share of a pixel times the slope); a floor of a share of the step; and for a curve too narrow for
+// the power fit (the 3-point log fit's error between images) a share of the step.
 constexpr double kStepFraction = 0.005;
 constexpr double kRoughnessPx2 = 9.0;
-constexpr double kScatterScale = 0.36;
+constexpr double kScatterScale = 0.09;
+constexpr double kModelShare = 0.6;
+constexpr double kModelSpanPx = 4.0;
 constexpr int kScatterWindowPx = 9;
 constexpr double kCurvatureSmoothingPx = 6.0;
 constexpr int kRoughnessBoxPx = 15;
@@ -239,7 +248,7 @@ namespace {
 struct MapBuffers {
   int width = 0, height = 0;
   bool parallel = true;
-  HugeVector<float> storage[8];
+  HugeVector<float> storage[10];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];
@@ -336,55 +345,77 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& bu
 // The heights' roughness at the window's scale (buffer 3): the rms over kRoughnessBoxPx of the Laplacian of the
 // smoothed heights less its own smooth local mean (the real surface's curvature, which changes slowly; what is
 // left are errors shared over a window, and the bends of the surface sharper than kCurvatureSmoothingPx: a
-// calotte's rim). From the slope of the map (buffers 4 and 6).
-cv::Mat WindowScaleRoughness(const std::vector<double>& z, const Slope& slope, MapBuffers& buffers) {
-  cv::Mat laplacian = buffers[0], valid = buffers[1], work = buffers[2], roughness = buffers[3], mean = buffers[7];
+// calotte's rim). Takes what SlopePerPixel leaves: the heights, the mask, its blur and the smooth heights
+// (buffers 0 to 3) and their slope (4 and 6). Beside holes the smooth heights are the mean of the valid points
+// only, whose centroid lies off the pixel: on a slope that is a step of up to the slope times the offset, which
+// the Laplacian took for roughness (walls with half their pixels invalid: 1.6 times their errors); the smooth
+// heights are moved back along the slope by that offset, and a point counts by the share of valid points around
+// it (squared).
+cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
+  cv::Mat heights = buffers[0], valid = buffers[1], weight = buffers[2], smooth = buffers[3];
+  cv::Mat a = buffers[7], b = buffers[8], c = buffers[9], roughness = buffers[3];
+  cv::Mat gauss = cv::getGaussianKernel(int(std::lround(8 * kSlopeSmoothingPx)) | 1, kSlopeSmoothingPx, CV_32F);
+  cv::Mat moment = gauss.clone();  // the kernel times the offset of its tap: the first moment of the valid points
+  for (int k = 0; k < moment.rows; ++k) moment.at<float>(k) *= float(k - moment.rows / 2);
+  const auto filter = [](const cv::Mat& in, cv::Mat& out, const cv::Mat& kx, const cv::Mat& ky) {
+    cv::sepFilter2D(in, out, CV_32F, kx, ky, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
+  };
   buffers.Pass([&](int r0, int r1) {
-    cv::Mat xx = laplacian.rowRange(r0, r1), yy = work.rowRange(r0, r1);
-    cv::Sobel(slope.x.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    cv::Sobel(slope.y.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
+    filter(valid.rowRange(r0, r1), a_rows, moment, gauss);
+    filter(valid.rowRange(r0, r1), b_rows, gauss, moment);
     for (int r = r0; r < r1; ++r) {
-      float* l = laplacian.ptr<float>(r);
-      float* v = valid.ptr<float>(r);
-      const float* y = work.ptr<float>(r);
-      const double* row = z.data() + std::size_t(r) * std::size_t(laplacian.cols);
-      for (int col = 0; col < laplacian.cols; ++col) {
-        v[col] = std::isfinite(row[col]) ? 1.0f : 0.0f;
-        l[col] = (l[col] + y[col]) * v[col];
+      float* s = c.ptr<float>(r);
+      float* w = weight.ptr<float>(r);
+      const float *m = smooth.ptr<float>(r), *v = valid.ptr<float>(r), *ox = a.ptr<float>(r), *oy = b.ptr<float>(r);
+      const float *gx = slope.x.ptr<float>(r), *gy = slope.y.ptr<float>(r);
+      for (int col = 0; col < smooth.cols; ++col) {
+        const float share = std::max(w[col], 1e-6f);
+        s[col] = m[col] - (gx[col] * ox[col] + gy[col] * oy[col]) / share;
+        w[col] = v[col] * std::min(share, 1.0f) * std::min(share, 1.0f);
       }
     }
   });
-  // The local mean of the Laplacian over the valid points, and the squared departures from it.
   buffers.Pass([&](int r0, int r1) {
-    cv::Mat m_rows = mean.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
-    cv::GaussianBlur(laplacian.rowRange(r0, r1), m_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
+    cv::Sobel(c.rowRange(r0, r1), a_rows, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Sobel(c.rowRange(r0, r1), b_rows, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
   });
-  buffers.Pass([&](int r0, int r1) {
+  buffers.Pass([&](int r0, int r1) {  // the Laplacian (buffer 0), and it weighted (9)
+    cv::Mat xx = heights.rowRange(r0, r1), yy = smooth.rowRange(r0, r1);
+    cv::Sobel(a.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
+    cv::Sobel(b.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
     for (int r = r0; r < r1; ++r) {
-      const float* l = laplacian.ptr<float>(r);
-      const float* m = mean.ptr<float>(r);
-      const float* w = work.ptr<float>(r);
-      const float* v = valid.ptr<float>(r);
+      float *l = heights.ptr<float>(r), *lw = c.ptr<float>(r);
+      const float *y = smooth.ptr<float>(r), *v = valid.ptr<float>(r), *w = weight.ptr<float>(r);
+      for (int col = 0; col < heights.cols; ++col) l[col] = (l[col] + y[col]) * v[col], lw[col] = l[col] * w[col];
+    }
+  });
+  // The Laplacian's weighted local mean, the weighted squared departures from it, and their mean over the box.
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
+    cv::GaussianBlur(c.rowRange(r0, r1), a_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(weight.rowRange(r0, r1), b_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
       float* d = roughness.ptr<float>(r);
-      for (int col = 0; col < laplacian.cols; ++col) {
-        const float departure = l[col] - m[col] / std::max(w[col], 1e-6f);
-        d[col] = departure * departure * v[col];
+      const float *l = heights.ptr<float>(r), *m = a.ptr<float>(r), *n = b.ptr<float>(r), *w = weight.ptr<float>(r);
+      for (int col = 0; col < heights.cols; ++col) {
+        const float departure = l[col] - m[col] / std::max(n[col], 1e-6f);
+        d[col] = departure * departure * w[col];
       }
     }
   });
   const cv::Size box(kRoughnessBoxPx, kRoughnessBoxPx);
   buffers.Pass([&](int r0, int r1) {
-    cv::Mat s_rows = mean.rowRange(r0, r1), count_rows = work.rowRange(r0, r1);
-    cv::boxFilter(roughness.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-    cv::boxFilter(valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
+    cv::boxFilter(roughness.rowRange(r0, r1), a_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
+    cv::boxFilter(weight.rowRange(r0, r1), b_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
   });
   buffers.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
-      const float* sum = mean.ptr<float>(r);
-      const float* count = work.ptr<float>(r);
+      const float *sum = a.ptr<float>(r), *count = b.ptr<float>(r);
       float* o = roughness.ptr<float>(r);
-      for (int col = 0; col < roughness.cols; ++col) o[col] = std::sqrt(std::max(sum[col], 0.0f) / std::max(count[col], 1.0f));
+      for (int col = 0; col < roughness.cols; ++col) o[col] = std::sqrt(std::max(sum[col], 0.0f) / std::max(count[col], 1e-3f));
     }
   });
   return roughness;
@@ -443,6 +474,7 @@ FocusResult FocusAccumulator::Finish() const {
   const double step = std::abs(s.z.back() - s.z.front()) / double(n - 1);
   const double origin = s.z.front();
 
+  std::vector<float> model(size);  // each height's Peak::model
   const bool coarse = CoarselySampled(large, s.z.size(), s.options.min_quality);
   // The largest window's heights everywhere; their slope says where the smaller windows serve instead (walls),
   // and only there are their peaks fitted.
@@ -450,6 +482,7 @@ FocusResult FocusAccumulator::Finish() const {
     for (std::size_t i = std::size_t(r0) * std::size_t(s.width); i < std::size_t(r1) * std::size_t(s.width); ++i) {
       const Peak p = FitPeak(large, i, s.z, s.options, coarse);
       map.z_mm[i] = p.z;
+      model[i] = static_cast<float>(p.model);
       result.u_z_mm[i] = static_cast<float>(p.u);
       result.quality[i] = p.quality;
     }
@@ -472,7 +505,10 @@ FocusResult FocusAccumulator::Finish() const {
         if (curves.size() > 1 && !(fits(large) && std::isfinite(z))) {
           const WindowCurves& smaller = curves[curves.size() - 2];
           const Peak small = FitPeak(smaller, i, s.z, s.options, coarse);
-          if (std::isfinite(small.z)) z = small.z, u_noise = small.u, window = smaller.window;
+          if (std::isfinite(small.z)) {
+            z = small.z, u_noise = small.u, window = smaller.window;
+            model[i] = static_cast<float>(small.model);
+          }
         }
         map.z_mm[i] = z;
         result.u_z_mm[i] = std::isfinite(z) ? static_cast<float>(u_noise) : kNaN;
@@ -496,7 +532,7 @@ FocusResult FocusAccumulator::Finish() const {
   // correction leaves. Both from the corrected heights.
   const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
   const Slope corrected_slope = SlopePerPixel(map.z_mm, origin, buffers);
-  const cv::Mat roughness = WindowScaleRoughness(map.z_mm, corrected_slope, buffers);
+  const cv::Mat roughness = WindowScaleRoughness(corrected_slope, buffers);
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
@@ -507,10 +543,12 @@ FocusResult FocusAccumulator::Finish() const {
         if (!std::isfinite(map.z_mm[i])) continue;
         const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
         const double u_roughness = kRoughnessPx2 * roughness_row[col];
-        const double u_slope = kSlopePx * corrected_slope.Magnitude(r, col);
+        const double g = corrected_slope.Magnitude(r, col), u_slope = kSlopePx * g;
+        const double span_steps = g * kModelSpanPx / step;
+        const double u_model = kModelShare * model[i] / (1.0 + span_steps * span_steps);
         result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter +
                                                         u_roughness * u_roughness + u_step * u_step +
-                                                        u_slope * u_slope));
+                                                        u_slope * u_slope + u_model * u_model));
       }
     }
   });

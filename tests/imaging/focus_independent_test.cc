@@ -103,6 +103,7 @@ struct Condition {
   std::string arguments;
   double max_rms_steps;  // per region
   double min_valid_share = 0.99;
+  double max_coverage = 0.99;  // per region
 };
 
 class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
@@ -114,11 +115,18 @@ class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
 // plus ~15 %, and their u_z must say so: NA 0.9 with an 0.8 um floor, where the blur grows linearly from the floor
 // and the focus curve's sharp top pulls peaks towards the nearest image (0.11-0.12 step on the flat, 0.11 on the
 // wall, seeds 11 and 12), and the same optics with a 2 px texture (0.12-0.15 step, 5-7 % of the pixels below
-// --min-quality 2). u_z: the 95 % coverage of 1.96 u_z measured at 93-98 % per region on the first two and at
-// 93.5-99 % on the last two (seeds 11 and 12; 78-84 % with the model before, which counted only the heights'
-// pixel-to-pixel scatter); a region here holds a few hundred independent patches (errors correlate over the 9 px
-// window), so one seed's coverage scatters by about 1.5 %: held at 90-99 %. The rms of error / u_z, measured
-// 0.76-1.06 on them, is held at 0.7-1.3.
+// --min-quality 2). u_z: the 95 % coverage of 1.96 u_z measured at 93.6-98.0 % per region on the first two and at
+// 91.7-97.7 % on the last two (the walls the lowest: the sharp top's bias, which the model term holds only where a
+// window spans less than a step; 78-84 % with the model that counted only the heights' pixel-to-pixel scatter,
+// 93-99 % before the model term); a region here holds a few hundred independent patches (errors correlate over
+// the 9 px window), so one seed's coverage scatters by about 1.5 %: held at 90-99 %. The rms of error / u_z,
+// measured 0.82-1.13 on them, is held at 0.7-1.3.
+// A long depth of field over a coarse texture (NA 0.3, sigma0 0.3 um, 2 px; seed 16, apart from the seeds 11 and 12
+// the uncertainty model is calibrated on): 0.24 step on the flat, 0.21 on the wall, 0.20 on the bottom, 57 % of
+// the pixels valid, held at measured plus ~15 %. Its flat's coverage was 88.8 % when u_z missed the power fit's
+// model error (the bias of where the surface lies between two images, which no roughness shows); 93.2 % now. Its
+// wall's u_z is still on the safe side (98.9 %, error / u_z rms 0.75; 99.3 % and 0.67 before): held at 99.5 %.
+
 TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
   if (!BenchUsable()) GTEST_SKIP() << kBench << " or python3 with numpy, scipy and tifffile is absent";
   const Condition& c = GetParam();
@@ -129,7 +137,7 @@ TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
     EXPECT_GT(f.count[k], 3000u) << "region " << k;
     EXPECT_LT(f.rms_steps[k], c.max_rms_steps) << "region " << k;
     EXPECT_GE(f.coverage[k], 0.90) << "region " << k;
-    EXPECT_LE(f.coverage[k], 0.99) << "region " << k;
+    EXPECT_LE(f.coverage[k], c.max_coverage) << "region " << k;
     EXPECT_GE(f.standardised_rms[k], 0.7) << "region " << k;
     EXPECT_LE(f.standardised_rms[k], 1.3) << "region " << k;
   }
@@ -141,7 +149,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1},
                       Condition{"sharp_top_NA09_floor08", "--seed 9 --na 0.9 --sigma0-um 0.8 --texture-px 0.7", 0.14},
                       Condition{"coarse_texture_NA09_floor08", "--seed 10 --na 0.9 --sigma0-um 0.8 --texture-px 2",
-                                0.17, 0.9}),
+                                0.17, 0.9},
+                      Condition{"coarse_texture_NA03_floor03", "--seed 16 --na 0.3 --sigma0-um 0.3 --texture-px 2",
+                                0.27, 0.5, 0.995}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
