@@ -227,7 +227,11 @@ CutOutcome StitchCutGrid(const CutGrid& g, const CutCase& c) {
   }
   StitchDistortionResult r;
   try {
-    r = StitchWithoutDistortion(rigid, g.images, {});
+    StitchDistortionOptions distortion;
+    // FVM_DISTORTION_FREE=1: the stretch terms identified too (imaging::kHeldStretchTerms), to see what the
+    // overlaps tell of them.
+    distortion.hold_stretch_terms = !std::getenv("FVM_DISTORTION_FREE");
+    r = StitchWithoutDistortion(rigid, g.images, distortion);
   } catch (const imaging::FieldDistortionUndeterminable& e) {
     out.refused = true, out.why = e.what();
     return out;
