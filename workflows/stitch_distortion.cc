@@ -1,7 +1,10 @@
 #include "workflows/stitch_distortion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include <fmt/core.h>
 
 namespace fvm::workflows {
 
@@ -30,43 +33,75 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   options.Check();
   if (images.size() != rigid.grid.size()) throw std::invalid_argument("StitchWithoutDistortion: one image per tile");
   const int width = static_cast<int>(images.front().cols()), height = static_cast<int>(images.front().rows());
-  const imaging::TilePositions& positions = rigid.registration.positions;
-  // Tiles the rigid solve left at their stage positions hold there; so does the first tile (the frame).
-  std::vector<bool> fixed(images.size(), false);
-  fixed[0] = true;
-  for (size_t i = 0; i < images.size(); ++i) {
-    if (!positions.registered[i]) fixed[i] = true;
-  }
-  std::vector<imaging::OverlapToMatch> overlaps;
-  for (const imaging::PairRegistration& pair : rigid.registration.pairs) {
-    if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
-  }
   StitchDistortionResult out;
   out.identified = !options.known.has_value();
-  imaging::FieldDistortion guess;  // the identity
-  if (options.known) guess = *options.known;
-  std::vector<Eigen::Vector2d> start = positions.positions_px;
   imaging::FieldDistortionFitOptions fit_options = options.fit;
   fit_options.order = options.known ? options.known->order : options.order;
   fit_options.hold_stretch_terms = options.hold_stretch_terms;
-  // Twice: the first round tracks a coarser grid of points (every other one along each axis) across the field's
-  // whole pull; its field and positions put the second round's points within a fraction of a pixel, where each
-  // is refined without the tracker, on the full grid. The tiles are prepared once for both.
   const imaging::PreparedTiles prepared = imaging::PrepareTilesForMatching(images, options.matching);
-  for (int round = 0; round < 2; ++round) {
-    imaging::CorrespondenceOptions matching = options.matching;
-    if (round == 0) matching.grid_step_px *= 2;
-    if (round > 0) matching.track = false;
-    const std::vector<imaging::PairCorrespondences> matched =
-        imaging::MatchPreparedOverlaps(prepared, overlaps, guess, matching);
-    out.fit = imaging::FitFieldDistortion(matched, start, fixed, width, height, fit_options,
-                                          options.known ? &*options.known : nullptr);
-    guess = out.fit.field;
-    start = out.fit.positions_px;
-    for (imaging::OverlapToMatch& o : overlaps) {
-      o.offset_px = start[static_cast<size_t>(o.b)] - start[static_cast<size_t>(o.a)];
+  // The field and the positions from the accepted pairs of `registration`, starting from its positions and `guess`.
+  const auto identify = [&](const imaging::RegistrationResult& registration, imaging::FieldDistortion guess) {
+    const imaging::TilePositions& positions = registration.positions;
+    // Tiles the rigid solve left at their stage positions hold there; so does the first tile (the frame).
+    std::vector<bool> fixed(images.size(), false);
+    fixed[0] = true;
+    for (size_t i = 0; i < images.size(); ++i) {
+      if (!positions.registered[i]) fixed[i] = true;
+    }
+    std::vector<imaging::OverlapToMatch> overlaps;
+    for (const imaging::PairRegistration& pair : registration.pairs) {
+      if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
+    }
+    std::vector<Eigen::Vector2d> start = positions.positions_px;
+    // Twice: the first round tracks a coarser grid of points (every other one along each axis) across the field's
+    // whole pull; its field and positions put the second round's points within a fraction of a pixel, where each
+    // is refined without the tracker, on the full grid. The tiles are prepared once for every round.
+    for (int round = 0; round < 2; ++round) {
+      imaging::CorrespondenceOptions matching = options.matching;
+      if (round == 0) matching.grid_step_px *= 2;
+      if (round > 0) matching.track = false;
+      const std::vector<imaging::PairCorrespondences> matched =
+          imaging::MatchPreparedOverlaps(prepared, overlaps, guess, matching);
+      out.fit = imaging::FitFieldDistortion(matched, start, fixed, width, height, fit_options,
+                                            options.known ? &*options.known : nullptr);
+      guess = out.fit.field;
+      start = out.fit.positions_px;
+      for (imaging::OverlapToMatch& o : overlaps) {
+        o.offset_px = start[static_cast<size_t>(o.b)] - start[static_cast<size_t>(o.a)];
+      }
+    }
+  };
+  const imaging::RegistrationResult* registration = &rigid.registration;
+  const auto accepted = [](const imaging::RegistrationResult& r) {
+    return static_cast<int>(std::count_if(r.pairs.begin(), r.pairs.end(), [](const auto& p) { return p.accepted; }));
+  };
+  try {
+    identify(*registration, options.known ? *options.known : imaging::FieldDistortion{});
+  } catch (const imaging::FieldDistortionUndeterminable& e) {
+    const int rejected = static_cast<int>(rigid.registration.pairs.size()) - accepted(rigid.registration);
+    if (rejected == 0) throw;
+    // Say that the overlaps exist but did not register rigidly (a field strong enough to shear them does that).
+    throw imaging::FieldDistortionUndeterminable(fmt::format(
+        "{} ({} of the {} neighbour pairs did not register on the raw tiles: with a field as strong as the overlaps "
+        "show, give the objective's field saved from a grid that registers with --distortion-file)",
+        e.what(), rejected, rigid.registration.pairs.size()));
+  }
+  // Pairs the rigid registration rejected because the field shears their overlap (its displacement changes along
+  // the band by more than the texture's grain: the raw overlaps do not match at any one offset) are what leave
+  // tiles at their stage positions, pixels off. The grid is registered again on the tiles resampled without the
+  // field found (edges clamped, not NaN: the registration wants finite pixels), and the field and the positions
+  // identified again from every pair that registers there.
+  imaging::RegistrationResult again;
+  if (accepted(rigid.registration) < static_cast<int>(rigid.registration.pairs.size())) {
+    again = imaging::RegisterTileGrid(imaging::UndistortTiles(images, out.fit.field, false), rigid.grid,
+                                      options.registration);
+    if (accepted(again) > accepted(rigid.registration)) {
+      out.pairs_registered_undistorted = accepted(again) - accepted(rigid.registration);
+      registration = &again;
+      identify(*registration, out.fit.field);
     }
   }
+  const imaging::TilePositions& positions = registration->positions;
   for (const Eigen::Matrix2d& c : out.fit.position_covariance_px2) out.sigma_px.emplace_back(c.diagonal().cwiseSqrt());
   // Tiles at their stage positions carry the stage's uncertainty, as the rigid solve says.
   for (size_t i = 0; i < images.size(); ++i) {

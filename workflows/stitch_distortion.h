@@ -25,6 +25,9 @@ struct StitchDistortionOptions {
   // A grid is placed by its overlaps alone: the terms that act on them as a stretch or shear of the mosaic are held
   // at 0 (imaging::kHeldStretchTerms), as the published method holds them.
   bool hold_stretch_terms = true;
+  // The rigid registration's options (StitchOptions::registration), for the grid registered again on the tiles
+  // resampled without the field when the raw tiles left pairs unregistered.
+  imaging::RegistrationOptions registration;
   void Check() const;  // throws std::invalid_argument
 };
 
@@ -37,6 +40,9 @@ struct StitchDistortionResult {
   // Each position's standard uncertainty per axis (px), against the first tile: what TilePositions::sigma_px says
   // for the rigid solve, the field's uncertainty included.
   std::vector<Eigen::Vector2d> sigma_px;
+  // Pairs the rigid registration rejected on the raw tiles that registered on the tiles resampled without the
+  // field (the field sheared their overlaps): the field and the positions were identified again with them.
+  int pairs_registered_undistorted = 0;
 };
 
 // `rigid`: StitchTiles on the same `images`. Throws imaging::FieldDistortionUndeterminable (a strip in one

@@ -47,6 +47,7 @@ StitchedLayout StitchLayout(const imaging::TileLayout& layout, const std::vector
     try {
       StitchDistortionOptions distortion = *options.distortion;
       if (options.stitch.threads > 0) distortion.fit.threads = options.stitch.threads;  // the solve's, as the pool's
+      distortion.registration = options.stitch.registration;
       s.field = StitchWithoutDistortion(s.rigid, images, distortion);
     } catch (const imaging::FieldDistortionUndeterminable& e) {
       throw InputError(fmt::format("--distortion, {}: {}", layout.source, e.what()));

@@ -105,6 +105,7 @@ Json StitchJson(const StitchedLayout& s) {
     out["distortion"] = DistortionJson(s.field->fit, s.field->identified, s.options.pixel_mm);
     out["distortion"]["overlap_ncc_before"] = FiniteOrNull(s.field->mean_overlap_ncc_before);
     out["distortion"]["overlap_ncc_after"] = FiniteOrNull(s.field->mean_overlap_ncc_after);
+    out["distortion"]["pairs_registered_undistorted"] = s.field->pairs_registered_undistorted;
   }
   out["stage_model"] = StageModelJson(rigid.registration);
   out["pairs"] = Json::array();
@@ -184,6 +185,11 @@ std::string StitchText(const StitchedLayout& s) {
     text += fmt::format("  mean overlap correlation of the undistorted tiles at their positions: {:.3f} (raw tiles, "
                         "rigid: {:.3f})\n",
                         s.field->mean_overlap_ncc_after, s.field->mean_overlap_ncc_before);
+    if (s.field->pairs_registered_undistorted > 0) {
+      text += fmt::format("  {} pairs the raw tiles did not register (the field shears their overlaps) registered on "
+                          "the undistorted tiles; the field and the positions were identified again with them\n",
+                          s.field->pairs_registered_undistorted);
+    }
   }
   if (rigid.accepted == 0) text += "  no pair registered: every tile stays at its nominal position\n";
   if (!rigid.at_stage_position.empty()) {
