@@ -73,7 +73,7 @@ Summary Summarize(const TileDiagnosis& d, const TileDiagnoseOptions& options) {
   doc["distortion"] = DistortionJson(d.field, true, mm);
 
   const auto um = [mm](double px) { return mm > 0.0 ? fmt::format(" ({:.3f} um)", px * mm * 1e3) : std::string(); };
-  std::string text = fmt::format("fvm diagnose: {} {} tiles of {} x {} px, {} pairs registered ({} with correspondences the "
+  std::string text = fmt::format("fvm diagnose: {} {} tiles of {} x {} px, {} neighbour pairs ({} with correspondences the "
                                  "fit weighs)\n\n",
                                  d.source == "layout" ? "a layout of" : "calibration scans of", d.tiles, d.width_px,
                                  d.height_px, d.pairs, d.pairs_used);
