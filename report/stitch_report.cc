@@ -79,7 +79,7 @@ std::string RenderField(const StitchReportData& data) {
   for (const StitchReportData::Displacement& d : data.field) largest = std::max(largest, std::hypot(d.dx_px, d.dy_px));
   // The longest arrow about 12 % of the tile's width, about one spacing of the arrows.
   const double scale = largest > 0 ? NiceFloor(0.12 * w / largest) : 1.0;
-  const double margin = 0.1 * w;
+  const double margin = 0.13 * w;  // room for the arrows at the edges
   SvgPlot plot(800, static_cast<PLINT>(std::clamp(800.0 * h / w, 400.0, 1200.0)));
   plvpas(0.14, 0.95, 0.1, 0.86, (h + 2 * margin) / (w + 2 * margin));
   plwind(-margin, w + margin, h + margin, -margin);

@@ -136,7 +136,7 @@ report::StitchReportData::Table FieldTable(const StitchDistortionResult& field) 
   const imaging::FieldDistortion& d = field.fit.field;
   report::StitchReportData::Table t{"Field distortion terms",
                                     fmt::format("The field's terms (px, as --json's distortion.terms) with their "
-                                                "standard uncertainties. {}.",
+                                                "standard uncertainties; {}.",
                                                 imaging::kFixedLinearPart),
                                     {"term", "value (px)", "u (px)", ""},
                                     {}};
