@@ -80,7 +80,7 @@ void RegisterDiagnose(CLI::App& app) {
   sub->add_option("--pixel-mm", args->tiles.pixel_mm, "--layout, --scan: the pixel size on the part (mm): sizes also in um")
       ->check(Within(kPixelMm));
   sub->add_option("--order", args->tiles.order, "--layout, --scan: the field model's polynomial order (2..6)")
-      ->check(CLI::Range(2, imaging::kMaxDistortionOrder))
+      ->check(Count(2, imaging::kMaxDistortionOrder))
       ->capture_default_str();
   sub->add_option("--model", options.model.model, "base model: 9, 15, 27 or 42")
       ->check(CLI::IsMember({"9", "15", "27", "42"}))
