@@ -11,6 +11,7 @@
 
 #include "core/input_error.h"
 #include "workflows/calibration_scans.h"
+#include "workflows/overlap_block_scatter.h"
 #include "workflows/stitch.h"
 #include "workflows/stitch_layout.h"
 
@@ -47,21 +48,6 @@ struct OverlapPoints {
   int width = 0, height = 0, pairs = 0;
 };
 
-// The matching for a set whose narrowest registered overlap is `band_px` wide, as the scan calibration matches
-// (workflows/scan_distortion.cc, MatchingForBand): a window of a quarter of a narrow band (at least 7 px), one pyramid
-// level, a grid of a tenth of it (at least 2 px). With the default 15 px window a 32 px band (128 px tiles at 25 %)
-// keeps two columns of points whose windows the band's edges clip: their bias, the same in every overlap, is a
-// pattern a field fits (simulated scans without a field: 0.074 -> 0.020 px rms, a "field" of 57 px named).
-imaging::CorrespondenceOptions MatchingForNarrowBand(imaging::CorrespondenceOptions matching, double band_px) {
-  if (band_px >= 4.0 * matching.window_px) return matching;
-  int window = static_cast<int>(std::floor(band_px / 4.0));
-  if (window % 2 == 0) --window;
-  matching.window_px = std::max(7, window);
-  matching.pyramid_levels = std::min(matching.pyramid_levels, 1);
-  matching.grid_step_px = std::max(2, std::min(matching.grid_step_px, static_cast<int>(std::floor(band_px / 10.0))));
-  return matching;
-}
-
 void AddRegisteredSet(const std::vector<imaging::TileImage>& images, const std::vector<imaging::PairRegistration>& pairs,
                       const imaging::TilePositions& positions, const imaging::CorrespondenceOptions& matching,
                       OverlapPoints& out) {
@@ -81,7 +67,7 @@ void AddRegisteredSet(const std::vector<imaging::TileImage>& images, const std::
     band = std::min({band, out.width - std::abs(o.offset_px.x()), out.height - std::abs(o.offset_px.y())});
   }
   for (imaging::PairCorrespondences& p :
-       imaging::MatchOverlaps(images, overlaps, imaging::FieldDistortion{}, MatchingForNarrowBand(matching, band))) {
+       imaging::MatchOverlaps(images, overlaps, imaging::FieldDistortion{}, BandMatching(matching, band))) {
     p.a += base, p.b += base;
     out.matched.push_back(std::move(p));
   }
@@ -184,41 +170,6 @@ OverlapResiduals ResidualsOf(const OverlapPoints& points, const Inliers& inliers
   return out;
 }
 
-// How much more the field model's residuals scatter over a quarter of an overlap than their points' own scatter
-// allows (the texture's errors, shared by neighbouring points): each pair's points split into four blocks along the
-// band, each block's mean about the pair's (which the positions take up) against sigma^2 / n. The same measure as
-// the scan calibration's (workflows/scan_distortion.cc), on the points both models share here. At least 1.
-double BlockScatter(const OverlapPoints& points, const Inliers& inliers, const imaging::FieldDistortionFit& fit, int* dof) {
-  constexpr int kBlocks = 4;
-  const double sigma = fit.point_sigma_px;
-  double chi2 = 0.0;
-  *dof = 0;
-  for (size_t q = 0; q < points.matched.size(); ++q) {
-    const imaging::PairCorrespondences& p = points.matched[q];
-    const int n = static_cast<int>(inliers[q].size());
-    if (n < 2 * kBlocks) continue;
-    const Eigen::Vector2d step = p.a_px[inliers[q].front()] - p.b_px[inliers[q].front()];
-    const bool along_x = std::abs(step.x()) >= std::abs(step.y());
-    std::vector<std::pair<double, Eigen::Vector2d>> residuals;  // (place along the band, residual)
-    for (size_t m : inliers[q]) {
-      residuals.emplace_back(along_x ? p.a_px[m].y() : p.a_px[m].x(), Misclosure(p, m, fit.positions_px, fit.field));
-    }
-    std::sort(residuals.begin(), residuals.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& entry : residuals) mean += entry.second;
-    mean /= n;
-    for (int b = 0; b < kBlocks; ++b) {
-      const int first = b * n / kBlocks, end = (b + 1) * n / kBlocks;
-      Eigen::Vector2d block = Eigen::Vector2d::Zero();
-      for (int m = first; m < end; ++m) block += residuals[static_cast<size_t>(m)].second;
-      block /= end - first;
-      chi2 += (block - mean).squaredNorm() * (end - first) / (sigma * sigma);
-    }
-    *dof += 2 * (kBlocks - 1);
-  }
-  return *dof > 0 && sigma > 0.0 ? std::max(1.0, std::sqrt(chi2 / *dof)) : 1.0;
-}
-
 }  // namespace
 
 TileDiagnosis DiagnoseTiles(const TileDiagnoseOptions& options) {
@@ -252,7 +203,7 @@ TileDiagnosis DiagnoseTiles(const TileDiagnoseOptions& options) {
   d.with_field = ResidualsOf(points, inliers, d.field.positions_px, d.field.field, &rss_field);
 
   d.extra_parameters = static_cast<int>(d.field.field.coefficients.size() - d.field.held_terms.size());
-  d.block_scatter_factor = BlockScatter(points, inliers, d.field, &d.block_dof);
+  d.block_scatter_factor = OverlapBlockScatter(points.matched, d.field, fit_options.min_pair_points, &d.block_dof);
   d.noise_factor = std::max(d.block_scatter_factor, d.field.pair_scatter_factor);
   const double noise = d.point_sigma_px * d.noise_factor;
   const int denominator_dof = d.block_dof > 0 ? d.block_dof : std::max(1, 2 * d.with_field.points - d.extra_parameters);
