@@ -11,6 +11,7 @@
 #include "fvm/commands.h"
 #include "fvm/distortion_options.h"
 #include "imaging/tile_plan.h"
+#include "report/report.h"
 #include "workflows/field_distortion_file.h"
 #include "workflows/stitch_layout.h"
 #include "workflows/stitch_summary.h"
@@ -22,6 +23,7 @@ struct StitchArgs {
   std::string layout;
   std::string output;
   std::string mosaic;
+  std::string report;
   bool json = false;
   workflows::StitchLayoutOptions job;
   DistortionArgs distortion;
@@ -71,12 +73,14 @@ void RunStitch(StitchArgs& args) {
   for (const auto& text : stitched.rigid.overruled) fmt::print(stderr, "fvm stitch: overruled {}\n", text);
   if (stitched.rigid.mostly_unresolved) fmt::print(stderr, "fvm stitch: warning: {}\n", stitched.rigid.UnresolvedWarning());
   const workflows::Summary summary = workflows::Summarize(stitched);
+  if (!args.report.empty()) report::Write(args.report, *summary.report);
   if (args.json) {
     fmt::print("{}\n", summary.json.dump(2));
     return;
   }
-  fmt::print("{}positions written to {}{}\n", summary.text, args.output,
-             args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic);
+  fmt::print("{}positions written to {}{}{}\n", summary.text, args.output,
+             args.mosaic.empty() ? "" : ", mosaic to " + args.mosaic,
+             args.report.empty() ? "" : ", report to " + args.report + "/index.html");
 }
 
 }  // namespace
@@ -128,6 +132,10 @@ void RegisterStitch(CLI::App& app) {
       ->capture_default_str();
   AddHiddenAlias(sub, "--stage-sigma", args->job.stitch.registration.stage_sigma_px, "--stage-sigma-px");
   AddDistortionOptions(sub, &args->distortion, true);
+  sub->add_option("--report", args->report,
+                  "write an HTML report into this directory: the tiles where they were placed with their u, every pair "
+                  "(accepted, overruled by the loops, unresolved), the loops' misclosures and, with --distortion, the "
+                  "field (terms with u, a plot of its displacement across a tile, overlap NCC before and after)");
   sub->add_flag("--json", args->json,
                 "print one JSON document {\"tiles\", \"pairs_accepted\", \"pairs_ambiguous\", \"mean_overlap_ncc\", "
                 "\"pairs_unresolved\", \"unresolved_warning\" (null unless a quarter of the pairs or more), \"overruled\": "
@@ -137,8 +145,9 @@ void RegisterStitch(CLI::App& app) {
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
                 "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "
                 "\"dy_px\", \"peak\", \"ncc\"}]}]}");
-  sub->footer("Example: fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
-              "-o demo/positions.csv --mosaic demo/mosaic.tif");
+  sub->footer("Examples:\n  fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
+              "-o demo/positions.csv --mosaic demo/mosaic.tif\n"
+              "  fvm stitch --layout demo/layout.csv --overlap 20 -o demo/positions.csv --distortion --report demo/report");
   sub->callback([args] { RunStitch(*args); });
 }
 

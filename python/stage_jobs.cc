@@ -1,7 +1,8 @@
 // The stage jobs beside calibrate: fvm.compare (every model order side by side), fvm.diagnose (the discrepancy
 // workflow) and fvm.correct (a centre export, a scan, a tile layout or a machine's point list corrected with a
-// model file, as `fvm correct` does). Each returns fvm.Result: the command's --json document (less the paths of its
-// files), its printed text and, for diagnose, its report (fvm.write_report).
+// model file, as `fvm correct` does), and fvm.diagnose_tiles (the field distortion's test on tiles, as `fvm diagnose
+// --layout/--scan`). Each returns fvm.Result: the command's --json document (less the paths of its files), its printed
+// text and, for diagnose, its report (fvm.write_report).
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -12,6 +13,7 @@
 #include "workflows/compare_models.h"
 #include "workflows/correct_files.h"
 #include "workflows/diagnose.h"
+#include "workflows/diagnose_tiles.h"
 
 namespace fvm::python {
 namespace {
@@ -70,6 +72,21 @@ workflows::Summary Diagnose(const std::filesystem::path& batch, const py::object
   return workflows::Summarize(workflows::DiagnoseBatch(b, options), options, batch.string());
 }
 
+workflows::Summary DiagnoseTiles(const std::optional<std::filesystem::path>& layout, const std::vector<std::filesystem::path>& scans,
+                                 double overlap, double pixel_mm, int order, double alpha, int threads) {
+  workflows::TileDiagnoseOptions options;
+  if (layout) options.layout = layout->string();
+  for (const auto& scan : scans) options.scans.push_back(scan.string());
+  options.overlap = overlap >= 1.0 ? overlap / 100.0 : overlap;  // as --overlap reads 10 and 0.1
+  options.pixel_mm = pixel_mm;
+  options.order = order;
+  options.alpha = alpha;
+  options.threads = threads;
+  options.Check();
+  py::gil_scoped_release release;
+  return workflows::Summarize(workflows::DiagnoseTiles(options), options);
+}
+
 struct ReadKeywords {
   double pixel_mm, pixel_y_mm, z_scale_mm, z_offset_mm;
   std::optional<double> invalid;
@@ -110,6 +127,16 @@ void BindStageJobs(py::module_& m) {
         "misses, added step by step while held-out placements confirm it. Returns fvm.Result (summary: the --json "
         "document less 'batch'); fvm.write_report(result, dir) writes what --report DIR writes.\n\nExample:\n"
         "    >>> r = fvm.diagnose('samples/bar17', model=27)\n    >>> r['effect'], r['after']['mean_um']");
+  const workflows::TileDiagnoseOptions tiles;
+  m.def("diagnose_tiles", &DiagnoseTiles, py::arg("layout") = py::none(), py::arg("scans") = std::vector<std::filesystem::path>{},
+        py::arg("overlap") = tiles.overlap, py::arg("pixel_mm") = tiles.pixel_mm, py::arg("order") = tiles.order,
+        py::arg("alpha") = tiles.alpha, py::arg("threads") = tiles.threads,
+        "Whether the overlaps of a tile grid (layout, with overlap) or of calibration scans (scans, with pixel_mm) "
+        "show the objective's field distortion, as `fvm diagnose --layout L.csv --overlap PCT` / `--scan L.csv ... "
+        "--pixel-mm P`: the rigid and the field model fitted on the same correspondences, compared by an F test and "
+        "the BIC. Returns fvm.Result (summary: the --json document less 'layout').\n\nExample:\n"
+        "    >>> r = fvm.diagnose_tiles(scans=['s/row.csv', 's/column.csv', 's/diagonal.csv'], pixel_mm=0.011)\n"
+        "    >>> r['effect'], r['before']['rms_px'], r['after']['rms_px']");
   m.def(
       "correct",
       [](const std::string& calibration, const std::string& input, const std::string& output, const std::string& layout,

@@ -25,4 +25,8 @@ void WriteUncertaintyReport(const std::filesystem::path& dir, const UncertaintyR
   LoadReportWriters("writing the report " + dir.string()).write_uncertainty_report(dir, data);
 }
 
+void WriteStitchReport(const std::filesystem::path& dir, const StitchReportData& data) {
+  LoadReportWriters("writing the report " + dir.string()).write_stitch_report(dir, data);
+}
+
 }  // namespace fvm::report

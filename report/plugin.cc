@@ -5,7 +5,8 @@
 namespace fvm::report {
 namespace {
 
-constexpr ReportWriters kReportWriters{&WriteReport, &WriteMachineReport, &WriteUncertaintyReport};
+constexpr ReportWriters kReportWriters{&WriteReport, &WriteMachineReport, &WriteUncertaintyReport,
+                                          &WriteStitchReport};
 
 }  // namespace
 }  // namespace fvm::report

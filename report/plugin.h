@@ -5,13 +5,14 @@
 //
 // How it is built (report/CMakeLists.txt): fvm_report stays a static library for the tests; the plugin
 // libfvm_report.so (plugin.cc) holds it and returns this table; the executable links on_demand.cc
-// instead, the same three functions forwarded through the table of the plugin, loaded on the first call
+// instead, the same functions forwarded through the table of the plugin, loaded on the first call
 // (imaging/io/plugin_loader.h). The members take their types from the declarations.
 
 #include <string_view>
 
 #include "report/machine_report.h"
 #include "report/stage_report.h"
+#include "report/stitch_report.h"
 #include "report/uncertainty_report.h"
 
 namespace fvm::report {
@@ -21,6 +22,7 @@ struct ReportWriters {
   decltype(&WriteReport) write_report;
   decltype(&WriteMachineReport) write_machine_report;
   decltype(&WriteUncertaintyReport) write_uncertainty_report;
+  decltype(&WriteStitchReport) write_stitch_report;
 };
 
 // The table, loading the plugin on first use; when it cannot be loaded, throws InputError "<action> needs PLplot:

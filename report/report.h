@@ -8,12 +8,14 @@
 
 #include "report/machine_report.h"
 #include "report/stage_report.h"
+#include "report/stitch_report.h"
 #include "report/uncertainty_report.h"
 
 namespace fvm::report {
 
-// The stage page (calibrate, diagnose), the machine page (verify, testpiece) or the Monte Carlo page (uncertainty).
-using Report = std::variant<ReportData, MachineReportData, UncertaintyReportData>;
+// The stage page (calibrate, diagnose), the machine page (verify, testpiece), the Monte Carlo page (uncertainty) or
+// the tiles page (stitch).
+using Report = std::variant<ReportData, MachineReportData, UncertaintyReportData, StitchReportData>;
 
 // Writes DIR with the writer of the report's kind (their headers say what each writes and how it fails).
 inline void Write(const std::filesystem::path& dir, const Report& report) {
@@ -24,8 +26,10 @@ inline void Write(const std::filesystem::path& dir, const Report& report) {
           WriteReport(dir, data);
         } else if constexpr (std::is_same_v<Data, MachineReportData>) {
           WriteMachineReport(dir, data);
-        } else {
+        } else if constexpr (std::is_same_v<Data, UncertaintyReportData>) {
           WriteUncertaintyReport(dir, data);
+        } else {
+          WriteStitchReport(dir, data);
         }
       },
       report);

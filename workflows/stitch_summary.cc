@@ -206,6 +206,8 @@ std::string StitchText(const StitchedLayout& s) {
 
 }  // namespace
 
-Summary Summarize(const StitchedLayout& stitched) { return {StitchJson(stitched), StitchText(stitched), std::nullopt}; }
+Summary Summarize(const StitchedLayout& stitched) {
+  return {StitchJson(stitched), StitchText(stitched), StitchReport(stitched)};
+}
 
 }  // namespace fvm::workflows

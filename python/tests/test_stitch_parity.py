@@ -1,6 +1,6 @@
 # fvm.stitch and the tiles jobs against the command line on the same input: every summary equals `fvm <job> --json`
 # (less the keys that hold the paths of written files), the printed text and the written files are the command's.
-# Neither `fvm stitch` nor `fvm tiles` writes a report, so there is no fvm.write_report to compare.
+# fvm.write_report writes the files `fvm stitch --report` writes; fvm.diagnose_tiles equals `fvm diagnose --scan --json`.
 import json
 import struct
 
@@ -46,6 +46,36 @@ def test_stitch_summary_equals_the_command_json(tile_set, tmp_path, options):
     # The arrays are the positions the command writes (4 decimals in its CSV).
     rows = np.genfromtxt(tmp_path / "p.csv", delimiter=",", names=True, dtype=None, encoding=None)
     np.testing.assert_allclose(result["positions"], np.c_[rows["x"], rows["y"]], atol=5e-5)
+
+
+def report_files(directory):
+    return {p.name: p.read_bytes() for p in sorted(directory.iterdir())}
+
+
+def test_stitch_report_is_the_commands(tile_set, tmp_path):
+    # With a field: the page, the tiles and pairs plot and the field's plot, byte for byte.
+    layout = tile_set / "layout.csv"
+    run_cli("stitch", "--layout", layout, "--overlap", "20", "-o", tmp_path / "p.csv", "--pixel-mm", "0.001",
+            "--distortion", "--report", tmp_path / "cli")
+    result = fvm.stitch(layout, overlap=20, pixel_mm=0.001, distortion=True)
+    assert result.has_report
+    fvm.write_report(result, tmp_path / "py")
+    cli, py = report_files(tmp_path / "cli"), report_files(tmp_path / "py")
+    assert sorted(cli) == ["field.svg", "index.html", "positions.svg"]
+    assert cli == py
+
+
+def test_diagnose_tiles_summary_equals_the_command_json(tmp_path):
+    # Scans through a known radial field (k1 = 2 px): the field named, as the command names it.
+    run_cli("simulate", "scan", "-o", tmp_path / "s", "--seed", "2", "--tile-px", "256", "--length-mm", "20",
+            "--validation", "1", "--distortion", "2")
+    pixel = json.loads((tmp_path / "s" / "truth.json").read_text())["pixel_mm"]
+    scans = [tmp_path / "s" / f"{name}.csv" for name in ("row", "column", "diagonal")]
+    doc = cli_json("diagnose", *[a for s in scans for a in ("--scan", s)], "--pixel-mm", pixel)
+    result = fvm.diagnose_tiles(scans=scans, pixel_mm=pixel)
+    assert result.summary == doc
+    assert result["effect"] == "field_distortion"
+    assert result["after"]["rms_px"] < 0.2 * result["before"]["rms_px"]
 
 
 def test_stitch_text_is_the_commands_less_its_file_line(tile_set, tmp_path):

@@ -90,7 +90,12 @@ TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
                                        "positions from the grid and overlap\n  stage model from 6 east and 6 south"));
   EXPECT_THAT(summary.text, HasSubstr("\nlargest standard uncertainty of a registered tile against the first of its "
                                       "chain: "));
-  EXPECT_FALSE(summary.report.has_value());
+  // The report's data (tests/report/stitch_report_test.cc checks the page): one tile and one pair each.
+  ASSERT_TRUE(summary.report.has_value());
+  const auto& report = std::get<report::StitchReportData>(*summary.report);
+  EXPECT_EQ(report.tiles.size(), 9u);
+  EXPECT_EQ(report.pairs.size(), 12u);
+  EXPECT_TRUE(report.field.empty());
   std::filesystem::remove_all(synth.output);
 }
 
