@@ -90,8 +90,8 @@ struct OverlapBand {
 // overlap share errors at the matching windows' scale and beyond (the texture's, the resampling's) that move the
 // field's terms; no loop of a grid checks them, and a chain of tiles has no loop at all: on scangen's scans
 // (512 px, 20 %) the quarters scatter 1.4-1.6 times the points' sigma, and the field's coefficients missed their
-// truth by 1.5-1.9 times their unwidened u; on a rendered 3 x 3 grid 2.1 times. (Halves, and blocks across the
-// band, scatter no more: 0.7-1.25 times on both.) At least 1.
+// truth by 1.5-1.9 times their unwidened u; on a rendered 3 x 3 grid 2.1 times (there halves of the band scatter
+// no more, blocks across the band less: 0.7-0.9). At least 1.
 double OverlapBlockScatter(const std::vector<OverlapBand>& bands, double sigma) {
   constexpr int kBlocks = 4;
   double chi2 = 0.0;
