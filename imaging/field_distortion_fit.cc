@@ -1,5 +1,7 @@
 #include "imaging/field_distortion_fit.h"
 #include "core/dense_decomposition.h"
+#include "core/statistics.h"
+#include "imaging/registration_floor.h"
 
 #include <ceres/ceres.h>
 #include <fmt/core.h>
@@ -66,16 +68,90 @@ struct FitPoint {
   Eigen::Matrix<double, 2, Eigen::Dynamic> g;
 };
 
-double MedianOf(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
-
 std::string JoinTerms(const std::vector<std::string>& names, const std::vector<int>& which) {
   std::vector<std::string> out;
   for (int k : which) out.push_back(names[static_cast<size_t>(k)]);
   return fmt::format("{}", fmt::join(out, ", "));
+}
+
+// An overlap's correspondences kept for the block scatter: where each lies in tile a and what the fit left of it,
+// and the direction of the step between the two tiles (the band runs across it).
+struct BandPoint {
+  Eigen::Vector2d a_px, residual;
+};
+struct OverlapBand {
+  bool step_along_x = true;
+  std::vector<BandPoint> points;
+};
+
+// How much more the correspondences' errors scatter at the scale of a quarter of an overlap than their own scatter
+// allows: each pair's inliers split into four blocks along its band (across the step) by their place in tile a,
+// each block's mean residual about the pair's (which the positions take up) against sigma^2 / n. The points of one
+// overlap share errors at the matching windows' scale and beyond (the texture's, the resampling's) that move the
+// field's terms; no loop of a grid checks them, and a chain of tiles has no loop at all: on scangen's scans
+// (512 px, 20 %) the quarters scatter 1.4-1.6 times the points' sigma, and the field's coefficients missed their
+// truth by 1.5-1.9 times their unwidened u; on a rendered 3 x 3 grid 2.1 times (there halves of the band scatter
+// no more, blocks across the band less: 0.7-0.9). At least 1.
+double OverlapBlockScatter(const std::vector<OverlapBand>& bands, double sigma) {
+  constexpr int kBlocks = 4;
+  double chi2 = 0.0;
+  int dof = 0;
+  for (const OverlapBand& band : bands) {
+    std::vector<BandPoint> pair = band.points;
+    const int n = static_cast<int>(pair.size());
+    if (n < 2 * kBlocks) continue;
+    const int axis = band.step_along_x ? 1 : 0;  // along the band
+    std::sort(pair.begin(), pair.end(), [axis](const BandPoint& l, const BandPoint& r) { return l.a_px(axis) < r.a_px(axis); });
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const BandPoint& p : pair) mean += p.residual;
+    mean /= n;
+    for (int b = 0; b < kBlocks; ++b) {
+      const int first = b * n / kBlocks, end = (b + 1) * n / kBlocks;
+      Eigen::Vector2d block = Eigen::Vector2d::Zero();
+      for (int m = first; m < end; ++m) block += pair[static_cast<size_t>(m)].residual;
+      block /= end - first;
+      chi2 += (block - mean).squaredNorm() * (end - first) / (sigma * sigma);
+    }
+    dof += 2 * (kBlocks - 1);
+  }
+  return dof > 0 && sigma > 0.0 ? std::max(1.0, std::sqrt(chi2 / dof)) : 1.0;
+}
+
+// What a shift shared by every point of one overlap does to the solution: the floor of a registered pair
+// (kRegistrationFloorPx, what resampling and shading leave of any shift) applied to each overlap as a whole, as the
+// rigid registration applies it to each pair. In a chain the positions take it up entirely; through a grid's loops
+// it reaches the other tiles and the field. The linearised solution moves by C G_q e for a shift e of pair q, C the
+// unscaled covariance, G_q = sum over its points of w J^T dr/de (w the robust weight over the weighting sigma^2,
+// dr/de the identity: e enters like tile a's position): sum_q f^2 C G_q G_q^T C, one product for all pairs.
+template <typename Residual>
+Eigen::MatrixXd PairFloorCovariance(const std::vector<FitPoint>& points, const Residual& residual_of,
+                                    const Eigen::MatrixXd& covariance, const std::vector<int>& column, int free_params,
+                                    int field_terms, size_t pairs, double weighted_sigma, double huber_sigmas) {
+  // G_q in three parts: its rows at tile a's position, at tile b's (the negative) and at the field's terms.
+  struct PairPull {
+    int a = -1, b = -1;
+    double weight = 0.0;
+    Eigen::MatrixXd field;
+  };
+  std::vector<PairPull> pulls(pairs, PairPull{-1, -1, 0.0, Eigen::MatrixXd::Zero(field_terms, 2)});
+  for (const FitPoint& p : points) {
+    const double s = (residual_of(p) / weighted_sigma).squaredNorm();
+    const double w = (s <= huber_sigmas * huber_sigmas ? 1.0 : huber_sigmas / std::sqrt(s)) / (weighted_sigma * weighted_sigma);
+    PairPull& pull = pulls[static_cast<size_t>(p.pair)];
+    pull.a = column[static_cast<size_t>(p.a)], pull.b = column[static_cast<size_t>(p.b)];
+    pull.weight += w;
+    if (field_terms > 0) pull.field += w * p.g.transpose();
+  }
+  const Eigen::Index n = covariance.rows();
+  Eigen::MatrixXd moved = Eigen::MatrixXd::Zero(n, 2 * static_cast<Eigen::Index>(pairs));
+  for (size_t q = 0; q < pairs; ++q) {
+    auto m = moved.middleCols(2 * static_cast<Eigen::Index>(q), 2);
+    const PairPull& pull = pulls[q];
+    if (pull.a >= 0) m += pull.weight * covariance.middleCols(pull.a, 2);
+    if (pull.b >= 0) m -= pull.weight * covariance.middleCols(pull.b, 2);
+    if (field_terms > 0) m += covariance.middleCols(free_params, field_terms) * pull.field;
+  }
+  return kRegistrationFloorPx * kRegistrationFloorPx * moved * moved.transpose();
 }
 
 // The coefficients' information once the positions are solved for (the Schur complement of the unit-weight normal
@@ -257,7 +333,8 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
       const Eigen::Vector2d r = residual_of(p);
       abs.push_back(std::abs(r.x())), abs.push_back(std::abs(r.y()));
     }
-    return std::max(1.4826 * MedianOf(abs), 1e-3);
+    // No point, no scatter: the floor (HighMedian would give NaN, which std::max passes on).
+    return abs.empty() ? 1e-3 : std::max(1.4826 * HighMedian(std::move(abs)), 1e-3);
   };
   {
     double sum = 0.0;
@@ -268,6 +345,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   // Solve, re-estimate the scatter of one correspondence, solve again with it: the loss bends at huber_sigmas of
   // that scatter, and the covariance below is in its units.
   double sigma = std::max(robust_sigma(), 0.05);
+  double weighted_sigma = sigma;  // what the last problem's residuals were scaled by
   std::vector<double*> blocks;
   for (int i = 0; i < tiles; ++i) {
     if (!hold[static_cast<size_t>(i)]) blocks.push_back(position[static_cast<size_t>(i)].data());
@@ -301,6 +379,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
     if (summary.termination_type == ceres::FAILURE) {
       throw std::runtime_error("field distortion: the solve failed: " + summary.message);
     }
+    weighted_sigma = sigma;
     sigma = robust_sigma();
   }
   fit.point_sigma_px = sigma;
@@ -326,16 +405,29 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
           .solve(Eigen::MatrixXd::Identity(information.rows(), information.cols()));
 
   // Inliers' residuals; each pair's mean residual against the scatter its points allow. Positions take up two
-  // components of each pair's mean, so only the loops of a grid check them.
+  // components of each pair's mean, so only the loops of a grid check them. The blocks of each pair's band, which
+  // no loop checks: OverlapBlockScatter.
   double inlier_sum = 0.0;
   int inliers = 0;
   std::vector<Eigen::Vector2d> pair_sum(used.size(), Eigen::Vector2d::Zero());
   std::vector<int> pair_n(used.size(), 0);
-  for (const FitPoint& p : points) {
-    const Eigen::Vector2d r = residual_of(p);
-    if (r.cwiseAbs().maxCoeff() > 3.0 * sigma) continue;
-    inlier_sum += r.squaredNorm(), ++inliers;
-    pair_sum[static_cast<size_t>(p.pair)] += r, ++pair_n[static_cast<size_t>(p.pair)];
+  std::vector<OverlapBand> bands(used.size());
+  for (size_t q = 0; q < used.size(); ++q) {
+    Eigen::Vector2d step = Eigen::Vector2d::Zero();
+    for (size_t m = 0; m < used[q]->a_px.size(); ++m) step += used[q]->a_px[m] - used[q]->b_px[m];
+    bands[q].step_along_x = std::abs(step.x()) >= std::abs(step.y());
+  }
+  {
+    std::vector<size_t> next(used.size(), 0);  // each pair's points in turn, as `points` holds them
+    for (const FitPoint& p : points) {
+      const size_t q = static_cast<size_t>(p.pair);
+      const Eigen::Vector2d& a_px = used[q]->a_px[next[q]++];
+      const Eigen::Vector2d r = residual_of(p);
+      if (r.cwiseAbs().maxCoeff() > 3.0 * sigma) continue;
+      inlier_sum += r.squaredNorm(), ++inliers;
+      pair_sum[q] += r, ++pair_n[q];
+      bands[q].points.push_back({a_px, r});
+    }
   }
   fit.residual_rms_px = inliers > 0 ? std::sqrt(inlier_sum / (2.0 * inliers)) : 0.0;
   double chi2 = 0.0;
@@ -344,7 +436,11 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   }
   const int dof = 2 * static_cast<int>(used.size()) - free_params;
   if (dof > 0) fit.pair_scatter_factor = std::max(1.0, std::sqrt(chi2 / dof));
-  covariance *= fit.pair_scatter_factor * fit.pair_scatter_factor;
+  fit.block_scatter_factor = OverlapBlockScatter(bands, sigma);
+  const double widened = std::max(fit.pair_scatter_factor, fit.block_scatter_factor);
+  covariance = widened * widened * covariance + PairFloorCovariance(points, residual_of, covariance, column, free_params,
+                                                                     known ? 0 : ks, used.size(), weighted_sigma,
+                                                                     options.huber_sigmas);
 
   for (int i = 0; i < tiles; ++i) {
     fit.positions_px.emplace_back(position[static_cast<size_t>(i)][0], position[static_cast<size_t>(i)][1]);
@@ -369,7 +465,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   // the correspondences' own scatter (what the overlaps' geometry and texture allow; the pairs' misfit, which a
   // better model would take up, is left out of this test).
   FieldDistortion determined = fit.field;
-  determined.covariance /= fit.pair_scatter_factor * fit.pair_scatter_factor;
+  determined.covariance /= widened * widened;
   std::vector<int> loose;
   for (int t : solved) {
     FieldDistortion alone = determined;

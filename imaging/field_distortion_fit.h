@@ -47,13 +47,19 @@ struct FieldDistortionFitOptions {
 struct FieldDistortionFit {
   FieldDistortion field;
   std::vector<Eigen::Vector2d> positions_px;   // of the undistorted tiles
-  std::vector<Eigen::Matrix2d> position_covariance_px2;  // against the fixed tiles
+  // Against the fixed tiles; the positions' and the field's covariance are widened as pair_scatter_factor and
+  // block_scatter_factor say and carry a registered pair's floor (0.005 px) shared by all points of an overlap.
+  std::vector<Eigen::Matrix2d> position_covariance_px2;
   double point_sigma_px = 0.0;   // robust scatter of one correspondence about the model (per axis)
   double rigid_rms_px = 0.0;     // rms of the correspondences' residuals at the start (the rigid positions, d = 0)
   double residual_rms_px = 0.0;  // ... and with the field and positions found (inliers within 3 sigma)
-  // The covariance is scaled up by this, when the pairs' mean residuals scatter more than the points' own
-  // scatter allows (the model's misfit is shared by the points of a pair): 1 when they do not, or no loop checks.
+  // How much more the pairs' mean residuals scatter than the points' own scatter allows (the model's misfit is
+  // shared by the points of a pair): 1 when they do not, or no loop checks them ...
   double pair_scatter_factor = 1.0;
+  // ... and the quarters of each overlap's band about their pair's mean (the points of one overlap share errors at
+  // that scale, which move the field's terms and which no loop checks). The covariance (field and positions) is
+  // scaled up by the larger of the two.
+  double block_scatter_factor = 1.0;
   int points = 0, pairs_used = 0, pairs_without_texture = 0;
   int iterations = 0;
   std::vector<int> held_terms;  // held at 0 (hold_stretch_terms): value and u 0

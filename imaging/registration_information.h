@@ -4,12 +4,13 @@
 
 #include <Eigen/Core>
 
+#include "imaging/registration_floor.h"
 #include "imaging/tile_prefilter.h"
 
 namespace fvm::imaging::detail {
 
 // The floor of a pair's standard uncertainty per direction (MeasureAlignment).
-constexpr double kSystematicPx = 0.005;
+constexpr double kSystematicPx = kRegistrationFloorPx;
 // A thin overlap's (narrower than kThinOverlapPx, its crops mirrored out) errors exceed what its noise alone
 // explains, by this factor in standard deviation: the crop's edges, where the high-pass and the quadratic meet the
 // mirrored context, stay put while the scene moves under them, and blobs cut by them pull the shift. Measured on

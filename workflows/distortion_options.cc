@@ -87,6 +87,7 @@ nlohmann::ordered_json DistortionJson(const imaging::FieldDistortionFit& fit, bo
   j["rigid_rms_px"] = fit.rigid_rms_px;
   j["residual_rms_px"] = fit.residual_rms_px;
   j["pair_scatter_factor"] = fit.pair_scatter_factor;
+  j["block_scatter_factor"] = fit.block_scatter_factor;
   if (!fit.held_terms.empty()) {  // stitching: the terms that act on a grid's overlaps as a stretch or shear
     nlohmann::ordered_json held = nlohmann::ordered_json::array();
     for (int t : fit.held_terms) held.push_back(imaging::FieldDistortionTermNames(fit.field.order)[static_cast<size_t>(t)]);

@@ -51,7 +51,6 @@ nlohmann::json ScanJson(const ScanCalibrationRun& run) {
   doc["pixel_u_mm"] = options.pixel_u_mm;
   if (run.field) {
     doc["distortion"] = DistortionJson(run.field->fit, run.field->identified, options.pixel_mm);
-    if (run.field->identified) doc["distortion"]["block_scatter_factor"] = run.field->block_scatter_factor;
   }
   doc["scans"] = ScansJson(run.scans);
   // What no image of a scan can tell, whatever the rank analysis finds on these data (it takes the pixel size as
@@ -131,7 +130,7 @@ std::string ScanText(const ScanCalibrationRun& run) {
     text += DistortionText(run.field->fit, run.field->identified, run.options.pixel_mm);
     if (run.field->identified) {
       text += fmt::format("    its u widened {:.2f} times: the overlaps' quarters scatter that much more than their points "
-                          "(no loop of the chains checks them)\n", run.field->block_scatter_factor);
+                          "(no loop of the chains checks them)\n", run.field->fit.block_scatter_factor);
     }
   }
   text += fmt::format("  solver: {} in {} iterations; condition number {:.3g}\n",

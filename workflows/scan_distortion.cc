@@ -80,47 +80,6 @@ Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivityOverOverlap(const imagi
   return FieldSensitivity(field, a_px, b_px);
 }
 
-// How much more the correspondences' errors scatter at the scale of a quarter of an overlap than their own scatter
-// allows: each pair's inliers split into four blocks along the band, each block's mean residual about the pair's
-// (which the positions take up) against sigma^2 / n. In a chain of tiles no loop checks the pairs' mean residuals
-// (FieldDistortionFit::pair_scatter_factor stays 1), yet the points of one overlap share errors that move the field
-// (the texture's, at the windows' scale): on scangen's scans (512 px, 20 %) the blocks scatter 1.4-1.6 times the
-// points' sigma, and the field's coefficients missed their truth by 1.5-1.9 times their stated u. At least 1.
-double BlockScatterFactor(const std::vector<imaging::PairCorrespondences>& matched, const imaging::FieldDistortionFit& fit,
-                          int min_points) {
-  constexpr int kBlocks = 4;
-  const double sigma = fit.point_sigma_px;
-  double chi2 = 0.0;
-  int dof = 0;
-  for (const imaging::PairCorrespondences& p : matched) {
-    if (static_cast<int>(p.a_px.size()) < min_points) continue;
-    Eigen::Vector2d step = Eigen::Vector2d::Zero();
-    for (size_t m = 0; m < p.a_px.size(); ++m) step += p.a_px[m] - p.b_px[m];
-    const bool along_x = std::abs(step.x()) >= std::abs(step.y());
-    std::vector<std::pair<double, Eigen::Vector2d>> residuals;  // (place along the band, residual)
-    for (size_t m = 0; m < p.a_px.size(); ++m) {
-      const Eigen::Vector2d r = fit.positions_px[static_cast<size_t>(p.a)] - fit.positions_px[static_cast<size_t>(p.b)] +
-                                p.a_px[m] - p.b_px[m] + fit.field.Displacement(p.a_px[m]) - fit.field.Displacement(p.b_px[m]);
-      if (r.cwiseAbs().maxCoeff() <= 3.0 * sigma) residuals.emplace_back(along_x ? p.a_px[m].y() : p.a_px[m].x(), r);
-    }
-    const int n = static_cast<int>(residuals.size());
-    if (n < 2 * kBlocks) continue;
-    std::sort(residuals.begin(), residuals.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& [place, r] : residuals) mean += r;
-    mean /= n;
-    for (int b = 0; b < kBlocks; ++b) {
-      const int first = b * n / kBlocks, end = (b + 1) * n / kBlocks;
-      Eigen::Vector2d block = Eigen::Vector2d::Zero();
-      for (int m = first; m < end; ++m) block += residuals[static_cast<size_t>(m)].second;
-      block /= end - first;
-      chi2 += (block - mean).squaredNorm() * (end - first) / (sigma * sigma);
-    }
-    dof += 2 * (kBlocks - 1);
-  }
-  return dof > 0 && sigma > 0.0 ? std::max(1.0, std::sqrt(chi2 / dof)) : 1.0;
-}
-
 }  // namespace
 
 std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std::vector<std::string>& layouts,
@@ -186,13 +145,6 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     throw InputError(std::string("--distortion: ") + e.what());
   }
   field->identified = !options.known;
-  if (field->identified) {
-    // The field's covariance (and the positions') widened by what the overlaps' blocks show: see BlockScatterFactor.
-    const double factor = BlockScatterFactor(matched, field->fit, options.fit.min_pair_points);
-    field->block_scatter_factor = factor;
-    field->fit.field.covariance *= factor * factor;
-    for (Eigen::Matrix2d& c : field->fit.position_covariance_px2) c *= factor * factor;
-  }
 
   // Every accepted pair's offset between the undistorted tiles: from the fit's positions where its correspondences
   // placed them (both tiles then in one group of the fit, whose positions chain consistently), else registered again

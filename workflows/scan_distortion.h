@@ -30,9 +30,6 @@ struct ScanDistortionOptions {
 struct ScanDistortion {
   imaging::FieldDistortionFit fit;  // positions_px: every scan's tiles in turn, each scan from its first tile
   bool identified = false;
-  // The field's covariance is widened by this (at least 1): how much more the correspondences scatter over a quarter
-  // of an overlap than their points' own scatter allows, which a chain of tiles has no loop to check.
-  double block_scatter_factor = 1.0;
 };
 
 // ReadAndRegisterScans, the field identified (or taken) and taken out of every pair's offset and every chained
