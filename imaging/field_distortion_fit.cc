@@ -92,10 +92,11 @@ struct OverlapBand {
 // (512 px, 20 %) the quarters scatter 1.4-1.6 times the points' sigma, and the field's coefficients missed their
 // truth by 1.5-1.9 times their unwidened u; on a rendered 3 x 3 grid 2.1 times (there halves of the band scatter
 // no more, blocks across the band less: 0.7-0.9). At least 1.
-double OverlapBlockScatter(const std::vector<OverlapBand>& bands, double sigma) {
+// `dof` receives the blocks' degrees of freedom (2 x 3 a pair).
+double OverlapBlockScatter(const std::vector<OverlapBand>& bands, double sigma, int& dof) {
   constexpr int kBlocks = 4;
   double chi2 = 0.0;
-  int dof = 0;
+  dof = 0;
   for (const OverlapBand& band : bands) {
     std::vector<BandPoint> pair = band.points;
     const int n = static_cast<int>(pair.size());
@@ -436,7 +437,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   }
   const int dof = 2 * static_cast<int>(used.size()) - free_params;
   if (dof > 0) fit.pair_scatter_factor = std::max(1.0, std::sqrt(chi2 / dof));
-  fit.block_scatter_factor = OverlapBlockScatter(bands, sigma);
+  fit.block_scatter_factor = OverlapBlockScatter(bands, sigma, fit.block_dof);
   const double widened = std::max(fit.pair_scatter_factor, fit.block_scatter_factor);
   covariance = widened * widened * covariance + PairFloorCovariance(points, residual_of, covariance, column, free_params,
                                                                      known ? 0 : ks, used.size(), weighted_sigma,

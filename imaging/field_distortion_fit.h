@@ -60,6 +60,7 @@ struct FieldDistortionFit {
   // that scale, which move the field's terms and which no loop checks). The covariance (field and positions) is
   // scaled up by the larger of the two.
   double block_scatter_factor = 1.0;
+  int block_dof = 0;  // the blocks' degrees of freedom behind block_scatter_factor (2 x 3 a pair)
   int points = 0, pairs_used = 0, pairs_without_texture = 0;
   int iterations = 0;
   std::vector<int> held_terms;  // held at 0 (hold_stretch_terms): value and u 0

@@ -11,7 +11,7 @@
 
 #include "core/input_error.h"
 #include "workflows/calibration_scans.h"
-#include "workflows/overlap_block_scatter.h"
+#include "workflows/overlap_band_matching.h"
 #include "workflows/stitch.h"
 #include "workflows/stitch_layout.h"
 
@@ -203,10 +203,9 @@ TileDiagnosis DiagnoseTiles(const TileDiagnoseOptions& options) {
   d.with_field = ResidualsOf(points, inliers, d.field.positions_px, d.field.field, &rss_field);
 
   d.extra_parameters = static_cast<int>(d.field.field.coefficients.size() - d.field.held_terms.size());
-  d.block_scatter_factor = OverlapBlockScatter(points.matched, d.field, fit_options.min_pair_points, &d.block_dof);
-  d.noise_factor = std::max(d.block_scatter_factor, d.field.pair_scatter_factor);
+  d.noise_factor = std::max(d.field.block_scatter_factor, d.field.pair_scatter_factor);
   const double noise = d.point_sigma_px * d.noise_factor;
-  const int denominator_dof = d.block_dof > 0 ? d.block_dof : std::max(1, 2 * d.with_field.points - d.extra_parameters);
+  const int denominator_dof = d.field.block_dof > 0 ? d.field.block_dof : std::max(1, 2 * d.with_field.points - d.extra_parameters);
   if (d.extra_parameters > 0 && noise > 0.0 && rss_rigid > rss_field) {
     d.f_statistic = (rss_rigid - rss_field) / d.extra_parameters / (noise * noise);
     const boost::math::fisher_f distribution(d.extra_parameters, denominator_dof);

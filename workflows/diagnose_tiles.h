@@ -51,9 +51,9 @@ struct TileDiagnosis {
   OverlapResiduals rigid, with_field;
   int extra_parameters = 0;          // the field's free coefficients (held terms excluded)
   double point_sigma_px = 0.0;       // the field fit's scatter of one correspondence (per axis)
-  double block_scatter_factor = 1.0; // quarter-overlap blocks' scatter against the points' (>= 1)
-  double noise_factor = 1.0;         // the larger of the block and loop (pair) scatter factors
-  int block_dof = 0;                 // degrees of freedom of that widening: the F test's denominator's
+  // The larger of the field fit's block and loop (pair) scatter factors; the blocks' degrees of freedom
+  // (field.block_dof) are the F test's denominator's.
+  double noise_factor = 1.0;
   double f_statistic = 0.0, p_value = 1.0;
   // The Bayesian information criterion's change on the points counted as independent observations (2 a point over
   // noise_factor^2): negative when the field earns its coefficients.

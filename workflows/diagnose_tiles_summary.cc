@@ -67,9 +67,9 @@ Summary Summarize(const TileDiagnosis& d, const TileDiagnoseOptions& options) {
   }
   doc["alpha"] = options.alpha;
   doc["noise"] = {{"point_sigma_px", d.point_sigma_px},
-                  {"block_scatter_factor", d.block_scatter_factor},
+                  {"block_scatter_factor", d.field.block_scatter_factor},
                   {"pair_scatter_factor", d.field.pair_scatter_factor},
-                  {"denominator_dof", d.block_dof}};
+                  {"denominator_dof", d.field.block_dof}};
   doc["distortion"] = DistortionJson(d.field, true, mm);
 
   const auto um = [mm](double px) { return mm > 0.0 ? fmt::format(" ({:.3f} um)", px * mm * 1e3) : std::string(); };
@@ -81,7 +81,7 @@ Summary Summarize(const TileDiagnosis& d, const TileDiagnoseOptions& options) {
   text += fmt::format("  {:<24} {:>6} {:>10.3g} {:>10.2g} {:>9.1f}{}\n", "field_distortion " + Component(d),
                       d.extra_parameters, d.f_statistic, d.p_value, d.delta_bic, d.significant ? "  significant" : "");
   text += fmt::format("  noise: {:.3f} px a point, widened {:.2f}x by the overlaps' quarter blocks ({:.2f}x by the loops)\n",
-                      d.point_sigma_px, d.block_scatter_factor, d.field.pair_scatter_factor);
+                      d.point_sigma_px, d.field.block_scatter_factor, d.field.pair_scatter_factor);
   if (d.significant) {
     text += fmt::format("\n  effect: field_distortion ({}), largest displacement {:.2f} px{}\n", Component(d), d.largest_px,
                         um(d.largest_px));

@@ -11,6 +11,7 @@
 #include "imaging/tile_pair_registration.h"
 #include "imaging/tile_registration.h"
 #include "workflows/calibration_scans.h"
+#include "workflows/overlap_band_matching.h"
 
 namespace fvm::workflows {
 namespace {
@@ -36,22 +37,6 @@ void RegisterUndistortedPair(const imaging::TileImage& a, const imaging::TileIma
     pair.accepted = false;
     pair.rejection = "registered, but not once undistorted (" + again.rejection + ")";
   }
-}
-
-// The matching for a scan whose narrowest accepted overlap is `band_px` wide: the correspondences' windows (and the
-// pyramid's reach) keep their centres half a window inside the band, so the default 15 px window leaves a 32 px band
-// (128 px tiles at 25 %) two columns of points 8 px apart, from which the field's change across the band, all a
-// chain of tiles shows of it, is extrapolated over the whole tile (k1 found 1.68 for 2 px, every step 0.15-0.43 px
-// short). Narrow bands get a window of a quarter of the band (at least 7 px), one pyramid level, and a grid of a
-// tenth of it (at least 2 px): eight columns over 22 px. Wide bands keep the options as given.
-imaging::CorrespondenceOptions MatchingForBand(imaging::CorrespondenceOptions matching, double band_px) {
-  if (band_px >= 4.0 * matching.window_px) return matching;
-  int window = static_cast<int>(std::floor(band_px / 4.0));
-  if (window % 2 == 0) --window;
-  matching.window_px = std::max(7, window);
-  matching.pyramid_levels = std::min(matching.pyramid_levels, 1);
-  matching.grid_step_px = std::max(2, std::min(matching.grid_step_px, static_cast<int>(std::floor(band_px / 10.0))));
-  return matching;
 }
 
 // How an offset between undistorted tiles moves with the field's coefficients: p_b - p_a = u_a - u_b + d(u_a) - d(u_b)
@@ -120,7 +105,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
           band = std::min({band, width - std::abs(o.offset_px.x()), height - std::abs(o.offset_px.y())});
         }
         std::vector<imaging::PairCorrespondences> found =
-            imaging::MatchOverlaps(images, overlaps, guess, MatchingForBand(options.matching, band));
+            imaging::MatchOverlaps(images, overlaps, guess, BandMatching(options.matching, band));
         for (size_t m = 0; m < found.size(); ++m) {
           imaging::PairCorrespondences& p = found[m];
           if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
