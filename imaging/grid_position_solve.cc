@@ -130,7 +130,8 @@ StageAxesPrior StageAxesPriorOf(const TileGridSteps& steps, double fallback_px, 
 }
 
 TilePositions SolveGridPositions(const std::vector<GridTile>& tiles, const std::vector<Eigen::Vector2d>& stage_px,
-                                 const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior) {
+                                 const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior,
+                                 double registered_within_px) {
   if (tiles.size() != stage_px.size() || tiles.empty()) {
     throw std::invalid_argument("SolveGridPositions: one stage position per tile, and at least one tile");
   }
@@ -145,15 +146,14 @@ TilePositions SolveGridPositions(const std::vector<GridTile>& tiles, const std::
   out.positions_px = any ? both.positions_px : stage_px;
   out.sigma_px = both.sigma_px;
   // Registered: the earliest tile of the first group, and a tile that the images place against its group's earliest
-  // better than the stage alone would, along both axes. The images alone: each tile free to 1000 px on its own, not
-  // through rows and columns (whose shared offsets pin a block of tiles to others even when scaled down), so that a
-  // direction no pair fixes spreads that far.
+  // along both axes to within `registered_within_px`. The images alone: each tile free to 1000 px on its own, not
+  // through rows and columns (whose shared offsets pin a block of tiles to others), so that a direction no pair fixes
+  // spreads that far.
   const TilePositions images = SolveTilePositions(stage_px, pairs, 1e3, Eigen::Vector2d::Zero());
-  const GridSolution stage = SolveGrid(tiles, stage_px, pairs, prior, 0.0, 1.0, out.anchor);
   out.registered.assign(tiles.size(), false);
   out.registered[0] = true;
   for (size_t i = 1; i < tiles.size(); ++i) {
-    out.registered[i] = out.anchor[i] != static_cast<int>(i) && (images.sigma_px[i].array() < stage.sigma_px[i].array()).all();
+    out.registered[i] = out.anchor[i] != static_cast<int>(i) && images.sigma_px[i].maxCoeff() < registered_within_px;
   }
   return out;
 }

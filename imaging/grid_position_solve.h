@@ -30,9 +30,11 @@ StageAxesPrior StageAxesPriorOf(const TileGridSteps& steps, double fallback_px, 
 // stage: p = stage + column offset + row offset (own_px), column offsets a random walk from column to column
 // (column_step_px), row offsets likewise; the first tile stays at its stage position exactly. Every tile's standard
 // uncertainty is against the first tile, whether pairs link it there or only the stage does. `registered`: the
-// images place the tile along both axes better than the stage alone would (a tile linked through a pair that fixes
-// one direction says false); `anchor` the earliest tile of the group of tiles the accepted pairs link.
+// images alone place the tile against its group's earliest along both axes to within registered_within_px (the
+// plausible range; a tile linked through a pair that fixes one direction says false); `anchor` the earliest tile of
+// the group of tiles the accepted pairs link.
 TilePositions SolveGridPositions(const std::vector<GridTile>& tiles, const std::vector<Eigen::Vector2d>& stage_px,
-                                 const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior);
+                                 const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior,
+                                 double registered_within_px);
 
 }  // namespace fvm::imaging

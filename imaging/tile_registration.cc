@@ -450,7 +450,7 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   // range for the steps; along an axis no pair fixes, the prior above for each tile on its own.
   const TileGridSteps shared = EstimateFromUnambiguous(tiles, result.pairs);
   result.stage_axes = StageAxesPriorOf(shared, loose_stage_px, result.stage_sigma_px);
-  result.positions = SolveGridPositions(tiles, result.stage_positions_px, weighed, result.stage_axes);
+  result.positions = SolveGridPositions(tiles, result.stage_positions_px, weighed, result.stage_axes, loose_stage_px);
   return result;
 }
 
