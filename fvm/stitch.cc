@@ -142,7 +142,8 @@ void RegisterStitch(CLI::App& app) {
                 "[{\"a\", \"b\", \"registered_px\", \"predicted_px\", \"misclosure_sigma\", \"replaced\"}] (pairs the "
                 "grid's loops contradicted, also on stderr), \"loop_birge_ratio\", \"loop_dof\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
-                "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", ...}, \"pairs\": [{\"a\", \"b\", "
+                "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", \"shared\": {\"column_step_px\", \"row_step_px\", "
+                "\"own_px\"} (the stage's error shared along columns and rows, and each tile's own), ...}, \"pairs\": [{\"a\", \"b\", "
                 "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "
                 "\"dy_px\", \"peak\", \"ncc\"}]}]}");
   sub->footer("Examples:\n  fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "

@@ -220,6 +220,9 @@ int RecoverRejected(const std::vector<Eigen::Vector2d>& stage_px, double stage_s
 }  // namespace
 
 double UncertaintyScale(double birge_ratio, double dof) {
+  // The loops' redundancy is a count; the stage prior's weak pull makes the solve's effective degrees of freedom miss
+  // it by a hair (a ring of 8 tiles around a blank one: 2.0000002, which scaled every pair's u by 1400).
+  dof = std::round(dof);
   if (!(dof > 2.0)) return std::max(1.0, birge_ratio);
   return birge_ratio * std::sqrt(dof / (dof - 2.0));
 }

@@ -29,6 +29,16 @@ struct TileGridSteps {
   // robust spread of the pairs' offsets about the mean step, over sqrt(2) (a pair differs two positions). 0 when
   // fewer than kMinPairs pairs fix the axis.
   Eigen::Vector2d repeatability_px = Eigen::Vector2d::Zero();
+  // What a stage shares along a row or a column (its error is a function of each axis's position, VDI 2617: the x
+  // axis's error at a column is the same in every row, the y axis's straightness at a row the same in every column).
+  // The spread per axis (px, standard deviation) of the east and south offsets about their median step: the step
+  // between two neighbouring columns' (east) or rows' (south) shared positions; 0 where fewer than kMinPairs pairs fix
+  // the axis. And each tile's own repeatability about its row's and column's shared positions, per axis: from the
+  // differences between two pairs across the same column boundary on neighbouring rows (or the same row boundary on
+  // neighbouring columns), which the shared parts cancel from (four tiles' own errors remain: / 2); 0 where fewer
+  // than kMinPairs such differences exist.
+  Eigen::Vector2d east_spread_px = Eigen::Vector2d::Zero(), south_spread_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d own_px = Eigen::Vector2d::Zero();
 
   static constexpr int kMinPairs = 3;
   bool Any() const { return estimated[0] || estimated[1] || estimated[2] || estimated[3]; }
@@ -41,6 +51,18 @@ struct TileGridSteps {
   // (col - col0) (east - nominal east) + (row - row0) (south - nominal south).
   Eigen::Vector2d Correction(int drow, int dcol) const;
 };
+
+// The stage's prior of a grid (grid_position_solve.h), per axis (px, standard deviations): each tile sits at its stage
+// position plus its column's shared offset, its row's, and its own error.
+struct StageAxesPrior {
+  Eigen::Vector2d column_step_px = Eigen::Vector2d::Constant(2.0);  // between neighbouring columns' shared offsets
+  Eigen::Vector2d row_step_px = Eigen::Vector2d::Constant(2.0);     // between neighbouring rows' shared offsets
+  Eigen::Vector2d own_px = Eigen::Vector2d::Constant(2.0);          // a tile about its row's and column's offsets
+};
+
+// Whether a pair's information fixes axis k (0 x, 1 y): the directions it determines to better than 0.5 px span the
+// axis (to within 18 degrees).
+bool PairFixesAxis(const Eigen::Matrix2d& information, int k);
 
 // From the accepted pairs between right (east) and lower (south) neighbours of `tiles`: the median offset per
 // direction and axis (robust against a wrong registration), over the pairs whose information fixes that axis to

@@ -19,18 +19,14 @@
 #include <vector>
 
 #include "core/statistics.h"
+#include "imaging/grid_position_solve.h"
 #include "imaging/overlap_correlation.h"
 #include "imaging/registration_information.h"
 
 namespace fvm::imaging {
 
-TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
-                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px,
-                                 const Eigen::Vector2d& unregistered_sigma_px) {
-  if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("SolveTilePositions: the stage sigma must be positive");
-  const int n = static_cast<int>(nominal_px.size());
+std::vector<int> PairGroups(int n, const std::vector<PairRegistration>& pairs) {
   const auto at = [](int i) { return static_cast<size_t>(i); };
-  // Groups of tiles joined by accepted pairs (union-find); each group's root is its earliest tile.
   std::vector<int> parent(at(n));
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](int i) {
@@ -42,17 +38,27 @@ TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
     const int ra = find(pair.a), rb = find(pair.b);
     if (ra != rb) parent[at(std::max(ra, rb))] = std::min(ra, rb);
   }
+  std::vector<int> group(at(n));
+  for (int i = 0; i < n; ++i) group[at(i)] = find(i);
+  return group;
+}
+
+TilePositions SolveTilePositions(const std::vector<Eigen::Vector2d>& nominal_px,
+                                 const std::vector<PairRegistration>& pairs, double stage_sigma_px,
+                                 const Eigen::Vector2d& unregistered_sigma_px) {
+  if (!(stage_sigma_px > 0.0)) throw std::invalid_argument("SolveTilePositions: the stage sigma must be positive");
+  const int n = static_cast<int>(nominal_px.size());
+  const auto at = [](int i) { return static_cast<size_t>(i); };
   TilePositions out;
   out.positions_px = nominal_px;
   out.registered.assign(at(n), false);
-  out.anchor.resize(at(n));
+  out.anchor = PairGroups(n, pairs);  // each group's root is its earliest tile
   out.sigma_px.assign(at(n), Eigen::Vector2d::Zero());
   // Unknowns: x and y of every tile that is not its group's anchor.
   std::vector<int> unknown(at(n), -1);
   int m = 0;
   for (int i = 0; i < n; ++i) {
-    out.anchor[at(i)] = find(i);
-    if (find(i) != i) unknown[at(i)] = m++;
+    if (out.anchor[at(i)] != i) unknown[at(i)] = m++;
   }
   for (int i = 0; i < n; ++i) {
     // A tile is registered when its position comes from images: it is linked to its group, or it anchors the
@@ -438,7 +444,13 @@ RegistrationResult RegisterTileGrid(const std::vector<TileImage>& images, const 
   } else if (repeatability.minCoeff() > 0.0) {
     result.stage_sigma_px = std::max(result.stage_sigma_px, loose_stage_px);
   }
-  result.positions = SolveTilePositions(result.stage_positions_px, weighed, result.stage_sigma_px, unregistered);
+  // The positions with the stage's error shared along rows and columns (grid_position_solve.h), its spreads from
+  // every pair that now stands: a tile that hangs on a pair fixing one direction lands along the other where the
+  // tiles of its row and column put it, and says what the stage leaves. Where the pairs show no spread, the plausible
+  // range for the steps; along an axis no pair fixes, the prior above for each tile on its own.
+  const TileGridSteps shared = EstimateFromUnambiguous(tiles, result.pairs);
+  result.stage_axes = StageAxesPriorOf(shared, loose_stage_px, result.stage_sigma_px);
+  result.positions = SolveGridPositions(tiles, result.stage_positions_px, weighed, result.stage_axes, loose_stage_px);
   return result;
 }
 

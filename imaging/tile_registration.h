@@ -28,6 +28,9 @@ struct TilePositions {
   std::vector<Eigen::Vector2d> sigma_px;
 };
 
+// Each tile's group of tiles joined by accepted pairs, named by its earliest tile (union-find).
+std::vector<int> PairGroups(int tiles, const std::vector<PairRegistration>& pairs);
+
 // Generalised least squares over accepted pairs, p_b - p_a = offset weighted by each pair's information, and the
 // stage, p = nominal with standard deviation stage_sigma_px per axis. In every connected group of tiles the first
 // (lowest index, i.e. earliest in the scan) keeps its nominal position exactly; a group of one tile is a tile
@@ -46,6 +49,8 @@ struct RegistrationResult {
   TileGridSteps stage;
   std::vector<Eigen::Vector2d> stage_positions_px;
   double stage_sigma_px = 0.0;
+  // The stage's error shared along rows and columns, as the final solve took it (SolveGridPositions).
+  StageAxesPrior stage_axes;
   int pairs_searched_again = 0;  // pairs the model's window searched a second time
   // The pairs the loops of the grid overruled (loop_misclosure.h), and how far the loops' misclosures exceed what
   // the pairs claim (the pairs' information is scaled by it before the solve).

@@ -82,12 +82,13 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
   s.unresolved = r.pairs_unresolved;
   s.mostly_unresolved = r.MostlyUnresolved();
   for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (!r.positions.registered[i]) {
-      s.at_stage_position.push_back(layout.tiles[i].file);
-    } else if (r.positions.anchor[i] == 0 &&
-               r.positions.sigma_px[i].maxCoeff() > 0.5 * options.registration.stage_sigma_px) {
-      // Linked by images, but along one axis only: a texture of parallel marks.
+    if (r.positions.registered[i]) continue;
+    if (i > 0 && r.positions.anchor[i] == 0) {
+      // Linked to the first tile by images, but along one direction only (parallel marks, traces): the stage's rows
+      // and columns place it along the other.
       s.stage_along_one_axis.push_back(layout.tiles[i].file);
+    } else {
+      s.at_stage_position.push_back(layout.tiles[i].file);
     }
   }
   return s;

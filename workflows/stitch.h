@@ -43,8 +43,8 @@ struct StitchResult {
   std::vector<imaging::PairOverlapCorrelation> overlap_ncc;
   double mean_overlap_ncc = NAN;
   int ncc_pairs = 0, accepted = 0, ambiguous = 0;
-  std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one
-  std::vector<std::string> stage_along_one_axis;  // linked across parallel marks only
+  std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one (registered 0)
+  std::vector<std::string> stage_along_one_axis;  // linked to the first by pairs fixing one direction (registered 0)
   // Pairs the loops of the grid overruled ("a - b: why, and what was done"), in the order they were.
   std::vector<std::string> overruled;
   // Pairs that place nothing (rejected or dropped); a quarter or more of them is a run to distrust, said aloud.

@@ -49,6 +49,9 @@ Json StageModelJson(const imaging::RegistrationResult& r) {
           {"east_pairs", model.east_pairs},
           {"south_pairs", model.south_pairs},
           {"prior_sigma_px", r.stage_sigma_px},
+          {"shared", {{"column_step_px", {r.stage_axes.column_step_px.x(), r.stage_axes.column_step_px.y()}},
+                      {"row_step_px", {r.stage_axes.row_step_px.x(), r.stage_axes.row_step_px.y()}},
+                      {"own_px", {r.stage_axes.own_px.x(), r.stage_axes.own_px.y()}}}},
           {"pairs_searched_again", r.pairs_searched_again}};
 }
 
@@ -197,9 +200,9 @@ std::string StitchText(const StitchedLayout& s) {
                         fmt::join(rigid.at_stage_position, ", "));
   }
   if (!rigid.stage_along_one_axis.empty()) {
-    text += fmt::format("  registered across but not along parallel marks, where the stage decides (u above {:g} px): "
-                        "{}\n",
-                        0.5 * s.options.registration.stage_sigma_px, fmt::join(rigid.stage_along_one_axis, ", "));
+    text += fmt::format("  linked by pairs that fix one direction (parallel marks, traces, edges), placed along the "
+                        "other by the stage's rows and columns (registered 0): {}\n",
+                        fmt::join(rigid.stage_along_one_axis, ", "));
   }
   return text + UncertaintyText(s);
 }

@@ -80,6 +80,12 @@ Judged Judge(const testing::CutTiles& cut, const RegistrationResult& result) {
     if (truth[k].correlation.ncc >= 0.5 && !(ours[k].correlation.ncc >= 0.3)) {
       ++out.lost;
       out.lost_accepted += result.pairs[k].accepted;
+      if (std::getenv("CUT_DEBUG")) {
+        std::printf("  lost %d-%d: truth ncc %.3f (%d px), ours %.3f (%d px) at %.2f %.2f\n", truth[k].a, truth[k].b,
+                    truth[k].correlation.ncc, truth[k].correlation.pixels, ours[k].correlation.ncc, ours[k].correlation.pixels,
+                    (p.positions_px[static_cast<size_t>(truth[k].b)] - p.positions_px[static_cast<size_t>(truth[k].a)]).x(),
+                    (p.positions_px[static_cast<size_t>(truth[k].b)] - p.positions_px[static_cast<size_t>(truth[k].a)]).y());
+      }
     }
   }
   return out;
@@ -164,12 +170,19 @@ TEST(CutTileGrid, RealTexturePlacedToThePixelWithHonestUncertainty) {
   double zz = 0.0, zmax = 0.0;
   for (const double v : z) zz += v * v, zmax = std::max(zmax, std::abs(v));
   const double z_rms = std::sqrt(zz / static_cast<double>(z.size()));
-  std::printf("standardised errors over every set: rms %.2f, max %.2f (%zu)\n", z_rms, zmax, z.size());
+  double uu = 0.0, umax = 0.0;
+  for (const double v : z_unplaced) uu += v * v, umax = std::max(umax, std::abs(v));
+  std::printf("standardised errors over every set: rms %.2f, max %.2f (%zu); of the tiles no pair links to the first: "
+              "rms %.2f, max %.2f (%zu)\n",
+              z_rms, zmax, z.size(), std::sqrt(uu / static_cast<double>(z_unplaced.size())), umax, z_unplaced.size());
   EXPECT_GE(z_rms, 0.8);
   EXPECT_LE(z_rms, 1.25);
   EXPECT_LT(zmax, 4.0);
-  // A tile no pair places stands where the stage put it, within the spread the search allowed.
-  for (const double v : z_unplaced) EXPECT_LT(std::abs(v), 2.0);
+  // A tile no pair links to the first stands where the stage's rows and columns put it, with the stage's spread as
+  // its u: as honest as the others (too few to judge an rms on their own; none beyond 4, none so loose that all
+  // lie within half a u).
+  for (const double v : z_unplaced) EXPECT_LT(std::abs(v), 4.0);
+  if (!z_unplaced.empty()) EXPECT_GT(umax, 0.5);
 }
 
 
@@ -260,19 +273,23 @@ TEST(CutTileGrid, LineTextureRefusesRepeatsOfItsTraces) {
     uint32_t seed;
     int cols;
     double jitter_px;
+    double sparse_fraction;
     std::vector<std::pair<int, int>> refused;  // the pairs that took a neighbouring trace
   };
-  for (const Case& c : {Case{11, 5, 5.0, {{5, 6}, {12, 13}}}, Case{13, 4, 20.0, {{2, 3}, {6, 7}}}}) {
+  // And the whole board, seed 2: pair 9-13 (an 11-row overlap whose texture lies in b's first column) read an overlap
+  // NCC of 0.30 at positions 0.03 px from the truth (0.56 at it), counted lost: the measure dropped the column.
+  for (const Case& c : {Case{11, 5, 5.0, 0.4, {{5, 6}, {12, 13}}}, Case{13, 4, 20.0, 0.35, {{2, 3}, {6, 7}}},
+                        Case{2, 4, 12.0, 0.0, {}}}) {
     testing::CutTileOptions o;
     o.seed = c.seed;
     o.cols = c.cols;
     o.jitter_px = c.jitter_px;
-    o.sparse_fraction = c.cols == 5 ? 0.4 : 0.35;
+    o.sparse_fraction = c.sparse_fraction;
     const testing::CutTiles cut = testing::CutTileGrid(pcb, o);
     const RegistrationResult result = RegisterTileGrid(cut.images, cut.tiles, RegistrationOptions{});
     const Judged judged = Judge(cut, result);
-    std::printf("pcb sparse seed %u, %d columns: rms %.2f px (max %.2f), %d lost (%d accepted), %zu of %zu pairs accepted\n",
-                c.seed, c.cols, judged.rms_px, judged.max_px, judged.lost, judged.lost_accepted,
+    std::printf("pcb %s seed %u, %d columns: rms %.2f px (max %.2f), %d lost (%d accepted), %zu of %zu pairs accepted\n",
+                c.sparse_fraction > 0.0 ? "sparse" : "whole", c.seed, c.cols, judged.rms_px, judged.max_px, judged.lost, judged.lost_accepted,
                 result.pairs.size() - result.pairs_unresolved, result.pairs.size());
     for (const auto& [a, b] : c.refused) {
       const auto pair = std::find_if(result.pairs.begin(), result.pairs.end(), [&](const auto& p) { return p.a == a && p.b == b; });
@@ -291,12 +308,24 @@ TEST(CutTileGrid, LineTextureRefusesRepeatsOfItsTraces) {
             << "seed " << c.seed << " pair " << pair.a << "-" << pair.b << " at " << pair.offset_px.transpose();
       }
     }
-    if (c.seed == 11) {
-      // The tiles the images place land to the pixel; the others say the stage's spread.
-      EXPECT_LE(judged.rms_px, 1.0);
-      EXPECT_EQ(judged.lost_accepted, 0);
-      for (const double v : judged.z) EXPECT_LT(std::abs(v), 4.0);
-      for (const double v : judged.z_unplaced) EXPECT_LT(std::abs(v), 2.0);
+    // The tiles the images place land to the pixel; the others say the stage's spread. Seed 13 had a block of eight
+    // tiles (3, 7, 9-11, 13-15) hanging on pair 5-9, which fixes one direction only (a diagonal trace), 59 px off with
+    // u = 12 px (z 5.1): the stage's rows and columns, shared with tiles the images place, now put it.
+    EXPECT_LE(judged.rms_px, 1.0) << "seed " << c.seed;
+    EXPECT_EQ(judged.lost, 0) << "seed " << c.seed;
+    for (const double v : judged.z) EXPECT_LT(std::abs(v), 4.0) << "seed " << c.seed;
+    for (const double v : judged.z_unplaced) EXPECT_LT(std::abs(v), 4.0) << "seed " << c.seed;
+    if (c.seed == 13) {
+      // Tile 9 is linked to the first only through 5-9: the images fix one of its directions, so it is no
+      // registered tile (the stage decides the other), while tile 5, placed by pairs across both axes, is.
+      const auto hanging = std::find_if(result.pairs.begin(), result.pairs.end(), [](const auto& p) { return p.a == 5 && p.b == 9; });
+      ASSERT_NE(hanging, result.pairs.end());
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> fixes(hanging->information);
+      EXPECT_LT(fixes.eigenvalues()(0), 1.0) << "pair 5-9 no longer leaves a direction open: the case is gone";
+      EXPECT_FALSE(result.positions.registered[9]);
+      EXPECT_TRUE(result.positions.registered[5]);
+      const Eigen::Vector2d error = result.positions.positions_px[9] - cut.truth_px[9];
+      EXPECT_LT(error.norm(), 1.0);
     }
   }
 }

@@ -131,7 +131,12 @@ TEST(LoopMisclosure, MisclosuresBeyondThePairsPrecisionScaleIt) {
   EXPECT_LT(check.birge_ratio, 16.0);
   // The solve scales every pair's uncertainty by it (and by Student's sqrt(dof / (dof - 2)), UncertaintyScale); the
   // pairs keep their own claims.
-  EXPECT_DOUBLE_EQ(check.uncertainty_scale, check.birge_ratio * std::sqrt(check.dof / (check.dof - 2.0)));
+  // The degrees of freedom as the count of the loops' redundancy (the stage prior's pull takes a hair off it).
+  EXPECT_DOUBLE_EQ(check.uncertainty_scale, check.birge_ratio * std::sqrt(8.0 / 6.0));
+  // A ring of 8 tiles around a blank one read 2.0000002 degrees of freedom, and the t factor scaled every pair's u by
+  // 1400 (issue 42): 2 it is, and the pairs are only ever scaled up, by R above 1.
+  EXPECT_DOUBLE_EQ(UncertaintyScale(0.46, 2.0000002), 1.0);
+  EXPECT_DOUBLE_EQ(UncertaintyScale(1.5, 1.9999998), 1.5);
   EXPECT_DOUBLE_EQ(g.pairs[0].information(0, 0), 1e4);
 }
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <sstream>
 
 #include <unistd.h>
@@ -96,6 +97,46 @@ TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
   EXPECT_EQ(report.tiles.size(), 9u);
   EXPECT_EQ(report.pairs.size(), 12u);
   EXPECT_TRUE(report.field.empty());
+  std::filesystem::remove_all(synth.output);
+}
+
+// Issue 42: the centre tile of the same set blank (the flat background of a sparse scene under camera noise): its
+// four pairs of twelve place nothing, a third, and the run says so (the warning the command prints on stderr, and
+// --json's unresolved_warning); the tile says registered 0 and carries the stage's spread, which covers where it is.
+TEST(StitchLayout, SaysARunWithAQuarterOfItsPairsUnresolvedAndATileNoPairPlaces) {
+  TilesSynthesizeOptions synth;
+  synth.output = StitchLayoutScratch("blank").string();
+  synth.bits = 8;
+  synth.seed = 4;
+  const SynthesizedTileSet set = SynthesizeTileSet(synth);
+  LayoutTiles tiles = ReadLayoutTiles(std::filesystem::path(synth.output) / "layout.csv");
+  imaging::TileImage& blank = tiles.images[4];
+  const float level = blank.mean();
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(0.0f, 2.0f);
+  for (Eigen::Index k = 0; k < blank.size(); ++k) blank.data()[k] = level + noise(rng);
+  const StitchedLayout stitched = StitchLayout(tiles.layout, tiles.images, StitchLayoutOptions{});
+  EXPECT_EQ(stitched.rigid.unresolved, 4);
+  EXPECT_TRUE(stitched.rigid.mostly_unresolved);
+  const Summary summary = Summarize(stitched);
+  EXPECT_EQ(summary.json["pairs_unresolved"], 4);
+  ASSERT_TRUE(summary.json["unresolved_warning"].is_string());
+  EXPECT_THAT(summary.json["unresolved_warning"].get<std::string>(), StartsWith("4 of 12 pairs are unresolved"));
+  EXPECT_EQ(summary.json["stage_fallback"], nlohmann::json::array({set.files[4]}));
+
+  const auto rows = CsvRows(PositionsCsv(stitched));
+  const auto truth = CsvRows(ReadText(std::filesystem::path(synth.output) / "truth.csv"));
+  ASSERT_EQ(rows.size(), 10u);
+  EXPECT_EQ(fmt::format("{}", fmt::join(rows[0], ",")), "file,x,y,registered,u_x,u_y");
+  for (size_t i = 1; i < rows.size(); ++i) EXPECT_EQ(rows[i][3], i == 5 ? "0" : "1") << rows[i][0];
+  // The blank tile: where the stage and its neighbours' rows and columns put it, within 4 of its u per axis, and
+  // its u the stage's (1.5 px per axis in this set), not a registration's hundredths.
+  for (const int k : {1, 2}) {
+    const double error = std::stod(rows[5][static_cast<size_t>(k)]) - std::stod(truth[5][static_cast<size_t>(k)]);
+    const double u = std::stod(rows[5][static_cast<size_t>(k + 3)]);
+    EXPECT_GT(u, 0.5);
+    EXPECT_LT(std::abs(error), 4.0 * u) << "axis " << k;
+  }
   std::filesystem::remove_all(synth.output);
 }
 
