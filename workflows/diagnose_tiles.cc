@@ -73,7 +73,7 @@ void AddRegisteredSet(const std::vector<imaging::TileImage>& images, const std::
   }
   for (size_t k = 0; k < images.size(); ++k) {
     out.initial.push_back(positions.positions_px[k]);
-    out.fixed.push_back(k == 0 || !positions.registered[k]);
+    out.fixed.push_back(positions.anchor[k] == static_cast<int>(k));  // each group's first tile (see stitch_distortion.cc)
   }
 }
 

@@ -117,7 +117,8 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
         }
         for (size_t k = 0; k < images.size(); ++k) {
           initial.push_back(scan.registration.positions.positions_px[k]);
-          fixed.push_back(k == 0 || !scan.registration.positions.registered[k]);
+          // each group's first tile (see stitch_distortion.cc)
+          fixed.push_back(scan.registration.positions.anchor[k] == static_cast<int>(k));
         }
         ++scan_index;
       });

@@ -42,12 +42,12 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   // The field and the positions from the accepted pairs of `registration`, starting from its positions and `guess`.
   const auto identify = [&](const imaging::RegistrationResult& registration, imaging::FieldDistortion guess) {
     const imaging::TilePositions& positions = registration.positions;
-    // Tiles the rigid solve left at their stage positions hold there; so does the first tile (the frame).
+    // The first tile of every group of tiles the accepted pairs join holds (the first tile is the frame), so does a
+    // tile no pair reaches. Not `registered`: that is false also for a tile placed through pairs that fix one
+    // direction, whose correspondences the field fit still takes (held at the rigid position, it would pull the
+    // field and its neighbours by the stage's error along that direction).
     std::vector<bool> fixed(images.size(), false);
-    fixed[0] = true;
-    for (size_t i = 0; i < images.size(); ++i) {
-      if (!positions.registered[i]) fixed[i] = true;
-    }
+    for (size_t i = 0; i < images.size(); ++i) fixed[i] = positions.anchor[i] == static_cast<int>(i);
     std::vector<imaging::OverlapToMatch> overlaps;
     for (const imaging::PairRegistration& pair : registration.pairs) {
       if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
@@ -103,9 +103,10 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   }
   const imaging::TilePositions& positions = registration->positions;
   for (const Eigen::Matrix2d& c : out.fit.position_covariance_px2) out.sigma_px.emplace_back(c.diagonal().cwiseSqrt());
-  // Tiles at their stage positions carry the stage's uncertainty, as the rigid solve says.
+  // Tiles the images do not place on both axes carry at least what the rigid solve says (the stage's uncertainty
+  // along an axis no pair fixes).
   for (size_t i = 0; i < images.size(); ++i) {
-    if (!positions.registered[i]) out.sigma_px[i] = positions.sigma_px[i];
+    if (!positions.registered[i]) out.sigma_px[i] = out.sigma_px[i].cwiseMax(positions.sigma_px[i]);
   }
   out.undistorted = imaging::UndistortTiles(images, out.fit.field);
   out.overlap_ncc = imaging::NeighbourOverlapNcc(out.undistorted, rigid.grid, out.fit.positions_px);

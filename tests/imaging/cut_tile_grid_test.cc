@@ -182,7 +182,9 @@ TEST(CutTileGrid, RealTexturePlacedToThePixelWithHonestUncertainty) {
   // its u: as honest as the others (too few to judge an rms on their own; none beyond 4, none so loose that all
   // lie within half a u).
   for (const double v : z_unplaced) EXPECT_LT(std::abs(v), 4.0);
-  if (!z_unplaced.empty()) EXPECT_GT(umax, 0.5);
+  if (!z_unplaced.empty()) {
+    EXPECT_GT(umax, 0.5);
+  }
 }
 
 
