@@ -91,6 +91,39 @@ struct Machine {
     const Calibration& c = v.identified.calibration;
     return Summarize(VolumetricResiduals(c.layout, &c.values, v.identified.pose, validation, tools)).mean_um();
   }
+
+  // Every repeat d1..dN of `dir` verified: its validation mean error; the first `starts` kept as Monte Carlo starts.
+  struct Repeats {
+    std::vector<double> observed;
+    std::vector<std::vector<Observation>> readings;
+    std::vector<VerificationResult> verified;
+  };
+  Repeats VerifyRepeats(const std::filesystem::path& dir, int repeats, int starts) const {
+    Repeats out;
+    for (int k = 1; k <= repeats; ++k) {
+      std::string name = "d";
+      name += std::to_string(k) + ".csv";
+      std::vector<Observation> readings = Readings(dir / name);
+      VerificationResult v = VerifyMachine(layout, readings, options);
+      out.observed.push_back(ValidationMeanUm(v));
+      if (k <= starts) out.readings.push_back(std::move(readings)), out.verified.push_back(std::move(v));
+    }
+    return out;
+  }
+
+  // The validation mean error of each of `runs` Monte Carlo runs from repeat `start` (0-based).
+  std::vector<double> PredictedMeans(const Repeats& r, int start, int runs) const {
+    MonteCarloOptions mc;
+    mc.runs = runs;
+    mc.seed = 1;
+    std::vector<double> predicted;
+    for (const MachineMonteCarloRun& run : MachineMonteCarlo(layout, r.verified[static_cast<size_t>(start)],
+                                                             r.readings[static_cast<size_t>(start)], validation, noise,
+                                                             options, mc)) {
+      predicted.push_back(run.validation.mean_um());
+    }
+    return predicted;
+  }
 };
 
 // Three machines, 150 repeats each (the sd of their validation mean error, a skewed quantity, known to about 8 %),
@@ -111,30 +144,12 @@ TEST(MachineMonteCarloTrackergen, PredictsRepeatsOfThreeMachinesFromAnyStart) {
   for (int seed : seeds) {
     const std::filesystem::path at = dir.path() / std::to_string(seed);
     const Machine machine(at);
-    std::vector<double> observed;
-    std::vector<std::vector<Observation>> candidates;
-    std::vector<VerificationResult> verified;
-    for (int k = 1; k <= kRepeats; ++k) {
-      std::string name = "d";
-      name += std::to_string(k) + ".csv";
-      std::vector<Observation> readings = machine.Readings(at / name);
-      VerificationResult v = VerifyMachine(machine.layout, readings, machine.options);
-      observed.push_back(machine.ValidationMeanUm(v));
-      if (k <= kCandidates) candidates.push_back(std::move(readings)), verified.push_back(std::move(v));
-    }
+    const Machine::Repeats repeats = machine.VerifyRepeats(at, kRepeats, kCandidates);
+    const std::vector<double>& observed = repeats.observed;
     const SampleSummary real = SummarizeSample(observed);
     const int hardest = static_cast<int>(std::max_element(observed.begin(), observed.begin() + kCandidates) - observed.begin());
     for (int start : {0, hardest}) {
-      MonteCarloOptions mc;
-      mc.runs = 150;
-      mc.seed = 1;
-      std::vector<double> predicted;
-      for (const MachineMonteCarloRun& r : MachineMonteCarlo(machine.layout, verified[static_cast<size_t>(start)],
-                                                             candidates[static_cast<size_t>(start)], machine.validation,
-                                                             machine.noise, machine.options, mc)) {
-        predicted.push_back(r.validation.mean_um());
-      }
-      const SampleSummary simulated = SummarizeSample(predicted);
+      const SampleSummary simulated = SummarizeSample(machine.PredictedMeans(repeats, start, 150));
       std::printf("trackergen --seed %d --truth rich: %d repeats %.2f +- %.2f um; Monte Carlo from repeat %d (its own "
                   "%.2f um) %.2f +- %.2f um (ratios: mean %.3f, spread %.3f)\n",
                   seed, kRepeats, real.mean, real.sd, start + 1, observed[static_cast<size_t>(start)], simulated.mean,
@@ -195,32 +210,14 @@ TEST(MachineMonteCarloTrackergen, MatchesTheCoreOfRepeatsOfAFourthMachine) {
   ASSERT_NO_FATAL_FAILURE(Generate(dir.path(), {kSeed}, kRepeats));
   const std::filesystem::path at = dir.path() / std::to_string(kSeed);
   const Machine machine(at);
-  std::vector<double> observed;
-  std::vector<std::vector<Observation>> candidates;
-  std::vector<VerificationResult> verified;
-  for (int k = 1; k <= kRepeats; ++k) {
-    std::string name = "d";
-    name += std::to_string(k) + ".csv";
-    std::vector<Observation> readings = machine.Readings(at / name);
-    VerificationResult v = VerifyMachine(machine.layout, readings, machine.options);
-    observed.push_back(machine.ValidationMeanUm(v));
-    if (k <= kCandidates) candidates.push_back(std::move(readings)), verified.push_back(std::move(v));
-  }
+  const Machine::Repeats repeats = machine.VerifyRepeats(at, kRepeats, kCandidates);
+  const std::vector<double>& observed = repeats.observed;
   const TrackergenCore real = CoreOf(observed);
   const auto first12 = observed.begin() + kCandidates;
   const int calmest = static_cast<int>(std::min_element(observed.begin(), first12) - observed.begin());
   const int hardest = static_cast<int>(std::max_element(observed.begin(), first12) - observed.begin());
   for (int start : {0, calmest, hardest}) {
-    MonteCarloOptions mc;
-    mc.runs = 300;
-    mc.seed = 1;
-    std::vector<double> predicted;
-    for (const MachineMonteCarloRun& r : MachineMonteCarlo(machine.layout, verified[static_cast<size_t>(start)],
-                                                           candidates[static_cast<size_t>(start)], machine.validation,
-                                                           machine.noise, machine.options, mc)) {
-      predicted.push_back(r.validation.mean_um());
-    }
-    const TrackergenCore simulated = CoreOf(predicted);
+    const TrackergenCore simulated = CoreOf(machine.PredictedMeans(repeats, start, 300));
     const double held = static_cast<double>(std::count_if(observed.begin(), observed.end(), [&](double v) {
                           return v >= simulated.p2_5 && v <= simulated.p97_5;
                         })) / kRepeats;
