@@ -39,14 +39,13 @@ Eigen::Matrix2d Weight(const Eigen::Vector2d& sigma_px) { return sigma_px.cwiseA
 
 struct GridSolution {
   std::vector<Eigen::Vector2d> positions_px;
-  std::vector<Eigen::Vector2d> sigma_px;  // of p_i - p_reference(i), per axis
+  std::vector<Eigen::Vector2d> sigma_px;  // of p_i - p_0, per axis
 };
 
-// The solve with the pairs' information times `pair_scale` and the stage's times `stage_scale`; each tile's standard
-// uncertainty against tile reference[i] (the first tile's position is exact).
+// The solve over the accepted pairs and the stage; each tile's standard uncertainty against the first tile, whose
+// position is exact.
 GridSolution SolveGrid(const std::vector<GridTile>& tiles, const std::vector<Eigen::Vector2d>& stage_px,
-                       const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior, double pair_scale,
-                       double stage_scale, const std::vector<int>& reference) {
+                       const std::vector<PairRegistration>& pairs, const StageAxesPrior& prior) {
   const int n = static_cast<int>(tiles.size());
   const auto at = [](int i) { return static_cast<size_t>(i); };
   int row0 = tiles[0].row, row1 = tiles[0].row, col0 = tiles[0].col, col1 = tiles[0].col;
@@ -61,25 +60,25 @@ GridSolution SolveGrid(const std::vector<GridTile>& tiles, const std::vector<Eig
   };
   const int blocks = n - 1 + (col1 - col0 + 1) + (row1 - row0);
   GridNormalEquations equations(blocks);
-  const Eigen::Matrix2d own = stage_scale * Weight(prior.own_px);
+  const Eigen::Matrix2d own = Weight(prior.own_px);
   for (int i = 0; i < n; ++i) {
     // p_i - a_col - b_row = stage_i (the first tile: - a_col - b_row = 0).
     const Eigen::Vector2d d = i == 0 ? Eigen::Vector2d::Zero() : stage_px[at(i)];
     equations.Add({{tile(i), 1.0}, {column(tiles[at(i)].col), -1.0}, {row(tiles[at(i)].row), -1.0}}, own, d);
   }
   for (int c = col0; c < col1; ++c) {
-    equations.Add({{column(c + 1), 1.0}, {column(c), -1.0}}, stage_scale * Weight(prior.column_step_px), Eigen::Vector2d::Zero());
+    equations.Add({{column(c + 1), 1.0}, {column(c), -1.0}}, Weight(prior.column_step_px), Eigen::Vector2d::Zero());
   }
   for (int r = row0; r < row1; ++r) {
-    equations.Add({{row(r + 1), 1.0}, {row(r), -1.0}}, stage_scale * Weight(prior.row_step_px), Eigen::Vector2d::Zero());
+    equations.Add({{row(r + 1), 1.0}, {row(r), -1.0}}, Weight(prior.row_step_px), Eigen::Vector2d::Zero());
   }
   for (const auto& pair : pairs) {
-    if (!pair.accepted || pair_scale == 0.0) continue;
+    if (!pair.accepted) continue;
     // p_b - p_a = offset; the first tile's position is known.
     Eigen::Vector2d d = pair.offset_px;
     if (pair.a == 0) d += stage_px[0];
     if (pair.b == 0) d -= stage_px[0];
-    equations.Add({{tile(pair.b), 1.0}, {tile(pair.a), -1.0}}, pair_scale * pair.information, d);
+    equations.Add({{tile(pair.b), 1.0}, {tile(pair.a), -1.0}}, pair.information, d);
   }
   Eigen::SparseMatrix<double> normal(equations.size, equations.size);
   normal.setFromTriplets(equations.triplets.begin(), equations.triplets.end());
@@ -92,15 +91,11 @@ GridSolution SolveGrid(const std::vector<GridTile>& tiles, const std::vector<Eig
   Eigen::VectorXd unit = Eigen::VectorXd::Zero(equations.size);
   for (int i = 1; i < n; ++i) out.positions_px[at(i)] = solution.segment<2>(2 * tile(i));
   for (int i = 1; i < n; ++i) {
-    const int u = tile(i), v = tile(reference[at(i)]);
-    if (u == v) continue;
     for (int k = 0; k < 2; ++k) {
-      // The variance of e' x for e = unit(i) - unit(reference): e' N^-1 e.
-      unit(2 * u + k) = 1.0;
-      if (v >= 0) unit(2 * v + k) = -1.0;
+      // The variance of tile i's coordinate k against the first tile's exact position: e' N^-1 e, e its unit vector.
+      unit(2 * tile(i) + k) = 1.0;
       out.sigma_px[at(i)](k) = std::sqrt(std::max(unit.dot(solver.solve(unit)), 0.0));
-      unit(2 * u + k) = 0.0;
-      if (v >= 0) unit(2 * v + k) = 0.0;
+      unit(2 * tile(i) + k) = 0.0;
     }
   }
   return out;
@@ -140,11 +135,11 @@ TilePositions SolveGridPositions(const std::vector<GridTile>& tiles, const std::
   }
   TilePositions out;
   out.anchor = PairGroups(static_cast<int>(tiles.size()), pairs);
-  const GridSolution both = SolveGrid(tiles, stage_px, pairs, prior, 1.0, 1.0, std::vector<int>(tiles.size(), 0));
+  const GridSolution solved = SolveGrid(tiles, stage_px, pairs, prior);
   // No accepted pair: every tile where the stage put it, exactly (the solve's would be that to round-off).
   const bool any = std::any_of(pairs.begin(), pairs.end(), [](const PairRegistration& p) { return p.accepted; });
-  out.positions_px = any ? both.positions_px : stage_px;
-  out.sigma_px = both.sigma_px;
+  out.positions_px = any ? solved.positions_px : stage_px;
+  out.sigma_px = solved.sigma_px;
   // Registered: the earliest tile of the first group, and a tile that the images place against its group's earliest
   // along both axes to within `registered_within_px`. The images alone: each tile free to 1000 px on its own, not
   // through rows and columns (whose shared offsets pin a block of tiles to others), so that a direction no pair fixes
