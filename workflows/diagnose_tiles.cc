@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
-#include <limits>
 
 #include "core/input_error.h"
 #include "workflows/calibration_scans.h"
@@ -40,41 +39,16 @@ void TileDiagnoseOptions::Check() const {
 namespace {
 
 // Every registered overlap's correspondences, the tiles' rigid positions (one index space over all scans) and the
-// tiles that hold (each scan's or grid's first, and those no pair registered).
-struct OverlapPoints {
-  std::vector<imaging::PairCorrespondences> matched;
-  std::vector<Eigen::Vector2d> initial;
-  std::vector<bool> fixed;
-  int width = 0, height = 0, pairs = 0;
+// tiles that hold; and how many neighbour pairs there were.
+struct OverlapPoints : RegisteredOverlapPoints {
+  int pairs = 0;
 };
 
 void AddRegisteredSet(const std::vector<imaging::TileImage>& images, const std::vector<imaging::PairRegistration>& pairs,
                       const imaging::TilePositions& positions, const imaging::CorrespondenceOptions& matching,
-                      OverlapPoints& out) {
-  if (out.width == 0) out.width = static_cast<int>(images.front().cols()), out.height = static_cast<int>(images.front().rows());
-  if (images.front().cols() != out.width || images.front().rows() != out.height) {
-    throw InputError(fmt::format("--scan: tiles of {} x {} px after tiles of {} x {}: one field is one objective and "
-                                 "one camera", images.front().cols(), images.front().rows(), out.width, out.height));
-  }
-  const int base = static_cast<int>(out.initial.size());
-  std::vector<imaging::OverlapToMatch> overlaps;
-  for (const imaging::PairRegistration& pair : pairs) {
-    ++out.pairs;
-    if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px});
-  }
-  double band = std::numeric_limits<double>::infinity();
-  for (const imaging::OverlapToMatch& o : overlaps) {
-    band = std::min({band, out.width - std::abs(o.offset_px.x()), out.height - std::abs(o.offset_px.y())});
-  }
-  for (imaging::PairCorrespondences& p :
-       imaging::MatchOverlaps(images, overlaps, imaging::FieldDistortion{}, BandMatching(matching, band))) {
-    p.a += base, p.b += base;
-    out.matched.push_back(std::move(p));
-  }
-  for (size_t k = 0; k < images.size(); ++k) {
-    out.initial.push_back(positions.positions_px[k]);
-    out.fixed.push_back(positions.anchor[k] == static_cast<int>(k));  // each group's first tile (see stitch_distortion.cc)
-  }
+                      const std::string& set, OverlapPoints& out) {
+  out.pairs += static_cast<int>(pairs.size());
+  AppendRegisteredSet(images, pairs, positions, imaging::FieldDistortion{}, matching, set, out);
 }
 
 OverlapPoints GatherOverlapPoints(const TileDiagnoseOptions& options) {
@@ -86,12 +60,14 @@ OverlapPoints GatherOverlapPoints(const TileDiagnoseOptions& options) {
     stitch.pixel_mm = options.pixel_mm;
     stitch.threads = options.threads;
     const StitchResult rigid = StitchTiles(tiles.layout, tiles.images, stitch);
-    AddRegisteredSet(tiles.images, rigid.registration.pairs, rigid.registration.positions, options.matching, out);
+    AddRegisteredSet(tiles.images, rigid.registration.pairs, rigid.registration.positions, options.matching,
+                     "--layout " + options.layout, out);
     return out;
   }
   ReadAndRegisterScans(options.scans, options.pixel_mm, options.threads, false,
                        [&](const artefacts::RegisteredScan& scan, const std::vector<imaging::TileImage>& images) {
-                         AddRegisteredSet(images, scan.registration.pairs, scan.registration.positions, options.matching, out);
+                         AddRegisteredSet(images, scan.registration.pairs, scan.registration.positions, options.matching,
+                                          "--scan: scan " + scan.name, out);
                        });
   return out;
 }

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 
 #include "core/input_error.h"
@@ -75,57 +74,34 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   options.matching.Check();
   options.fit.Check();
   const imaging::FieldDistortion guess = options.known.value_or(imaging::FieldDistortion{});
-  std::vector<imaging::PairCorrespondences> matched;
-  std::vector<Eigen::Vector2d> initial;
-  std::vector<bool> fixed;
+  RegisteredOverlapPoints points;
   // Pairs the fit cannot place (fewer correspondences than it weighs), with their tiles kept for the second
   // registration; the pairs it places, each scan's in a set.
   std::vector<PairToRegisterAgain> again;
   std::map<int, imaging::TileImage> kept;
   size_t scan_index = 0;
-  int width = 0, height = 0;
   std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(
       layouts, pixel_mm, threads, progress,
       [&](const artefacts::RegisteredScan& scan, const std::vector<imaging::TileImage>& images) {
-        if (width == 0) width = static_cast<int>(images.front().cols()), height = static_cast<int>(images.front().rows());
-        if (images.front().cols() != width || images.front().rows() != height) {
-          throw InputError(fmt::format("--distortion: scan {} has tiles of {} x {} px, the first scan {} x {}: one "
-                                       "field is one objective and one camera",
-                                       scan.name, images.front().cols(), images.front().rows(), width, height));
-        }
-        const int base = static_cast<int>(initial.size());
-        std::vector<imaging::OverlapToMatch> overlaps;
-        std::vector<size_t> pair_of_overlap;
-        for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
-          const imaging::PairRegistration& pair = scan.registration.pairs[q];
-          if (pair.accepted) overlaps.push_back({pair.a, pair.b, pair.offset_px}), pair_of_overlap.push_back(q);
-        }
-        double band = std::numeric_limits<double>::infinity();
-        for (const imaging::OverlapToMatch& o : overlaps) {
-          band = std::min({band, width - std::abs(o.offset_px.x()), height - std::abs(o.offset_px.y())});
-        }
-        std::vector<imaging::PairCorrespondences> found =
-            imaging::MatchOverlaps(images, overlaps, guess, BandMatching(options.matching, band));
-        for (size_t m = 0; m < found.size(); ++m) {
-          imaging::PairCorrespondences& p = found[m];
+        const int base = static_cast<int>(points.initial.size());
+        const size_t first = points.matched.size();
+        const std::vector<size_t> pair_of_overlap =
+            AppendRegisteredSet(images, scan.registration.pairs, scan.registration.positions, guess, options.matching,
+                                "--distortion: scan " + scan.name, points);
+        for (size_t m = 0; m < pair_of_overlap.size(); ++m) {
+          const imaging::PairCorrespondences& p = points.matched[first + m];
           if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
             again.push_back({scan_index, pair_of_overlap[m]});
-            for (int t : {p.a, p.b}) kept.emplace(base + t, images[static_cast<size_t>(t)]);
+            for (int t : {p.a, p.b}) kept.emplace(t, images[static_cast<size_t>(t - base)]);
           }
-          p.a += base, p.b += base;
-          matched.push_back(std::move(p));
-        }
-        for (size_t k = 0; k < images.size(); ++k) {
-          initial.push_back(scan.registration.positions.positions_px[k]);
-          // each group's first tile (see stitch_distortion.cc)
-          fixed.push_back(scan.registration.positions.anchor[k] == static_cast<int>(k));
         }
         ++scan_index;
       });
   try {
     imaging::FieldDistortionFitOptions fit_options = options.fit;
     fit_options.order = options.known ? options.known->order : options.order;
-    field->fit = imaging::FitFieldDistortion(matched, initial, fixed, width, height, fit_options,
+    field->fit = imaging::FitFieldDistortion(points.matched, points.initial, points.fixed, points.width,
+                                             points.height, fit_options,
                                              options.known ? &*options.known : nullptr);
   } catch (const imaging::FieldDistortionUndeterminable& e) {
     throw InputError(std::string("--distortion: ") + e.what());
@@ -140,7 +116,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   std::vector<std::vector<bool>> register_again(scans.size());
   for (size_t s = 0; s < scans.size(); ++s) register_again[s].assign(scans[s].registration.pairs.size(), false);
   for (const PairToRegisterAgain& r : again) register_again[r.scan][r.pair] = true;
-  // Each scan's matched pairs in `matched` follow its accepted pairs in order.
+  // Each scan's matched pairs in `points.matched` follow its accepted pairs in order.
   int base = 0;
   size_t next_matched = 0;
   const imaging::FieldDistortion& identified = field->fit.field;
@@ -153,14 +129,14 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     for (size_t q = 0; q < scan.registration.pairs.size(); ++q) {
       imaging::PairRegistration& pair = scan.registration.pairs[q];
       if (!pair.accepted) continue;
-      const imaging::PairCorrespondences& points = matched[next_matched++];
+      const imaging::PairCorrespondences& overlap = points.matched[next_matched++];
       if (register_again[s][q]) {
         RegisterUndistortedPair(kept.at(base + pair.a), kept.at(base + pair.b), identified, pair);
         scan.field_sensitivity[q] = FieldSensitivityOverOverlap(identified, pair.offset_px);
       } else {
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
-        scan.field_sensitivity[q] = FieldSensitivity(identified, points.a_px, points.b_px);
+        scan.field_sensitivity[q] = FieldSensitivity(identified, overlap.a_px, overlap.b_px);
       }
     }
     // The positions chained from the undistorted offsets as the rigid registration chains its own.
