@@ -157,6 +157,9 @@ std::pair<int, bool> Solve(const Problem& pr, const Layout& layout, int max_iter
     problem.AddParameterBlock(p.data(), 3);
     ordering->AddElementToGroup(p.data(), 0);
   }
+  // Within a group Ceres orders the blocks by their addresses: the stations and the turns, two arrays, in groups of
+  // their own, so that the reduced system's columns, and with them its rounding, do not depend on where the heap
+  // put the two arrays (in a long-lived process, such as Python's, the last digits changed from call to call).
   std::vector<Eigen::Vector3d> turns(st->stations.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < st->stations.size(); ++i) {
     problem.AddParameterBlock(st->stations[i].data(), 3);
@@ -165,7 +168,7 @@ std::pair<int, bool> Solve(const Problem& pr, const Layout& layout, int max_iter
     if (angles) {
       problem.AddParameterBlock(turns[i].data(), 3);
       HoldCoordinates(&problem, turns[i].data(), layout.rotation[i]);
-      ordering->AddElementToGroup(turns[i].data(), 1);
+      ordering->AddElementToGroup(turns[i].data(), 2);
     }
   }
   for (const StationReading& m : pr.problem->readings) {
