@@ -24,9 +24,17 @@ struct FieldTerm {
 };
 
 std::string MonomialName(int component, int i, int j) {
+  // Appended piece by piece, not `"x" + std::to_string(i)`: GCC 12 inlines operator+(const char*, string&&) and
+  // warns falsely of overlapping memcpy of 2^63 bytes (-Wrestrict, GCC bug 105329; the Release build's only warning).
   std::string name = component == 0 ? "dx_" : "dy_";
-  if (i > 0) name += "x" + (i > 1 ? std::to_string(i) : std::string());
-  if (j > 0) name += "y" + (j > 1 ? std::to_string(j) : std::string());
+  if (i > 0) {
+    name += 'x';
+    if (i > 1) name += std::to_string(i);
+  }
+  if (j > 0) {
+    name += 'y';
+    if (j > 1) name += std::to_string(j);
+  }
   return name;
 }
 

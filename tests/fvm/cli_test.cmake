@@ -84,10 +84,30 @@ foreach(code "0  done" "1  bad input" "2  usage" "3  did not converge")
   endif()
 endforeach()
 
-# Every built command (and sub-subcommand) ends its --help with an example; the summary heads its description.
-foreach(cmd calibrate correct compare diff diagnose simulate "simulate fvm-batch" info fit focus tiles
-    "tiles plan" "tiles synthesize" "tiles simulate" stitch multilaterate testpiece "testpiece design" "testpiece verify"
-    "simulate testpiece")
+# fvm --help, every built command and every subcommand its --help lists (the list read from the help, so that a new
+# one cannot go without) end their --help with an example; the summary heads a command's description.
+run(0 --help)
+if(NOT OUT MATCHES "\nExample[^\n]*:\n  fvm [a-z]")
+  message(FATAL_ERROR "fvm --help has no example:\n${OUT}")
+endif()
+set(with_subcommands ${COMMANDS})
+foreach(cmd ${COMMANDS})
+  run(0 ${cmd} --help)
+  string(REGEX MATCH "\nSubcommands:\n([^\n]+\n)+" block "${OUT}")
+  string(REGEX MATCHALL "\n  [a-z][a-z-]*" names "${block}")
+  foreach(name ${names})
+    string(STRIP "${name}" name)
+    list(APPEND with_subcommands "${cmd} ${name}")
+  endforeach()
+endforeach()
+foreach(expected "simulate fvm-batch" "simulate scan" "simulate tracker" "simulate testpiece" "tiles plan"
+    "tiles synthesize" "tiles simulate" "testpiece design" "testpiece verify")
+  list(FIND with_subcommands "${expected}" found)  # (a -P script runs under old policies: no IN_LIST)
+  if(found EQUAL -1)
+    message(FATAL_ERROR "the subcommands read from --help lack '${expected}': ${with_subcommands}")
+  endif()
+endforeach()
+foreach(cmd ${with_subcommands})
   separate_arguments(words UNIX_COMMAND "${cmd}")
   run(0 ${words} --help)
   if(NOT OUT MATCHES "Example[^\n]*:\n  fvm |Example: fvm ")

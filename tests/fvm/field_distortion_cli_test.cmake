@@ -34,6 +34,14 @@ fails_naming("--pixel-mm" diagnose --scan ${WORK}/s0/row.csv)
 fails_naming("BATCH" diagnose ${WORK}/s0 --scan ${WORK}/s0/row.csv --pixel-mm 0.01)
 fails_naming("--overlap" diagnose --layout ${WORK}/s0/row.csv)
 fails_naming("--report" diagnose --scan ${WORK}/s0/row.csv --scan ${WORK}/s0/column.csv --pixel-mm 0.01 --report ${WORK}/r)
+# The batch's stage-model options have nothing to act on in the tiles' test (positions free, the field's model is
+# --order), and the tiles' options nothing in a batch: refused naming the option, not ignored.
+fails_naming("--model" diagnose --scan ${WORK}/s0/row.csv --scan ${WORK}/s0/column.csv --pixel-mm 0.01 --model 27)
+fails_naming("--terms" diagnose --layout ${WORK}/s0/row.csv --overlap 10 --terms xTx:1)
+fails_naming("--stitched-frame" diagnose --layout ${WORK}/s0/row.csv --overlap 10 --stitched-frame rotated)
+fails_naming("--loss-scale-um" diagnose --scan ${WORK}/s0/row.csv --pixel-mm 0.01 --loss-scale-um 5)
+fails_naming("--order" diagnose ${WORK}/s0 --order 4)
+fails_naming("--pixel-mm" diagnose ${WORK}/s0 --pixel-mm 0.01)
 
 # 2. stitch --report with a field: the page, both plots, the terms with u as --json has them.
 run(0 tiles synthesize -o ${WORK}/set --rows 3 --cols 3 --bits 8 --seed 4)

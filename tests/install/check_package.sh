@@ -62,7 +62,8 @@ loaded="$(plugin_loaded /usr/bin/python3 -c "import fvm; fvm.read_surface('raw/i
 man -w fvm > /dev/null || fail "man -w fvm"
 man -w fvm-calibrate > /dev/null || fail "man -w fvm-calibrate"
 
-# Another project on the installed libraries: the same distance figure as fvm calibrate's JSON.
+# Another project on the installed libraries: the same distance figure as fvm calibrate's JSON. Its configure step
+# fails when the package exports a target, or names an fvm library in a link interface, other than as fvm::<name>.
 cmake -S "$root/tests/install/consumer" -B consumer -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build consumer > /dev/null
 consumer/fvm_consumer /usr/share/fvm/samples/bar17 > consumer.txt
