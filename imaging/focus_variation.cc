@@ -14,6 +14,7 @@
 
 #include "core/input_error.h"
 #include "core/number_text.h"
+#include "imaging/focus_height_maps.h"
 #include "imaging/focus_peak.h"
 #include "imaging/focus_stack_curves.h"
 #include "imaging/focus_window_centroid.h"
@@ -50,7 +51,6 @@ constexpr float kMaxIntensity = 1e15f;
 // (4 px): beyond, the second-order bias of the heights it mixes grows faster than its noise falls (on 40 deg walls
 // the small window errs 0.2-0.3 step, the large one 0.3-0.55).
 constexpr double kSpreadLimitSteps = 2.4;
-constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heights before their slope
 // The uncertainty model (see Finish and FitPeak). A pixel's height comes from a window of 5 or 9 px, so its
 // error is shared by its neighbours: on the independent stacks of ../shared/bench/focusgen.py the errors
 // correlate 0.7-0.8 three pixels apart, and farther where the texture is coarse (2 px) or the blur grows linearly
@@ -59,9 +59,9 @@ constexpr double kSlopeSmoothingPx = 2.0;  // sigma of the smoothing of the heig
 // about their 2 px local mean (the model's only such term before) sees 35-65 % of these errors depending on the
 // optics and the texture, so u_z covered 75-88 % at a 2 px texture and at NA 0.9 with a 0.8 um floor. What they
 // leave in the map is roughness at the window's scale: the Laplacian of the heights smoothed over 2 px, less its
-// own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px; times
-// 9 px^2 (about half a 9 px window's variance: the second-order term of a window's mean, which also covers the
-// real bias where the surface bends sharply, a calotte's rim). The fit's own model error: on a face tilted by
+// own local mean over 6 px (the surface's real curvature changes slowly and is no error), rms over 15 px, the
+// surface's sharp bends (a calotte's rim) left out (focus_height_maps.cc); times 9 px^2 (about half a 9 px
+// window's variance: the second-order term of a window's mean). The fit's own model error: on a face tilted by
 // less than a step over a window the power fit errs by up to a tenth of a step depending on where the surface
 // lies between two images (a bias that changes slowly across the map, which no roughness shows: 0.02-0.09 step
 // rms on focusgen.py's flats, most at NA 0.9 with a 0.8 um floor and with a 2 px texture); the vertex's move when
@@ -80,9 +80,6 @@ constexpr double kRoughnessPx2 = 9.0;
 constexpr double kScatterScale = 0.09;
 constexpr double kModelShare = 0.6;
 constexpr double kModelSpanPx = 4.0;
-constexpr int kScatterWindowPx = 9;
-constexpr double kCurvatureSmoothingPx = 6.0;
-constexpr int kRoughnessBoxPx = 15;
 constexpr double kSlopePx = 0.005;
 
 }  // namespace
@@ -238,191 +235,6 @@ void FocusAccumulator::Add(const StackImageView& image, double z_mm, std::string
   s.Pend(image, s.colour ? &texture : nullptr);
 }
 
-namespace {
-
-// Float maps of the height map's size over memory in huge pages, reused from map to map: fresh 4 kB pages cost
-// more than the filters that fill them (a page fault per 4 kB on a virtual machine). The maps are filled and
-// filtered in stripes of rows in parallel (ForStripes): a filter applied to a stripe of a map reads the rows
-// beyond it from the map itself (OpenCV filters a sub-matrix with its real neighbours unless told
-// BORDER_ISOLATED), so each stripe's result is that of the whole map's filter.
-struct MapBuffers {
-  int width = 0, height = 0;
-  bool parallel = true;
-  HugeVector<float> storage[10];
-
-  cv::Mat operator[](int i) {
-    HugeVector<float>& v = storage[i];
-    v.resize(std::size_t(width) * std::size_t(height));  // left uninitialised: each pass writes all of it
-    return cv::Mat(height, width, CV_32F, v.data());
-  }
-  // body(r0, r1) for each stripe of rows; every stripe of a pass ends before the next pass starts.
-  void Pass(const std::function<void(int, int)>& body) const { ForStripes(height, parallel, body); }
-};
-
-// Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
-// keeps the nm of a stage tens of mm out), 0 in the holes, and the mask of the valid points.
-struct HoleyMap {
-  cv::Mat heights, valid, work;
-
-  HoleyMap(const std::vector<double>& z, double origin, MapBuffers& buffers)
-      : heights(buffers[0]), valid(buffers[1]), work(buffers[2]) {
-    buffers.Pass([&](int r0, int r1) {
-      for (int r = r0; r < r1; ++r) {
-        float* h = heights.ptr<float>(r);
-        float* v = valid.ptr<float>(r);
-        const double* row = z.data() + std::size_t(r) * std::size_t(heights.cols);
-        for (int col = 0; col < heights.cols; ++col) {
-          const bool ok = std::isfinite(row[col]);
-          h[col] = ok ? float(row[col] - origin) : 0.0f;
-          v[col] = ok ? 1.0f : 0.0f;
-        }
-      }
-    });
-  }
-
-  // The local mean of the valid points in rows r0..r1 of `out`: a Gaussian average over them only (the blur of
-  // the heights over the blur of the mask).
-  void Smooth(double sigma_px, int r0, int r1, cv::Mat& out) {
-    cv::Mat o_rows = out.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
-    cv::GaussianBlur(heights.rowRange(r0, r1), o_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* o = out.ptr<float>(r);
-      const float* w = work.ptr<float>(r);
-      for (int col = 0; col < out.cols; ++col) o[col] /= std::max(w[col], 1e-6f);
-    }
-  }
-};
-
-// The local slope (height change per pixel along x and y, mm) of a map with holes, from its smooth local mean
-// (in buffers 4 and 6, which the scatter below leaves alone).
-struct Slope {
-  cv::Mat x, y;
-  float Magnitude(int r, int col) const { return std::hypot(x.ptr<float>(r)[col], y.ptr<float>(r)[col]); }
-};
-Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
-  HoleyMap map(z, origin, buffers);
-  cv::Mat smooth = buffers[3];
-  Slope slope{buffers[4], buffers[6]};
-  buffers.Pass([&](int r0, int r1) { map.Smooth(kSlopeSmoothingPx, r0, r1, smooth); });
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat gx_rows = slope.x.rowRange(r0, r1), gy_rows = slope.y.rowRange(r0, r1);
-    cv::Sobel(smooth.rowRange(r0, r1), gx_rows, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    cv::Sobel(smooth.rowRange(r0, r1), gy_rows, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  });
-  return slope;
-}
-
-// The rms of the heights about their smooth local mean, over a window around each valid point (buffer 5).
-cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers) {
-  HoleyMap map(z, origin, buffers);
-  cv::Mat residual = buffers[3], scatter = buffers[5];
-  buffers.Pass([&](int r0, int r1) {
-    map.Smooth(kSlopeSmoothingPx, r0, r1, residual);
-    for (int r = r0; r < r1; ++r) {
-      float* o = residual.ptr<float>(r);
-      const float* h = map.heights.ptr<float>(r);
-      const float* v = map.valid.ptr<float>(r);
-      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
-    }
-  });
-  const cv::Size box(kScatterWindowPx, kScatterWindowPx);
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat s_rows = scatter.rowRange(r0, r1), count_rows = map.work.rowRange(r0, r1);
-    cv::boxFilter(residual.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-    cv::boxFilter(map.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
-                  cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* o = scatter.ptr<float>(r);
-      const float* count = map.work.ptr<float>(r);
-      for (int col = 0; col < scatter.cols; ++col)
-        o[col] = std::sqrt(std::max(o[col], 0.0f) / std::max(count[col], 1.0f));
-    }
-  });
-  return scatter;
-}
-
-// The heights' roughness at the window's scale (buffer 3): the rms over kRoughnessBoxPx of the Laplacian of the
-// smoothed heights less its own smooth local mean (the real surface's curvature, which changes slowly; what is
-// left are errors shared over a window, and the bends of the surface sharper than kCurvatureSmoothingPx: a
-// calotte's rim). Takes what SlopePerPixel leaves: the heights, the mask, its blur and the smooth heights
-// (buffers 0 to 3) and their slope (4 and 6). Beside holes the smooth heights are the mean of the valid points
-// only, whose centroid lies off the pixel: on a slope that is a step of up to the slope times the offset, which
-// the Laplacian took for roughness (walls with half their pixels invalid: 1.6 times their errors); the smooth
-// heights are moved back along the slope by that offset, and a point counts by the share of valid points around
-// it (squared).
-cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
-  cv::Mat heights = buffers[0], valid = buffers[1], weight = buffers[2], smooth = buffers[3];
-  cv::Mat a = buffers[7], b = buffers[8], c = buffers[9], roughness = buffers[3];
-  cv::Mat gauss = cv::getGaussianKernel(int(std::lround(8 * kSlopeSmoothingPx)) | 1, kSlopeSmoothingPx, CV_32F);
-  cv::Mat moment = gauss.clone();  // the kernel times the offset of its tap: the first moment of the valid points
-  for (int k = 0; k < moment.rows; ++k) moment.at<float>(k) *= float(k - moment.rows / 2);
-  const auto filter = [](const cv::Mat& in, cv::Mat& out, const cv::Mat& kx, const cv::Mat& ky) {
-    cv::sepFilter2D(in, out, CV_32F, kx, ky, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
-  };
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-    filter(valid.rowRange(r0, r1), a_rows, moment, gauss);
-    filter(valid.rowRange(r0, r1), b_rows, gauss, moment);
-    for (int r = r0; r < r1; ++r) {
-      float* s = c.ptr<float>(r);
-      float* w = weight.ptr<float>(r);
-      const float *m = smooth.ptr<float>(r), *v = valid.ptr<float>(r), *ox = a.ptr<float>(r), *oy = b.ptr<float>(r);
-      const float *gx = slope.x.ptr<float>(r), *gy = slope.y.ptr<float>(r);
-      for (int col = 0; col < smooth.cols; ++col) {
-        const float share = std::max(w[col], 1e-6f);
-        s[col] = m[col] - (gx[col] * ox[col] + gy[col] * oy[col]) / share;
-        w[col] = v[col] * std::min(share, 1.0f) * std::min(share, 1.0f);
-      }
-    }
-  });
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-    cv::Sobel(c.rowRange(r0, r1), a_rows, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    cv::Sobel(c.rowRange(r0, r1), b_rows, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-  });
-  buffers.Pass([&](int r0, int r1) {  // the Laplacian (buffer 0), and it weighted (9)
-    cv::Mat xx = heights.rowRange(r0, r1), yy = smooth.rowRange(r0, r1);
-    cv::Sobel(a.rowRange(r0, r1), xx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    cv::Sobel(b.rowRange(r0, r1), yy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float *l = heights.ptr<float>(r), *lw = c.ptr<float>(r);
-      const float *y = smooth.ptr<float>(r), *v = valid.ptr<float>(r), *w = weight.ptr<float>(r);
-      for (int col = 0; col < heights.cols; ++col) l[col] = (l[col] + y[col]) * v[col], lw[col] = l[col] * w[col];
-    }
-  });
-  // The Laplacian's weighted local mean, the weighted squared departures from it, and their mean over the box.
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-    cv::GaussianBlur(c.rowRange(r0, r1), a_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(weight.rowRange(r0, r1), b_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* d = roughness.ptr<float>(r);
-      const float *l = heights.ptr<float>(r), *m = a.ptr<float>(r), *n = b.ptr<float>(r), *w = weight.ptr<float>(r);
-      for (int col = 0; col < heights.cols; ++col) {
-        const float departure = l[col] - m[col] / std::max(n[col], 1e-6f);
-        d[col] = departure * departure * w[col];
-      }
-    }
-  });
-  const cv::Size box(kRoughnessBoxPx, kRoughnessBoxPx);
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-    cv::boxFilter(roughness.rowRange(r0, r1), a_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-    cv::boxFilter(weight.rowRange(r0, r1), b_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-  });
-  buffers.Pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      const float *sum = a.ptr<float>(r), *count = b.ptr<float>(r);
-      float* o = roughness.ptr<float>(r);
-      for (int col = 0; col < roughness.cols; ++col) o[col] = std::sqrt(std::max(sum[col], 0.0f) / std::max(count[col], 1e-3f));
-    }
-  });
-  return roughness;
-}
-
-}  // namespace
-
 FocusResult FocusAccumulator::Finish() const {
   const State& s = *state_;
   const int n = count();
@@ -527,6 +339,7 @@ FocusResult FocusAccumulator::Finish() const {
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
+
   // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
   // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
   // correction leaves. Both from the corrected heights.

@@ -40,6 +40,9 @@ struct RegionFigures {
   double standardised_rms[3] = {0, 0, 0};  // rms of error / u_z
   std::size_t count[3] = {0, 0, 0};
   double valid_share = 0.0;
+  // Within 3-12 px inside the rim (part of the wall): rms u_z over rms error. The rim's bend is no roughness, so
+  // u_z there should follow the errors as on the rest of the wall.
+  double rim_ratio = 0.0;
 };
 
 // Renders the stack with focusgen.py's `arguments` in `dir`, reconstructs it as `fvm focus` does, and compares.
@@ -65,7 +68,8 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
   const double a = truth["surface_info"]["footprint_radius_px"].get<double>();
   RegionFigures f;
   double sum[3] = {0, 0, 0}, standardised[3] = {0, 0, 0};
-  std::size_t covered[3] = {0, 0, 0}, compared = 0, valid = 0;
+  std::size_t covered[3] = {0, 0, 0}, compared = 0, valid = 0, rim_count = 0;
+  double rim_u2 = 0.0, rim_e2 = 0.0;
   constexpr int kBorder = 5;
   for (int y = kBorder; y < surface.size_y - kBorder; ++y) {
     for (int x = kBorder; x < surface.size_x - kBorder; ++x) {
@@ -78,6 +82,9 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
       const int region = radius > a + 3 ? 0 : radius > a / 2 && radius < a - 3 ? 1 : radius < a / 2 ? 2 : -1;
       if (region < 0) continue;  // the rim's 3 px either side, as the bench leaves them out
       const double d = z - surface.z_mm[i];
+      if (radius > a - 12 && radius < a - 3) {
+        rim_u2 += double(r.u_z_mm[i]) * double(r.u_z_mm[i]), rim_e2 += d * d, ++rim_count;
+      }
       sum[region] += d * d;
       standardised[region] += d * d / (double(r.u_z_mm[i]) * double(r.u_z_mm[i]));
       covered[region] += std::abs(d) <= 1.96 * r.u_z_mm[i];
@@ -90,11 +97,12 @@ RegionFigures RenderAndMeasure(const std::filesystem::path& dir, const std::stri
     f.standardised_rms[k] = std::sqrt(standardised[k] / double(f.count[k]));
   }
   f.valid_share = double(valid) / double(compared);
+  f.rim_ratio = rim_count > 0 ? std::sqrt(rim_u2 / rim_e2) : 0.0;
   std::printf(
       "focusgen.py %s: rms flat %.3f, wall %.3f, bottom %.3f step; coverage %.3f, %.3f, %.3f; error / u_z rms %.2f, "
-      "%.2f, %.2f; valid %.4f\n",
+      "%.2f, %.2f; valid %.4f; rim u_z / error %.2f\n",
       arguments.c_str(), f.rms_steps[0], f.rms_steps[1], f.rms_steps[2], f.coverage[0], f.coverage[1], f.coverage[2],
-      f.standardised_rms[0], f.standardised_rms[1], f.standardised_rms[2], f.valid_share);
+      f.standardised_rms[0], f.standardised_rms[1], f.standardised_rms[2], f.valid_share, f.rim_ratio);
   return f;
 }
 
@@ -104,6 +112,7 @@ struct Condition {
   double max_rms_steps;  // per region
   double min_valid_share = 0.99;
   double max_coverage = 0.99;  // per region
+  double max_rim_ratio = 10.0;
 };
 
 class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
@@ -115,17 +124,21 @@ class FocusIndependentStacks : public ::testing::TestWithParam<Condition> {};
 // plus ~15 %, and their u_z must say so: NA 0.9 with an 0.8 um floor, where the blur grows linearly from the floor
 // and the focus curve's sharp top pulls peaks towards the nearest image (0.11-0.12 step on the flat, 0.11 on the
 // wall, seeds 11 and 12), and the same optics with a 2 px texture (0.12-0.15 step, 5-7 % of the pixels below
-// --min-quality 2). u_z: the 95 % coverage of 1.96 u_z measured at 93.6-98.0 % per region on the first two and at
-// 91.7-97.7 % on the last two (the walls the lowest: the sharp top's bias, which the model term holds only where a
+// --min-quality 2). u_z: the 95 % coverage of 1.96 u_z measured at 92.2-97.7 % per region on the first two and at
+// 90.6-97.2 % on the last two (the walls the lowest: the sharp top's bias, which the model term holds only where a
 // window spans less than a step; 78-84 % with the model that counted only the heights' pixel-to-pixel scatter,
 // 93-99 % before the model term); a region here holds a few hundred independent patches (errors correlate over
 // the 9 px window), so one seed's coverage scatters by about 1.5 %: held at 90-99 %. The rms of error / u_z,
-// measured 0.82-1.13 on them, is held at 0.7-1.3.
+// measured 0.86-1.18 on them, is held at 0.7-1.3.
 // A long depth of field over a coarse texture (NA 0.3, sigma0 0.3 um, 2 px; seed 16, apart from the seeds 11 and 12
 // the uncertainty model is calibrated on): 0.24 step on the flat, 0.21 on the wall, 0.20 on the bottom, 57 % of
 // the pixels valid, held at measured plus ~15 %. Its flat's coverage was 88.8 % when u_z missed the power fit's
-// model error (the bias of where the surface lies between two images, which no roughness shows); 93.2 % now. Its
-// wall's u_z is still on the safe side (98.9 %, error / u_z rms 0.75; 99.3 % and 0.67 before): held at 99.5 %.
+// model error (the bias of where the surface lies between two images, which no roughness shows); 92.4 % now. Its
+// wall's u_z is still on the safe side (98.9 %, error / u_z rms 0.77; 99.3 % and 0.67 before): held at 99.5 %.
+// Beside the rim (3-12 px inside it) u_z read the rim's bend as roughness: 1.65-1.8 times the errors' rms there
+// on the first two conditions' optics (focusgen.py seeds 11 and 12), against 1.1-1.25 on the rest of the wall;
+// with the bends left out of the roughness (focus_height_maps.cc) 1.29-1.30 on seeds 7 and 8: held at 1.45. At
+// NA 0.9 with a 0.8 um floor the window's error beside the rim is larger than the bend term allows (0.64-0.65).
 
 TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
   if (!BenchUsable()) GTEST_SKIP() << kBench << " or python3 with numpy, scipy and tifffile is absent";
@@ -141,12 +154,15 @@ TEST_P(FocusIndependentStacks, PerRegionAccuracyAndCoverage) {
     EXPECT_GE(f.standardised_rms[k], 0.7) << "region " << k;
     EXPECT_LE(f.standardised_rms[k], 1.3) << "region " << k;
   }
+  EXPECT_GT(f.rim_ratio, 0.0);
+  EXPECT_LE(f.rim_ratio, c.max_rim_ratio);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Focusgen, FocusIndependentStacks,
-    ::testing::Values(Condition{"bench_scene", "--seed 7", 0.1},
-                      Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1},
+    ::testing::Values(Condition{"bench_scene", "--seed 7", 0.1, 0.99, 0.99, 1.45},
+                      Condition{"coarser_texture_NA06", "--seed 8 --na 0.6 --sigma0-um 0.45 --texture-px 1.5", 0.1,
+                                0.99, 0.99, 1.45},
                       Condition{"sharp_top_NA09_floor08", "--seed 9 --na 0.9 --sigma0-um 0.8 --texture-px 0.7", 0.14},
                       Condition{"coarse_texture_NA09_floor08", "--seed 10 --na 0.9 --sigma0-um 0.8 --texture-px 2",
                                 0.17, 0.9},
