@@ -2,9 +2,11 @@
 // field and known positions: the authors' distortion-corrected confocal tiles (../shared/realdata/tiles/
 // confocal-3x4/corrected, Rouwane, Texier, Passieux 2024) fused at their translations (TileConfiguration_case1.txt)
 // into one undistorted mosaic; grids cut from it at jittered whole-pixel positions, each tile taken through a known
-// field and, optionally, vignetting and camera noise. Judged: the positions after the common offset, the field over
-// the tile against the truth, the standardised position errors, the overlap NCC after. Skipped where ../shared is
-// absent. FVM_DISTORTION_SWEEP=1 runs the whole table (a few minutes) instead of the fast cases.
+// field (each pixel integrated over its area, as a camera records it) and, optionally, vignetting and camera noise.
+// Judged: the positions after the common offset, the field over the tile against the truth, the standardised
+// position errors, the overlap NCC after; and what the summaries say of the registration the positions rest on.
+// Skipped where ../shared is absent. FVM_DISTORTION_SWEEP=1 runs the whole table (10-30 minutes on a loaded
+// machine) instead of the fast cases; FVM_DISTORTION_SWEEP=authors (or any part of a row's description) its rows.
 
 #include <fmt/core.h>
 #include <fmt/format.h>
