@@ -256,7 +256,9 @@ CutOutcome StitchCutGrid(const CutGrid& g, const CutCase& c) {
     for (size_t i = 0; i < n; ++i) {
       const Eigen::Vector2d e = mine[i] - g.truth_px[i] - mean;
       sum += e.squaredNorm();
-      if (sigma && i > 0) z += e.cwiseQuotient((*sigma)[i]).squaredNorm();
+      // The standardised errors against the first tile, as the u are (the errors about the mean offset, which
+      // share the first tile's error less, read 1.35 times smaller on the fast case).
+      if (sigma && i > 0) z += (mine[i] - mine[0] - g.truth_px[i]).cwiseQuotient((*sigma)[i]).squaredNorm();
     }
     if (z_rms) *z_rms = std::sqrt(z / (2.0 * static_cast<double>(n - 1)));
     return std::sqrt(sum / static_cast<double>(n));
@@ -332,10 +334,11 @@ TEST(CutConfocalGrid, PairsTheFieldShearsRegisterOnceUndistorted) {
   EXPECT_LT(o.rms, 0.1);
   EXPECT_LT(o.field_rms, 0.1);
   EXPECT_GT(o.ncc_after, o.ncc_before + 0.2);
-  // The positions' u honest: standardised errors' rms 0.92 (16 values, 95 % of such rms within about 0.65-1.35 if the
-  // u are right; 1.73 when the truth was cut point-sampled, IntegrateThroughField).
+  // The positions' u honest: standardised errors' rms 1.25 (16 values sharing the first tile's error, about 8
+  // independent: such an rms falls within 0.5-1.5 when the u are right; 2.53 when the truth was cut point-sampled,
+  // IntegrateThroughField).
   EXPECT_GT(o.z_rms, 0.6);
-  EXPECT_LT(o.z_rms, 1.4);
+  EXPECT_LT(o.z_rms, 1.5);
 }
 
 // What the summaries say once the grid registered again on the undistorted tiles: the tiles that registration places
