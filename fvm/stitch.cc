@@ -70,8 +70,9 @@ void RunStitch(StitchArgs& args) {
   WriteOutputs(args, tiles, stitched);
   // What the loops overruled, and a run that leaves a quarter of its pairs unresolved, go to stderr whatever the
   // output: a script reading --json sees them there too.
-  for (const auto& text : stitched.rigid.overruled) fmt::print(stderr, "fvm stitch: overruled {}\n", text);
-  if (stitched.rigid.mostly_unresolved) fmt::print(stderr, "fvm stitch: warning: {}\n", stitched.rigid.UnresolvedWarning());
+  const workflows::StitchResult& placed = stitched.Registered();
+  for (const auto& text : placed.overruled) fmt::print(stderr, "fvm stitch: overruled {}\n", text);
+  if (placed.mostly_unresolved) fmt::print(stderr, "fvm stitch: warning: {}\n", placed.UnresolvedWarning());
   const workflows::Summary summary = workflows::Summarize(stitched);
   if (!args.report.empty()) report::Write(args.report, *summary.report);
   if (args.json) {
@@ -145,7 +146,9 @@ void RegisterStitch(CLI::App& app) {
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", \"shared\": {\"column_step_px\", \"row_step_px\", "
                 "\"own_px\"} (the stage's error shared along columns and rows, and each tile's own), ...}, \"pairs\": [{\"a\", \"b\", "
                 "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "
-                "\"dy_px\", \"peak\", \"ncc\"}]}]}");
+                "\"dy_px\", \"peak\", \"ncc\"}]}]}; with --distortion, when pairs the raw tiles did not register "
+                "registered on the undistorted tiles, the pairs, loops, stage model and fallbacks are that registration's "
+                "(the overlap NCC stays the raw tiles' at the rigid positions)");
   sub->footer("Examples:\n  fvm tiles synthesize -o demo --seed 1 && fvm stitch --layout demo/layout.csv --overlap 20 "
               "-o demo/positions.csv --mosaic demo/mosaic.tif\n"
               "  fvm stitch --layout demo/layout.csv --overlap 20 -o demo/positions.csv --distortion --report demo/report");

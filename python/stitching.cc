@@ -117,7 +117,7 @@ py::array_t<double> XyArray(const std::vector<Eigen::Vector2d>& v) {
 }
 
 py::dict Values(const workflows::StitchedLayout& s, const std::optional<imaging::Mosaic>& mosaic) {
-  const workflows::StitchResult& r = s.rigid;
+  const workflows::StitchResult& r = s.Registered();
   const imaging::TilePositions& p = r.registration.positions;
   std::vector<Eigen::Vector2d> nominal;
   for (const imaging::GridTile& t : r.grid) nominal.push_back(t.nominal_px);

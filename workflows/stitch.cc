@@ -58,6 +58,31 @@ int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
   return pairs;
 }
 
+void DescribeRegistration(StitchResult& s, const std::vector<std::string>& files) {
+  const imaging::RegistrationResult& r = s.registration;
+  s.accepted = s.ambiguous = 0;
+  for (const auto& pair : r.pairs) s.accepted += pair.accepted, s.ambiguous += pair.accepted && pair.ambiguous;
+  s.overruled.clear();
+  for (const auto& o : r.loops.overruled) {
+    const auto& pair = r.pairs[static_cast<size_t>(o.pair)];
+    s.overruled.push_back(files[static_cast<size_t>(pair.a)] + " - " + files[static_cast<size_t>(pair.b)] + ": " +
+                          o.Text());
+  }
+  s.unresolved = r.pairs_unresolved;
+  s.mostly_unresolved = r.MostlyUnresolved();
+  s.at_stage_position.clear(), s.stage_along_one_axis.clear();
+  for (size_t i = 0; i < files.size(); ++i) {
+    if (r.positions.registered[i]) continue;
+    if (i > 0 && r.positions.anchor[i] == 0) {
+      // Linked to the first tile by images, but along one direction only (parallel marks, traces): the stage's rows
+      // and columns place it along the other.
+      s.stage_along_one_axis.push_back(files[i]);
+    } else {
+      s.at_stage_position.push_back(files[i]);
+    }
+  }
+}
+
 StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
                          const StitchOptions& options, const std::function<void(int, int)>& on_pair) {
   StitchResult s;
@@ -66,31 +91,15 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
   s.origin_mm = layout.tiles.front().stage_mm.value_or(Eigen::Vector2d::Zero());
   imaging::SetImagingThreads(options.threads);
   s.registration = imaging::RegisterTileGrid(images, s.grid, options.registration, on_pair);
-  const imaging::RegistrationResult& r = s.registration;
-  for (const auto& pair : r.pairs) s.accepted += pair.accepted, s.ambiguous += pair.accepted && pair.ambiguous;
-  s.overlap_ncc = imaging::NeighbourOverlapNcc(images, s.grid, r.positions.positions_px);
+  s.overlap_ncc = imaging::NeighbourOverlapNcc(images, s.grid, s.registration.positions.positions_px);
   double sum = 0.0;
   for (const auto& o : s.overlap_ncc) {
     if (std::isfinite(o.correlation.ncc)) sum += o.correlation.ncc, ++s.ncc_pairs;
   }
   if (s.ncc_pairs > 0) s.mean_overlap_ncc = sum / s.ncc_pairs;
-  for (const auto& o : r.loops.overruled) {
-    const auto& pair = r.pairs[static_cast<size_t>(o.pair)];
-    s.overruled.push_back(layout.tiles[static_cast<size_t>(pair.a)].file + " - " +
-                          layout.tiles[static_cast<size_t>(pair.b)].file + ": " + o.Text());
-  }
-  s.unresolved = r.pairs_unresolved;
-  s.mostly_unresolved = r.MostlyUnresolved();
-  for (size_t i = 0; i < layout.tiles.size(); ++i) {
-    if (r.positions.registered[i]) continue;
-    if (i > 0 && r.positions.anchor[i] == 0) {
-      // Linked to the first tile by images, but along one direction only (parallel marks, traces): the stage's rows
-      // and columns place it along the other.
-      s.stage_along_one_axis.push_back(layout.tiles[i].file);
-    } else {
-      s.at_stage_position.push_back(layout.tiles[i].file);
-    }
-  }
+  std::vector<std::string> files;
+  for (const auto& tile : layout.tiles) files.push_back(tile.file);
+  DescribeRegistration(s, files);
   return s;
 }
 

@@ -53,6 +53,11 @@ struct StitchResult {
   std::string UnresolvedWarning() const;  // empty unless mostly_unresolved
 };
 
+// StitchResult's account of `s.registration`: its accepted and ambiguous pairs, the pairs its loops overruled, the
+// unresolved ones, and the tiles it leaves at their stage positions or places along one axis (named from `files`, the
+// layout's tiles in its order). What it had said before is replaced; the grid and the overlap correlation stay.
+void DescribeRegistration(StitchResult& s, const std::vector<std::string>& files);
+
 // `images[i]` is the layout's tile i. `on_pair` is called as each pair is registered (progress).
 StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
                          const StitchOptions& options, const std::function<void(int done, int total)>& on_pair = {});

@@ -101,6 +101,7 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
       identify(*registration, out.fit.field);
     }
   }
+  out.registration = *registration;
   const imaging::TilePositions& positions = registration->positions;
   for (const Eigen::Matrix2d& c : out.fit.position_covariance_px2) out.sigma_px.emplace_back(c.diagonal().cwiseSqrt());
   // Tiles the images do not place on both axes carry at least what the rigid solve says (the stage's uncertainty

@@ -43,6 +43,10 @@ struct StitchDistortionResult {
   // Pairs the rigid registration rejected on the raw tiles that registered on the tiles resampled without the
   // field (the field sheared their overlaps): the field and the positions were identified again with them.
   int pairs_registered_undistorted = 0;
+  // The registration whose accepted pairs the field and the positions were identified from, and whose tiles it
+  // places on both axes (positions.registered) the positions rest on: the rigid one on the raw tiles, or the grid
+  // registered again on the undistorted tiles when that registered more pairs (pairs_registered_undistorted > 0).
+  imaging::RegistrationResult registration;
 };
 
 // `rigid`: StitchTiles on the same `images`. Throws imaging::FieldDistortionUndeterminable (a strip in one

@@ -29,6 +29,10 @@ const std::vector<Eigen::Vector2d>& StitchedLayout::SigmaPx() const {
   return field ? field->sigma_px : rigid.registration.positions.sigma_px;
 }
 
+const StitchResult& StitchedLayout::Registered() const {
+  return registered_undistorted ? *registered_undistorted : rigid;
+}
+
 int StitchPairCount(const imaging::TileLayout& layout, const std::vector<imaging::TileImage>& images,
                     const StitchOptions& options) {
   return CountGridPairs(NominalGrid(layout, static_cast<int>(images.front().cols()),
@@ -52,6 +56,12 @@ StitchedLayout StitchLayout(const imaging::TileLayout& layout, const std::vector
     } catch (const imaging::FieldDistortionUndeterminable& e) {
       throw InputError(fmt::format("--distortion, {}: {}", layout.source, e.what()));
     }
+    if (s.field->pairs_registered_undistorted > 0) {
+      StitchResult again = s.rigid;  // its grid, frame and overlap correlation
+      again.registration = s.field->registration;
+      DescribeRegistration(again, s.files);
+      s.registered_undistorted = std::move(again);
+    }
   }
   return s;
 }
@@ -69,8 +79,8 @@ std::string PositionsCsv(const StitchedLayout& stitched) {
       csv += fmt::format(",{:.6f},{:.6f}", origin.x() + p.x() * pixel_mm, origin.y() - p.y() * pixel_mm);
     }
     const Eigen::Vector2d& u = sigmas[i];
-    csv += fmt::format(",{},{:.4f},{:.4f}\n", stitched.rigid.registration.positions.registered[i] ? 1 : 0, u.x(),
-                       u.y());
+    csv += fmt::format(",{},{:.4f},{:.4f}\n", stitched.Registered().registration.positions.registered[i] ? 1 : 0,
+                       u.x(), u.y());
   }
   return csv;
 }

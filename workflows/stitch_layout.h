@@ -42,6 +42,13 @@ struct StitchedLayout {
   StitchOptions options;
   StitchResult rigid;
   std::optional<StitchDistortionResult> field;  // with a distortion
+  // With a field whose pairs registered again on the undistorted tiles (field->pairs_registered_undistorted > 0):
+  // that registration (field->registration) described as `rigid` describes the first (the overlap correlation stays
+  // the raw tiles' at the rigid positions, the measure before the field).
+  std::optional<StitchResult> registered_undistorted;
+  // The registration the positions rest on: which pairs placed them, which tiles the images place (the positions
+  // CSV's `registered`), which rest on the stage. Every summary reads this one.
+  const StitchResult& Registered() const;
   // The positions and their standard uncertainties: the undistorted tiles' with a field, else the rigid ones.
   const std::vector<Eigen::Vector2d>& PositionsPx() const;
   const std::vector<Eigen::Vector2d>& SigmaPx() const;

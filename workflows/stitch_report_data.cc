@@ -43,7 +43,7 @@ report::StitchReportData::Table TilesTable(const StitchedLayout& s) {
   const std::vector<Eigen::Vector2d>& u = s.SigmaPx();
   for (size_t i = 0; i < s.files.size(); ++i) {
     t.rows.push_back({std::to_string(i + 1), s.files[i], Number(p[i].x(), 3), Number(p[i].y(), 3), Number(u[i].x(), 4),
-                      Number(u[i].y(), 4), s.rigid.registration.positions.registered[i] ? "yes" : "stage position"});
+                      Number(u[i].y(), 4), s.Registered().registration.positions.registered[i] ? "yes" : "stage position"});
   }
   return t;
 }
@@ -56,7 +56,7 @@ report::StitchReportData::Table PairsTable(const StitchedLayout& s, const std::v
                                     {"a", "b", "status", "dx (px)", "dy (px)", "u x (px)", "u y (px)", "quality",
                                      "overlap NCC", "note"},
                                     {}};
-  const imaging::RegistrationResult& r = s.rigid.registration;
+  const imaging::RegistrationResult& r = s.Registered().registration;
   for (size_t k = 0; k < r.pairs.size(); ++k) {
     const imaging::PairRegistration& pair = r.pairs[k];
     const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
@@ -68,14 +68,14 @@ report::StitchReportData::Table PairsTable(const StitchedLayout& s, const std::v
     std::string note = pair.accepted ? (pair.ambiguous ? "ambiguous: the stage chose" : "") : pair.rejection;
     t.rows.push_back({s.files[static_cast<size_t>(pair.a)], s.files[static_cast<size_t>(pair.b)], StatusName(status[k]),
                       pair.accepted ? Number(d.x(), 3) : "-", pair.accepted ? Number(d.y(), 3) : "-", ux, uy,
-                      Number(pair.quality, 3), Number(s.rigid.overlap_ncc[k].correlation.ncc, 3), note});
+                      Number(pair.quality, 3), Number(s.Registered().overlap_ncc[k].correlation.ncc, 3), note});
   }
   return t;
 }
 
 // Every square of four tiles whose four pairs were accepted: right then down against down then right should meet.
 report::StitchReportData::Table LoopsTable(const StitchedLayout& s) {
-  const imaging::RegistrationResult& r = s.rigid.registration;
+  const imaging::RegistrationResult& r = s.Registered().registration;
   report::StitchReportData::Table t{
       "Loop misclosures",
       fmt::format("Around each square of four tiles, the offsets right then down against down then right (px): what "
@@ -116,7 +116,7 @@ report::StitchReportData::Table LoopsTable(const StitchedLayout& s) {
 }
 
 report::StitchReportData::Table OverruledTable(const StitchedLayout& s) {
-  const imaging::RegistrationResult& r = s.rigid.registration;
+  const imaging::RegistrationResult& r = s.Registered().registration;
   report::StitchReportData::Table t{"Pairs the loops overruled",
                                     "What the pair registered, what the other pairs and the stage put there, how many "
                                     "standard deviations apart, and what was done.",
@@ -177,8 +177,8 @@ void AddField(const StitchedLayout& s, report::StitchReportData& data) {
 }  // namespace
 
 report::StitchReportData StitchReport(const StitchedLayout& s) {
-  const StitchResult& rigid = s.rigid;
-  const imaging::RegistrationResult& r = rigid.registration;
+  const StitchResult& placed = s.Registered();
+  const imaging::RegistrationResult& r = placed.registration;
   report::StitchReportData data;
   data.title = fmt::format("fvm stitch: {} tiles of {} x {} px", s.files.size(), s.width_px, s.height_px);
   data.width_px = s.width_px, data.height_px = s.height_px;
@@ -186,13 +186,13 @@ report::StitchReportData StitchReport(const StitchedLayout& s) {
   const int overruled = static_cast<int>(std::count(status.begin(), status.end(), Status::kOverruled));
   data.summary = {
       {"tiles", fmt::format("{} of {} x {} px; nominal positions from the {}", s.files.size(), s.width_px, s.height_px,
-                            rigid.from_stage ? "stage" : "grid and overlap")},
+                            placed.from_stage ? "stage" : "grid and overlap")},
       {"pairs", fmt::format("{} neighbour pairs: {} accepted ({} overruled by the loops and replaced), {} unresolved",
-                            r.pairs.size(), rigid.accepted, overruled, rigid.unresolved)},
+                            r.pairs.size(), placed.accepted, overruled, placed.unresolved)},
       {"mean overlap NCC (raw tiles at the rigid positions)",
-       rigid.ncc_pairs > 0 ? Number(rigid.mean_overlap_ncc, 3) : std::string("-")},
+       placed.ncc_pairs > 0 ? Number(placed.mean_overlap_ncc, 3) : std::string("-")},
       {"loops", fmt::format("Birge ratio {:.3f} on {:g} degrees of freedom", r.loops.birge_ratio, r.loops.dof)}};
-  if (rigid.mostly_unresolved) data.summary.emplace_back("warning", rigid.UnresolvedWarning());
+  if (placed.mostly_unresolved) data.summary.emplace_back("warning", placed.UnresolvedWarning());
   const std::vector<Eigen::Vector2d>& positions = s.PositionsPx();
   for (size_t i = 0; i < s.files.size(); ++i) data.tiles.push_back({std::to_string(i + 1), positions[i].x(), positions[i].y()});
   for (size_t k = 0; k < r.pairs.size(); ++k) data.pairs.push_back({r.pairs[k].a, r.pairs[k].b, status[k]});

@@ -18,7 +18,7 @@ using Json = nlohmann::ordered_json;
 Json FiniteOrNull(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
 
 Json OverruledJson(const StitchedLayout& s) {
-  const imaging::RegistrationResult& r = s.rigid.registration;
+  const imaging::RegistrationResult& r = s.Registered().registration;
   Json out = Json::array();
   for (const auto& o : r.loops.overruled) {
     const imaging::PairRegistration& pair = r.pairs[static_cast<size_t>(o.pair)];
@@ -56,7 +56,7 @@ Json StageModelJson(const imaging::RegistrationResult& r) {
 }
 
 Json PairJson(const StitchedLayout& s, size_t k) {
-  const imaging::PairRegistration& pair = s.rigid.registration.pairs[k];
+  const imaging::PairRegistration& pair = s.Registered().registration.pairs[k];
   const Eigen::Vector2d d = pair.offset_px - pair.nominal_px;
   // Standard uncertainty per axis where the pair determines both; null along an axis it leaves to the stage.
   Json sigma = {nullptr, nullptr};
@@ -79,7 +79,7 @@ Json PairJson(const StitchedLayout& s, size_t k) {
           {"sigma_px", sigma},
           {"quality", pair.quality},
           {"accepted", pair.accepted},
-          {"overlap_ncc", FiniteOrNull(s.rigid.overlap_ncc[k].correlation.ncc)},
+          {"overlap_ncc", FiniteOrNull(s.Registered().overlap_ncc[k].correlation.ncc)},
           {"searched", pair.searched},
           {"ambiguous", pair.ambiguous},
           {"unmoved", pair.unmoved},
@@ -89,40 +89,40 @@ Json PairJson(const StitchedLayout& s, size_t k) {
 }
 
 Json StitchJson(const StitchedLayout& s) {
-  const StitchResult& rigid = s.rigid;
+  const StitchResult& placed = s.Registered();
   Json out;
   out["tiles"] = s.files.size();
   out["size_px"] = {s.width_px, s.height_px};
-  out["nominal"] = rigid.from_stage ? "stage" : "grid";
-  out["pairs_accepted"] = rigid.accepted;
-  out["pairs_ambiguous"] = rigid.ambiguous;
-  out["mean_overlap_ncc"] = rigid.ncc_pairs > 0 ? Json(rigid.mean_overlap_ncc) : Json(nullptr);
-  out["pairs_unresolved"] = rigid.unresolved;
-  out["unresolved_warning"] = rigid.mostly_unresolved ? Json(rigid.UnresolvedWarning()) : Json(nullptr);
+  out["nominal"] = placed.from_stage ? "stage" : "grid";
+  out["pairs_accepted"] = placed.accepted;
+  out["pairs_ambiguous"] = placed.ambiguous;
+  out["mean_overlap_ncc"] = placed.ncc_pairs > 0 ? Json(placed.mean_overlap_ncc) : Json(nullptr);
+  out["pairs_unresolved"] = placed.unresolved;
+  out["unresolved_warning"] = placed.mostly_unresolved ? Json(placed.UnresolvedWarning()) : Json(nullptr);
   out["overruled"] = OverruledJson(s);
-  out["loop_birge_ratio"] = rigid.registration.loops.birge_ratio;
-  out["loop_dof"] = rigid.registration.loops.dof;
-  out["stage_fallback"] = rigid.at_stage_position;
-  out["stage_along_one_axis"] = rigid.stage_along_one_axis;
+  out["loop_birge_ratio"] = placed.registration.loops.birge_ratio;
+  out["loop_dof"] = placed.registration.loops.dof;
+  out["stage_fallback"] = placed.at_stage_position;
+  out["stage_along_one_axis"] = placed.stage_along_one_axis;
   if (s.field) {
     out["distortion"] = DistortionJson(s.field->fit, s.field->identified, s.options.pixel_mm);
     out["distortion"]["overlap_ncc_before"] = FiniteOrNull(s.field->mean_overlap_ncc_before);
     out["distortion"]["overlap_ncc_after"] = FiniteOrNull(s.field->mean_overlap_ncc_after);
     out["distortion"]["pairs_registered_undistorted"] = s.field->pairs_registered_undistorted;
   }
-  out["stage_model"] = StageModelJson(rigid.registration);
+  out["stage_model"] = StageModelJson(placed.registration);
   out["pairs"] = Json::array();
-  for (size_t k = 0; k < rigid.registration.pairs.size(); ++k) out["pairs"].push_back(PairJson(s, k));
+  for (size_t k = 0; k < placed.registration.pairs.size(); ++k) out["pairs"].push_back(PairJson(s, k));
   return out;
 }
 
 std::string StageModelText(const StitchedLayout& s) {
-  const imaging::RegistrationResult& r = s.rigid.registration;
+  const imaging::RegistrationResult& r = s.Registered().registration;
   const imaging::TileGridSteps& model = r.stage;
   if (!model.Any()) {
     return fmt::format("  stage model: not estimated ({} registered pairs; it needs {} per direction): the nominal "
                        "positions stand\n",
-                       s.rigid.accepted, imaging::TileGridSteps::kMinPairs);
+                       s.Registered().accepted, imaging::TileGridSteps::kMinPairs);
   }
   const auto value = [&](const Eigen::Vector2d& v, int k, int index) {
     return model.estimated[static_cast<size_t>(index)] ? fmt::format("{:+.2f}", v(k)) : std::string("nominal");
@@ -140,7 +140,7 @@ std::string StageModelText(const StitchedLayout& s) {
 // The pairs a reader should look at: ambiguous ones the stage chose, rejected ones and why.
 std::string PairsText(const StitchedLayout& s) {
   std::string text;
-  for (const auto& pair : s.rigid.registration.pairs) {
+  for (const auto& pair : s.Registered().registration.pairs) {
     const std::string& a = s.files[static_cast<size_t>(pair.a)];
     const std::string& b = s.files[static_cast<size_t>(pair.b)];
     if (pair.accepted && pair.ambiguous) {
@@ -158,7 +158,7 @@ std::string UncertaintyText(const StitchedLayout& s) {
   double worst = 0.0, worst_any = 0.0;
   for (size_t i = 0; i < s.files.size(); ++i) {
     const double u = sigmas[i].maxCoeff();
-    if (s.rigid.registration.positions.anchor[i] == 0) worst = std::max(worst, u);
+    if (s.Registered().registration.positions.anchor[i] == 0) worst = std::max(worst, u);
     worst_any = std::max(worst_any, u);
   }
   std::string text =
@@ -172,15 +172,16 @@ std::string UncertaintyText(const StitchedLayout& s) {
 }
 
 std::string StitchText(const StitchedLayout& s) {
-  const StitchResult& rigid = s.rigid;
+  const StitchResult& placed = s.Registered();
   std::string text = fmt::format(
-      "{} tiles of {} x {} px, {} pairs, {} accepted (quality >= {}); nominal positions from the {}\n", s.files.size(),
-      s.width_px, s.height_px, rigid.registration.pairs.size(), rigid.accepted, s.options.registration.min_quality,
-      rigid.from_stage ? "stage" : "grid and overlap");
+      "{} tiles of {} x {} px, {} pairs, {} accepted (quality >= {}{}); nominal positions from the {}\n", s.files.size(),
+      s.width_px, s.height_px, placed.registration.pairs.size(), placed.accepted, s.options.registration.min_quality,
+      s.registered_undistorted ? ", on the tiles undistorted by the field" : "",
+      placed.from_stage ? "stage" : "grid and overlap");
   text += StageModelText(s);
-  if (rigid.ncc_pairs > 0) {
+  if (placed.ncc_pairs > 0) {
     text += fmt::format("  mean overlap correlation of the {} neighbour pairs at these positions: {:.3f}\n",
-                        rigid.ncc_pairs, rigid.mean_overlap_ncc);
+                        placed.ncc_pairs, placed.mean_overlap_ncc);
   }
   text += PairsText(s);
   if (s.field) {
@@ -194,15 +195,15 @@ std::string StitchText(const StitchedLayout& s) {
                           s.field->pairs_registered_undistorted);
     }
   }
-  if (rigid.accepted == 0) text += "  no pair registered: every tile stays at its nominal position\n";
-  if (!rigid.at_stage_position.empty()) {
+  if (placed.accepted == 0) text += "  no pair registered: every tile stays at its nominal position\n";
+  if (!placed.at_stage_position.empty()) {
     text += fmt::format("  at their stage positions (no good pair to an earlier tile): {}\n",
-                        fmt::join(rigid.at_stage_position, ", "));
+                        fmt::join(placed.at_stage_position, ", "));
   }
-  if (!rigid.stage_along_one_axis.empty()) {
+  if (!placed.stage_along_one_axis.empty()) {
     text += fmt::format("  linked by pairs that fix one direction (parallel marks, traces, edges), placed along the "
                         "other by the stage's rows and columns (registered 0): {}\n",
-                        fmt::join(rigid.stage_along_one_axis, ", "));
+                        fmt::join(placed.stage_along_one_axis, ", "));
   }
   return text + UncertaintyText(s);
 }
