@@ -95,7 +95,7 @@ struct FieldDistortion {
   void Check() const;
 };
 
-// The tile resampled without distortion: output pixel u' shows what the raw tile shows at RawPixel(u') (cubic).
+// The tile resampled without distortion: output pixel u' shows what the raw tile shows at RawPixel(u') (Lanczos-4).
 // Where that lies outside the raw tile: NaN when `outside_nan`, else the nearest edge pixel (integer tiles, which
 // have no NaN; a band as wide as the field's inward displacement at the edges, none where it points outward).
 // Throws std::invalid_argument when the tile's size is not the field's.
