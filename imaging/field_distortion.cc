@@ -92,6 +92,28 @@ const std::vector<FieldTerm>& Terms(int order) {
   return all[static_cast<size_t>(order)];
 }
 
+using Powers = std::array<double, kMaxDistortionOrder + 1>;
+
+// x^p for p = 0..order at normalised x, averaged over the kernel's offsets v / s about x: the mean of (x + v)^p is
+// sum over even k of binomial(p, k) x^(p - k) m_k / s^k (odd moments vanish).
+Powers AveragedPowers(double x, double s, const FieldKernel& kernel, int order) {
+  Powers plain{};
+  plain[0] = 1.0;
+  for (int p = 1; p <= order; ++p) plain[p] = plain[p - 1] * x;
+  if (kernel.m2 == 0.0 && kernel.m4 == 0.0 && kernel.m6 == 0.0) return plain;
+  const std::array<double, 7> moment = {1.0, 0.0, kernel.m2 / (s * s), 0.0, kernel.m4 / std::pow(s, 4), 0.0,
+                                        kernel.m6 / std::pow(s, 6)};
+  Powers averaged{};
+  for (int p = 0; p <= order; ++p) {
+    double binomial = 1.0;  // binomial(p, k), k = 0, 1, ...
+    for (int k = 0; k <= p; ++k) {
+      averaged[p] += binomial * plain[p - k] * moment[static_cast<size_t>(k)];
+      binomial = binomial * (p - k) / (k + 1);
+    }
+  }
+  return averaged;
+}
+
 }  // namespace
 
 const std::vector<std::string>& FieldDistortionTermNames(int order) {
@@ -134,14 +156,13 @@ void FieldDistortion::Check() const {
   }
 }
 
-Eigen::Matrix<double, 2, Eigen::Dynamic> FieldDistortion::Basis(const Eigen::Vector2d& pixel) const {
+Eigen::Matrix<double, 2, Eigen::Dynamic> FieldDistortion::Basis(const Eigen::Vector2d& pixel,
+                                                                const FieldKernel& kernel) const {
   if (order == 0) return Eigen::Matrix<double, 2, Eigen::Dynamic>(2, 0);
   const std::vector<FieldTerm>& terms = Terms(order);
   const double s = 0.5 * width_px;
-  const double x = (pixel.x() - 0.5 * (width_px - 1)) / s, y = (pixel.y() - 0.5 * (height_px - 1)) / s;
-  std::array<double, kMaxDistortionOrder + 1> xp{}, yp{};
-  xp[0] = yp[0] = 1.0;
-  for (int p = 1; p <= kMaxDistortionOrder; ++p) xp[p] = xp[p - 1] * x, yp[p] = yp[p - 1] * y;
+  const Powers xp = AveragedPowers((pixel.x() - 0.5 * (width_px - 1)) / s, s, kernel, order);
+  const Powers yp = AveragedPowers((pixel.y() - 0.5 * (height_px - 1)) / s, s, kernel, order);
   Eigen::Matrix<double, 2, Eigen::Dynamic> b = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, terms.size());
   for (size_t t = 0; t < terms.size(); ++t) {
     for (const FieldMonomial& m : terms[t].monomials) b(m.component, t) += m.factor * xp[m.i] * yp[m.j];
@@ -149,15 +170,13 @@ Eigen::Matrix<double, 2, Eigen::Dynamic> FieldDistortion::Basis(const Eigen::Vec
   return b;
 }
 
-Eigen::Vector2d FieldDistortion::Displacement(const Eigen::Vector2d& pixel) const {
+Eigen::Vector2d FieldDistortion::Displacement(const Eigen::Vector2d& pixel, const FieldKernel& kernel) const {
   if (order == 0) return Eigen::Vector2d::Zero();
   // Basis(pixel) * coefficients without the allocation: resampling a tile calls this millions of times.
   const std::vector<FieldTerm>& terms = Terms(order);
   const double s = 0.5 * width_px;
-  const double x = (pixel.x() - 0.5 * (width_px - 1)) / s, y = (pixel.y() - 0.5 * (height_px - 1)) / s;
-  std::array<double, kMaxDistortionOrder + 1> xp{}, yp{};
-  xp[0] = yp[0] = 1.0;
-  for (int p = 1; p <= order; ++p) xp[p] = xp[p - 1] * x, yp[p] = yp[p - 1] * y;
+  const Powers xp = AveragedPowers((pixel.x() - 0.5 * (width_px - 1)) / s, s, kernel, order);
+  const Powers yp = AveragedPowers((pixel.y() - 0.5 * (height_px - 1)) / s, s, kernel, order);
   double d[2] = {0.0, 0.0};
   for (size_t t = 0; t < terms.size(); ++t) {
     const double c = coefficients(static_cast<Eigen::Index>(t));

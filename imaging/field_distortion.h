@@ -61,6 +61,19 @@ const std::vector<std::string>& FieldDistortionTermNames(int order);
 // of one coordinate alone (in either component). Holding them at 0 holds exactly those monomials at 0.
 std::vector<int> FieldDistortionStretchTerms(int order);
 
+// What one correspondence sees of the field about its pixel: not d there but d averaged over the window it was
+// matched on, since a translation fitted to a window follows the mean displacement of the window's content (to first
+// order in the field's change across it). For a kernel that is symmetric and separable in x and y, the average of a
+// polynomial field is again a polynomial, fixed by the kernel's even moments per axis: x^3 averages to x^3 + 3 m2 x
+// (normalised), so the curvature of a radial field adds a linear part, m2 / 2 times the field's Laplacian, in
+// opposite senses at the two ends of an overlap. Taken for d itself, that is a scale no overlap can tell from the
+// step (kFixedLinearPart), and it went into every step: 4.7 ppm per px of k1 with 512 px tiles and the 15 px window
+// (measured on scangen's pairs against their true shifts: -0.0041 px a step for k1 = 2 px, predicted -0.0038 px;
+// -0.016 px with a 31 px window, predicted -0.016).
+struct FieldKernel {
+  double m2 = 0.0, m4 = 0.0, m6 = 0.0;  // even moments per axis (px^2, px^4, px^6); all 0: the pixel itself
+};
+
 struct FieldDistortion {
   int width_px = 0, height_px = 0;  // the tiles it was identified on
   int order = 0;                    // 0: no distortion (the identity)
@@ -68,10 +81,10 @@ struct FieldDistortion {
   Eigen::MatrixXd covariance;       // px^2, of the coefficients (empty: unknown)
 
   bool Identity() const { return order == 0; }
-  // d(u) in px at pixel u of a width_px x height_px tile.
-  Eigen::Vector2d Displacement(const Eigen::Vector2d& pixel) const;
-  // The 2 x K matrix B with d(u) = B c: each column is a term at u.
-  Eigen::Matrix<double, 2, Eigen::Dynamic> Basis(const Eigen::Vector2d& pixel) const;
+  // d(u) in px at pixel u of a width_px x height_px tile; with a kernel, d averaged over it about u.
+  Eigen::Vector2d Displacement(const Eigen::Vector2d& pixel, const FieldKernel& kernel = {}) const;
+  // The 2 x K matrix B with d(u) = B c: each column is a term at u (averaged over the kernel).
+  Eigen::Matrix<double, 2, Eigen::Dynamic> Basis(const Eigen::Vector2d& pixel, const FieldKernel& kernel = {}) const;
   // Where an undistorted pixel's point is seen in the raw tile: the u with u + d(u) = pixel (fixed point).
   Eigen::Vector2d RawPixel(const Eigen::Vector2d& undistorted_pixel) const;
   // The largest |d| over the tile (px) on a 33 x 33 grid of its pixels, and where.
@@ -82,7 +95,7 @@ struct FieldDistortion {
   void Check() const;
 };
 
-// The tile resampled without distortion: output pixel u' shows what the raw tile shows at RawPixel(u') (cubic).
+// The tile resampled without distortion: output pixel u' shows what the raw tile shows at RawPixel(u') (Lanczos-4).
 // Where that lies outside the raw tile: NaN when `outside_nan`, else the nearest edge pixel (integer tiles, which
 // have no NaN; a band as wide as the field's inward displacement at the edges, none where it points outward).
 // Throws std::invalid_argument when the tile's size is not the field's.

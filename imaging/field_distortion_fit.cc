@@ -307,7 +307,7 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   for (size_t q = 0; q < used.size(); ++q) {
     const PairCorrespondences& p = *used[q];
     for (size_t m = 0; m < p.a_px.size(); ++m) {
-      const Eigen::Matrix<double, 2, Eigen::Dynamic> g = fit.field.Basis(p.a_px[m]) - fit.field.Basis(p.b_px[m]);
+      const Eigen::Matrix<double, 2, Eigen::Dynamic> g = fit.field.Basis(p.a_px[m], p.kernel) - fit.field.Basis(p.b_px[m], p.kernel);
       Eigen::Matrix<double, 2, Eigen::Dynamic> gs(2, ks);
       for (int s = 0; s < ks; ++s) gs.col(s) = g.col(solved[static_cast<size_t>(s)]);
       points.push_back({static_cast<int>(q), p.a, p.b, p.a_px[m] - p.b_px[m], std::move(gs)});

@@ -2,7 +2,9 @@
 // The field distortion (field_distortion.h) and the tile positions identified together from the overlaps: every
 // correspondence of every overlap (overlap_correspondences.h) says that two raw pixels see one point,
 //   p_a + u_a + d(u_a) = p_b + u_b + d(u_b),
-// linear in the positions p and the coefficients of d. One Ceres problem holds them all, each residual scaled by
+// linear in the positions p and the coefficients of d, with d averaged over the window each point was matched on
+// (PairCorrespondences::kernel, FieldKernel): read at the windows' centres, a radial field's curvature passed for a
+// scale of every step. One Ceres problem holds them all, each residual scaled by
 // the correspondences' own scatter and robust (Huber) against the few that tracked the wrong speckle; the
 // covariance of positions and coefficients is the inverse of that problem's information, so that the positions
 // carry the field's uncertainty. The published method (Rouwane, Texier, Passieux 2024) identifies the field by

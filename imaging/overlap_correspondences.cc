@@ -38,6 +38,9 @@ namespace {
 
 using TrackableTile = PreparedTileSet::Tile;
 
+// The Gaussian (px) the refinement's copy of each tile is smoothed with (TrackableImage).
+constexpr double kRefinementSmoothingPx = 1.0;
+
 
 // The image less the least-squares polynomial of degree 4 in x and y (vignetting, uneven illumination), fitted on
 // every 4th pixel: a window's mean and gain are taken out in the refinement, not a slope across it.
@@ -100,7 +103,8 @@ TrackableTile TrackableImage(const TileImage& tile, double sigma) {
   // same for both tiles: no shift); not high-passed, since a high-pass reflects the tile at its edges, where the
   // overlaps are, and so shifts what it shows there. Interpolation errs most near the Nyquist frequency, at the
   // fraction every point of a regular scan shares: smoothed, that error would not pass for field.
-  cv::GaussianBlur(LessShading(f), out.value, cv::Size(), 1.0, 1.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(LessShading(f), out.value, cv::Size(), kRefinementSmoothingPx, kRefinementSmoothingPx,
+                   cv::BORDER_REFLECT);
   cv::Sobel(out.value, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT);  // central differences
   cv::Sobel(out.value, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT);
   if (sigma > 0.0) {
@@ -213,6 +217,7 @@ PairCorrespondences MatchPrepared(const TrackableTile& ta, const TrackableTile& 
                                   const CorrespondenceOptions& options) {
   PairCorrespondences out;
   out.a = a_index, out.b = b_index;
+  out.kernel = MatchingKernel(options);
   const cv::Mat &ia = ta.u8, &ib = tb.u8;
   const double half = options.window_px / 2 + 1.0;
   const double wa = ia.cols, ha = ia.rows, wb = ib.cols, hb = ib.rows;
@@ -277,6 +282,16 @@ PairCorrespondences MatchPrepared(const TrackableTile& ta, const TrackableTile& 
 }
 
 }  // namespace
+
+FieldKernel MatchingKernel(const CorrespondenceOptions& options) {
+  // The window's offsets -h..h, each weighing 1 / n, and the Gaussian's moments (sigma^2, 3 sigma^4, 15 sigma^6):
+  // the moments of the sum of the two independent offsets.
+  const int h = options.window_px / 2, n = 2 * h + 1;
+  double w2 = 0.0, w4 = 0.0, w6 = 0.0;
+  for (int v = -h; v <= h; ++v) w2 += std::pow(v, 2) / n, w4 += std::pow(v, 4) / n, w6 += std::pow(v, 6) / n;
+  const double g2 = kRefinementSmoothingPx * kRefinementSmoothingPx, g4 = 3.0 * g2 * g2, g6 = 15.0 * g2 * g2 * g2;
+  return {w2 + g2, w4 + 6.0 * w2 * g2 + g4, w6 + 15.0 * w4 * g2 + 15.0 * w2 * g4 + g6};
+}
 
 PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_index, int b_index,
                                  const Eigen::Vector2d& offset_px, const FieldDistortion& guess,

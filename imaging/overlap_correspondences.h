@@ -33,7 +33,15 @@ struct PairCorrespondences {
   int a = 0, b = 0;  // tile indices
   std::vector<Eigen::Vector2d> a_px, b_px;  // raw pixels that see the same point
   int tried = 0;     // grid points in the overlap
+  // What each point sees of the field: d averaged over the window it was matched on (MatchingKernel), in both
+  // tiles alike. All 0 (the pixel itself) for correspondences known exactly.
+  FieldKernel kernel;
 };
+
+// The kernel the matching averages the field over: the refinement's window of window_px x window_px pixels, uniform
+// in expectation over a texture (the translation it fits weighs each pixel by its gradients), after the 1 px
+// Gaussian both tiles are smoothed with.
+FieldKernel MatchingKernel(const CorrespondenceOptions& options);
 
 // Points of a on a grid over the overlap that b at `offset_px` shares with it, inset so that both views stay inside
 // their tiles whatever `guess` (the field believed so far; the identity at first) moves them; each point's start in b

@@ -76,7 +76,7 @@ OverlapPoints GatherOverlapPoints(const TileDiagnoseOptions& options) {
 Eigen::Vector2d Misclosure(const imaging::PairCorrespondences& p, size_t m, const std::vector<Eigen::Vector2d>& positions,
                            const imaging::FieldDistortion& field) {
   Eigen::Vector2d r = positions[static_cast<size_t>(p.a)] - positions[static_cast<size_t>(p.b)] + p.a_px[m] - p.b_px[m];
-  if (!field.Identity()) r += field.Displacement(p.a_px[m]) - field.Displacement(p.b_px[m]);
+  if (!field.Identity()) r += field.Displacement(p.a_px[m], p.kernel) - field.Displacement(p.b_px[m], p.kernel);
   return r;
 }
 
