@@ -105,7 +105,8 @@ std::vector<TileImage> UndistortTiles(const std::vector<TileImage>& raw, const F
                                       bool outside_nan = true);
 
 // The reverse, for simulators: a raw tile through the field from an ideal image rendered with `margin_px` extra
-// pixels on every side (its pixel (margin, margin) is the tile's (0, 0)): raw(u) = ideal(u + d(u)). Throws
+// pixels on every side (its pixel (margin, margin) is the tile's (0, 0)): raw(u) = ideal(u + d(u)), averaged over the
+// pixel's area. Throws
 // std::invalid_argument when the margin does not cover the field.
 TileImage DistortTile(const TileImage& ideal_with_margin, int margin_px, const FieldDistortion& field);
 

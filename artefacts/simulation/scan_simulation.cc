@@ -80,7 +80,7 @@ std::vector<SimulatedScan> SimulateScans(const StageTruth& truth, const std::vec
       if (options.distortion.Identity()) {
         image = scene.Photograph(axes, origin, options.tile_px, options.tile_px, random);
       } else {
-        const int margin = static_cast<int>(std::ceil(options.distortion.LargestDisplacementPx())) + 4;
+        const int margin = static_cast<int>(std::ceil(options.distortion.LargestDisplacementPx())) + 6;
         image = imaging::DistortTile(scene.Photograph(axes, origin - axes * Eigen::Vector2d::Constant(margin),
                                                       options.tile_px + 2 * margin, options.tile_px + 2 * margin, random),
                                      margin, options.distortion);
