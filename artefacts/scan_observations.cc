@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "core/dense_decomposition.h"
@@ -135,16 +136,26 @@ bool ContinuesRun(const stage::MeasurementSet& set, size_t i) {
 
 ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals) {
   ScanResidualSplit out;
-  double white = 0.0, misfit = 0.0;
-  int differences = 0, points = 0;
+  double white = 0.0;
+  int differences = 0;
+  // Per scan (group): the chained residuals' squares about their run's mean per coordinate, their number, and the
+  // box its readings span (which axes it moves).
+  struct ScanMisfit {
+    Eigen::Vector2d squares = Eigen::Vector2d::Zero();
+    int points = 0;
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  };
+  std::map<int, ScanMisfit> scans;
   std::vector<Eigen::Vector2d> chained;  // positions of the current run of consecutive pairs
+  int chained_group = 0;
   const auto close_run = [&] {
     if (chained.size() < 2) return chained.clear();
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     for (const Eigen::Vector2d& p : chained) mean += p;
     mean /= static_cast<double>(chained.size());
-    for (const Eigen::Vector2d& p : chained) misfit += (p - mean).squaredNorm();
-    points += static_cast<int>(chained.size());
+    ScanMisfit& scan = scans[chained_group];
+    for (const Eigen::Vector2d& p : chained) scan.squares += (p - mean).cwiseAbs2();
+    scan.points += static_cast<int>(chained.size());
     chained.clear();
   };
   // Whitened residuals of the current run: their second differences see white noise (variance 6 per coordinate)
@@ -155,7 +166,12 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
     if (!ContinuesRun(set, i)) {
       close_run();
       chained.push_back(Eigen::Vector2d::Zero());
+      chained_group = o.group;
       run.clear();
+    }
+    ScanMisfit& scan = scans[o.group];
+    for (const Eigen::Vector3d& e : {o.from.value_or(o.command), o.command}) {
+      scan.lo = scan.lo.cwiseMin(e.head<2>()), scan.hi = scan.hi.cwiseMax(e.head<2>());
     }
     const Eigen::Vector2d r = residuals[i].head<2>();
     chained.push_back(chained.back() + r);
@@ -169,7 +185,30 @@ ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std
   }
   close_run();
   out.white_ratio = differences > 0 ? std::sqrt(white / (6.0 * differences)) : 0.0;
-  out.misfit_mm = points > 0 ? std::sqrt(misfit / points) : 0.0;
+  // Each scan's mean square per coordinate is the sum of the misfits of the axes it moves (an axis whose travel
+  // along the scan is at least a tenth of the other's: a row's servo scatter in y is no travel). Least squares of
+  // minimum norm over the scans (a lone diagonal splits its misfit evenly, the sum stays its own), each axis'
+  // share at least 0.
+  std::vector<Eigen::Vector2d> moves, mean_squares;
+  for (const auto& [group, scan] : scans) {
+    if (scan.points == 0) continue;
+    const Eigen::Vector2d travel = scan.hi - scan.lo;
+    const double longest = travel.maxCoeff();
+    if (!(longest > 0.0)) continue;
+    moves.emplace_back(travel.x() >= 0.1 * longest ? 1.0 : 0.0, travel.y() >= 0.1 * longest ? 1.0 : 0.0);
+    mean_squares.push_back(scan.squares / scan.points);
+  }
+  if (!moves.empty()) {
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(moves.size()), 2), b(static_cast<Eigen::Index>(moves.size()), 2);
+    for (size_t k = 0; k < moves.size(); ++k) {
+      a.row(static_cast<Eigen::Index>(k)) = moves[k].transpose();
+      b.row(static_cast<Eigen::Index>(k)) = mean_squares[k].transpose();
+    }
+    const Eigen::MatrixXd axes =  // axis x coordinate
+        Decompose<Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>>(a, "the scans' misfit per axis").solve(b).cwiseMax(0.0);
+    out.misfit_at_point_mm = axes.colwise().sum().transpose().cwiseSqrt();
+  }
+  out.misfit_mm = out.misfit_at_point_mm.norm();
   return out;
 }
 
@@ -185,6 +224,8 @@ ScanCalibration IdentifyFromScans(const stage::ParameterLayout& layout, const st
   const double applied = std::max(result.weighted_rms, 1.0);
   stage::Calibration& cal = result.calibration;
   cal.covariance *= (split.white_ratio * split.white_ratio) / (applied * applied);
+  // What the model cannot take stays at every point it corrects (fvm correct's u): the misfit a point inherits.
+  cal.unmodelled_mm = Eigen::Vector3d(split.misfit_at_point_mm.x(), split.misfit_at_point_mm.y(), 0.0);
   // What the pairs of a scan share and the white part does not model: the registrations' pull towards whole
   // pixels, and what of the misfit the coefficients took up (scan_correlated_errors.h).
   const ScanCorrelatedErrors correlated = ScanCorrelatedErrorCovariances(cal, set, result.residuals, pixel_mm);

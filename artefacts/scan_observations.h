@@ -66,8 +66,14 @@ struct ScanResidualSplit {
   // The white part against the registrations' own covariances, from the second differences of consecutive
   // whitened residuals (1: as the registrations say). What scales the covariance.
   double white_ratio = 0.0;
-  // The smooth part: the residuals chained into positions along each scan, rms about each scan's mean, per point
-  // (xy, mm). What a prediction between the scans should add to the covariance's share.
+  // The smooth part: the residuals chained into positions along each scan about each run's mean. A stage's error is
+  // each axis' error function of its own coordinate (VDI 2617), so a scan along X sees only X's misfit, one along Y
+  // only Y's, and a diagonal both; a point between the scans carries X's at its x and Y's at its y. Per coordinate
+  // (mm): the standard deviation of the misfit a point inherits, the mean squares of the scans that move each axis
+  // (least squares over the scans, a diagonal counting for both) summed over the axes. Pooling every scan's
+  // points instead counts a point's misfit as one axis' on a row and a column (sqrt(2) short).
+  Eigen::Vector2d misfit_at_point_mm = Eigen::Vector2d::Zero();
+  // Its norm (xy, mm): what a prediction between the scans adds to the covariance's share.
   double misfit_mm = 0.0;
 };
 ScanResidualSplit SplitScanResiduals(const stage::MeasurementSet& set, const std::vector<Eigen::Vector3d>& residuals);

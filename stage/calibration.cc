@@ -53,6 +53,7 @@ CorrectedPoint Correct(const Calibration& calibration, const Eigen::Vector3d& fr
   CorrectedPoint out;
   const Eigen::MatrixXd j = ForwardJacobian(calibration.layout, calibration.values.data(), free_point, &out.position);
   if (calibration.covariance.rows() == j.cols()) out.covariance = j * calibration.covariance * j.transpose();
+  out.covariance += calibration.unmodelled_mm.cwiseAbs2().asDiagonal();
   return out;
 }
 
@@ -80,6 +81,7 @@ CorrectedPoint FirstTileCompensation::Correct(const Eigen::Vector3d& free_point)
   Eigen::MatrixXd j;
   out.position = (*this)(free_point, &j);
   if (calibration_.covariance.rows() == j.cols()) out.covariance = j * calibration_.covariance * j.transpose();
+  out.covariance += calibration_.unmodelled_mm.cwiseAbs2().asDiagonal();
   return out;
 }
 

@@ -28,6 +28,10 @@ struct Calibration {
     std::vector<std::string> names;
     Eigen::MatrixXd absorbed;  // values.size() x names.size(): d(values) / d(its value) on the identification data
   } undetermined;
+  // What the model cannot take at a point (a lead screw's cycle no polynomial follows), standard deviation per
+  // coordinate (mm): added to every corrected point's covariance beside the coefficients'. A scan calibration sets
+  // it from the misfit along its scans (artefacts/scan_observations.h); zero where nothing estimated it.
+  Eigen::Vector3d unmodelled_mm = Eigen::Vector3d::Zero();
 
   Eigen::VectorXd StandardUncertainty() const { return covariance.diagonal().cwiseSqrt(); }
   Eigen::MatrixXd Correlation() const;
@@ -35,7 +39,7 @@ struct Calibration {
 
 struct CorrectedPoint {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();    // compensated (stitched-equivalent) coordinates, mm
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // from the model's parameter covariance only, mm^2
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // the coefficients' covariance and the unmodelled part, mm^2
 };
 
 // The 21 term values at command q (mm, rad), each with its standard uncertainty from the coefficient covariance:

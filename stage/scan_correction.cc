@@ -76,6 +76,7 @@ CorrectedPoint ScanCorrector::Correct(const Eigen::Vector3d& file_point) const {
       const Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxCoefficients> jc = j * calibration_.covariance;
       out.covariance = jc * j.transpose();
     }
+    out.covariance += calibration_.unmodelled_mm.cwiseAbs2().asDiagonal();
   }
   out.position -= options_.origin_mm;
   return out;

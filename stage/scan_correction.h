@@ -37,7 +37,7 @@ class ScanCorrector {
   ScanCorrector(const Calibration& calibration, const ScanCorrectionOptions& options,
                 const std::vector<Eigen::Vector3d>& file_points);
 
-  // The corrected point in the file's frame, with the covariance the model's coefficients give it.
+  // The corrected point in the file's frame, with the covariance the model's coefficients and its unmodelled part give it.
   CorrectedPoint Correct(const Eigen::Vector3d& file_point) const;
   // The same position, without the covariance (several times faster).
   Eigen::Vector3d Position(const Eigen::Vector3d& file_point) const;

@@ -34,6 +34,7 @@ nlohmann::json PredictedJson(const ScanCalibrationResult& r) {
           {"pair_weights_without_pixel_size", r.predicted_without_pixel_um},
           {"independent_positions", r.predicted_independent_um},
           {"model_misfit_along_scans", r.fitted.split.misfit_mm * 1e3},
+          {"model_misfit_at_point_um", {r.fitted.split.misfit_at_point_mm.x() * 1e3, r.fitted.split.misfit_at_point_mm.y() * 1e3}},
           {"combined", r.predicted_xy_with_misfit_um},
           {"white_residual_ratio", r.fitted.split.white_ratio},
           {"what", "standard uncertainty of the xy stage error, rms over the box the scans cover, "
@@ -106,7 +107,9 @@ std::string ScanFitText(const ScanCalibrationRun& run) {
   text += fmt::format("\n  registered displacements after the fit: rms {:.3f} um (weighted rms {:.2f}: 1 = as the registrations' own "
                       "covariances say)\n", result.residual_summary.rms_um(), result.weighted_rms);
   text += fmt::format("  the residuals' white part is {:.2f} x the registrations' covariance; chained along the scans they leave "
-                      "{:.3f} um rms that the model cannot take\n", r.fitted.split.white_ratio, r.fitted.split.misfit_mm * 1e3);
+                      "{:.3f} um rms that the model cannot take at a point (x {:.3f}, y {:.3f}: each axis' along the scans "
+                      "that move it)\n", r.fitted.split.white_ratio, r.fitted.split.misfit_mm * 1e3,
+                      r.fitted.split.misfit_at_point_mm.x() * 1e3, r.fitted.split.misfit_at_point_mm.y() * 1e3);
   text += fmt::format("  predicted xy stage-error uncertainty over the scanned box, less its offset and turn about z (k=1): {:.3f} um rms "
                       "from the coefficients", r.predicted_xy_um);
   if (run.options.pixel_u_mm > 0.0) text += fmt::format(" ({:.3f} um without the pixel size's)", r.predicted_without_pixel_um);

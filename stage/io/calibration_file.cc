@@ -95,6 +95,8 @@ json CalibrationToJson(const stage::IdentificationResult& result) {
   doc["correlation"] = corr;
   doc["condition_number"] = result.condition_number;
   doc["sigma_mm"] = cal.sigma_mm;
+  // What the model cannot take at a point (calibration.h), for fvm correct's u; written where something estimated it.
+  if (!cal.unmodelled_mm.isZero(0.0)) doc["unmodelled_mm"] = {cal.unmodelled_mm.x(), cal.unmodelled_mm.y(), cal.unmodelled_mm.z()};
   if (cal.frame_reference) {
     const Eigen::Vector3d& r = *cal.frame_reference;
     doc["frame_reference_mm"] = {r.x(), r.y(), r.z()};  // the first tile whose view the part frame is (stitched_frame.h)
@@ -195,6 +197,15 @@ stage::Calibration ReadCalibration(const std::filesystem::path& path) {
       if (!r.is_array() || r.size() != 3) throw fail("'frame_reference_mm' is not three numbers (x, y, z in mm)");
       cal.frame_reference = Eigen::Vector3d(r.at(0).get<double>(), r.at(1).get<double>(), r.at(2).get<double>());
       if (!cal.frame_reference->allFinite()) throw fail("'frame_reference_mm' is not finite");
+    }
+    if (doc.contains("unmodelled_mm")) {
+      const json& m = doc.at("unmodelled_mm");
+      if (!m.is_array() || m.size() != 3) throw fail("'unmodelled_mm' is not three numbers (x, y, z in mm)");
+      for (size_t k = 0; k < 3; ++k) {
+        const double v = m.at(k).get<double>();
+        if (!std::isfinite(v) || v < 0.0) throw fail(fmt::format("'unmodelled_mm'[{}] is not a finite standard deviation (>= 0 mm)", k));
+        cal.unmodelled_mm[static_cast<Eigen::Index>(k)] = v;
+      }
     }
     return cal;
   } catch (const json::exception& e) {

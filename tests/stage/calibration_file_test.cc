@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "core/input_error.h"
+#include "stage/calibration.h"
 #include "tests/support/test_models.h"
 
 namespace fvm::stage {
@@ -126,6 +127,29 @@ TEST_F(CalibrationFile, RefusesATieToATiedCoefficientInsteadOfOverflowing) {
         p["factor"] = 1.0;
       },
       {"(xWy)", "yTx0 is itself tied to xTx0"});
+}
+
+// What the model cannot take at a point (a scan calibration's misfit along its scans) is kept by the file and
+// reaches every corrected point's u beside the coefficients' share: 0.4 um and 0.3 um in x and y here.
+TEST_F(CalibrationFile, KeepsTheUnmodelledPartAndCorrectCarriesItInTheU) {
+  IdentificationResult written = SmallResult();
+  EXPECT_FALSE(CalibrationToJson(written).contains("unmodelled_mm"));  // nothing estimated it: not written
+  const Eigen::Vector3d q(-120, -35, -50);
+  const Eigen::Matrix3d coefficients = Correct(written.calibration, q).covariance;
+  written.calibration.unmodelled_mm = Eigen::Vector3d(4e-4, 3e-4, 0.0);
+  const Calibration read = ReadCalibration(Write(CalibrationToJson(written)));
+  EXPECT_EQ(read.unmodelled_mm, written.calibration.unmodelled_mm);
+  const Eigen::Matrix3d with = Correct(read, q).covariance;
+  EXPECT_NEAR(with(0, 0) - coefficients(0, 0), 1.6e-7, 1e-18);
+  EXPECT_NEAR(with(1, 1) - coefficients(1, 1), 9e-8, 1e-18);
+  EXPECT_EQ(with(2, 2), coefficients(2, 2));
+  const FirstTileCompensation first_tile(read, StitchedFrame::kRotated, Eigen::Vector3d(-185.0, -15.0, -50.0));
+  EXPECT_GE(first_tile.Correct(q).covariance(0, 0), 1.6e-7);
+}
+
+TEST_F(CalibrationFile, RefusesABadUnmodelledPart) {
+  ExpectRefused([&](json& d) { d["unmodelled_mm"] = {1e-4, 2e-4}; }, {"unmodelled_mm", "three numbers"});
+  ExpectRefused([&](json& d) { d["unmodelled_mm"] = {1e-4, -2e-4, 0.0}; }, {"'unmodelled_mm'[1]", "standard deviation"});
 }
 
 TEST_F(CalibrationFile, RefusesABadFrameReference) {
