@@ -149,7 +149,10 @@ TEST(ReaderFuzz, InstrumentExports) {
       {ParseZygoDatx, testing::BuildDatx(map)},
       {[](const std::string& b, const std::string& n) { return ParseSensofarPlux(b, n); }, testing::BuildPlux(map)}};
   std::mt19937 random(11);
-  for (const auto& [parse, valid] : formats) {
+  for (const auto& format : formats) {
+    // Named, not a structured binding: clang 14 cannot capture one in the lambda below (C++20 allows it).
+    const auto& parse = format.first;
+    const auto& valid = format.second;
     for (int round = 0; round < kRounds; ++round) {
       std::string bytes = Mutate(valid, random);
       if (round % 2 == 0) {
