@@ -72,6 +72,30 @@ float TypicalSquare(const cv::Mat& square, const cv::Mat& weight) {
   return sample[sample.size() / 2] / 0.4549f;
 }
 
+// The local mean of `values` weighted by `weights` over a Gaussian of sigma_px, into `mean`: the blur of values x
+// weights over the blur of the weights. `product` and `total` are scratch; the product is complete before any band
+// blurs it, since a band's blur reads the rows beside it.
+void WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sigma_px, MapBuffers& buffers,
+                       cv::Mat& product, cv::Mat& total, cv::Mat& mean) {
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      float* p = product.ptr<float>(r);
+      const float *v = values.ptr<float>(r), *w = weights.ptr<float>(r);
+      for (int col = 0; col < values.cols; ++col) p[col] = v[col] * w[col];
+    }
+  });
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
+    cv::GaussianBlur(product.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    cv::GaussianBlur(weights.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+    for (int r = r0; r < r1; ++r) {
+      float* m = mean.ptr<float>(r);
+      const float* t = total.ptr<float>(r);
+      for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
+    }
+  });
+}
+
 }  // namespace
 
 Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
@@ -181,44 +205,24 @@ cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
   // bends' spread over their reach.
   cv::Mat kept = valid;
   const auto departures = [&](const cv::Mat& weights) {
+    WeightedLocalMean(heights, weights, kCurvatureSmoothingPx, buffers, c, b, a);
     buffers.Pass([&](int r0, int r1) {
-      for (int r = r0; r < r1; ++r) {
-        float* lw = c.ptr<float>(r);
-        const float *l = heights.ptr<float>(r), *w = weights.ptr<float>(r);
-        for (int col = 0; col < heights.cols; ++col) lw[col] = l[col] * w[col];
-      }
-    });
-    buffers.Pass([&](int r0, int r1) {
-      cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-      cv::GaussianBlur(c.rowRange(r0, r1), a_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
-      cv::GaussianBlur(weights.rowRange(r0, r1), b_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
       for (int r = r0; r < r1; ++r) {
         float* d = roughness.ptr<float>(r);
-        const float *l = heights.ptr<float>(r), *m = a.ptr<float>(r), *n = b.ptr<float>(r);
-        for (int col = 0; col < heights.cols; ++col) d[col] = l[col] - m[col] / std::max(n[col], 1e-6f);
+        const float *l = heights.ptr<float>(r), *m = a.ptr<float>(r);
+        for (int col = 0; col < heights.cols; ++col) d[col] = l[col] - m[col];
       }
     });
   };
   // The departures' local mean (signed) over kBendWidthPx, squared (buffer 9): the points where it exceeds the cut
   // are bends.
   departures(weight);
-  buffers.Pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* dw = c.ptr<float>(r);
-      const float *d = roughness.ptr<float>(r), *w = weight.ptr<float>(r);
-      for (int col = 0; col < c.cols; ++col) dw[col] = d[col] * w[col];
-    }
-  });
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat a_rows = a.rowRange(r0, r1), b_rows = b.rowRange(r0, r1);
-    cv::GaussianBlur(c.rowRange(r0, r1), a_rows, cv::Size(), kBendWidthPx, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(weight.rowRange(r0, r1), b_rows, cv::Size(), kBendWidthPx, 0.0, cv::BORDER_REFLECT);
-  });
+  WeightedLocalMean(roughness, weight, kBendWidthPx, buffers, c, b, a);
   buffers.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       float* o = c.ptr<float>(r);
-      const float *m = a.ptr<float>(r), *n = b.ptr<float>(r);
-      for (int col = 0; col < c.cols; ++col) o[col] = m[col] / std::max(n[col], 1e-6f), o[col] *= o[col];
+      const float* m = a.ptr<float>(r);
+      for (int col = 0; col < c.cols; ++col) o[col] = m[col] * m[col];
     }
   });
   const float cut = kBendCut * kBendCut * TypicalSquare(c, weight);
