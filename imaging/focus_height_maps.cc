@@ -21,8 +21,9 @@ constexpr float kBendCut = 3.0f;
 constexpr double kBendWidthPx = 2.0;
 constexpr double kBendReachPx = 4.0;
 constexpr float kBendShare = 0.4f;
-// The local plane is fitted where the determinant of its normal equations is at least this share of a full
-// window's (1 point in 20 of the full determinant's sigma^4 share^3: a plane's slope fixed along both axes).
+// The local plane (WindowScaleRoughness) is fitted where the determinant of its normal equations is at least this
+// share of what as many valid points spread evenly would give (share^3 sigma^4); below it they lie too nearly on a
+// line or at a point to fix a plane's slope along both axes.
 constexpr double kPlaneFitConditioning = 0.05;
 
 // Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
