@@ -21,7 +21,7 @@ namespace fvm::imaging {
 struct MapBuffers {
   int width = 0, height = 0;
   bool parallel = true;
-  HugeVector<float> storage[11];
+  HugeVector<float> storage[16];
 
   cv::Mat operator[](int i) {
     HugeVector<float>& v = storage[i];

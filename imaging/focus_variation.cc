@@ -67,8 +67,11 @@ constexpr double kSpreadLimitSteps = 2.4;
 // rms on focusgen.py's flats, most at NA 0.9 with a 0.8 um floor and with a 2 px texture); the vertex's move when
 // the fit keeps only the top three images (Peak::model) measures the curve's departure from the parabola there;
 // on a slope the window's heights span steps and average that bias away, so the term falls as 1 / (1 + (slope
-// times kModelSpanPx over the step)^2). The terms overlap (the noise's errors show in the roughness and in the
-// fits' disagreement too) and add in quadrature, each at a weight calibrated for 95 % coverage of 1.96 u_z on
+// times kModelSpanPx over the step)^2): from a step over about a window's side (8 px; with 4 px, walls of slope
+// 0.2-0.45 step/px kept a third of the term, which their roughness already holds: walls covered 97-98.6 %,
+// error / u_z 0.85-0.9 where the heights' roughness alone matched the errors). The terms overlap (the noise's
+// errors show in the roughness and in the fits' disagreement too) and add in quadrature, each at a weight
+// calibrated for 95 % coverage of 1.96 u_z on
 // focusgen.py seeds 11 and 12 over 13 conditions (NA 0.3 to 0.9, floor 0.3 to 0.8 um, texture correlation 0.7 to
 // 2 px; tests/bench/focus_conditions.py) and checked on seeds 13 and 14: the measure's noise per pixel over its
 // floor propagated through the fit (scaled by the power fit's misfit, focus_peak.cc); the roughness; a share of
@@ -79,7 +82,7 @@ constexpr double kStepFraction = 0.005;
 constexpr double kRoughnessPx2 = 9.0;
 constexpr double kScatterScale = 0.09;
 constexpr double kModelShare = 0.6;
-constexpr double kModelSpanPx = 4.0;
+constexpr double kModelSpanPx = 8.0;
 constexpr double kSlopePx = 0.005;
 
 }  // namespace
