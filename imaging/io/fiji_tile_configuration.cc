@@ -142,7 +142,16 @@ std::vector<int> FijiAxisNodes(const FijiTileConfiguration& config, int axis, do
                                             clusters[static_cast<size_t>(to)].end());  // first in the file
       refuse(tile, std::abs(pitches - whole) * pitch);
     }
-    index[static_cast<size_t>(to)] = index[static_cast<size_t>(from)] + static_cast<int>(whole);
+    // Within the bounds of a layout before any index is formed (coordinates up to 1e9 px over a pitch of a pixel).
+    const double at_index = index[static_cast<size_t>(from)] + whole;
+    if (std::abs(at_index) >= kMaxTilesPerAxis) {
+      const FijiTile& t = config.tiles[clusters[static_cast<size_t>(to)].front()];
+      throw InputError(fmt::format("{}:{}: tile {} is {:.0f} pitches of {:.1f} px from the first tile along {}: more {}s "
+                                   "than a layout may span ({}); check the positions and --overlap",
+                                   config.source, t.line, t.file, at_index, pitch, coordinate, what,
+                                   kMaxTilesPerAxis));
+    }
+    index[static_cast<size_t>(to)] = static_cast<int>(at_index);
   };
   for (int c = first + 1; c < static_cast<int>(clusters.size()); ++c) step(c - 1, c);
   for (int c = first - 1; c >= 0; --c) step(c + 1, c);

@@ -8,6 +8,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
+#include <set>
 
 #include "core/input_error.h"
 
@@ -149,6 +151,16 @@ TEST(FijiTileConfiguration, BadInputIsRefusedByFileAndLine) {
                            "(pitch 100.0 px): it lies on no node, within a third of a pitch; check its position and "
                            "--overlap");
   }
+  // A pitch of a pixel and a tile a billion pixels away: more columns than a layout may span, refused before an
+  // index overflows.
+  try {
+    FijiTileLayout(ParseFijiTileConfiguration("dim = 2\na.tif; ; (0, 0)\nb.tif; ; (1e9, 0)\n", "far.txt"),
+                   Eigen::Vector2d(1.0, 1.0));
+    ADD_FAILURE() << "a grid of a billion columns was laid out";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "far.txt:3: tile b.tif is 1000000000 pitches of 1.0 px from the first tile along x: more "
+                           "columns than a layout may span (100000); check the positions and --overlap");
+  }
   EXPECT_EQ(error("empty.txt", "# Define the number of dimensions we are working on\ndim = 2\n"),
             ": no tiles; a Fiji tile configuration lists one 'name; ; (x, y)' line a tile");
   // A tile line before the dimension (such a file is a CSV layout to ReadTileLayout, whose reader says what it
@@ -181,6 +193,42 @@ TEST(FijiTileConfiguration, WritesTheRegisteredFormThatReadsBack) {
   EXPECT_EQ(std::tie(layout.tiles[2].row, layout.tiles[2].col), std::make_tuple(1, 0));
   EXPECT_THROW(FormatFijiTileConfiguration({"a;b.tif"}, {{0.0, 0.0}}), InputError);
   EXPECT_THROW(FormatFijiTileConfiguration({" a.tif"}, {{0.0, 0.0}}), InputError);
+}
+
+// A brief fuzz: a registered configuration with 1-4 bytes changed, cut or given extra digits reads to a well-formed
+// layout (every tile inside its rows x cols, one a node) or fails with an InputError, never otherwise.
+TEST(FijiTileConfiguration, DamagedConfigurationsReadOrFailWithAnInputError) {
+  const std::string valid = std::string(kHeader) +
+                            "a.tif; ; (0.0, 0.0)\nb.tif; ; (460.5, -1.25)\nc.tif; ; (921.75, -2.5E0)\n"
+                            "f.tif; ; (923.0, 358.0)\ne.tif; ; (462.1, 357.5)\nd.tif; ; (-3.0E-1, 3.6e2)\n";
+  std::mt19937 random(43);
+  for (int round = 0; round < 2000; ++round) {
+    std::string bytes = valid;
+    const int kind = static_cast<int>(random() % 10);
+    std::uniform_int_distribution<size_t> where(0, bytes.size() - 1);
+    if (kind == 0) {
+      bytes.resize(where(random));
+    } else if (kind == 1) {
+      bytes.insert(where(random), std::string(1 + random() % 9, static_cast<char>('0' + random() % 10)));
+    } else {
+      for (int i = 0, n = 1 + static_cast<int>(random() % 4); i < n; ++i) bytes[where(random)] = static_cast<char>(random() % 256);
+    }
+    for (const bool given : {false, true}) {
+      try {
+        const TileLayout layout = FijiTileLayout(ParseFijiTileConfiguration(bytes, "fuzz.txt"),
+                                                 given ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(460.8, 360.0))
+                                                       : std::nullopt);
+        std::set<std::pair<int, int>> nodes;
+        for (const TileLayoutEntry& t : layout.tiles) {
+          ASSERT_TRUE(t.row >= 0 && t.row < layout.rows && t.col >= 0 && t.col < layout.cols) << "round " << round;
+          ASSERT_TRUE(nodes.insert({t.row, t.col}).second) << "round " << round;
+        }
+      } catch (const InputError&) {
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "round " << round << ": " << e.what();
+      }
+    }
+  }
 }
 
 // The configurations that come with the real tiles: Fiji's input (serpentine), its registered output, the authors'
