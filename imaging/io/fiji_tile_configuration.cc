@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
+#include <tuple>
 #include <utility>
 
 #include "core/file_io.h"
@@ -97,6 +99,11 @@ FijiTile ParseFijiTileLine(std::string_view line, int dim, const FijiLine& at, s
   return tile;
 }
 
+// A byte-order mark, which Windows editors put before the first line.
+std::string_view WithoutByteOrderMark(std::string_view text) {
+  return text.starts_with("\xEF\xBB\xBF") ? text.substr(3) : text;
+}
+
 // One axis's node indices: see FijiTileLayout. `what` names the axis's lines ("column", "row") in messages.
 std::vector<int> FijiAxisNodes(const FijiTileConfiguration& config, int axis, double pitch, const char* what) {
   const size_t n = config.tiles.size();
@@ -170,9 +177,10 @@ bool IsFijiTileConfiguration(const std::filesystem::path& path) {
   } catch (const InputError&) {
     return false;
   }
-  for (size_t begin = 0; begin < head.size();) {
-    const size_t end = std::min(head.find('\n', begin), head.size());
-    const std::string_view line = TrimBlanks(std::string_view(head).substr(begin, end - begin));
+  const std::string_view text = WithoutByteOrderMark(head);
+  for (size_t begin = 0; begin < text.size();) {
+    const size_t end = std::min(text.find('\n', begin), text.size());
+    const std::string_view line = TrimBlanks(text.substr(begin, end - begin));
     begin = end + 1;
     if (line.empty() || line.front() == '#') continue;
     return line.starts_with("dim") && TrimBlanks(line.substr(3)).starts_with("=");
@@ -181,6 +189,7 @@ bool IsFijiTileConfiguration(const std::filesystem::path& path) {
 }
 
 FijiTileConfiguration ParseFijiTileConfiguration(std::string_view text, const std::string& source) {
+  text = WithoutByteOrderMark(text);
   FijiTileConfiguration config;
   config.source = source;
   bool dim_given = false;
@@ -227,7 +236,10 @@ FijiTileConfiguration ReadFijiTileConfiguration(const std::filesystem::path& pat
   return ParseFijiTileConfiguration(ReadFileBytes(path, size_t{1} << 28), path.string());
 }
 
-Eigen::Vector2d PitchFromGaps(const FijiTileConfiguration& config) {
+namespace {
+
+// Each axis's pitch as its own gaps show it (see PitchFromGaps); NaN along an axis without a step (one column or row).
+Eigen::Vector2d OwnGapPitches(const FijiTileConfiguration& config) {
   std::vector<double> gaps[2];
   double widest = 0.0;
   for (int axis = 0; axis < 2; ++axis) {
@@ -237,8 +249,8 @@ Eigen::Vector2d PitchFromGaps(const FijiTileConfiguration& config) {
     for (size_t k = 1; k < v.size(); ++k) gaps[axis].push_back(v[k] - v[k - 1]);
     for (double g : gaps[axis]) widest = std::max(widest, g);
   }
-  if (!(widest > 0.0)) return Eigen::Vector2d::Ones();  // one tile, or all on one point (refused as such)
   Eigen::Vector2d pitch(NAN, NAN);
+  if (!(widest > 0.0)) return pitch;  // one tile, or all on one point
   for (int axis = 0; axis < 2; ++axis) {
     std::vector<double> steps;
     for (double g : gaps[axis]) {
@@ -248,8 +260,16 @@ Eigen::Vector2d PitchFromGaps(const FijiTileConfiguration& config) {
     std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
     pitch[axis] = steps[steps.size() / 2];
   }
+  return pitch;
+}
+
+}  // namespace
+
+Eigen::Vector2d PitchFromGaps(const FijiTileConfiguration& config) {
+  Eigen::Vector2d pitch = OwnGapPitches(config);
   if (std::isnan(pitch.x())) pitch.x() = pitch.y();
   if (std::isnan(pitch.y())) pitch.y() = pitch.x();
+  if (std::isnan(pitch.x())) pitch = Eigen::Vector2d::Ones();  // one node: any pitch (two tiles there are refused)
   return pitch;
 }
 
@@ -257,6 +277,22 @@ TileLayout FijiTileLayout(const FijiTileConfiguration& config, std::optional<Eig
   const Eigen::Vector2d pitch = pitch_px.value_or(PitchFromGaps(config));
   const std::vector<int> cols = FijiAxisNodes(config, 0, pitch.x(), "column");
   const std::vector<int> rows = FijiAxisNodes(config, 1, pitch.y(), "row");
+  // A pitch the positions step over two or more at a time everywhere (a wrong --overlap: the tiles then lie two nodes
+  // apart, with no neighbour to register) is refused, saying so.
+  for (const auto& [nodes, what, coordinate, along] :
+       {std::tuple(&cols, "columns", "x", pitch.x()), std::tuple(&rows, "rows", "y", pitch.y())}) {
+    std::vector<int> present(*nodes);
+    std::sort(present.begin(), present.end());
+    present.erase(std::unique(present.begin(), present.end()), present.end());
+    int nearest = std::numeric_limits<int>::max();
+    for (size_t k = 1; k < present.size(); ++k) nearest = std::min(nearest, present[k] - present[k - 1]);
+    if (present.size() >= 2 && nearest >= 2) {
+      throw InputError(fmt::format("{}: no two {} of the grid are neighbours: the nearest lie {} pitches of {:.1f} px "
+                                   "apart along {}; check --overlap (the pitch is the tile size times 1 - overlap), or "
+                                   "give the tiles between them",
+                                   config.source, what, nearest, along, coordinate));
+    }
+  }
   TileLayout layout;
   layout.source = config.source;
   std::map<std::pair<int, int>, size_t> seen;

@@ -69,6 +69,12 @@ if(NOT ERR MATCHES "between.txt:3: tile tile_r000_c001.tif at x = 102.4 px is 10
    OR EXISTS ${WORK}/set/bad.csv)
   message(FATAL_ERROR "a tile between two columns was not named:\n${ERR}")
 endif()
+# A wrong --overlap (60 % of 256 px: a pitch of 102.4 px where the tiles step by 204.8) is named, not stitched.
+run(1 stitch --layout ${WORK}/set/TileConfiguration.txt --overlap 60 -o ${WORK}/set/bad.csv)
+if(NOT ERR MATCHES "TileConfiguration.txt: no two columns of the grid are neighbours: the nearest lie 2 pitches of 102.4 px apart along x; check --overlap"
+   OR EXISTS ${WORK}/set/bad.csv)
+  message(FATAL_ERROR "a wrong overlap was not named:\n${ERR}")
+endif()
 file(WRITE ${WORK}/set/stacks.txt "dim = 3\ntile_r000_c000.tif; ; (0.0, 0.0, 0.0)\ntile_r000_c001.tif; ; (204.8, 0.0, 3.0)\n")
 run(1 stitch --layout ${WORK}/set/stacks.txt --overlap 20 -o ${WORK}/set/bad.csv)
 if(NOT ERR MATCHES "stacks.txt:3: tile tile_r000_c001.tif is at z = 3 px, the first tile at z = 0: tiles in several planes")

@@ -76,6 +76,10 @@ TEST(FijiTileConfiguration, ReadsASerpentineRegisteredGridAsALayout) {
   for (size_t i = 0; i < expected.size(); ++i) {
     EXPECT_EQ(std::tie(given.tiles[i].row, given.tiles[i].col), std::tie(layout.tiles[i].row, layout.tiles[i].col));
   }
+  // A byte-order mark before the first line (Windows editors) changes nothing.
+  const auto marked = WriteFiji("marked.txt", "\xEF\xBB\xBF" + text);
+  ASSERT_TRUE(IsFijiTileConfiguration(marked));
+  EXPECT_EQ(ReadTileLayout(marked).tiles[5].col, 0);
   // A CSV layout is not taken for one.
   EXPECT_FALSE(IsFijiTileConfiguration(WriteFiji("plain.csv", "# dim = 2\nfile,row,col\na.tif,0,0\n")));
   EXPECT_FALSE(IsFijiTileConfiguration(FijiScratch("absent.txt")));
@@ -86,14 +90,27 @@ TEST(FijiTileConfiguration, ReadsASerpentineRegisteredGridAsALayout) {
 TEST(FijiTileConfiguration, MissingTilesLeaveHolesAtTheirNodes) {
   const std::string text = std::string(kHeader) +
                            "a.tif; ; (1000.0, 500.0)\n"
-                           "c.tif; ; (1180.0, 500.0)\n"
-                           "d.tif; ; (1000.0, 590.0)\n"
-                           "f.tif; ; (1181.0, 591.0)\n";
+                           "b.tif; ; (1090.5, 500.0)\n"
+                           "d.tif; ; (1271.0, 501.0)\n"
+                           "e.tif; ; (1000.0, 590.0)\n"
+                           "h.tif; ; (1270.0, 591.0)\n";
   const TileLayout layout = FijiTileLayout(ParseFijiTileConfiguration(text, "holes.txt"), Eigen::Vector2d(90.0, 90.0));
   EXPECT_EQ(layout.rows, 2);
-  EXPECT_EQ(layout.cols, 3);
-  EXPECT_EQ(std::tie(layout.tiles[1].row, layout.tiles[1].col), std::make_tuple(0, 2));
-  EXPECT_EQ(std::tie(layout.tiles[3].row, layout.tiles[3].col), std::make_tuple(1, 2));
+  EXPECT_EQ(layout.cols, 4);
+  std::vector<std::pair<int, int>> nodes;
+  for (const TileLayoutEntry& t : layout.tiles) nodes.emplace_back(t.row, t.col);
+  EXPECT_EQ(nodes, (std::vector<std::pair<int, int>>{{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 3}}));
+  // Tiles that lie two pitches apart everywhere: the overlap is wrong (or the tiles between them missing).
+  try {
+    FijiTileLayout(ParseFijiTileConfiguration("dim = 2\na.tif; ; (0, 0)\nb.tif; ; (921, 1)\nc.tif; ; (1842, 2)\n",
+                                              "overlap.txt"),
+                   Eigen::Vector2d(512.0, 512.0));
+    ADD_FAILURE() << "tiles 921 px apart were laid out with a pitch of 512 px";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "overlap.txt: no two columns of the grid are neighbours: the nearest lie 2 pitches of 512.0 px "
+                           "apart along x; check --overlap (the pitch is the tile size times 1 - overlap), or give the "
+                           "tiles between them");
+  }
 }
 
 // dim = 3 is read where every tile lies in one plane; tiles in several planes (image stacks) are refused.
