@@ -47,7 +47,8 @@ void WriteOutputs(const StitchArgs& args, const workflows::LayoutTiles& tiles, c
   if (stitched.field && !args.distortion.undistorted_dir.empty()) {
     workflows::WriteUndistortedTiles(args.distortion.undistorted_dir, stitched, tiles.images, tiles.pixel_type);
   }
-  WriteFileAtomically(args.output, workflows::PositionsCsv(stitched));
+  WriteFileAtomically(args.output, workflows::IsFijiPositionsPath(args.output) ? workflows::PositionsFiji(stitched)
+                                                                               : workflows::PositionsCsv(stitched));
   if (args.mosaic.empty()) return;
   Progress tile_progress("fusing tiles", static_cast<int>(tiles.images.size()), ShowProgress());
   imaging::Mosaic mosaic = workflows::FuseStitched(stitched, tiles.images, [&](int, int) { tile_progress.Advance(); });
@@ -60,7 +61,7 @@ void RunStitch(StitchArgs& args) {
   args.job.Check();
   workflows::CheckMosaicPath(args.mosaic, args.job.stitch.pixel_mm);
   BindDistortion(args);
-  const workflows::LayoutTiles tiles = workflows::ReadLayoutTiles(args.layout, args.job.stitch.threads);
+  const workflows::LayoutTiles tiles = workflows::ReadLayoutTiles(args.layout, args.job.stitch.threads, args.job.stitch.overlap);
   workflows::CheckMosaicTiles(args.mosaic, tiles.pixel_type);
   Progress pair_progress("registering pairs", workflows::StitchPairCount(tiles.layout, tiles.images, args.job.stitch),
                          ShowProgress());
@@ -104,7 +105,11 @@ void RegisterStitch(CLI::App& app) {
       "of the layout at 0,0, with its standard uncertainty. Tiles that no good pair links to an earlier one keep "
       "their stage (or grid) positions, as the instrument does; along parallel marks, where images cannot tell a "
       "shift, the stage position holds too.");
-  sub->add_option("--layout", args->layout, "layout CSV file,row,col[,x,y]; image paths relative to it")->required();
+  sub->add_option("--layout", args->layout,
+                  "layout CSV file,row,col[,x,y], or a Fiji tile configuration (TileConfiguration.txt: 'dim = 2', then "
+                  "'name; ; (x, y)' in px; rows and columns found by clustering the positions with the tile size "
+                  "times 1 - overlap; the positions are the nominal ones); image paths relative to it")
+      ->required();
   sub->add_option_function<std::string>(
          "--overlap", [args](const std::string& text) { args->job.stitch.overlap = imaging::ParseOverlap(text, "--overlap"); },
                   "nominal overlap of neighbouring tiles in percent, e.g. 20 (a value below 1 is read as a fraction: "
@@ -113,7 +118,8 @@ void RegisterStitch(CLI::App& app) {
       ->required();
   sub->add_option("-o,--output", args->output,
                   "positions CSV file,x,y[,x_mm,y_mm],registered,u_x,u_y (u: standard uncertainty in px against "
-                  "the first tile of the chain)")
+                  "the first tile of the chain); a name ending in .txt writes the same positions as Fiji's registered "
+                  "tile configuration ('name; ; (x, y)', px), which Fiji's Grid/Collection stitching opens")
       ->required();
   sub->add_option("--mosaic", args->mosaic,
                   "also fuse the registered tiles (feathered seams) into one image in the tiles' pixel type (TIFF, "

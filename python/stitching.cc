@@ -168,7 +168,7 @@ Stitched Stitch(const py::object& tiles, const std::optional<std::vector<std::pa
     if (layout || stage_mm) throw InputError("a layout file gives the tiles' rows, columns and stage positions: leave out layout and stage_mm");
     const auto path = py::cast<std::filesystem::path>(tiles);
     py::gil_scoped_release release;
-    t = workflows::ReadLayoutTiles(path);
+    t = workflows::ReadLayoutTiles(path, 0, options.stitch.overlap);
   } else {
     if (!layout) throw InputError("layout: give the (row, col) of each tile (or the path of a layout file as tiles)");
     t = TilesFrom(py::cast<py::sequence>(tiles), *layout, stage_mm);
@@ -215,7 +215,8 @@ void BindStitching(py::module_& m) {
         "Registers overlapping tiles into one frame, as `fvm stitch --layout L.csv --overlap PCT` does. tiles: "
         "2-D grey images of one size (any numeric dtype; NaN marks invalid pixels), H x W x C colour images (the "
         "channels' mean, alpha left out, as the command reads a colour file) or image paths; or the path of a "
-        "layout CSV (file,row,col[,x,y]) as the command reads it. layout: (row, col) of each tile, row 0 the "
+        "layout CSV (file,row,col[,x,y]) or of a Fiji tile configuration (TileConfiguration.txt, its rows and columns "
+        "clustered with the tile size times 1 - overlap, its positions the nominal ones) as the command reads it. layout: (row, col) of each tile, row 0 the "
         "highest Y, in scan order (the first tile anchors the frame); stage_mm: optional (x, y) stage positions of "
         "the tiles' centres, used with pixel_mm for the nominal positions. overlap: a fraction (0.2) or percent "
         "(20). distortion: identify the objective's field distortion of this order (True: 3); distortion_file: a "

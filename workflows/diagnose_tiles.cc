@@ -54,7 +54,7 @@ void AddRegisteredSet(const std::vector<imaging::TileImage>& images, const std::
 OverlapPoints GatherOverlapPoints(const TileDiagnoseOptions& options) {
   OverlapPoints out;
   if (!options.layout.empty()) {
-    const LayoutTiles tiles = ReadLayoutTiles(options.layout, options.threads);
+    const LayoutTiles tiles = ReadLayoutTiles(options.layout, options.threads, options.overlap);
     StitchOptions stitch;
     stitch.overlap = options.overlap;
     stitch.pixel_mm = options.pixel_mm;

@@ -33,11 +33,15 @@ std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, in
                                            const StitchOptions& options, bool* from_stage) {
   const double width = static_cast<double>(width_px), height = static_cast<double>(height_px);
   const bool stage = options.pixel_mm > 0.0 && layout.tiles.front().stage_mm.has_value();
+  // A Fiji tile configuration's positions are in px already: the stage positions, whatever the pixel size.
+  const bool in_px = !stage && layout.tiles.front().nominal_px.has_value();
   const auto& first = layout.tiles.front();
   std::vector<imaging::GridTile> grid;
   for (const auto& tile : layout.tiles) {
     Eigen::Vector2d nominal;
-    if (stage) {
+    if (in_px) {
+      nominal = tile.nominal_px.value() - *first.nominal_px;
+    } else if (stage) {
       nominal = Eigen::Vector2d(tile.stage_mm->x() - first.stage_mm->x(), first.stage_mm->y() - tile.stage_mm->y()) /
                 options.pixel_mm;
     } else {
@@ -46,7 +50,7 @@ std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, in
     }
     grid.push_back({tile.row, tile.col, nominal});
   }
-  if (from_stage) *from_stage = stage;
+  if (from_stage) *from_stage = stage || in_px;
   return grid;
 }
 

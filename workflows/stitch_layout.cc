@@ -6,16 +6,38 @@
 
 #include "core/file_io.h"
 #include "core/input_error.h"
+#include "core/number_text.h"
 #include "imaging/field_distortion.h"
+#include "imaging/io/fiji_tile_configuration.h"
 #include "imaging/io/x3p.h"
 
 namespace fvm::workflows {
 
 void StitchLayoutOptions::Check() const { stitch.Check(); }
 
-LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads) {
+namespace {
+
+// A Fiji tile configuration's grid: the pitch the tile size and the overlap give (the first tile's header read for
+// its size), else the one the positions' gaps show.
+imaging::TileLayout ReadFijiLayout(const std::filesystem::path& path, double overlap) {
+  const imaging::FijiTileConfiguration config = imaging::ReadFijiTileConfiguration(path);
+  if (!(overlap > 0.0 && overlap < 1.0)) return imaging::FijiTileLayout(config);
+  const imaging::FijiTile& first = config.tiles.front();
+  Eigen::Vector2i size;
+  try {
+    size = imaging::ReadTileImageSize(path.parent_path() / first.file);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}:{}: tile {}: {}", config.source, first.line, first.file, e.what()));
+  }
+  return imaging::FijiTileLayout(config, size.cast<double>() * (1.0 - overlap));
+}
+
+}  // namespace
+
+LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads, double overlap) {
   LayoutTiles tiles;
-  tiles.layout = imaging::ReadTileLayout(layout);
+  tiles.layout = imaging::IsFijiTileConfiguration(layout) ? ReadFijiLayout(layout, overlap)
+                                                          : imaging::ReadTileLayout(layout);
   imaging::CheckLayoutComplete(tiles.layout);
   tiles.images = imaging::ReadLayoutImages(tiles.layout, layout.parent_path(), &tiles.pixel_type, threads);
   return tiles;
@@ -83,6 +105,12 @@ std::string PositionsCsv(const StitchedLayout& stitched) {
                        u.x(), u.y());
   }
   return csv;
+}
+
+bool IsFijiPositionsPath(const std::filesystem::path& path) { return AsciiLower(path.extension().string()) == ".txt"; }
+
+std::string PositionsFiji(const StitchedLayout& stitched) {
+  return imaging::FormatFijiTileConfiguration(stitched.files, stitched.PositionsPx());
 }
 
 namespace {

@@ -33,8 +33,10 @@ struct LayoutTiles {
   imaging::TilePixelType pixel_type = imaging::TilePixelType::kFloat;  // the first tile's
 };
 // Throws InputError naming the layout's line and tile (imaging/io/tile_layout.h). The tiles decoded on `threads`
-// threads (0: all cores).
-LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads = 0);
+// threads (0: all cores). A Fiji tile configuration (imaging/io/fiji_tile_configuration.h) is read as a layout, its
+// rows and columns clustered with the pitch the tile size and `overlap` (a fraction) give, or, with overlap 0, the
+// pitch its positions' gaps show.
+LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads = 0, double overlap = 0.0);
 
 struct StitchedLayout {
   std::vector<std::string> files;  // the layout's tiles, in its order
@@ -65,6 +67,10 @@ int StitchPairCount(const imaging::TileLayout& layout, const std::vector<imaging
 
 // file,x,y[,x_mm,y_mm],registered,u_x,u_y (x_mm, y_mm with the pixel size: stage frame, +Y up).
 std::string PositionsCsv(const StitchedLayout& stitched);
+// The same positions as Fiji's registered tile configuration (`name; ; (x, y)`, px), for `-o NAME.txt`: Fiji's
+// Grid/Collection stitching opens them. With a field, the positions of the undistorted tiles (--undistorted DIR).
+bool IsFijiPositionsPath(const std::filesystem::path& path);
+std::string PositionsFiji(const StitchedLayout& stitched);
 
 // --mosaic PATH before anything is read: an X3P height map needs the pixel size. After the tiles are read: it
 // needs float tiles (heights in mm). InputError naming --mosaic.

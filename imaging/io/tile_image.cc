@@ -48,6 +48,17 @@ void ReadGrey(ImageFileReader& input, const ImageHeader& spec, PixelType as, con
 
 }  // namespace
 
+Eigen::Vector2i ReadTileImageSize(const std::filesystem::path& path) {
+  CheckReadableFile(path);
+  std::string error;
+  const std::unique_ptr<ImageFileReader> input = LoadImageCodec("reading " + path.string()).open(path, &error);
+  if (!input) {
+    throw InputError(path.string() + ": cannot read it as an image (" + error +
+                     "); tiles are grey or colour TIFF, PNG or EXR files");
+  }
+  return Eigen::Vector2i(input->Header().width, input->Header().height);
+}
+
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type) {
   const std::size_t file_bytes = CheckReadableFile(path);
   std::string error;

@@ -18,6 +18,10 @@ enum class TilePixelType { kUint8, kUint16, kFloat };
 // not an image, a volume, holds infinite pixels or no valid one.
 TileImage ReadTileImage(const std::filesystem::path& path, TilePixelType* type = nullptr);
 
+// The image's width and height (x, y) as its header gives them, no pixel decoded (the pitch of a Fiji tile
+// configuration). Throws InputError naming the file when it is missing or not an image.
+Eigen::Vector2i ReadTileImageSize(const std::filesystem::path& path);
+
 // Writes atomically; integer types round and clamp. Throws InputError naming the file when it cannot be written.
 void WriteTileImage(const std::filesystem::path& path, const TileImage& image, TilePixelType type);
 

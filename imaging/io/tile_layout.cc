@@ -12,12 +12,14 @@
 #include "core/csv.h"
 #include "core/input_error.h"
 #include "core/number_text.h"
+#include "imaging/io/fiji_tile_configuration.h"
 #include "imaging/io/image_codec.h"
 #include "imaging/io/tile_image.h"
 
 namespace fvm::imaging {
 
 TileLayout ReadTileLayout(const std::filesystem::path& path) {
+  if (IsFijiTileConfiguration(path)) return FijiTileLayout(ReadFijiTileConfiguration(path));
   CsvOptions options;
   options.expected_header = "file,row,col[,x,y[,z]]";
   options.max_rows = static_cast<std::size_t>(kMaxLayoutTiles);

@@ -26,6 +26,10 @@ struct TileLayoutEntry {
   std::optional<Eigen::Vector2d> stage_mm;  // tile centre
   int line = 0;                             // line of the layout file, for messages
   std::optional<double> stage_z_mm;         // the encoder's z there (calibration scans), optional
+  // The tile's top-left corner in px (x right, y down) where a Fiji tile configuration places it
+  // (fiji_tile_configuration.h): the nominal position the registration starts from. Initialised, so that the brace
+  // lists that end before it stay free of -Wmissing-field-initializers.
+  std::optional<Eigen::Vector2d> nominal_px = std::nullopt;
 };
 
 struct TileLayout {
@@ -37,6 +41,8 @@ struct TileLayout {
 // Throws InputError "FILE:LINE: problem; what to do" on a missing file, a header without file,row,col, a short or
 // non-numeric row, an index outside 0 .. kMaxTilesPerAxis - 1, a grid of more than kMaxLayoutTiles, x without y,
 // z without x and y, a (row, col) given twice, or no tiles. Columns other than file,row,col,x,y,z are ignored.
+// A Fiji tile configuration (a `dim =` line first, whatever the extension) is read as one, its pitch found from the
+// positions' gaps (imaging/io/fiji_tile_configuration.h).
 TileLayout ReadTileLayout(const std::filesystem::path& path);
 
 // Throws InputError naming the first missing (row, col) when the tiles do not fill the rows x cols rectangle:

@@ -226,3 +226,28 @@ def test_tiles_synthesize_writes_the_commands_files(tmp_path, args, keywords):
     overlap = "6" if keywords.get("texture") == "sparse" else "25" if "overlap" in keywords else "20"
     doc = cli_json("stitch", "--layout", tmp_path / "cli" / "layout.csv", "--overlap", overlap, "-o", tmp_path / "p.csv")
     assert fvm.stitch(tmp_path / "py" / "layout.csv", overlap=float(overlap)).summary == doc
+
+
+def test_a_fiji_tile_configuration_stitches_as_the_command_reads_it(tile_set, tmp_path):
+    # Fiji's Grid stitching's TileConfiguration.txt for the set (serpentine, at the nominal grid): read as a layout
+    # by both front ends, the same summary; positions of the tiles as with the CSV layout.
+    lines = ["# Define the number of dimensions we are working on", "dim = 2", "",
+             "# Define the image coordinates"]
+    for row in range(3):
+        for k in range(3):
+            col = 2 - k if row == 1 else k
+            lines.append(f"tile_r{row:03d}_c{col:03d}.tif; ; ({col * 204.8}, {row * 204.8})")
+    config = tile_set / "TileConfiguration.txt"
+    config.write_text("\n".join(lines) + "\n")
+    doc = cli_json("stitch", "--layout", config, "--overlap", "20", "-o", tmp_path / "p.csv")
+    result = fvm.stitch(config, overlap=20)
+    assert result.summary == doc
+    assert doc["nominal"] == "stage"
+    grid = fvm.stitch(tile_set / "layout.csv", overlap=20)
+    names = [f"tile_r{r:03d}_c{c:03d}.tif" for r in range(3) for c in range(3)]
+    fiji_order = [l.split(";")[0] for l in lines[4:]]
+    fiji_xy = {f: result["positions"][i] for i, f in enumerate(fiji_order)}
+    csv_rows = [l.split(",")[0] for l in (tile_set / "layout.csv").read_text().splitlines() if l and not l.startswith("#")][1:]
+    for i, f in enumerate(csv_rows):
+        np.testing.assert_allclose(fiji_xy[f.split("/")[-1]], grid["positions"][i], atol=1e-3)
+    assert set(names) == set(fiji_xy)

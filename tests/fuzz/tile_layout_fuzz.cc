@@ -1,4 +1,5 @@
-// Tile layout CSV (imaging/io/tile_layout.h), and the completeness check fvm stitch runs on it next.
+// Tile layout CSV (imaging/io/tile_layout.h) or Fiji tile configuration (fiji_tile_configuration.h, the seed
+// fiji.txt), and the completeness check fvm stitch runs on it next.
 #include "imaging/io/tile_layout.h"
 #include "tests/fuzz/fuzz_support.h"
 
