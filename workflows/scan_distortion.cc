@@ -39,12 +39,15 @@ void RegisterUndistortedPair(const imaging::TileImage& a, const imaging::TileIma
 }
 
 // How an offset between undistorted tiles moves with the field's coefficients: p_b - p_a = u_a - u_b + d(u_a) - d(u_b)
-// averaged over the points that placed it, so the mean of B(u_a) - B(u_b) over them (px per px of coefficient).
+// averaged over the points that placed it, so the mean of B(u_a) - B(u_b) over them (px per px of coefficient),
+// each read as the fit read it: through the window the point was matched on (`kernel`; none for a registration of
+// whole undistorted tiles, which moves each pixel by the field there).
 Eigen::Matrix<double, 2, Eigen::Dynamic> FieldSensitivity(const imaging::FieldDistortion& field,
                                                           const std::vector<Eigen::Vector2d>& a_px,
-                                                          const std::vector<Eigen::Vector2d>& b_px) {
+                                                          const std::vector<Eigen::Vector2d>& b_px,
+                                                          const imaging::FieldKernel& kernel = {}) {
   Eigen::Matrix<double, 2, Eigen::Dynamic> sum = Eigen::Matrix<double, 2, Eigen::Dynamic>::Zero(2, field.coefficients.size());
-  for (size_t m = 0; m < a_px.size(); ++m) sum += field.Basis(a_px[m]) - field.Basis(b_px[m]);
+  for (size_t m = 0; m < a_px.size(); ++m) sum += field.Basis(a_px[m], kernel) - field.Basis(b_px[m], kernel);
   return a_px.empty() ? sum : Eigen::Matrix<double, 2, Eigen::Dynamic>(sum / static_cast<double>(a_px.size()));
 }
 
@@ -136,7 +139,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
       } else {
         pair.offset_px = field->fit.positions_px[static_cast<size_t>(base + pair.b)] -
                          field->fit.positions_px[static_cast<size_t>(base + pair.a)];
-        scan.field_sensitivity[q] = FieldSensitivity(identified, overlap.a_px, overlap.b_px);
+        scan.field_sensitivity[q] = FieldSensitivity(identified, overlap.a_px, overlap.b_px, overlap.kernel);
       }
     }
     // The positions chained from the undistorted offsets as the rigid registration chains its own.
