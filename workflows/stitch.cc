@@ -99,6 +99,10 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
   if (s.ncc_pairs > 0) s.mean_overlap_ncc = sum / s.ncc_pairs;
   std::vector<std::string> files;
   for (const auto& tile : layout.tiles) files.push_back(tile.file);
+  for (const size_t i : imaging::TilesWithoutNeighbour(layout)) {
+    const imaging::TileLayoutEntry& tile = layout.tiles[i];
+    s.without_neighbour.push_back(fmt::format("{} (row {} col {})", tile.file, tile.row, tile.col));
+  }
   DescribeRegistration(s, files);
   return s;
 }

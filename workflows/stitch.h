@@ -45,6 +45,9 @@ struct StitchResult {
   int ncc_pairs = 0, accepted = 0, ambiguous = 0;
   std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one (registered 0)
   std::vector<std::string> stage_along_one_axis;  // linked to the first by pairs fixing one direction (registered 0)
+  // Tiles the layout gives no neighbour (holes on every side): no pair can place them; the stage alone does, with
+  // its uncertainty. "FILE (row R col C)".
+  std::vector<std::string> without_neighbour;
   // Pairs the loops of the grid overruled ("a - b: why, and what was done"), in the order they were.
   std::vector<std::string> overruled;
   // Pairs that place nothing (rejected or dropped); a quarter or more of them is a run to distrust, said aloud.

@@ -191,6 +191,55 @@ TEST(StitchWithoutDistortion, RecoversAKnownFieldAndThePositions) {
   for (size_t i = 0; i < g.images.size(); ++i) EXPECT_LT((again.fit.positions_px[i] - r.fit.positions_px[i]).norm(), 0.02);
 }
 
+// The grid without the tiles at `missing` (row, col): a layout with holes.
+DistortedGrid WithHoles(const DistortedGrid& g, const std::vector<std::pair<int, int>>& missing) {
+  DistortedGrid out;
+  out.overlap = g.overlap;
+  for (size_t i = 0; i < g.images.size(); ++i) {
+    const imaging::TileLayoutEntry& tile = g.layout.tiles[i];
+    if (std::find(missing.begin(), missing.end(), std::pair{tile.row, tile.col}) != missing.end()) continue;
+    out.layout.tiles.push_back(tile), out.images.push_back(g.images[i]), out.truth_px.push_back(g.truth_px[i]);
+  }
+  out.layout.rows = g.layout.rows, out.layout.cols = g.layout.cols;
+  return out;
+}
+
+// Holes in the layout: a 3 x 3 grid without two corners (7 tiles, 8 pairs, still both directions at every step) gives
+// the field and the positions as the full grid does (0.1 px); without (0, 1) and (1, 0) the first tile has no
+// neighbour: the stage alone places it, the others keep their places among themselves (0.1 px) and carry the stage's
+// uncertainty against it, and the fit holds their group at its earliest tile.
+TEST(StitchWithoutDistortion, LayoutsWithHoles) {
+  const imaging::FieldDistortion truth = Field(384, {{"dx_xy2", 2.5}, {"dy_x2y", 2.5}, {"p1", 0.4}});
+  const DistortedGrid full = RenderGrid(3, 3, 384, truth, 11);
+  const DistortedGrid corners = WithHoles(full, {{0, 2}, {2, 0}});
+  const StitchResult rigid = Rigid(corners);
+  ASSERT_EQ(rigid.registration.pairs.size(), 8u);
+  ASSERT_EQ(rigid.accepted, 8);
+  EXPECT_TRUE(rigid.without_neighbour.empty());
+  const StitchDistortionResult r = StitchWithoutDistortion(rigid, corners.images, {});
+  EXPECT_LT(FieldDifferenceRms(r.fit.field, truth), 0.1);
+  double z2 = 0.0;
+  for (size_t i = 1; i < corners.images.size(); ++i) {
+    const Eigen::Vector2d e = r.fit.positions_px[i] - (corners.truth_px[i] - corners.truth_px[0]);
+    EXPECT_LT(e.norm(), 0.1) << i;
+    z2 += e.cwiseQuotient(r.sigma_px[i]).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(z2 / (2.0 * (corners.images.size() - 1))), 1.25);
+
+  const DistortedGrid alone = WithHoles(full, {{0, 1}, {1, 0}});
+  const StitchResult apart = Rigid(alone);
+  ASSERT_EQ(apart.without_neighbour, std::vector<std::string>{"t0.tif (row 0 col 0)"});
+  const StitchDistortionResult s = StitchWithoutDistortion(apart, alone.images, {});
+  EXPECT_LT(FieldDifferenceRms(s.fit.field, truth), 0.1);
+  for (size_t i = 2; i < alone.images.size(); ++i) {
+    const Eigen::Vector2d found = s.fit.positions_px[i] - s.fit.positions_px[1];
+    EXPECT_LT((found - (alone.truth_px[i] - alone.truth_px[1])).norm(), 0.1) << i;
+    // Against the first tile, the stage's uncertainty (the rigid solve's for the group's earliest tile), not the fit's.
+    EXPECT_GE(s.sigma_px[i].minCoeff(), apart.registration.positions.sigma_px[1].minCoeff()) << i;
+  }
+  EXPECT_GT(s.sigma_px[1].minCoeff(), 0.3);
+}
+
 // A strip of tiles in one row sees how the field changes along x only: terms in y alone are refused by name.
 TEST(StitchWithoutDistortion, RefusesAStripInOneDirection) {
   const DistortedGrid g = RenderGrid(1, 2, 256, Field(256, {{"k1", 2.0}}), 5);
