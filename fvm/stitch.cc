@@ -143,7 +143,7 @@ void RegisterStitch(CLI::App& app) {
                 "[{\"a\", \"b\", \"registered_px\", \"predicted_px\", \"misclosure_sigma\", \"replaced\"}] (pairs the "
                 "grid's loops contradicted, also on stderr), \"loop_birge_ratio\", \"loop_dof\", \"stage_fallback\": [files], "
                 "\"stage_along_one_axis\": [files], \"without_neighbour\": [\"FILE (row R col C)\"] (tiles the layout's holes leave without a "
-                "neighbour: placed by the stage alone), \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
+                "side neighbour: registered through their corners with diagonal ones), \"stage_model\": {\"east_step_px\", \"east_drift_px\", "
                 "\"south_step_px\", \"south_drift_px\", \"repeatability_px\", \"shared\": {\"column_step_px\", \"row_step_px\", "
                 "\"own_px\"} (the stage's error shared along columns and rows, and each tile's own), ...}, \"pairs\": [{\"a\", \"b\", "
                 "\"dx_px\", \"dy_px\", \"sigma_px\", \"quality\", \"accepted\", \"overlap_ncc\", \"ambiguous\", \"unmoved\", \"candidates\": [{\"dx_px\", "

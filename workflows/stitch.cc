@@ -51,11 +51,7 @@ std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, in
 }
 
 int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
-  std::set<std::pair<int, int>> at;
-  for (const auto& t : grid) at.insert({t.row, t.col});
-  int pairs = 0;
-  for (const auto& t : grid) pairs += static_cast<int>(at.count({t.row, t.col + 1}) + at.count({t.row + 1, t.col}));
-  return pairs;
+  return static_cast<int>(imaging::GridNeighbourPairs(grid).size());
 }
 
 void DescribeRegistration(StitchResult& s, const std::vector<std::string>& files) {

@@ -202,8 +202,8 @@ std::string StitchText(const StitchedLayout& s) {
                         fmt::join(placed.at_stage_position, ", "));
   }
   if (!placed.without_neighbour.empty()) {
-    text += fmt::format("  no neighbour in the layout (holes on every side), placed by the stage alone with its "
-                        "uncertainty: {}\n",
+    text += fmt::format("  no neighbour beside them in the layout (holes on every side): registered through the corners "
+                        "they share with their diagonal neighbours, or by the stage where none registers: {}\n",
                         fmt::join(placed.without_neighbour, ", "));
   }
   if (!placed.stage_along_one_axis.empty()) {

@@ -42,7 +42,8 @@ TileLayout ReadTileLayout(const std::filesystem::path& path);
 // Throws InputError when the grid or a tile is outside the bounds above, or when a layout of two tiles or more has no
 // two neighbours (nothing to register), naming the first tile. Holes are allowed: a scanned region that is not a
 // rectangle, or tiles left out (Fiji's and MIST's grids with missing tiles); each tile is registered with the
-// neighbours the layout has, and a tile with none is placed by the stage alone (TilesWithoutNeighbour).
+// neighbours the layout has; a tile with none beside it (TilesWithoutNeighbour) through the corners it shares with
+// its diagonal ones (imaging::GridNeighbourPairs), or by the stage where none registers.
 void CheckLayoutComplete(const TileLayout& layout);
 
 // The tiles (indices in layout order) that have no tile left, right, above or below them in the layout.

@@ -207,8 +207,9 @@ DistortedGrid WithHoles(const DistortedGrid& g, const std::vector<std::pair<int,
 
 // Holes in the layout: a 3 x 3 grid without two corners (7 tiles, 8 pairs, still both directions at every step) gives
 // the field and the positions as the full grid does (0.1 px); without (0, 1) and (1, 0) the first tile has no
-// neighbour: the stage alone places it, the others keep their places among themselves (0.1 px) and carry the stage's
-// uncertainty against it, and the fit holds their group at its earliest tile.
+// neighbour beside it: the corner it shares with (1, 1) places it (0.1 px); and when that corner holds nothing (the
+// first tile blank), the stage alone does: the others keep their places among themselves (0.1 px) and carry the
+// stage's uncertainty against it, and the fit holds their group at its earliest tile.
 TEST(StitchWithoutDistortion, LayoutsWithHoles) {
   const imaging::FieldDistortion truth = Field(384, {{"dx_xy2", 2.5}, {"dy_x2y", 2.5}, {"p1", 0.4}});
   const DistortedGrid full = RenderGrid(3, 3, 384, truth, 11);
@@ -227,9 +228,20 @@ TEST(StitchWithoutDistortion, LayoutsWithHoles) {
   }
   EXPECT_LT(std::sqrt(z2 / (2.0 * (corners.images.size() - 1))), 1.25);
 
-  const DistortedGrid alone = WithHoles(full, {{0, 1}, {1, 0}});
+  DistortedGrid alone = WithHoles(full, {{0, 1}, {1, 0}});
+  const StitchResult corner = Rigid(alone);
+  ASSERT_EQ(corner.without_neighbour, std::vector<std::string>{"t0.tif (row 0 col 0)"});
+  ASSERT_EQ(corner.registration.pairs.size(), 7u);  // 6 beside, 1 corner
+  EXPECT_EQ(corner.accepted, 7);
+  const StitchDistortionResult q = StitchWithoutDistortion(corner, alone.images, {});
+  for (size_t i = 1; i < alone.images.size(); ++i) {
+    EXPECT_LT((q.fit.positions_px[i] - (alone.truth_px[i] - alone.truth_px[0])).norm(), 0.1) << i;
+  }
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  for (Eigen::Index k = 0; k < alone.images[0].size(); ++k) alone.images[0].data()[k] = 0.5f + noise(rng);
   const StitchResult apart = Rigid(alone);
-  ASSERT_EQ(apart.without_neighbour, std::vector<std::string>{"t0.tif (row 0 col 0)"});
+  EXPECT_EQ(apart.at_stage_position.size(), 1u);  // the earliest of the others (the blank first one is the frame)
   const StitchDistortionResult s = StitchWithoutDistortion(apart, alone.images, {});
   EXPECT_LT(FieldDifferenceRms(s.fit.field, truth), 0.1);
   for (size_t i = 2; i < alone.images.size(); ++i) {

@@ -80,10 +80,11 @@ TEST(StitchTiles, RegistersAGridWithHoles) {
   }
 }
 
-// Without (0, 1) and (1, 0) the first tile has no neighbour: named, placed by the stage; the others keep their places
-// among themselves (0.3 px) and carry against it the stage's uncertainty, the mean steps' included (the pairs' median
-// steps held exact gave 0.8 px where the tile lay 2.8 px off, on cut grids of the held-out shape).
-TEST(StitchTiles, NamesATileWithoutNeighbourAndPlacesItByTheStage) {
+// Without (0, 1) and (1, 0) the first tile has no neighbour beside it: named, and registered through the corner it
+// shares with (1, 1) (0.3 px). Its corner blank, the stage places it: the others keep their places among themselves
+// (0.3 px) and carry against it the stage's uncertainty, the mean steps' included (the pairs' median steps held exact
+// gave 0.8 px where the tile lay 2.8 px off, on cut grids of the held-out shape).
+TEST(StitchTiles, NamesATileWithoutNeighbourAndPlacesItByItsCornerOrTheStage) {
   artefacts::TileSynthesisOptions synth;
   synth.rows = 3, synth.cols = 4, synth.seed = 5;
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(synth);
@@ -99,8 +100,20 @@ TEST(StitchTiles, NamesATileWithoutNeighbourAndPlacesItByTheStage) {
   layout.rows = 3, layout.cols = 4;
   StitchOptions options;
   options.overlap = synth.overlap;
+  const StitchResult by_corner = StitchTiles(layout, images, options);
+  ASSERT_EQ(by_corner.without_neighbour, std::vector<std::string>{"t0.tif (row 0 col 0)"});
+  EXPECT_EQ(CountGridPairs(by_corner.grid), 12);  // 17 of the full grid less 3 and 3 beside the holes, 1 corner
+  EXPECT_EQ(by_corner.accepted, 12);
+  EXPECT_TRUE(by_corner.at_stage_position.empty());
+  for (size_t i = 1; i < images.size(); ++i) {
+    const imaging::TilePositions& c = by_corner.registration.positions;
+    EXPECT_LT(((c.positions_px[i] - c.positions_px[0]) - (truth[i] - truth[0])).norm(), 0.3) << i;
+  }
+  images[0].setConstant(images[0].mean());
   const StitchResult s = StitchTiles(layout, images, options);
-  ASSERT_EQ(s.without_neighbour, std::vector<std::string>{"t0.tif (row 0 col 0)"});
+  // The blank first tile is the frame; the earliest of the others (t2: the scan runs down columns) starts their chain
+  // at its stage position.
+  EXPECT_EQ(s.at_stage_position, std::vector<std::string>{"t2.tif"});
   const imaging::TilePositions& p = s.registration.positions;
   for (size_t i = 2; i < images.size(); ++i) {
     EXPECT_LT(((p.positions_px[i] - p.positions_px[1]) - (truth[i] - truth[1])).norm(), 0.3) << i;
