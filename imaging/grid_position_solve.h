@@ -28,7 +28,8 @@ StageAxesPrior StageAxesPriorOf(const TileGridSteps& steps, double fallback_px, 
 
 // Generalised least squares over the accepted pairs, p_b - p_a = offset weighted by each pair's information, and the
 // stage: p = stage + column offset + row offset (own_px), column offsets a random walk from column to column
-// (column_step_px), row offsets likewise; the first tile stays at its stage position exactly. Every tile's standard
+// (column_step_px), row offsets likewise; where the accepted pairs leave groups of tiles apart, a correction of the
+// mean steps too (east_mean_px, south_mean_px); the first tile stays at its stage position exactly. Every tile's standard
 // uncertainty is against the first tile, whether pairs link it there or only the stage does. `registered`: the
 // images alone place the tile against its group's earliest along both axes to within registered_within_px (the
 // plausible range; a tile linked through a pair that fixes one direction says false); `anchor` the earliest tile of

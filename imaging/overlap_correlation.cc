@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -63,6 +64,19 @@ std::vector<std::pair<int, int>> GridNeighbourPairs(const std::vector<GridTile>&
     for (const auto& [dr, dc] : {std::pair{0, 1}, std::pair{1, 0}}) {
       const auto it = at.find({tiles[i].row + dr, tiles[i].col + dc});
       if (it != at.end()) out.emplace_back(static_cast<int>(i), it->second);
+    }
+  }
+  // A tile the layout's holes leave without a side neighbour still shares a corner with its diagonal ones (a tenth
+  // of a tile each way at 10 %: a 100 px square of a 1024 px tile), which places it better than the stage alone.
+  std::set<std::pair<int, int>> corners;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    const int r = tiles[i].row, c = tiles[i].col;
+    if (at.count({r, c - 1}) || at.count({r, c + 1}) || at.count({r - 1, c}) || at.count({r + 1, c})) continue;
+    for (const auto& [dr, dc] : {std::pair{-1, -1}, std::pair{-1, 1}, std::pair{1, -1}, std::pair{1, 1}}) {
+      const auto it = at.find({r + dr, c + dc});
+      if (it == at.end()) continue;
+      const int a = std::min(static_cast<int>(i), it->second), b = std::max(static_cast<int>(i), it->second);
+      if (corners.insert({a, b}).second) out.emplace_back(a, b);
     }
   }
   return out;

@@ -29,7 +29,8 @@ struct OverlapCorrelation {
 OverlapCorrelation OverlapNcc(const TileImage& a, const TileImage& b, const Eigen::Vector2d& offset_px);
 
 // Right (col + 1) and lower (row + 1) neighbours of a grid, as RegisterTileGrid pairs them: (a, b) tile indices,
-// in the order of the tiles, east before south.
+// in the order of the tiles, east before south; then, for a tile with no side neighbour (holes on every side), its
+// diagonal neighbours (the earlier tile first), whose corners overlap.
 std::vector<std::pair<int, int>> GridNeighbourPairs(const std::vector<GridTile>& tiles);
 
 struct PairOverlapCorrelation {

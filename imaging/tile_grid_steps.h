@@ -58,6 +58,12 @@ struct StageAxesPrior {
   Eigen::Vector2d column_step_px = Eigen::Vector2d::Constant(2.0);  // between neighbouring columns' shared offsets
   Eigen::Vector2d row_step_px = Eigen::Vector2d::Constant(2.0);     // between neighbouring rows' shared offsets
   Eigen::Vector2d own_px = Eigen::Vector2d::Constant(2.0);          // a tile about its row's and column's offsets
+  // How far the mean steps the positions start from (TileGridSteps' east and south, medians of the pairs) may lie
+  // from the grid's: the solve takes a correction of each with this standard deviation per axis, for the pairs to
+  // fix. 0: the step held (a component the pairs did not estimate keeps its nominal value, as before). Without it, a
+  // tile no pair joins to the others (a hole on every side) was placed as though the median steps were exact: on cut
+  // grids of the held-out shape, 2.8 px off with u = 0.8 px.
+  Eigen::Vector2d east_mean_px = Eigen::Vector2d::Zero(), south_mean_px = Eigen::Vector2d::Zero();
 };
 
 // Whether a pair's information fixes axis k (0 x, 1 y): the directions it determines to better than 0.5 px span the

@@ -139,6 +139,7 @@ py::dict Values(const workflows::StitchedLayout& s, const std::optional<imaging:
   out["mean_overlap_ncc"] = r.mean_overlap_ncc;
   out["from_stage"] = r.from_stage;
   out["at_stage_position"] = r.at_stage_position;
+  out["without_neighbour"] = r.without_neighbour;
   out["overruled"] = r.overruled;
   out["pairs_unresolved"] = r.unresolved;
   out["unresolved_warning"] = r.UnresolvedWarning();

@@ -55,11 +55,7 @@ std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, in
 }
 
 int CountGridPairs(const std::vector<imaging::GridTile>& grid) {
-  std::set<std::pair<int, int>> at;
-  for (const auto& t : grid) at.insert({t.row, t.col});
-  int pairs = 0;
-  for (const auto& t : grid) pairs += static_cast<int>(at.count({t.row, t.col + 1}) + at.count({t.row + 1, t.col}));
-  return pairs;
+  return static_cast<int>(imaging::GridNeighbourPairs(grid).size());
 }
 
 void DescribeRegistration(StitchResult& s, const std::vector<std::string>& files) {
@@ -103,6 +99,10 @@ StitchResult StitchTiles(const imaging::TileLayout& layout, const std::vector<im
   if (s.ncc_pairs > 0) s.mean_overlap_ncc = sum / s.ncc_pairs;
   std::vector<std::string> files;
   for (const auto& tile : layout.tiles) files.push_back(tile.file);
+  for (const size_t i : imaging::TilesWithoutNeighbour(layout)) {
+    const imaging::TileLayoutEntry& tile = layout.tiles[i];
+    s.without_neighbour.push_back(fmt::format("{} (row {} col {})", tile.file, tile.row, tile.col));
+  }
   DescribeRegistration(s, files);
   return s;
 }

@@ -29,7 +29,8 @@ struct StitchOptions {
 // stage positions gave it.
 std::vector<imaging::GridTile> NominalGrid(const imaging::TileLayout& layout, int width_px, int height_px,
                                            const StitchOptions& options, bool* from_stage);
-// Right and lower neighbours, as imaging::RegisterTileGrid pairs them: the total of a progress count.
+// The pairs imaging::RegisterTileGrid registers (right and lower neighbours, and the corners of a tile without
+// either): the total of a progress count.
 int CountGridPairs(const std::vector<imaging::GridTile>& grid);
 
 struct StitchResult {
@@ -45,6 +46,10 @@ struct StitchResult {
   int ncc_pairs = 0, accepted = 0, ambiguous = 0;
   std::vector<std::string> at_stage_position;   // tiles no good pair links to an earlier one (registered 0)
   std::vector<std::string> stage_along_one_axis;  // linked to the first by pairs fixing one direction (registered 0)
+  // Tiles the layout gives no neighbour beside them (holes on every side): registered through the corners they share
+  // with their diagonal neighbours, or placed by the stage (at_stage_position) where none registers. "FILE (row R
+  // col C)".
+  std::vector<std::string> without_neighbour;
   // Pairs the loops of the grid overruled ("a - b: why, and what was done"), in the order they were.
   std::vector<std::string> overruled;
   // Pairs that place nothing (rejected or dropped); a quarter or more of them is a run to distrust, said aloud.

@@ -106,7 +106,13 @@ StitchDistortionResult StitchWithoutDistortion(const StitchResult& rigid, const 
   for (const Eigen::Matrix2d& c : out.fit.position_covariance_px2) out.sigma_px.emplace_back(c.diagonal().cwiseSqrt());
   // Tiles the images do not place on both axes carry at least what the rigid solve says (the stage's uncertainty
   // along an axis no pair fixes).
+  // A group of tiles the pairs do not join to the first tile (a hole, failed pairs) is fitted about its earliest tile,
+  // held where the rigid solve put it: what the stage leaves of that tile against the first adds to each of them.
   for (size_t i = 0; i < images.size(); ++i) {
+    const size_t anchor = static_cast<size_t>(positions.anchor[i]);
+    if (anchor != 0 && anchor != i) {
+      out.sigma_px[i] = (out.sigma_px[i].cwiseAbs2() + positions.sigma_px[anchor].cwiseAbs2()).cwiseSqrt();
+    }
     if (!positions.registered[i]) out.sigma_px[i] = out.sigma_px[i].cwiseMax(positions.sigma_px[i]);
   }
   out.undistorted = imaging::UndistortTiles(images, out.fit.field);

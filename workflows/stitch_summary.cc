@@ -104,6 +104,7 @@ Json StitchJson(const StitchedLayout& s) {
   out["loop_dof"] = placed.registration.loops.dof;
   out["stage_fallback"] = placed.at_stage_position;
   out["stage_along_one_axis"] = placed.stage_along_one_axis;
+  out["without_neighbour"] = placed.without_neighbour;
   if (s.field) {
     out["distortion"] = DistortionJson(s.field->fit, s.field->identified, s.options.pixel_mm);
     out["distortion"]["overlap_ncc_before"] = FiniteOrNull(s.field->mean_overlap_ncc_before);
@@ -199,6 +200,11 @@ std::string StitchText(const StitchedLayout& s) {
   if (!placed.at_stage_position.empty()) {
     text += fmt::format("  at their stage positions (no good pair to an earlier tile): {}\n",
                         fmt::join(placed.at_stage_position, ", "));
+  }
+  if (!placed.without_neighbour.empty()) {
+    text += fmt::format("  no neighbour beside them in the layout (holes on every side): registered through the corners "
+                        "they share with their diagonal neighbours, or by the stage where none registers: {}\n",
+                        fmt::join(placed.without_neighbour, ", "));
   }
   if (!placed.stage_along_one_axis.empty()) {
     text += fmt::format("  linked by pairs that fix one direction (parallel marks, traces, edges), placed along the "

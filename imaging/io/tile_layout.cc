@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <exception>
 #include <utility>
 
@@ -93,16 +94,28 @@ void CheckLayoutComplete(const TileLayout& layout) {
     }
     present[static_cast<size_t>(tile.row) * static_cast<size_t>(layout.cols) + static_cast<size_t>(tile.col)] = 1;
   }
-  for (int row = 0; row < layout.rows; ++row) {
-    for (int col = 0; col < layout.cols; ++col) {
-      if (!present[static_cast<size_t>(row) * layout.cols + col]) {
-        throw InputError(layout.source + ": the layout has a hole: no tile at row " + std::to_string(row) + " col " +
-                         std::to_string(col) + " of the " + std::to_string(layout.rows) + " x " +
-                         std::to_string(layout.cols) +
-                         " grid; stitching needs a full grid (stitching-free layouts are not stitched)");
-      }
+  // Holes are allowed (a region that is not a rectangle, a tile left out): the tiles beside them are registered with
+  // the neighbours they have. A layout in which no two tiles are neighbours has nothing to register.
+  if (layout.tiles.size() > 1 && TilesWithoutNeighbour(layout).size() == layout.tiles.size()) {
+    const TileLayoutEntry& first = layout.tiles.front();
+    throw InputError(layout.source + ":" + std::to_string(first.line) + ": no two tiles are neighbours (tile " +
+                     first.file + " at row " + std::to_string(first.row) + " col " + std::to_string(first.col) +
+                     " has none, nor has any other): stitching registers neighbouring tiles; check the row and col "
+                     "columns");
+  }
+}
+
+std::vector<size_t> TilesWithoutNeighbour(const TileLayout& layout) {
+  std::set<std::pair<int, int>> at;
+  for (const auto& tile : layout.tiles) at.insert({tile.row, tile.col});
+  std::vector<size_t> alone;
+  for (size_t i = 0; i < layout.tiles.size(); ++i) {
+    const int r = layout.tiles[i].row, c = layout.tiles[i].col;
+    if (!at.count({r, c - 1}) && !at.count({r, c + 1}) && !at.count({r - 1, c}) && !at.count({r + 1, c})) {
+      alone.push_back(i);
     }
   }
+  return alone;
 }
 
 std::vector<TileImage> ReadLayoutImages(const TileLayout& layout, const std::filesystem::path& dir, TilePixelType* type,

@@ -45,9 +45,15 @@ struct TileLayout {
 // positions' gaps (imaging/io/fiji_tile_configuration.h).
 TileLayout ReadTileLayout(const std::filesystem::path& path);
 
-// Throws InputError naming the first missing (row, col) when the tiles do not fill the rows x cols rectangle:
-// registration needs every neighbour it is told about; and when the grid or a tile is outside the bounds above.
+// Throws InputError when the grid or a tile is outside the bounds above, or when a layout of two tiles or more has no
+// two neighbours (nothing to register), naming the first tile. Holes are allowed: a scanned region that is not a
+// rectangle, or tiles left out (Fiji's and MIST's grids with missing tiles); each tile is registered with the
+// neighbours the layout has; a tile with none beside it (TilesWithoutNeighbour) through the corners it shares with
+// its diagonal ones (imaging::GridNeighbourPairs), or by the stage where none registers.
 void CheckLayoutComplete(const TileLayout& layout);
+
+// The tiles (indices in layout order) that have no tile left, right, above or below them in the layout.
+std::vector<size_t> TilesWithoutNeighbour(const TileLayout& layout);
 
 // The tiles' images in layout order, file names relative to `dir` (an absolute name replaces it); `type`, when
 // given, receives the first tile's pixel type. Throws InputError "LAYOUT:LINE: tile row R col C: ..." when one

@@ -47,8 +47,10 @@ TEST(TileLayout, RoundTrip) {
 }
 
 TEST(TileLayout, BadInputNamesFileLineAndTile) {
-  Write(Scratch("hole.csv"), "file,row,col\na,0,0\nb,0,1\nc,1,1\n");
-  EXPECT_NE(ErrorOf(Scratch("hole.csv")).find("hole: no tile at row 1 col 0"), std::string::npos);
+  Write(Scratch("apart.csv"), "file,row,col\na,0,0\nb,1,1\nc,0,2\n");
+  EXPECT_EQ(ErrorOf(Scratch("apart.csv")),
+            Scratch("apart.csv").string() + ":2: no two tiles are neighbours (tile a at row 0 col 0 has none, nor has "
+                                            "any other): stitching registers neighbouring tiles; check the row and col columns");
   Write(Scratch("twice.csv"), "file,row,col\na,0,0\nb,0,0\n");
   EXPECT_NE(ErrorOf(Scratch("twice.csv")).find("twice.csv:3: tile row 0 col 0 is given twice"), std::string::npos);
   Write(Scratch("header.csv"), "name,row,col\na,0,0\n");
@@ -75,18 +77,31 @@ TEST(TileLayout, HugeIndicesAreRefusedNamingFileAndLine) {
             Scratch("wide.csv").string() +
                 ":3: tile row 99999 col 0 makes the grid 100000 x 100000, more than the 1000000 tiles a layout may "
                 "span; check the row and col columns");
-  // The largest grid allowed is read; its hole is reported, nothing overflows.
+  // The largest grid allowed is read; its two tiles far apart are reported, nothing overflows.
   Write(Scratch("largest.csv"), "file,row,col\na.tif,0,99999\nb.tif,9,0\n");
   EXPECT_EQ(ErrorOf(Scratch("largest.csv")),
             Scratch("largest.csv").string() +
-                ": the layout has a hole: no tile at row 0 col 0 of the 10 x 100000 grid; stitching needs a full grid "
-                "(stitching-free layouts are not stitched)");
+                ":2: no two tiles are neighbours (tile a.tif at row 0 col 99999 has none, nor has any other): stitching "
+                "registers neighbouring tiles; check the row and col columns");
   // A layout built in code is checked too before the grid is allocated.
   TileLayout built;
   built.source = "built";
   built.rows = 2147483647;
   built.cols = 2;
   EXPECT_THROW(CheckLayoutComplete(built), InputError);
+}
+
+// A region that is not a rectangle (Fiji's and MIST's grids with missing tiles, a tile the export left out) is
+// stitched with the neighbours each tile has; a tile with none is named, for the stage to place.
+TEST(TileLayout, HolesAreAllowedAndTilesWithoutNeighbourNamed) {
+  Write(Scratch("holes.csv"), "file,row,col\na,0,0\nb,0,2\nc,1,1\nd,1,2\ne,2,0\nf,2,1\n");
+  const TileLayout layout = ReadTileLayout(Scratch("holes.csv"));
+  EXPECT_EQ(layout.rows, 3);
+  EXPECT_EQ(layout.cols, 3);
+  EXPECT_NO_THROW(CheckLayoutComplete(layout));
+  EXPECT_EQ(TilesWithoutNeighbour(layout), std::vector<size_t>{0});  // a at (0, 0): (0, 1) and (1, 0) missing
+  Write(Scratch("single.csv"), "file,row,col\na,3,4\n");
+  EXPECT_EQ(ErrorOf(Scratch("single.csv")), "");  // one tile: nothing to register, nothing wrong
 }
 
 TEST(TileLayout, FileNamesWithCommasAndQuotesRoundTrip) {

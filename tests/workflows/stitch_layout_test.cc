@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -97,6 +99,47 @@ TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
   EXPECT_EQ(report.tiles.size(), 9u);
   EXPECT_EQ(report.pairs.size(), 12u);
   EXPECT_TRUE(report.field.empty());
+  std::filesystem::remove_all(synth.output);
+}
+
+// The same set with a hole: its last tile (row 2, col 2) left out of layout.csv, as a layout read from another
+// tool's export leaves a tile it could not place. The command reads it, every other tile is registered to its truth,
+// the positions CSV has the eight, the summary names no tile without neighbour, and the mosaic is empty (NaN) where
+// the hole is and filled elsewhere.
+TEST(StitchLayout, StitchesALayoutWithAHoleAndFusesItsMosaic) {
+  TilesSynthesizeOptions synth;
+  synth.output = StitchLayoutScratch("hole").string();
+  synth.bits = 8;
+  synth.seed = 4;
+  const SynthesizedTileSet set = SynthesizeTileSet(synth);
+  const std::filesystem::path layout = std::filesystem::path(synth.output) / "layout.csv";
+  std::string text = ReadText(layout), kept;
+  std::stringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find(",2,2") == std::string::npos) kept += line + "\n";
+  }
+  ASSERT_LT(kept.size(), text.size());
+  std::ofstream(layout) << kept;
+  const LayoutTiles tiles = ReadLayoutTiles(layout);
+  ASSERT_EQ(tiles.images.size(), 8u);
+  const StitchedLayout stitched = StitchLayout(tiles.layout, tiles.images, StitchLayoutOptions{});
+  EXPECT_EQ(stitched.rigid.accepted, 10);
+  const auto rows = CsvRows(PositionsCsv(stitched));
+  const auto truth = CsvRows(ReadText(std::filesystem::path(synth.output) / "truth.csv"));
+  ASSERT_EQ(rows.size(), 9u);
+  for (size_t i = 1; i < rows.size(); ++i) {
+    const auto t = std::find_if(truth.begin(), truth.end(), [&](const auto& r) { return r[0] == rows[i][0]; });
+    ASSERT_NE(t, truth.end()) << rows[i][0];
+    EXPECT_NEAR(std::stod(rows[i][1]), std::stod((*t)[1]), 0.15) << rows[i][0];
+    EXPECT_NEAR(std::stod(rows[i][2]), std::stod((*t)[2]), 0.15) << rows[i][0];
+    EXPECT_EQ(rows[i][3], "1") << rows[i][0];
+  }
+  const Summary summary = Summarize(stitched);
+  EXPECT_EQ(summary.json["without_neighbour"], nlohmann::json::array());
+  const imaging::Mosaic mosaic = FuseStitched(stitched, tiles.images);
+  const imaging::TileImage& m = mosaic.image;
+  EXPECT_TRUE(std::isnan(m(m.rows() - 5, m.cols() - 5)));  // the hole's corner
+  EXPECT_TRUE(std::isfinite(m(5, 5)) && std::isfinite(m(m.rows() - 5, 5)) && std::isfinite(m(5, m.cols() - 5)));
   std::filesystem::remove_all(synth.output);
 }
 
