@@ -295,7 +295,17 @@ FieldDistortionFit FitFieldDistortion(const std::vector<PairCorrespondences>& pa
   }
 
   // The terms solved for (all but the held ones): each point's g has their columns only.
-  if (!known && options.hold_stretch_terms) fit.held_terms = FieldDistortionStretchTerms(fit.field.order);
+  if (!known && options.hold_stretch_terms) {
+    fit.held_terms = FieldDistortionStretchTerms(fit.field.order), fit.held_reason = kHeldStretchTerms;
+  }
+  if (!known && !options.hold_terms.empty()) {
+    for (int t : options.hold_terms) {
+      if (t < 0 || t >= k) throw std::invalid_argument("FitFieldDistortion: a held term outside the order's terms");
+      if (std::find(fit.held_terms.begin(), fit.held_terms.end(), t) == fit.held_terms.end()) fit.held_terms.push_back(t);
+    }
+    std::sort(fit.held_terms.begin(), fit.held_terms.end());
+    fit.held_reason = fit.held_reason.empty() ? options.hold_reason : fit.held_reason + "; " + options.hold_reason;
+  }
   std::vector<int> solved;
   for (int t = 0; t < k; ++t) {
     if (std::find(fit.held_terms.begin(), fit.held_terms.end(), t) == fit.held_terms.end()) solved.push_back(t);

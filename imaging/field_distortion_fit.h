@@ -42,6 +42,10 @@ struct FieldDistortionFitOptions {
   // Hold the terms that act on the overlaps as a stretch or shear of the mosaic (FieldDistortionStretchTerms,
   // kHeldStretchTerms) at 0: what a stitched grid needs, where nothing but the overlaps places the tiles.
   bool hold_stretch_terms = false;
+  // Terms held at 0 besides those (indices into FieldDistortionTermNames(order)), for the reason `hold_reason` says
+  // (FitFieldDistortionByEvidence).
+  std::vector<int> hold_terms;
+  std::string hold_reason;
   int threads = 2;  // Ceres' threads for the solve (fvm stitch sets its --threads)
   void Check() const;  // throws std::invalid_argument
 };
@@ -65,7 +69,13 @@ struct FieldDistortionFit {
   int block_dof = 0;  // the blocks' degrees of freedom behind block_scatter_factor (2 x 3 a pair)
   int points = 0, pairs_used = 0, pairs_without_texture = 0;
   int iterations = 0;
-  std::vector<int> held_terms;  // held at 0 (hold_stretch_terms): value and u 0
+  std::vector<int> held_terms;  // held at 0 (hold_stretch_terms, hold_terms): value and u 0
+  std::string held_reason;      // why (kHeldStretchTerms or the options' hold_reason)
+  // FitFieldDistortionByEvidence: the terms it tested, whether the overlaps showed them (then solved, else held), its
+  // Wald statistic and the threshold it was held against.
+  std::vector<int> tested_terms;
+  bool tested_terms_added = false;
+  double evidence_chi2 = 0.0, evidence_threshold = 0.0;
   std::string solver_report;  // Ceres' BriefReport of the last solve
 };
 

@@ -45,7 +45,10 @@ FieldKernel MatchingKernel(const CorrespondenceOptions& options);
 
 // Points of a on a grid over the overlap that b at `offset_px` shares with it, inset so that both views stay inside
 // their tiles whatever `guess` (the field believed so far; the identity at first) moves them; each point's start in b
-// is where the guess puts it: u_b + d(u_b) = u_a + d(u_a) - offset. Empty when the overlap is too small for a window.
+// is where the guess puts it: u_b + d(u_b) = u_a + d(u_a) - offset, and b's window is warped to a's view of it by the
+// guess's local map (I + grad d(u_b))^-1 (I + grad d(u_a)): the field stretches the two views differently, and a
+// translation fitted to windows that differ by a stretch is biased at second order in it. Empty when the overlap is
+// too small for a window.
 PairCorrespondences MatchOverlap(const TileImage& a, const TileImage& b, int a_index, int b_index,
                                  const Eigen::Vector2d& offset_px, const FieldDistortion& guess,
                                  const CorrespondenceOptions& options = {});

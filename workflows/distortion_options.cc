@@ -71,7 +71,14 @@ std::string DistortionText(const imaging::FieldDistortionFit& fit, bool identifi
     if (!fit.held_terms.empty()) {
       std::vector<std::string> held;
       for (int t : fit.held_terms) held.push_back(names[static_cast<size_t>(t)]);
-      text += fmt::format("    held at 0: {}: {}\n", fmt::join(held, ", "), imaging::kHeldStretchTerms);
+      text += fmt::format("    held at 0: {}: {}\n", fmt::join(held, ", "), fit.held_reason);
+    }
+    if (!fit.tested_terms.empty() && fit.tested_terms_added) {
+      std::vector<std::string> added;
+      for (int t : fit.tested_terms) added.push_back(names[static_cast<size_t>(t)]);
+      text += fmt::format("    added by evidence: {} (Wald statistic {:.1f} above 3 ln n = {:.1f}): the overlaps show the "
+                          "own-axis cubic departing from radial symmetry\n",
+                          fmt::join(added, ", "), fit.evidence_chi2, fit.evidence_threshold);
     }
   }
   return text;
@@ -92,7 +99,16 @@ nlohmann::ordered_json DistortionJson(const imaging::FieldDistortionFit& fit, bo
     nlohmann::ordered_json held = nlohmann::ordered_json::array();
     for (int t : fit.held_terms) held.push_back(imaging::FieldDistortionTermNames(fit.field.order)[static_cast<size_t>(t)]);
     j["held_terms"] = held;
-    j["held"] = imaging::kHeldStretchTerms;
+    j["held"] = fit.held_reason;
+  }
+  if (!fit.tested_terms.empty()) {  // the non-radial own-axis cubic terms, tested (imaging/field_distortion_evidence.h)
+    nlohmann::ordered_json tested = nlohmann::ordered_json::array();
+    for (int t : fit.tested_terms) tested.push_back(imaging::FieldDistortionTermNames(fit.field.order)[static_cast<size_t>(t)]);
+    j["evidence"] = {{"tested_terms", tested},
+                     {"added", fit.tested_terms_added},
+                     {"added_terms", fit.tested_terms_added ? tested : nlohmann::ordered_json::array()},
+                     {"wald_chi2", fit.evidence_chi2},
+                     {"threshold", fit.evidence_threshold}};
   }
   return j;
 }

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 
 #include "core/input_error.h"
+#include "imaging/field_distortion_evidence.h"
+#include "imaging/io/tile_layout.h"
 #include "imaging/tile_pair_registration.h"
 #include "imaging/tile_registration.h"
 #include "workflows/calibration_scans.h"
@@ -76,38 +79,78 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
   if (!options.known) imaging::FieldDistortionTermNames(options.order);  // throws outside 2..6
   options.matching.Check();
   options.fit.Check();
-  const imaging::FieldDistortion guess = options.known.value_or(imaging::FieldDistortion{});
-  RegisteredOverlapPoints points;
   // Pairs the fit cannot place (fewer correspondences than it weighs), with their tiles kept for the second
   // registration; the pairs it places, each scan's in a set.
+  RegisteredOverlapPoints points;
   std::vector<PairToRegisterAgain> again;
   std::map<int, imaging::TileImage> kept;
+  // One scan's accepted overlaps matched from `guess`, at the offsets `pairs` give.
+  const auto append = [&](size_t scan_index, const std::string& name, const std::vector<imaging::TileImage>& images,
+                          const std::vector<imaging::PairRegistration>& pairs, const imaging::TilePositions& positions,
+                          const imaging::FieldDistortion& guess) {
+    const int base = static_cast<int>(points.initial.size());
+    const size_t first = points.matched.size();
+    const std::vector<size_t> pair_of_overlap = AppendRegisteredSet(images, pairs, positions, guess, options.matching,
+                                                                    "--distortion: scan " + name, points);
+    for (size_t m = 0; m < pair_of_overlap.size(); ++m) {
+      const imaging::PairCorrespondences& p = points.matched[first + m];
+      if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
+        again.push_back({scan_index, pair_of_overlap[m]});
+        for (int t : {p.a, p.b}) kept.emplace(t, images[static_cast<size_t>(t - base)]);
+      }
+    }
+  };
+  const auto fit = [&](const imaging::FieldDistortion* known) {
+    try {
+      imaging::FieldDistortionFitOptions fit_options = options.fit;
+      fit_options.order = known ? known->order : options.order;
+      // Identified: the non-radial own-axis cubic terms only when the overlaps show them
+      // (imaging/field_distortion_evidence.h): a chain of tiles pins them only through the curvature of the step.
+      return known ? imaging::FitFieldDistortion(points.matched, points.initial, points.fixed, points.width,
+                                                 points.height, fit_options, known)
+                   : imaging::FitFieldDistortionByEvidence(points.matched, points.initial, points.fixed, points.width,
+                                                           points.height, fit_options);
+    } catch (const imaging::FieldDistortionUndeterminable& e) {
+      throw InputError(std::string("--distortion: ") + e.what());
+    }
+  };
+  const imaging::FieldDistortion none;
   size_t scan_index = 0;
   std::vector<artefacts::RegisteredScan> scans = ReadAndRegisterScans(
       layouts, pixel_mm, threads, progress,
       [&](const artefacts::RegisteredScan& scan, const std::vector<imaging::TileImage>& images) {
-        const int base = static_cast<int>(points.initial.size());
-        const size_t first = points.matched.size();
-        const std::vector<size_t> pair_of_overlap =
-            AppendRegisteredSet(images, scan.registration.pairs, scan.registration.positions, guess, options.matching,
-                                "--distortion: scan " + scan.name, points);
-        for (size_t m = 0; m < pair_of_overlap.size(); ++m) {
-          const imaging::PairCorrespondences& p = points.matched[first + m];
-          if (static_cast<int>(p.a_px.size()) < options.fit.min_pair_points) {
-            again.push_back({scan_index, pair_of_overlap[m]});
-            for (int t : {p.a, p.b}) kept.emplace(t, images[static_cast<size_t>(t - base)]);
-          }
-        }
+        append(scan_index, scan.name, images, scan.registration.pairs, scan.registration.positions,
+               options.known ? *options.known : none);
         ++scan_index;
       });
-  try {
-    imaging::FieldDistortionFitOptions fit_options = options.fit;
-    fit_options.order = options.known ? options.known->order : options.order;
-    field->fit = imaging::FitFieldDistortion(points.matched, points.initial, points.fixed, points.width,
-                                             points.height, fit_options,
-                                             options.known ? &*options.known : nullptr);
-  } catch (const imaging::FieldDistortionUndeterminable& e) {
-    throw InputError(std::string("--distortion: ") + e.what());
+  field->fit = fit(options.known ? &*options.known : nullptr);
+  if (!options.known && options.rematch) {
+    const std::vector<PairToRegisterAgain> first_again = again;
+    // The second round: every overlap matched again from the field just found, each window of b warped to a's view
+    // of it (imaging/overlap_correspondences.h): the two views of a point differ by the field's stretch, which the
+    // first round's windows could not follow, and that biased the field's own-axis cubic terms (x^3 in dx, y^3 in
+    // dy, the mosaic's scale) by about 0.0017 D^2 px on scangen (D px of radial field), 3-5 times their noise. The
+    // tiles are read again (a scan's tiles stay in memory only while it is registered).
+    const imaging::FieldDistortionFit first = field->fit;
+    points = {}, again.clear(), kept.clear();
+    int base = 0;
+    for (size_t s = 0; s < scans.size(); ++s) {
+      const imaging::TileLayout layout = imaging::ReadTileLayout(layouts[s]);
+      const std::vector<imaging::TileImage> images =
+          imaging::ReadLayoutImages(layout, std::filesystem::path(layouts[s]).parent_path());
+      // Each pair from the first round's undistorted offset (its rigid one where that round could not place it).
+      std::vector<imaging::PairRegistration> pairs = scans[s].registration.pairs;
+      for (size_t q = 0; q < pairs.size(); ++q) {
+        const bool placed = std::none_of(first_again.begin(), first_again.end(),
+                                         [&](const PairToRegisterAgain& r) { return r.scan == s && r.pair == q; });
+        if (!pairs[q].accepted || !placed) continue;
+        pairs[q].offset_px = first.positions_px[static_cast<size_t>(base + pairs[q].b)] -
+                             first.positions_px[static_cast<size_t>(base + pairs[q].a)];
+      }
+      append(s, scans[s].name, images, pairs, scans[s].registration.positions, first.field);
+      base += static_cast<int>(scans[s].encoder_mm.size());
+    }
+    field->fit = fit(nullptr);
   }
   field->identified = !options.known;
 

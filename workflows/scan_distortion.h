@@ -25,6 +25,9 @@ struct ScanDistortionOptions {
   std::optional<imaging::FieldDistortion> known;  // a saved field: positions only
   imaging::CorrespondenceOptions matching;
   imaging::FieldDistortionFitOptions fit;
+  // Identified: match every overlap again from the field found, b's windows warped to a's view (a second read of
+  // the tiles), and fit again. Off: the first round's field (own-axis cubic biased by the views' stretch).
+  bool rematch = true;
 };
 
 struct ScanDistortion {
