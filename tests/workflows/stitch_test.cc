@@ -1,5 +1,6 @@
 #include "workflows/stitch.h"
 
+#include <algorithm>
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
@@ -16,6 +17,29 @@ imaging::TileLayout LayoutOf(const artefacts::SynthesizedTiles& tiles) {
   }
   return layout;
 }
+
+// Part of a synthesized grid, as a layout with holes: the tiles appended node by node, in the order of the appends.
+struct GridPart {
+  imaging::TileLayout layout;
+  std::vector<imaging::TileImage> images;
+  std::vector<Eigen::Vector2d> truth;
+
+  explicit GridPart(const artefacts::SynthesizedTiles& tiles) : tiles_(tiles), full_(LayoutOf(tiles)) {
+    for (const imaging::TileLayoutEntry& tile : full_.tiles) {  // the full grid's extent, holes or not
+      layout.rows = std::max(layout.rows, tile.row + 1), layout.cols = std::max(layout.cols, tile.col + 1);
+    }
+  }
+  void Append(int row, int col) {
+    for (size_t i = 0; i < full_.tiles.size(); ++i) {
+      if (full_.tiles[i].row != row || full_.tiles[i].col != col) continue;
+      layout.tiles.push_back(full_.tiles[i]), images.push_back(tiles_.images[i]), truth.push_back(tiles_.truth_px[i]);
+    }
+  }
+
+ private:
+  const artefacts::SynthesizedTiles& tiles_;
+  imaging::TileLayout full_;
+};
 
 // A 3 x 3 grid with 1.5 px of stage error per axis: every pair registers, every tile lands within 0.3 px of its
 // true place against the first (registration noise on 256 px textured tiles is a few hundredths of a pixel; 0.3 px
@@ -50,22 +74,17 @@ TEST(StitchTiles, RegistersAGridWithHoles) {
   artefacts::TileSynthesisOptions synth;
   synth.rows = 3, synth.cols = 4, synth.seed = 5;
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(synth);
-  const imaging::TileLayout full = LayoutOf(tiles);
-  imaging::TileLayout layout;
-  std::vector<imaging::TileImage> images;
-  std::vector<Eigen::Vector2d> truth;
+  GridPart part(tiles);
   // Serpentine: row 0 left to right, row 1 right to left, row 2 left to right; without (0, 0), (2, 3) and (1, 2).
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 4; ++k) {
       const int c = r % 2 == 0 ? k : 3 - k;
-      if ((r == 0 && c == 0) || (r == 2 && c == 3) || (r == 1 && c == 2)) continue;
-      for (size_t i = 0; i < full.tiles.size(); ++i) {
-        if (full.tiles[i].row != r || full.tiles[i].col != c) continue;
-        layout.tiles.push_back(full.tiles[i]), images.push_back(tiles.images[i]), truth.push_back(tiles.truth_px[i]);
-      }
+      if (!((r == 0 && c == 0) || (r == 2 && c == 3) || (r == 1 && c == 2))) part.Append(r, c);
     }
   }
-  layout.rows = 3, layout.cols = 4;
+  const imaging::TileLayout& layout = part.layout;
+  const std::vector<imaging::TileImage>& images = part.images;
+  const std::vector<Eigen::Vector2d>& truth = part.truth;
   StitchOptions options;
   options.overlap = synth.overlap;
   const StitchResult s = StitchTiles(layout, images, options);
@@ -88,16 +107,13 @@ TEST(StitchTiles, NamesATileWithoutNeighbourAndPlacesItByItsCornerOrTheStage) {
   artefacts::TileSynthesisOptions synth;
   synth.rows = 3, synth.cols = 4, synth.seed = 5;
   const artefacts::SynthesizedTiles tiles = artefacts::SynthesizeTiles(synth);
-  const imaging::TileLayout full = LayoutOf(tiles);
-  imaging::TileLayout layout;
-  std::vector<imaging::TileImage> images;
-  std::vector<Eigen::Vector2d> truth;
-  for (size_t i = 0; i < full.tiles.size(); ++i) {
-    const int r = full.tiles[i].row, c = full.tiles[i].col;
-    if ((r == 0 && c == 1) || (r == 1 && c == 0)) continue;
-    layout.tiles.push_back(full.tiles[i]), images.push_back(tiles.images[i]), truth.push_back(tiles.truth_px[i]);
+  GridPart part(tiles);
+  for (const imaging::TileLayoutEntry& tile : LayoutOf(tiles).tiles) {  // the synthesized order, without two nodes
+    if (!((tile.row == 0 && tile.col == 1) || (tile.row == 1 && tile.col == 0))) part.Append(tile.row, tile.col);
   }
-  layout.rows = 3, layout.cols = 4;
+  const imaging::TileLayout& layout = part.layout;
+  std::vector<imaging::TileImage>& images = part.images;
+  const std::vector<Eigen::Vector2d>& truth = part.truth;
   StitchOptions options;
   options.overlap = synth.overlap;
   const StitchResult by_corner = StitchTiles(layout, images, options);
