@@ -8,6 +8,7 @@
 #include <map>
 
 #include "core/input_error.h"
+#include "core/progress.h"
 #include "imaging/field_distortion_evidence.h"
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_pair_registration.h"
@@ -134,6 +135,7 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
     const imaging::FieldDistortionFit first = field->fit;
     points = {}, again.clear(), kept.clear();
     int base = 0;
+    Progress bar("matching the overlaps again through the field", static_cast<int>(scans.size()), progress);
     for (size_t s = 0; s < scans.size(); ++s) {
       const imaging::TileLayout layout = imaging::ReadTileLayout(layouts[s]);
       const std::vector<imaging::TileImage> images =
@@ -149,7 +151,9 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterUndistortedScans(const std
       }
       append(s, scans[s].name, images, pairs, scans[s].registration.positions, first.field);
       base += static_cast<int>(scans[s].encoder_mm.size());
+      bar.Advance();
     }
+    bar.Finish();
     field->fit = fit(nullptr);
   }
   field->identified = !options.known;
