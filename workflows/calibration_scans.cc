@@ -6,6 +6,7 @@
 
 #include "core/input_error.h"
 #include "core/progress.h"
+#include "imaging/io/fiji_tile_configuration.h"
 #include "imaging/io/tile_layout.h"
 #include "imaging/tile_registration.h"
 
@@ -36,6 +37,11 @@ std::vector<artefacts::RegisteredScan> ReadAndRegisterScans(
   std::vector<artefacts::RegisteredScan> scans;
   imaging::SetImagingThreads(threads);
   for (const std::string& path : layouts) {
+    if (imaging::IsFijiTileConfiguration(path)) {  // its positions are registered pixels, not the stage's readings
+      throw InputError(fmt::format("{}: a Fiji tile configuration holds positions in pixels, not encoder readings; a "
+                                   "calibration scan needs a CSV layout file,row,col,x,y[,z] with each tile centre's "
+                                   "encoder reading in mm", path));
+    }
     const imaging::TileLayout layout = imaging::ReadTileLayout(path);
     if (layout.tiles.size() < 2) {
       throw InputError(fmt::format("{}: a scan of one tile has no neighbour to register; give two or more in scan order",

@@ -103,6 +103,10 @@ file(WRITE ${WORK}/s/one.csv "file,row,col,x,y,z\nrow/tile_000.tif,0,0,-115,-100
 refused("a one-tile scan" "one.csv: a scan of one tile" --scan ${WORK}/s/one.csv --pixel-mm ${pixel})
 file(WRITE ${WORK}/s/noxy.csv "file,row,col\nrow/tile_000.tif,0,0\nrow/tile_001.tif,0,1\n")
 refused("encoder readings missing" "noxy.csv:2: no encoder reading" --scan ${WORK}/s/noxy.csv --pixel-mm ${pixel})
+# Fiji's tile configuration (which `fvm stitch --layout` reads) holds registered pixels, not the stage's readings.
+file(WRITE ${WORK}/s/TileConfiguration.txt "dim = 2\nrow/tile_000.tif; ; (0.0, 0.0)\nrow/tile_001.tif; ; (96.0, 0.0)\n")
+refused("a Fiji tile configuration" "TileConfiguration.txt: a Fiji tile configuration holds positions in pixels, not encoder readings"
+        --scan ${WORK}/s/TileConfiguration.txt --pixel-mm ${pixel})
 # Encoder readings in pixels: a step of 96 "mm" between overlapping tiles.
 file(WRITE ${WORK}/s/pixels.csv "file,row,col,x,y\nrow/tile_000.tif,0,0,0,0\nrow/tile_001.tif,0,1,96,0\n")
 refused("encoder readings in pixels" "pixels.csv:3: tile 2 is 96, 0 mm from the one before, more than the field"
