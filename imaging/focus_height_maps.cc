@@ -26,6 +26,20 @@ constexpr float kBendShare = 0.4f;
 // line or at a point to fix a plane's slope along both axes.
 constexpr double kPlaneFitConditioning = 0.05;
 
+// Rows r0..r1 of `mean`: the Gaussian blur of `numerator` over that of `weights` (`total` is scratch), the local
+// mean a weighted average takes where `numerator` holds the values times their weights.
+void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
+                  cv::Mat& mean) {
+  cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
+  cv::GaussianBlur(numerator.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(weights.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  for (int r = r0; r < r1; ++r) {
+    float* m = mean.ptr<float>(r);
+    const float* t = total.ptr<float>(r);
+    for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
+  }
+}
+
 // Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
 // keeps the nm of a stage tens of mm out), 0 in the holes, and the mask of the valid points.
 struct HoleyMap {
@@ -49,15 +63,9 @@ struct HoleyMap {
 
   // The local mean of the valid points in rows r0..r1 of `out`: a Gaussian average over them only (the blur of
   // the heights over the blur of the mask).
+  // The holes are 0 already, so the heights are their own product with the mask.
   void Smooth(double sigma_px, int r0, int r1, cv::Mat& out) {
-    cv::Mat o_rows = out.rowRange(r0, r1), w_rows = work.rowRange(r0, r1);
-    cv::GaussianBlur(heights.rowRange(r0, r1), o_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(valid.rowRange(r0, r1), w_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* o = out.ptr<float>(r);
-      const float* w = work.ptr<float>(r);
-      for (int col = 0; col < out.cols; ++col) o[col] /= std::max(w[col], 1e-6f);
-    }
+    BlurredRatio(heights, valid, sigma_px, r0, r1, work, out);
   }
 };
 
@@ -88,16 +96,7 @@ void WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sig
       for (int col = 0; col < values.cols; ++col) p[col] = v[col] * w[col];
     }
   });
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
-    cv::GaussianBlur(product.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    cv::GaussianBlur(weights.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-    for (int r = r0; r < r1; ++r) {
-      float* m = mean.ptr<float>(r);
-      const float* t = total.ptr<float>(r);
-      for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
-    }
-  });
+  buffers.Pass([&](int r0, int r1) { BlurredRatio(product, weights, sigma_px, r0, r1, total, mean); });
 }
 
 }  // namespace
