@@ -29,6 +29,22 @@ struct FijiLine {
   }
 };
 
+// `text`'s fields between `delimiter`s, each without blanks at either end.
+std::vector<std::string_view> SplitTrimmed(std::string_view text, char delimiter) {
+  std::vector<std::string_view> fields;
+  for (size_t begin = 0;;) {
+    const size_t end = text.find(delimiter, begin);
+    fields.push_back(TrimBlanks(text.substr(begin, end == std::string_view::npos ? end : end - begin)));
+    if (end == std::string_view::npos) return fields;
+    begin = end + 1;
+  }
+}
+
+// Whether a line (trimmed) is the `dim = N` line.
+bool IsDimensionLine(std::string_view line) {
+  return line.starts_with("dim") && TrimBlanks(line.substr(3)).starts_with("=");
+}
+
 // The `dim = N` line's N (2 or 3).
 int ParseFijiDimension(std::string_view line, const FijiLine& at) {
   const size_t equals = line.find('=');
@@ -51,13 +67,7 @@ FijiTile ParseFijiTileLine(std::string_view line, int dim, const FijiLine& at, s
     at.Fail("cannot read " + QuotedForMessage(line) + " as a tile; write 'name; ; (x, y)'" +
             (dim == 3 ? " with (x, y, z) under dim = 3" : ""));
   };
-  std::vector<std::string_view> fields;
-  for (size_t begin = 0;;) {
-    const size_t end = line.find(';', begin);
-    fields.push_back(TrimBlanks(line.substr(begin, end == std::string_view::npos ? end : end - begin)));
-    if (end == std::string_view::npos) break;
-    begin = end + 1;
-  }
+  const std::vector<std::string_view> fields = SplitTrimmed(line, ';');
   if (fields.size() != 3) expected();
   FijiTile tile;
   tile.file = std::string(fields[0]);
@@ -71,17 +81,13 @@ FijiTile ParseFijiTileLine(std::string_view line, int dim, const FijiLine& at, s
   if (point.size() < 2 || point.front() != '(' || point.back() != ')') expected();
   point = point.substr(1, point.size() - 2);
   std::vector<double> values;
-  for (size_t begin = 0;;) {
-    const size_t end = point.find(',', begin);
-    const std::string_view text = point.substr(begin, end == std::string_view::npos ? end : end - begin);
+  for (const std::string_view text : SplitTrimmed(point, ',')) {
     const std::optional<double> v = ParseDouble(text);
     if (!v || !std::isfinite(*v) || std::abs(*v) > kMaxFijiCoordinatePx) {
-      at.Fail("tile " + tile.file + ": coordinate " + QuotedForMessage(TrimBlanks(text)) +
+      at.Fail("tile " + tile.file + ": coordinate " + QuotedForMessage(text) +
               " is not a position in pixels (a finite number within 1e9); check the line");
     }
     values.push_back(*v);
-    if (end == std::string_view::npos) break;
-    begin = end + 1;
   }
   if (static_cast<int>(values.size()) != dim) {
     at.Fail("tile " + tile.file + " has " + std::to_string(values.size()) + " coordinates under dim = " +
@@ -183,7 +189,7 @@ bool IsFijiTileConfiguration(const std::filesystem::path& path) {
     const std::string_view line = TrimBlanks(text.substr(begin, end - begin));
     begin = end + 1;
     if (line.empty() || line.front() == '#') continue;
-    return line.starts_with("dim") && TrimBlanks(line.substr(3)).starts_with("=");
+    return IsDimensionLine(line);
   }
   return false;
 }
@@ -202,7 +208,7 @@ FijiTileConfiguration ParseFijiTileConfiguration(std::string_view text, const st
     begin = end + 1;
     const FijiLine at{source, ++number};
     if (line.empty() || line.front() == '#') continue;
-    if (line.starts_with("dim") && TrimBlanks(line.substr(3)).starts_with("=")) {
+    if (IsDimensionLine(line)) {
       if (dim_given) at.Fail("a second 'dim =' line; give the dimension once, before the tiles");
       config.dim = ParseFijiDimension(line, at);
       dim_given = true;
