@@ -81,7 +81,7 @@ workflows::LayoutTiles TilesFrom(const py::sequence& tiles, const std::vector<st
     }
   }
   if (t.layout.tiles.empty()) throw InputError("no tiles");
-  imaging::CheckLayoutComplete(t.layout);
+  imaging::CheckLayoutForStitching(t.layout);
   return t;
 }
 

@@ -38,7 +38,7 @@ LayoutTiles ReadLayoutTiles(const std::filesystem::path& layout, int threads, do
   LayoutTiles tiles;
   tiles.layout = imaging::IsFijiTileConfiguration(layout) ? ReadFijiLayout(layout, overlap)
                                                           : imaging::ReadTileLayout(layout);
-  imaging::CheckLayoutComplete(tiles.layout);
+  imaging::CheckLayoutForStitching(tiles.layout);
   tiles.images = imaging::ReadLayoutImages(tiles.layout, layout.parent_path(), &tiles.pixel_type, threads);
   return tiles;
 }

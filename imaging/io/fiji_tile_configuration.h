@@ -55,7 +55,7 @@ Eigen::Vector2d PitchFromGaps(const FijiTileConfiguration& config);
 
 // The configuration as a layout: along each axis the coordinates closer than a third of `pitch_px` form one column
 // (row); neighbouring columns are as many pitches apart as their distance rounds to, counted from the first tile's,
-// so that a stage's scale error does not add up along the grid. Missing tiles leave holes (CheckLayoutComplete
+// so that a stage's scale error does not add up along the grid. Missing tiles leave holes (CheckLayoutForStitching
 // decides). Throws InputError "FILE:LINE: tile NAME ..." for a tile on no node of the grid (a third of a pitch or
 // more from every one) and for two tiles on one node. `pitch_px` defaults to PitchFromGaps.
 TileLayout FijiTileLayout(const FijiTileConfiguration& config, std::optional<Eigen::Vector2d> pitch_px = {});

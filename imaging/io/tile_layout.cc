@@ -78,21 +78,19 @@ TileLayout ReadTileLayout(const std::filesystem::path& path) {
   return layout;
 }
 
-void CheckLayoutComplete(const TileLayout& layout) {
-  // A layout built in code has not passed the reader's bounds: check them before sizing by them.
+void CheckLayoutForStitching(const TileLayout& layout) {
+  // A layout built in code has not passed the reader's bounds: check them.
   if (layout.rows < 0 || layout.cols < 0 || layout.rows > kMaxTilesPerAxis || layout.cols > kMaxTilesPerAxis ||
       std::int64_t{layout.rows} * layout.cols > kMaxLayoutTiles) {
     throw InputError(layout.source + ": a grid of " + std::to_string(layout.rows) + " x " +
                      std::to_string(layout.cols) + " tiles is outside the bounds of a layout; check the rows and cols");
   }
-  std::vector<char> present(static_cast<size_t>(layout.rows) * static_cast<size_t>(layout.cols), 0);
   for (const auto& tile : layout.tiles) {
     if (tile.row < 0 || tile.col < 0 || tile.row >= layout.rows || tile.col >= layout.cols) {
       throw InputError(layout.source + ":" + std::to_string(tile.line) + ": tile row " + std::to_string(tile.row) +
                        " col " + std::to_string(tile.col) + " is outside the " + std::to_string(layout.rows) + " x " +
                        std::to_string(layout.cols) + " grid; check the layout");
     }
-    present[static_cast<size_t>(tile.row) * static_cast<size_t>(layout.cols) + static_cast<size_t>(tile.col)] = 1;
   }
   // Holes are allowed (a region that is not a rectangle, a tile left out): the tiles beside them are registered with
   // the neighbours they have. A layout in which no two tiles are neighbours has nothing to register.

@@ -50,7 +50,7 @@ TileLayout ReadTileLayout(const std::filesystem::path& path);
 // rectangle, or tiles left out (Fiji's and MIST's grids with missing tiles); each tile is registered with the
 // neighbours the layout has; a tile with none beside it (TilesWithoutNeighbour) through the corners it shares with
 // its diagonal ones (imaging::GridNeighbourPairs), or by the stage where none registers.
-void CheckLayoutComplete(const TileLayout& layout);
+void CheckLayoutForStitching(const TileLayout& layout);
 
 // The tiles (indices in layout order) that have no tile left, right, above or below them in the layout.
 std::vector<size_t> TilesWithoutNeighbour(const TileLayout& layout);

@@ -7,7 +7,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto file = fvm::fuzz::Scratch().Write("layout.csv", fvm::fuzz::Bytes(data, size));
   fvm::fuzz::ReadExpectingInputErrorOnly([&] {
     const fvm::imaging::TileLayout layout = fvm::imaging::ReadTileLayout(file);
-    fvm::imaging::CheckLayoutComplete(layout);
+    fvm::imaging::CheckLayoutForStitching(layout);
   });
   return 0;
 }

@@ -68,7 +68,7 @@ TEST(FijiTileConfiguration, ReadsASerpentineRegisteredGridAsALayout) {
   ASSERT_TRUE(layout.tiles[5].nominal_px.has_value());
   EXPECT_EQ(*layout.tiles[5].nominal_px, Eigen::Vector2d(-0.3, 360.0));
   EXPECT_EQ(*layout.tiles[2].nominal_px, Eigen::Vector2d(921.75, -2.5));
-  EXPECT_NO_THROW(CheckLayoutComplete(layout));
+  EXPECT_NO_THROW(CheckLayoutForStitching(layout));
   // The pitch the gaps show (the median of the steps), and the same grid from a pitch given by the tile size.
   const FijiTileConfiguration config = ReadFijiTileConfiguration(path);
   EXPECT_EQ(PitchFromGaps(config), Eigen::Vector2d(460.5, 357.5));
@@ -264,7 +264,7 @@ TEST(FijiTileConfiguration, ReadsTheRealConfigurations) {
       const int row = k / 4, col = row == 1 ? 3 - k % 4 : k % 4;
       EXPECT_EQ(std::tie(t.row, t.col), std::tie(row, col)) << name << " " << t.file;
     }
-    EXPECT_NO_THROW(CheckLayoutComplete(layout)) << name;
+    EXPECT_NO_THROW(CheckLayoutForStitching(layout)) << name;
   }
   for (const char* name : {"tile_config.txt", "tile_config.registered.txt"}) {
     const TileLayout layout = ReadTileLayout(tiles / "starrynight" / name);

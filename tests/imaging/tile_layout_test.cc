@@ -23,7 +23,7 @@ void Write(const std::filesystem::path& path, const std::string& text) { std::of
 
 std::string ErrorOf(const std::filesystem::path& path) {
   try {
-    CheckLayoutComplete(ReadTileLayout(path));
+    CheckLayoutForStitching(ReadTileLayout(path));
   } catch (const InputError& e) {
     return e.what();
   }
@@ -43,7 +43,7 @@ TEST(TileLayout, RoundTrip) {
   EXPECT_EQ(layout.tiles[1].line, 4);  // comment, header, first tile
   ASSERT_TRUE(layout.tiles[0].stage_mm.has_value());
   EXPECT_DOUBLE_EQ(layout.tiles[0].stage_mm->y(), 2.25);
-  EXPECT_NO_THROW(CheckLayoutComplete(layout));
+  EXPECT_NO_THROW(CheckLayoutForStitching(layout));
 }
 
 TEST(TileLayout, BadInputNamesFileLineAndTile) {
@@ -88,7 +88,7 @@ TEST(TileLayout, HugeIndicesAreRefusedNamingFileAndLine) {
   built.source = "built";
   built.rows = 2147483647;
   built.cols = 2;
-  EXPECT_THROW(CheckLayoutComplete(built), InputError);
+  EXPECT_THROW(CheckLayoutForStitching(built), InputError);
 }
 
 // A region that is not a rectangle (Fiji's and MIST's grids with missing tiles, a tile the export left out) is
@@ -98,7 +98,7 @@ TEST(TileLayout, HolesAreAllowedAndTilesWithoutNeighbourNamed) {
   const TileLayout layout = ReadTileLayout(Scratch("holes.csv"));
   EXPECT_EQ(layout.rows, 3);
   EXPECT_EQ(layout.cols, 3);
-  EXPECT_NO_THROW(CheckLayoutComplete(layout));
+  EXPECT_NO_THROW(CheckLayoutForStitching(layout));
   EXPECT_EQ(TilesWithoutNeighbour(layout), std::vector<size_t>{0});  // a at (0, 0): (0, 1) and (1, 0) missing
   Write(Scratch("single.csv"), "file,row,col\na,3,4\n");
   EXPECT_EQ(ErrorOf(Scratch("single.csv")), "");  // one tile: nothing to register, nothing wrong
