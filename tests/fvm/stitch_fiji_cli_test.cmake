@@ -57,38 +57,32 @@ file(COPY_FILE ${WORK}/set/TileConfiguration.registered.txt ${WORK}/set/register
 run(0 stitch --layout ${WORK}/set/registered.layout --overlap 20 -o ${WORK}/set/again.csv)
 
 # Bad configurations: exit 1, the message names the file and line, no output written.
+function(refused what pattern)
+  file(REMOVE ${WORK}/set/bad.csv)
+  run(1 stitch ${ARGN} -o ${WORK}/set/bad.csv)
+  if(NOT ERR MATCHES "${pattern}" OR EXISTS ${WORK}/set/bad.csv)
+    message(FATAL_ERROR "${what} was not refused by name, or left an output:\n${ERR}")
+  endif()
+endfunction()
 file(WRITE ${WORK}/set/bad.txt "dim = 2\ntile_r000_c000.tif; ; (0.0, 0.0)\ntile_r000_c001.tif, (204.8, 0.0)\n")
-run(1 stitch --layout ${WORK}/set/bad.txt --overlap 20 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "bad.txt:3: cannot read 'tile_r000_c001.tif, \\(204.8, 0.0\\)' as a tile; write 'name; ; \\(x, y\\)'"
-   OR EXISTS ${WORK}/set/bad.csv)
-  message(FATAL_ERROR "a malformed line was not named:\n${ERR}")
-endif()
+refused("a malformed line"
+        "bad.txt:3: cannot read 'tile_r000_c001.tif, \\(204.8, 0.0\\)' as a tile; write 'name; ; \\(x, y\\)'"
+        --layout ${WORK}/set/bad.txt --overlap 20)
 file(WRITE ${WORK}/set/between.txt "dim = 2\ntile_r000_c000.tif; ; (0.0, 0.0)\ntile_r000_c001.tif; ; (102.4, 0.0)\n")
-run(1 stitch --layout ${WORK}/set/between.txt --overlap 20 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "between.txt:3: tile tile_r000_c001.tif at x = 102.4 px is 102.4 px from the nearest column of the grid \\(pitch 204.8 px\\): it lies on no node"
-   OR EXISTS ${WORK}/set/bad.csv)
-  message(FATAL_ERROR "a tile between two columns was not named:\n${ERR}")
-endif()
+refused("a tile between two columns"
+        "between.txt:3: tile tile_r000_c001.tif at x = 102.4 px is 102.4 px from the nearest column of the grid \\(pitch 204.8 px\\): it lies on no node"
+        --layout ${WORK}/set/between.txt --overlap 20)
 # A wrong --overlap (60 % of 256 px: a pitch of 102.4 px where the tiles step by 204.8) is named, not stitched.
-run(1 stitch --layout ${WORK}/set/TileConfiguration.txt --overlap 60 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "TileConfiguration.txt: no two columns of the grid are neighbours: the nearest lie 2 pitches of 102.4 px apart along x; check --overlap"
-   OR EXISTS ${WORK}/set/bad.csv)
-  message(FATAL_ERROR "a wrong overlap was not named:\n${ERR}")
-endif()
+refused("a wrong overlap"
+        "TileConfiguration.txt: no two columns of the grid are neighbours: the nearest lie 2 pitches of 102.4 px apart along x; check --overlap"
+        --layout ${WORK}/set/TileConfiguration.txt --overlap 60)
 file(WRITE ${WORK}/set/stacks.txt "dim = 3\ntile_r000_c000.tif; ; (0.0, 0.0, 0.0)\ntile_r000_c001.tif; ; (204.8, 0.0, 3.0)\n")
-run(1 stitch --layout ${WORK}/set/stacks.txt --overlap 20 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "stacks.txt:3: tile tile_r000_c001.tif is at z = 3 px, the first tile at z = 0: tiles in several planes")
-  message(FATAL_ERROR "tiles in several planes were not refused:\n${ERR}")
-endif()
+refused("tiles in several planes"
+        "stacks.txt:3: tile tile_r000_c001.tif is at z = 3 px, the first tile at z = 0: tiles in several planes"
+        --layout ${WORK}/set/stacks.txt --overlap 20)
 file(WRITE ${WORK}/set/absent.txt "dim = 2\ntile_r000_c000.tif; ; (0.0, 0.0)\nnone.tif; ; (204.8, 0.0)\n")
-run(1 stitch --layout ${WORK}/set/absent.txt --overlap 20 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "absent.txt:3: tile row 0 col 1: .*none.tif" OR EXISTS ${WORK}/set/bad.csv)
-  message(FATAL_ERROR "a missing tile was not named with the configuration's line:\n${ERR}")
-endif()
-run(1 stitch --layout ${WORK}/set/nothing.txt --overlap 20 -o ${WORK}/set/bad.csv)
-if(NOT ERR MATCHES "nothing.txt")
-  message(FATAL_ERROR "a missing configuration was not named:\n${ERR}")
-endif()
+refused("a missing tile" "absent.txt:3: tile row 0 col 1: .*none.tif" --layout ${WORK}/set/absent.txt --overlap 20)
+refused("a missing configuration" "nothing.txt" --layout ${WORK}/set/nothing.txt --overlap 20)
 # A tile name Fiji cannot read back is refused before anything is written.
 file(COPY_FILE ${WORK}/set/tile_r000_c000.tif "${WORK}/set/a;b.tif")
 file(WRITE ${WORK}/set/semicolon.csv "file,row,col\na;b.tif,0,0\ntile_r000_c001.tif,0,1\n")
