@@ -16,16 +16,11 @@
 #include "imaging/io/fiji_tile_configuration.h"
 #include "workflows/stitch_layout.h"
 #include "workflows/stitch_summary.h"
+#include "tests/workflows/stitch_tile_set.h"
 #include "workflows/tiles_synthesize.h"
 
 namespace fvm::workflows {
 namespace {
-
-std::filesystem::path StitchFijiScratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / fmt::format("fvm_stitch_fiji_test_{}_{}", name, ::getpid());
-  std::filesystem::remove_all(dir);
-  return dir;
-}
 
 // file -> (x, y) text of a positions CSV, as written.
 std::map<std::string, std::pair<std::string, std::string>> CsvPositionTexts(const std::string& csv) {
@@ -48,10 +43,7 @@ std::map<std::string, std::pair<std::string, std::string>> CsvPositionTexts(cons
 // configuration lists the tiles serpentine (the middle row right to left), at the nominal grid positions of the
 // CSV layout: the same grid, the same nominal positions, so the same registration.
 TEST(StitchFiji, AConfigurationStitchesAsItsLayoutAndTheFijiPositionsAreTheCsvPositions) {
-  TilesSynthesizeOptions synth;
-  synth.output = StitchFijiScratch("set").string();
-  synth.bits = 8;
-  synth.seed = 4;
+  const TilesSynthesizeOptions synth = EightBitSetOptions(StitchScratch("stitch_fiji_test", "set"));
   const SynthesizedTileSet set = SynthesizeTileSet(synth);
   const std::filesystem::path dir(synth.output);
   const LayoutTiles csv = ReadLayoutTiles(dir / "layout.csv", 0, 0.2);

@@ -19,6 +19,7 @@
 #include "core/input_error.h"
 #include "workflows/stitch_layout.h"
 #include "workflows/stitch_summary.h"
+#include "tests/workflows/stitch_tile_set.h"
 #include "workflows/tiles_synthesize.h"
 
 namespace fvm::workflows {
@@ -26,12 +27,6 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-
-std::filesystem::path StitchLayoutScratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / fmt::format("fvm_stitch_layout_test_{}_{}", name, ::getpid());
-  std::filesystem::remove_all(dir);
-  return dir;
-}
 
 std::vector<std::vector<std::string>> CsvRows(const std::string& text) {
   std::vector<std::vector<std::string>> rows;
@@ -54,10 +49,7 @@ std::string ReadText(const std::filesystem::path& path) {
 // registers; every tile lands within 0.15 px of its truth (the set's rms is 0.04 px, 8-bit quantisation); the CSV
 // carries mm with the pixel size; the summary counts what the result holds and prints it.
 TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
-  TilesSynthesizeOptions synth;
-  synth.output = StitchLayoutScratch("set").string();
-  synth.bits = 8;
-  synth.seed = 4;
+  const TilesSynthesizeOptions synth = EightBitSetOptions(StitchScratch("stitch_layout_test", "set"));
   const SynthesizedTileSet set = SynthesizeTileSet(synth);
   const LayoutTiles tiles = ReadLayoutTiles(std::filesystem::path(synth.output) / "layout.csv");
   EXPECT_EQ(tiles.pixel_type, imaging::TilePixelType::kUint8);
@@ -107,10 +99,7 @@ TEST(StitchLayout, StitchesASynthesizedSetBackToItsTruthAndSummarizesIt) {
 // the positions CSV has the eight, the summary names no tile without neighbour, and the mosaic is empty (NaN) where
 // the hole is and filled elsewhere.
 TEST(StitchLayout, StitchesALayoutWithAHoleAndFusesItsMosaic) {
-  TilesSynthesizeOptions synth;
-  synth.output = StitchLayoutScratch("hole").string();
-  synth.bits = 8;
-  synth.seed = 4;
+  const TilesSynthesizeOptions synth = EightBitSetOptions(StitchScratch("stitch_layout_test", "hole"));
   const SynthesizedTileSet set = SynthesizeTileSet(synth);
   const std::filesystem::path layout = std::filesystem::path(synth.output) / "layout.csv";
   std::string text = ReadText(layout), kept;
@@ -147,10 +136,7 @@ TEST(StitchLayout, StitchesALayoutWithAHoleAndFusesItsMosaic) {
 // four pairs of twelve place nothing, a third, and the run says so (the warning the command prints on stderr, and
 // --json's unresolved_warning); the tile says registered 0 and carries the stage's spread, which covers where it is.
 TEST(StitchLayout, SaysARunWithAQuarterOfItsPairsUnresolvedAndATileNoPairPlaces) {
-  TilesSynthesizeOptions synth;
-  synth.output = StitchLayoutScratch("blank").string();
-  synth.bits = 8;
-  synth.seed = 4;
+  const TilesSynthesizeOptions synth = EightBitSetOptions(StitchScratch("stitch_layout_test", "blank"));
   const SynthesizedTileSet set = SynthesizeTileSet(synth);
   LayoutTiles tiles = ReadLayoutTiles(std::filesystem::path(synth.output) / "layout.csv");
   imaging::TileImage& blank = tiles.images[4];
@@ -186,7 +172,7 @@ TEST(StitchLayout, SaysARunWithAQuarterOfItsPairsUnresolvedAndATileNoPairPlaces)
 // A strip in one direction cannot tell the field's terms apart: refused naming --distortion and the layout.
 TEST(StitchLayout, RefusesAFieldTheOverlapsCannotDetermineNamingTheLayout) {
   TilesSynthesizeOptions synth;
-  synth.output = StitchLayoutScratch("strip").string();
+  synth.output = StitchScratch("stitch_layout_test", "strip").string();
   synth.rows = 1;
   synth.cols = 3;
   synth.tile_px = 128;
