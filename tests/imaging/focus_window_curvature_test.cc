@@ -1,0 +1,142 @@
+// The window corrections on curved surfaces (imaging/focus_window_curvature.h, focus_steep_curvature_bias.h) on
+// synthetic cases whose bias is known: the mean of a paraboloid over the window's weights (its taps written from
+// their formula, widened by the pre-filter's), and focus curves of a known shape.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "imaging/focus_steep_curvature_bias.h"
+#include "imaging/focus_window_curvature.h"
+
+namespace fvm {
+namespace {
+
+std::vector<imaging::WindowCurves> AdaptiveWindows() {
+  std::vector<imaging::WindowCurves> windows(3);
+  for (int k = 0; k < 3; ++k) windows[std::size_t(k)].window = 3 + 2 * k + 2 * (k == 2), windows[std::size_t(k)].gaussian = true;
+  return windows;  // 3, 5 and 9 px
+}
+
+// Normalised 1-D Gaussian taps of sigma `sigma` over 2 half + 1 points.
+std::vector<double> Gaussian(double sigma, int half) {
+  std::vector<double> t;
+  double sum = 0.0;
+  for (int j = -half; j <= half; ++j) t.push_back(std::exp(-j * j / (2.0 * sigma * sigma))), sum += t.back();
+  for (double& v : t) v /= sum;
+  return t;
+}
+
+TEST(FocusWindowCurvature, MovesEachHeightByTheWindowsMeanOfAParaboloid) {
+  // A paraboloid h = c (x^2 + y^2) / 2 (Laplacian 2c) seen through the 9 px window (Gaussian of sigma 2.7 px to 2.5
+  // sigma, rounded: 7 px either side) of a measure pre-filtered by a 5-tap Gaussian of sigma 0.5 px: the window's
+  // weighted mean of the heights around a point exceeds the point's height by the weights' variance times c, which
+  // the correction takes off.
+  const std::vector<double> window = Gaussian(0.3 * 9, 7), prefilter = Gaussian(0.5, 2);
+  std::vector<double> weights(window.size() + prefilter.size() - 1, 0.0);  // their convolution, along one axis
+  for (std::size_t a = 0; a < window.size(); ++a)
+    for (std::size_t b = 0; b < prefilter.size(); ++b) weights[a + b] += window[a] * prefilter[b];
+  constexpr double kC = 2e-6;  // mm per px^2: a sphere of 0.5 mm radius in 1 um pixels
+  const int half = int(weights.size() / 2);
+  double mean = 0.0;  // of c (x^2 + y^2) / 2 over the 2-D weights, the centre at 0
+  for (int y = -half; y <= half; ++y)
+    for (int x = -half; x <= half; ++x)
+      mean += weights[std::size_t(x + half)] * weights[std::size_t(y + half)] * kC * (x * x + y * y) / 2.0;
+  const std::vector<imaging::WindowCurves> windows = AdaptiveWindows();
+  EXPECT_NEAR(imaging::WindowWeightVariancePx2(windows[2]) * kC, mean, 1e-4 * mean);
+
+  constexpr int kWidth = 4, kHeight = 1;
+  const std::vector<float> window_px = {9.0f, 5.0f, 9.0f, 4.0f};
+  const std::vector<float> laplacian = {float(2 * kC), float(2 * kC), std::numeric_limits<float>::quiet_NaN(),
+                                        float(2 * kC)};
+  const std::vector<float> roughness(4, 0.0f);
+  std::vector<double> z(4, 0.01);
+  imaging::CorrectWindowCurvature(kWidth, kHeight, false, windows, window_px, laplacian.data(), roughness.data(), z);
+  EXPECT_NEAR(z[0], 0.01 - mean, 1e-4 * mean);  // the window's mean of the heights, taken off
+  EXPECT_NEAR(z[1], 0.01 - imaging::WindowWeightVariancePx2(windows[1]) * kC, 1e-12);  // the 5 px window's
+  EXPECT_LT(imaging::WindowWeightVariancePx2(windows[1]), 0.5 * imaging::WindowWeightVariancePx2(windows[2]));
+  EXPECT_EQ(z[2], 0.01);  // no curvature known (near a bend)
+  EXPECT_EQ(z[3], 0.01);  // no window of that size
+
+  // A Laplacian no clearer than its noise moves the heights by less: by L^2 / (L^2 + n^2) of the full amount.
+  std::vector<double> noisy(4, 0.01);
+  const std::vector<float> rough(4, float(1e3 * kC));
+  imaging::CorrectWindowCurvature(kWidth, kHeight, false, windows, window_px, laplacian.data(), rough.data(), noisy);
+  EXPECT_GT(noisy[0], 0.01 - 0.1 * mean);
+  EXPECT_LT(noisy[0], 0.01);
+}
+
+// Window curves of n pixels, each with its peak at image k of a stack and the measures f(k + j) = curve(j - offset).
+template <typename Curve>
+imaging::WindowCurves Curves(std::size_t n, int k, double offset, const Curve& curve) {
+  imaging::WindowCurves c;
+  c.window = 9, c.gaussian = true;
+  c.Reset(9, true, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double o = offset * double(int(i % 7) - 3) / 3.0;  // the peak's place between images, spread
+    c.index[i] = k;
+    c.best[i] = float(curve(-o)), c.left[i] = float(curve(-1 - o)), c.right[i] = float(curve(1 - o));
+    c.left2[i] = float(curve(-2 - o)), c.right2[i] = float(curve(2 - o));
+    c.floor[i] = 0.0f;
+    c.sum[i] = c.best[i];  // peak over mean: the number of images
+  }
+  return c;
+}
+
+TEST(FocusSteepCurvatureBias, TellsASharpToppedNarrowCurveFromASmoothWaist) {
+  constexpr std::size_t kN = 2000, kImages = 40;
+  const std::vector<float> flat(kN, 0.0f);
+  constexpr double kStep = 0.001;
+  // The modified Laplacian falls as the blur's sigma^-3 (focus_peak.cc). A waist of sigma^2 = s0^2 + (k dz)^2
+  // (in steps: s0 = 0.6, k = 1): the transformed measure is a parabola, its rise two images out four times that one
+  // image out; a cone from its floor, sigma = s0 + k |dz|: a V-topped rise, about 2.5 times.
+  const auto waist = [](double dz) { return std::pow(0.36 + dz * dz, -1.5); };
+  const auto cone = [](double dz) { return std::pow(0.6 + std::abs(dz), -3.0); };
+  const imaging::FocusCurveShape round =
+      imaging::MeasureCurveShape(Curves(kN, 10, 0.0, waist), kImages, 0.0, flat.data(), flat.data(), kStep);
+  const imaging::FocusCurveShape sharp =
+      imaging::MeasureCurveShape(Curves(kN, 10, 0.0, cone), kImages, 0.0, flat.data(), flat.data(), kStep);
+  EXPECT_NEAR(round.cusp, 4.0, 1e-3);
+  EXPECT_NEAR(sharp.cusp, (std::pow(2.6 / 0.6, 2.0) - 1.0) / (std::pow(1.6 / 0.6, 2.0) - 1.0), 1e-3);
+  EXPECT_LT(sharp.cusp, imaging::kCuspFull);
+  EXPECT_LT(sharp.shoulder, imaging::kNarrowShoulderFull);
+  EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare(sharp), 1.0);
+  EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare(round), 0.0);
+  // The same cone 33 times wider (a small aperture): the shoulder is wide, nothing to remove.
+  const auto wide = [](double dz) { return std::pow(20.0 + std::abs(dz), -3.0); };
+  const imaging::FocusCurveShape low_na =
+      imaging::MeasureCurveShape(Curves(kN, 10, 0.0, wide), kImages, 0.0, flat.data(), flat.data(), kStep);
+  EXPECT_GT(low_na.shoulder, imaging::kNarrowShoulderNone);
+  EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare(low_na), 0.0);
+  // Peaks at the stack's ends and on steep parts are not sampled.
+  const std::vector<float> steep(kN, float(0.5 * kStep));
+  EXPECT_EQ(imaging::MeasureCurveShape(Curves(kN, 10, 0.0, cone), kImages, 0.0, steep.data(), flat.data(), kStep).samples, 0);
+  EXPECT_EQ(imaging::MeasureCurveShape(Curves(kN, 1, 0.0, cone), kImages, 0.0, flat.data(), flat.data(), kStep).samples, 0);
+  EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare({}), 0.0);
+}
+
+TEST(FocusSteepCurvatureBias, TakesTheBiasOffSteepCurvedWallsOnly) {
+  constexpr double kStep = 0.001, kLaplacian = 5e-6;  // mm per px^2
+  const std::vector<imaging::WindowCurves> windows = AdaptiveWindows();
+  const std::vector<float> window_px(4, 9.0f), gy(4, 0.0f);
+  const std::vector<float> gx = {0.0f, float(0.29 * kStep), float(0.4 * kStep), float(0.4 * kStep)};
+  const std::vector<float> laplacian = {float(kLaplacian), float(kLaplacian), float(kLaplacian),
+                                        std::numeric_limits<float>::quiet_NaN()};
+  std::vector<double> z(4, 0.02);
+  imaging::CorrectSteepCurvatureBias(4, 1, false, 0.5, kStep, windows, window_px, gx.data(), gy.data(),
+                                     laplacian.data(), z);
+  const double full = 0.5 * imaging::kSteepBiasPx * std::sqrt(imaging::WindowWeightVariancePx2(windows[2])) * kLaplacian;
+  EXPECT_EQ(z[0], 0.02);  // a gentle slope
+  EXPECT_NEAR(z[1], 0.02 - 0.5 * full, 1e-6 * full);  // half way up the ramp (the slope in float)
+  EXPECT_NEAR(z[2], 0.02 - full, 1e-6 * full);
+  EXPECT_EQ(z[3], 0.02);  // no curvature known
+  std::vector<double> none(4, 0.02);
+  imaging::CorrectSteepCurvatureBias(4, 1, false, 0.0, kStep, windows, window_px, gx.data(), gy.data(),
+                                     laplacian.data(), none);
+  EXPECT_EQ(none, std::vector<double>(4, 0.02));
+}
+
+}  // namespace
+}  // namespace fvm
