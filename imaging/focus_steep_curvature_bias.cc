@@ -8,8 +8,8 @@
 namespace fvm::imaging {
 namespace {
 
-constexpr std::size_t kShapeEvery = 13;     // a sample of the pixels, prime against the image's width
-constexpr double kGentleSlopeSteps = 0.1;   // steps per px: a window's heights span well under a step
+constexpr std::size_t kShapeEvery = 13;    // a sample of the pixels, prime against the image's width
+constexpr double kGentleSlopeSteps = 0.1;  // steps per px: a window's heights span well under a step
 constexpr int kMinShapeSamples = 50;
 
 float Median(std::vector<float>& v) {
@@ -54,7 +54,9 @@ double SteepCurvatureBiasShare(const FocusCurveShape& shape) {
 void CorrectSteepCurvatureBias(int width, int height, bool parallel, double share, double step_mm,
                                const std::vector<WindowCurves>& windows, const std::vector<float>& window_px,
                                const float* slope_x, const float* slope_y, const float* laplacian,
-                               std::vector<double>& z_mm) {
+                               const float* filled_laplacian, std::vector<double>& z_mm,
+                               std::vector<float>& unremoved_mm) {
+  unremoved_mm.assign(std::size_t(width) * std::size_t(height), 0.0f);
   if (!(share > 0.0)) return;
   std::vector<double> scale(windows.size());
   for (std::size_t k = 0; k < windows.size(); ++k) {
@@ -62,12 +64,17 @@ void CorrectSteepCurvatureBias(int width, int height, bool parallel, double shar
   }
   ForStripes(height, parallel, [&](int r0, int r1) {
     for (std::size_t i = std::size_t(r0) * std::size_t(width); i < std::size_t(r1) * std::size_t(width); ++i) {
-      if (!std::isfinite(z_mm[i]) || !std::isfinite(laplacian[i])) continue;
+      if (!std::isfinite(z_mm[i])) continue;
       const double slope_steps = std::hypot(slope_x[i], slope_y[i]) / step_mm;
       const double ramp = Ramp(slope_steps, kSteepRampStartSteps, kSteepRampEndSteps);
       if (ramp == 0.0) continue;
       for (std::size_t k = 0; k < windows.size(); ++k) {
-        if (window_px[i] == float(windows[k].window)) z_mm[i] -= scale[k] * ramp * double(laplacian[i]);
+        if (window_px[i] != float(windows[k].window)) continue;
+        if (std::isfinite(laplacian[i])) {
+          z_mm[i] -= scale[k] * ramp * double(laplacian[i]);
+        } else if (std::isfinite(filled_laplacian[i])) {
+          unremoved_mm[i] = float(scale[k] * ramp * std::abs(double(filled_laplacian[i])));
+        }
       }
     }
   });

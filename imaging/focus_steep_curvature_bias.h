@@ -15,7 +15,9 @@
 // one image away (4 for the parabola of a smooth waist, 2 for a V; 2.55-2.75 at NA 0.9 with a 0.8 um floor,
 // 3.56-3.73 with a 0.3 um floor). So the stack's typical focus curve, on its gentle parts, says how much of the bias
 // to remove: all of it where the curves are narrow (shoulder below kNarrowShoulderFull) and V-topped (ratio below
-// kCuspFull), none where either is wide or round. Used by focus_variation.cc.
+// kCuspFull), none where either is wide or round. Within reach of a sharp bend (a calotte's rim), where the map's
+// curvature is unknown, the heights are left alone and the bias's size, from the curvature around, goes to u_z.
+// Used by focus_variation.cc.
 
 #include <cstddef>
 #include <vector>
@@ -51,10 +53,13 @@ FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, dou
 double SteepCurvatureBiasShare(const FocusCurveShape& shape);
 
 // Moves each finite height whose window is one of `windows` by -share x kSteepBiasPx x sigma x ramp(slope) x
-// laplacian (heights where the Laplacian is NaN, near a sharp bend, left alone). Maps row-major, width x height.
+// laplacian. Where the Laplacian is NaN (near a sharp bend, where its local mean holds the bend's ridge) the height
+// is left alone, and `unremoved_mm` (n values, else 0) gets the bias's size from `filled_laplacian` (the curvature
+// of the surface around, for the uncertainty). Maps row-major, width x height.
 void CorrectSteepCurvatureBias(int width, int height, bool parallel, double share, double step_mm,
                                const std::vector<WindowCurves>& windows, const std::vector<float>& window_px,
                                const float* slope_x, const float* slope_y, const float* laplacian,
-                               std::vector<double>& z_mm);
+                               const float* filled_laplacian, std::vector<double>& z_mm,
+                               std::vector<float>& unremoved_mm);
 
 }  // namespace fvm::imaging

@@ -1,10 +1,9 @@
 #include "imaging/focus_window_curvature.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <opencv2/imgproc.hpp>
 
 namespace fvm::imaging {
 namespace {

@@ -2,6 +2,8 @@
 // synthetic cases whose bias is known: the mean of a paraboloid over the window's weights (its taps written from
 // their formula, widened by the pre-filter's), and focus curves of a known shape.
 
+#include "imaging/focus_window_curvature.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,14 +11,14 @@
 #include <vector>
 
 #include "imaging/focus_steep_curvature_bias.h"
-#include "imaging/focus_window_curvature.h"
 
 namespace fvm {
 namespace {
 
 std::vector<imaging::WindowCurves> AdaptiveWindows() {
   std::vector<imaging::WindowCurves> windows(3);
-  for (int k = 0; k < 3; ++k) windows[std::size_t(k)].window = 3 + 2 * k + 2 * (k == 2), windows[std::size_t(k)].gaussian = true;
+  for (int k = 0; k < 3; ++k)
+    windows[std::size_t(k)].window = 3 + 2 * k + 2 * (k == 2), windows[std::size_t(k)].gaussian = true;
   return windows;  // 3, 5 and 9 px
 }
 
@@ -112,30 +114,42 @@ TEST(FocusSteepCurvatureBias, TellsASharpToppedNarrowCurveFromASmoothWaist) {
   EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare(low_na), 0.0);
   // Peaks at the stack's ends and on steep parts are not sampled.
   const std::vector<float> steep(kN, float(0.5 * kStep));
-  EXPECT_EQ(imaging::MeasureCurveShape(Curves(kN, 10, 0.0, cone), kImages, 0.0, steep.data(), flat.data(), kStep).samples, 0);
-  EXPECT_EQ(imaging::MeasureCurveShape(Curves(kN, 1, 0.0, cone), kImages, 0.0, flat.data(), flat.data(), kStep).samples, 0);
+  EXPECT_EQ(
+      imaging::MeasureCurveShape(Curves(kN, 10, 0.0, cone), kImages, 0.0, steep.data(), flat.data(), kStep).samples, 0);
+  EXPECT_EQ(imaging::MeasureCurveShape(Curves(kN, 1, 0.0, cone), kImages, 0.0, flat.data(), flat.data(), kStep).samples,
+            0);
   EXPECT_DOUBLE_EQ(imaging::SteepCurvatureBiasShare({}), 0.0);
 }
 
 TEST(FocusSteepCurvatureBias, TakesTheBiasOffSteepCurvedWallsOnly) {
   constexpr double kStep = 0.001, kLaplacian = 5e-6;  // mm per px^2
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const std::vector<imaging::WindowCurves> windows = AdaptiveWindows();
-  const std::vector<float> window_px(4, 9.0f), gy(4, 0.0f);
-  const std::vector<float> gx = {0.0f, float(0.29 * kStep), float(0.4 * kStep), float(0.4 * kStep)};
-  const std::vector<float> laplacian = {float(kLaplacian), float(kLaplacian), float(kLaplacian),
-                                        std::numeric_limits<float>::quiet_NaN()};
-  std::vector<double> z(4, 0.02);
-  imaging::CorrectSteepCurvatureBias(4, 1, false, 0.5, kStep, windows, window_px, gx.data(), gy.data(),
-                                     laplacian.data(), z);
-  const double full = 0.5 * imaging::kSteepBiasPx * std::sqrt(imaging::WindowWeightVariancePx2(windows[2])) * kLaplacian;
-  EXPECT_EQ(z[0], 0.02);  // a gentle slope
+  const std::vector<float> window_px(5, 9.0f), gy(5, 0.0f);
+  const std::vector<float> gx = {0.0f, float(0.29 * kStep), float(0.4 * kStep), float(0.4 * kStep), float(0.4 * kStep)};
+  const std::vector<float> laplacian = {float(kLaplacian), float(kLaplacian), float(kLaplacian), kNaN, kNaN};
+  const std::vector<float> filled = {float(kLaplacian), float(kLaplacian), float(kLaplacian), float(-kLaplacian), kNaN};
+  std::vector<double> z(5, 0.02);
+  std::vector<float> unremoved;
+  imaging::CorrectSteepCurvatureBias(5, 1, false, 0.5, kStep, windows, window_px, gx.data(), gy.data(),
+                                     laplacian.data(), filled.data(), z, unremoved);
+  const double full =
+      0.5 * imaging::kSteepBiasPx * std::sqrt(imaging::WindowWeightVariancePx2(windows[2])) * kLaplacian;
+  EXPECT_EQ(z[0], 0.02);                              // a gentle slope
   EXPECT_NEAR(z[1], 0.02 - 0.5 * full, 1e-6 * full);  // half way up the ramp (the slope in float)
   EXPECT_NEAR(z[2], 0.02 - full, 1e-6 * full);
-  EXPECT_EQ(z[3], 0.02);  // no curvature known
-  std::vector<double> none(4, 0.02);
-  imaging::CorrectSteepCurvatureBias(4, 1, false, 0.0, kStep, windows, window_px, gx.data(), gy.data(),
-                                     laplacian.data(), none);
-  EXPECT_EQ(none, std::vector<double>(4, 0.02));
+  EXPECT_EQ(z[3], 0.02);  // no curvature known here: the bias's size from the curvature around goes to u_z
+  EXPECT_EQ(z[4], 0.02);
+  ASSERT_EQ(unremoved.size(), 5u);
+  EXPECT_EQ(unremoved[0], 0.0f);
+  EXPECT_EQ(unremoved[2], 0.0f);
+  EXPECT_NEAR(unremoved[3], full, 1e-6 * full);
+  EXPECT_EQ(unremoved[4], 0.0f);
+  std::vector<double> none(5, 0.02);
+  imaging::CorrectSteepCurvatureBias(5, 1, false, 0.0, kStep, windows, window_px, gx.data(), gy.data(),
+                                     laplacian.data(), filled.data(), none, unremoved);
+  EXPECT_EQ(none, std::vector<double>(5, 0.02));
+  EXPECT_EQ(unremoved, std::vector<float>(5, 0.0f));
 }
 
 }  // namespace
