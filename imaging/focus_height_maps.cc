@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace fvm::imaging {
 namespace {
@@ -21,6 +22,16 @@ constexpr float kBendCut = 3.0f;
 constexpr double kBendWidthPx = 2.0;
 constexpr double kBendReachPx = 4.0;
 constexpr float kBendShare = 0.4f;
+// The surface's curvature (for the heights' window correction, focus_window_curvature.h) is left unknown where the
+// bends make more than this share of the points around a pixel (over kCurvatureSmoothingPx): within about 14 px of
+// a calotte's rim, where the local mean of the Laplacian still holds the rim's ridge (+0.045 step of false correction
+// 0-10 px either side of the rim on focusgen.py's stacks).
+constexpr float kBendFreeShare = 0.02f;
+constexpr float kNoCurvature = std::numeric_limits<float>::quiet_NaN();
+// Where the curvature is unknown, its estimate for the uncertainty of what the heights' corrections could not take
+// off: the local mean of the known values over this sigma, where they make at least kCurvatureFillShare of the points.
+constexpr double kCurvatureFillPx = 12.0;
+constexpr float kCurvatureFillShare = 0.05f;
 // The local plane (WindowScaleRoughness) is fitted where the determinant of its normal equations is at least this
 // share of what as many valid points spread evenly would give (share^3 sigma^4); below it they lie too nearly on a
 // line or at a point to fix a plane's slope along both axes.
@@ -259,15 +270,54 @@ cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
       for (int col = 0; col < c.cols; ++col) k[col] = bend[col] <= cut ? w[col] : 0.0f;
     }
   });
-  cv::Mat bend = buffers[10];
+  cv::Mat bend = buffers[10], is_bend = buffers[12];
   buffers.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
-      float* o = bend.ptr<float>(r);
+      float *o = bend.ptr<float>(r), *flag = is_bend.ptr<float>(r);
       const float *d = roughness.ptr<float>(r), *k = kept.ptr<float>(r), *w = weight.ptr<float>(r);
-      for (int col = 0; col < c.cols; ++col) o[col] = d[col] * d[col] * (w[col] - k[col]);
+      for (int col = 0; col < c.cols; ++col) {
+        o[col] = d[col] * d[col] * (w[col] - k[col]);
+        flag[col] = w[col] > k[col] ? 1.0f : 0.0f;
+      }
     }
   });
   departures(kept);
+  // The surface's own curvature (buffer 11), NaN where bends lie within reach of its local mean: there the
+  // smoothing has spread the bend's ridge into the Laplacian on either side.
+  cv::Mat curvature = buffers[11], near_bend = buffers[13];
+  buffers.Pass([&](int r0, int r1) {
+    cv::Mat n_rows = near_bend.rowRange(r0, r1);
+    cv::GaussianBlur(is_bend.rowRange(r0, r1), n_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
+  });
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      float* o = curvature.ptr<float>(r);
+      const float *m = a.ptr<float>(r), *n = near_bend.ptr<float>(r);
+      for (int col = 0; col < c.cols; ++col) o[col] = n[col] <= kBendFreeShare ? m[col] : kNoCurvature;
+    }
+  });
+  // The same, filled where unknown by the local mean of the known values over kCurvatureFillPx (buffer 15; NaN where
+  // none lies within reach).
+  cv::Mat known = buffers[12], known_values = buffers[13], filled = buffers[15];
+  buffers.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      float *k = known.ptr<float>(r), *v = known_values.ptr<float>(r);
+      const float* l = curvature.ptr<float>(r);
+      for (int col = 0; col < c.cols; ++col) {
+        k[col] = std::isfinite(l[col]) ? 1.0f : 0.0f;
+        v[col] = std::isfinite(l[col]) ? l[col] : 0.0f;
+      }
+    }
+  });
+  cv::Mat fill_total = buffers[14];
+  buffers.Pass([&](int r0, int r1) {
+    BlurredRatio(known_values, known, kCurvatureFillPx, r0, r1, fill_total, filled);
+    for (int r = r0; r < r1; ++r) {
+      float* f = filled.ptr<float>(r);
+      const float* t = fill_total.ptr<float>(r);
+      for (int col = 0; col < c.cols; ++col) f[col] = t[col] >= kCurvatureFillShare ? f[col] : kNoCurvature;
+    }
+  });
   buffers.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       float* o = c.ptr<float>(r);

@@ -44,7 +44,10 @@ Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buf
 cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& buffers);
 
 // The heights' roughness at the window's scale (buffer 3), from what SlopePerPixel leaves in the buffers and the
-// slope of the same heights (see focus_height_maps.cc).
+// slope of the same heights (see focus_height_maps.cc). Leaves in buffer 11 the surface's own curvature: the
+// Laplacian (mm per px^2) of the heights smoothed over 2 px, its weighted local mean over 6 px with the sharp bends
+// (a calotte's rim) left out; NaN within reach of such a bend. And in buffer 15 the same filled where NaN by the
+// local mean of the known values over 12 px (NaN where none lies within reach).
 cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers);
 
 }  // namespace fvm::imaging

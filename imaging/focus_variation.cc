@@ -18,6 +18,8 @@
 #include "imaging/focus_peak.h"
 #include "imaging/focus_stack_curves.h"
 #include "imaging/focus_window_centroid.h"
+#include "imaging/focus_window_curvature.h"
+#include "imaging/focus_steep_curvature_bias.h"
 
 namespace fvm::imaging {
 namespace {
@@ -349,6 +351,21 @@ FocusResult FocusAccumulator::Finish() const {
   const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
   const Slope corrected_slope = SlopePerPixel(map.z_mm, origin, buffers);
   const cv::Mat roughness = WindowScaleRoughness(corrected_slope, buffers);
+  // Each window's height is that under its centre on a curved surface too (focus_window_curvature.h), from the
+  // surface's curvature the roughness leaves (a move this smooth does not change the roughness); and on steep curved
+  // walls, where the stack's focus curves are narrow with a sharp top, the bias that mixing the window's heights
+  // leaves there (focus_steep_curvature_bias.h).
+  const float* curvature = buffers[11].ptr<float>();
+  CorrectWindowCurvature(s.width, s.height, s.options.parallel, curves, result.window_px, curvature,
+                         roughness.ptr<float>(), map.z_mm);
+  std::vector<float> unremoved;  // the steep walls' bias near a bend, which u_z holds instead
+  {
+    const float *gx = corrected_slope.x.ptr<float>(), *gy = corrected_slope.y.ptr<float>();
+    const FocusCurveShape shape = MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step);
+    const double share = SteepCurvatureBiasShare(shape);
+    CorrectSteepCurvatureBias(s.width, s.height, s.options.parallel, share, step, curves, result.window_px, gx, gy,
+                              curvature, buffers[15].ptr<float>(), map.z_mm, unremoved);
+  }
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
@@ -362,9 +379,11 @@ FocusResult FocusAccumulator::Finish() const {
         const double g = corrected_slope.Magnitude(r, col), u_slope = kSlopePx * g;
         const double span_steps = g * kModelSpanPx / step;
         const double u_model = kModelShare * model[i] / (1.0 + span_steps * span_steps);
+        const double u_unremoved = unremoved[i];
         result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter +
                                                         u_roughness * u_roughness + u_step * u_step +
-                                                        u_slope * u_slope + u_model * u_model));
+                                                        u_slope * u_slope + u_model * u_model +
+                                                        u_unremoved * u_unremoved));
       }
     }
   });
