@@ -1,0 +1,269 @@
+#include "imaging/focus_phase_bias.h"
+
+#include <Eigen/Dense>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <unordered_map>
+
+namespace fvm::imaging {
+namespace {
+
+using Terms = Eigen::Matrix<double, PhaseBias::kTerms, 1>;
+using TermMatrix = Eigen::Matrix<double, PhaseBias::kTerms, PhaseBias::kTerms>;
+
+// Level: a slope below this many steps per pixel (on focusgen.py's flat, tilted by 0.012 step per px, the
+// phase sweeps a period over about 85 px; a calotte's bottom stays below it within 12 px of its centre).
+constexpr double kLevelSlope = 0.03;
+// The correction's fade with the slope (steps per px): exp(-(slope / kFadeSlope)^2).
+constexpr double kFadeSlope = 0.05;
+// The local plane's box (px), wider than a stripe of equal phase on the gently tilted faces where the bias is
+// largest, so that the plane does not follow the bias (a Gaussian of sigma 20 px did as well on focusgen.py's
+// stacks; a box's sums cost the same whatever its side); the blocks of the cluster sandwich (px), about twice the distance at which the heights' errors correlate
+// 0.5 on focusgen.py's stacks.
+constexpr int kPlaneBoxPx = 61;
+constexpr int kBlockPx = 16;
+// The estimation runs on a grid of at most this many points a side (every s-th pixel of a larger map; the
+// box and the blocks shrink with it), so that its cost stays a few milliseconds on any map.
+constexpr int kEstimationSide = 512;
+// Declined below this many level points (in pixels of the map), this many blocks, or where any of kPhaseBins
+// bins of the phase holds less than a quarter of its even share.
+constexpr double kMinPoints = 1000.0;
+constexpr int kMinBlocks = 10;
+constexpr int kPhaseBins = 8;
+// A local plane is fitted where at least this share of its box holds level points and they spread over both
+// axes (the determinant of its normal equations at least kPlaneConditioning of an even spread's).
+constexpr double kMinBoxShare = 0.125;
+constexpr double kPlaneConditioning = 0.05;
+// The level points' scatter about their planes (LevelScatter): an rms over a box of this side, where at least
+// kMinScatterShare of it holds level points with a plane.
+constexpr int kScatterBoxPx = 31;
+constexpr double kMinScatterShare = 0.1;
+
+double PhaseOf(double z, double origin, double step) {
+  const double t = (z - origin) / step;
+  return t - std::round(t);
+}
+
+Terms Harmonics(double phase) {
+  static_assert(PhaseBias::kHarmonics == 3);
+  const double c1 = std::cos(2.0 * std::numbers::pi * phase), s1 = std::sin(2.0 * std::numbers::pi * phase);
+  const double c2 = c1 * c1 - s1 * s1, s2 = 2.0 * s1 * c1;  // the higher harmonics by the angle sums
+  Terms f;
+  f << c1, s1, c2, s2, c2 * c1 - s2 * s1, s2 * c1 + c2 * s1;
+  return f;
+}
+
+cv::Mat Box(const cv::Mat& in, int side) {
+  cv::Mat out;
+  cv::boxFilter(in, out, CV_64F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  return out;
+}
+
+}  // namespace
+
+double PhaseBias::At(double phase) const {
+  if (!applied) return 0.0;
+  const Terms f = Harmonics(phase);
+  return Eigen::Map<const Terms>(coefficients.data()).dot(f);
+}
+
+double PhaseBias::Uncertainty(double phase) const {
+  if (!applied) return 0.0;
+  const Terms f = Harmonics(phase);
+  const Eigen::Map<const Eigen::Matrix<double, kTerms, kTerms, Eigen::RowMajor>> v(covariance.data());
+  return std::sqrt(std::max(f.dot(v * f), 0.0));
+}
+
+double PhaseBias::Fade(double slope_mm_per_px) const {
+  if (!applied || !(step_mm > 0.0)) return 0.0;
+  const double s = slope_mm_per_px / step_mm / kFadeSlope;
+  return std::exp(-s * s);
+}
+
+double PhaseBias::LevelScatter(int row, int col) const {
+  if (level_scatter.empty()) return std::numeric_limits<double>::quiet_NaN();
+  return level_scatter[std::size_t(row / grid_stride) * std::size_t(grid_cols) + std::size_t(col / grid_stride)];
+}
+
+PhaseBias EstimatePhaseBias(const PhaseBiasInput& in) {
+  PhaseBias bias;
+  bias.step_mm = in.step_mm;
+  const int stride = std::max(1, (std::max(in.width, in.height) + kEstimationSide - 1) / kEstimationSide);
+  const int cols = (in.width + stride - 1) / stride, rows = (in.height + stride - 1) / stride;
+  const int box = std::max(3, (kPlaneBoxPx / stride) | 1);
+  const int block = std::max(1, kBlockPx / stride);
+  const std::vector<double>& z = *in.z_mm;
+  // The level points on the grid (weight 1), their heights in steps and the harmonics of their phase; coordinates
+  // from the grid's centre.
+  cv::Mat w(rows, cols, CV_64F, 0.0);
+  std::vector<cv::Mat> signals(1 + PhaseBias::kTerms);
+  for (cv::Mat& m : signals) m = cv::Mat(rows, cols, CV_64F, 0.0);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const std::size_t i = std::size_t(r) * stride * std::size_t(in.width) + std::size_t(c) * stride;
+      const double g = std::hypot(in.slope_x[i], in.slope_y[i]) / in.step_mm;
+      if (!std::isfinite(z[i]) || !(g < kLevelSlope)) continue;
+      w.at<double>(r, c) = 1.0;
+      signals[0].at<double>(r, c) = (z[i] - in.origin_mm) / in.step_mm;
+      const Terms f = Harmonics(PhaseOf(z[i], in.origin_mm, in.step_mm));
+      for (int j = 0; j < PhaseBias::kTerms; ++j) signals[std::size_t(j) + 1].at<double>(r, c) = f(j);
+    }
+  }
+  cv::Mat x(rows, cols, CV_64F), y(rows, cols, CV_64F);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) x.at<double>(r, c) = c - 0.5 * cols, y.at<double>(r, c) = r - 0.5 * rows;
+  }
+  const cv::Mat wx = w.mul(x), wy = w.mul(y);
+  const cv::Mat s0 = Box(w, box), sx = Box(wx, box), sy = Box(wy, box), sxx = Box(wx.mul(x), box),
+                syy = Box(wy.mul(y), box), sxy = Box(wx.mul(y), box);
+  // Per level point, the first row of the inverse of its local plane's normal equations (centred on it): the
+  // plane's intercept is that row times the box sums of the signal (its weighted sum and first moments).
+  struct Point {
+    int r, c;
+    double row[3];
+  };
+  std::vector<Point> points;
+  const double even = double(box) * double(box) / 12.0;  // the second moment of points spread evenly over the box
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if (w.at<double>(r, c) == 0.0) continue;
+      const double n = s0.at<double>(r, c);
+      if (n < kMinBoxShare * box * box) continue;
+      const double px = x.at<double>(r, c), py = y.at<double>(r, c);
+      const double mx = sx.at<double>(r, c) - px * n, my = sy.at<double>(r, c) - py * n;
+      const double mxx = sxx.at<double>(r, c) - 2.0 * px * sx.at<double>(r, c) + px * px * n;
+      const double myy = syy.at<double>(r, c) - 2.0 * py * sy.at<double>(r, c) + py * py * n;
+      const double mxy = sxy.at<double>(r, c) - px * sy.at<double>(r, c) - py * sx.at<double>(r, c) + px * py * n;
+      Eigen::Matrix3d m;
+      m << n, mx, my, mx, mxx, mxy, my, mxy, myy;
+      if (!(m.determinant() > kPlaneConditioning * n * n * n * even * even)) continue;
+      const Eigen::Matrix3d inverse = m.inverse();
+      points.push_back({r, c, {inverse(0, 0), inverse(0, 1), inverse(0, 2)}});
+    }
+  }
+  bias.points = int(points.size());
+  if (double(points.size()) * stride * stride < kMinPoints) {
+    bias.reason = "too few level points (" + std::to_string(points.size() * std::size_t(stride) * stride) + " px)";
+    return bias;
+  }
+  // The departures of each signal from its local plane at the level points.
+  std::vector<double> departure(points.size() * std::size_t(1 + PhaseBias::kTerms));
+  for (std::size_t s = 0; s < signals.size(); ++s) {
+    const cv::Mat ws = w.mul(signals[s]);
+    const cv::Mat t0 = Box(ws, box), tx = Box(ws.mul(x), box), ty = Box(ws.mul(y), box);
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const Point& q = points[p];
+      const double px = x.at<double>(q.r, q.c), py = y.at<double>(q.r, q.c);
+      const double a = t0.at<double>(q.r, q.c), b = tx.at<double>(q.r, q.c) - px * a,
+                   c = ty.at<double>(q.r, q.c) - py * a;
+      const double intercept = q.row[0] * a + q.row[1] * b + q.row[2] * c;
+      departure[p * signals.size() + s] = signals[s].at<double>(q.r, q.c) - intercept;
+    }
+  }
+  // The level points' scatter about their local planes less the bias `fitted` (steps).
+  const auto scatter_about_planes = [&](const Terms& fitted) {
+    const int scatter_box = std::max(3, (kScatterBoxPx / stride) | 1);
+    cv::Mat square(rows, cols, CV_64F, 0.0), counted(rows, cols, CV_64F, 0.0);
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const double* d = departure.data() + p * signals.size();
+      const double r = d[0] - Eigen::Map<const Terms>(d + 1).dot(fitted);
+      square.at<double>(points[p].r, points[p].c) = r * r;
+      counted.at<double>(points[p].r, points[p].c) = 1.0;
+    }
+    const cv::Mat sum = Box(square, scatter_box), count = Box(counted, scatter_box);
+    bias.grid_stride = stride, bias.grid_cols = cols;
+    bias.level_scatter.assign(std::size_t(rows) * std::size_t(cols), std::numeric_limits<float>::quiet_NaN());
+    const double min_count = kMinScatterShare * scatter_box * scatter_box;
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const double n = count.at<double>(r, c);
+        if (n >= min_count && w.at<double>(r, c) > 0.0) {
+          bias.level_scatter[std::size_t(r) * std::size_t(cols) + std::size_t(c)] =
+              float(std::sqrt(sum.at<double>(r, c) / n) * in.step_mm);
+        }
+      }
+    }
+  };
+  // The phases seen: each bin at least a quarter of its even share.
+  std::array<int, kPhaseBins> bins{};
+  for (const Point& q : points) {
+    const double phase = std::atan2(signals[2].at<double>(q.r, q.c), signals[1].at<double>(q.r, q.c)) /
+                         (2.0 * std::numbers::pi);  // -0.5..0.5
+    bins[std::size_t(std::clamp(int(std::floor((phase + 0.5) * kPhaseBins)), 0, kPhaseBins - 1))]++;
+  }
+  if (*std::min_element(bins.begin(), bins.end()) * 4 * kPhaseBins < int(points.size())) {
+    bias.reason = "too few phases seen (a face level within a step)";
+    return bias;
+  }
+  TermMatrix a = TermMatrix::Zero();
+  Terms b = Terms::Zero();
+  const auto regressors = [&](std::size_t p) {
+    return Eigen::Map<const Terms>(departure.data() + p * signals.size() + 1);
+  };
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const auto f = regressors(p);
+    a.noalias() += f * f.transpose();
+    b += f * departure[p * signals.size()];
+  }
+  const Eigen::LDLT<TermMatrix> solver(a);
+  if (solver.info() != Eigen::Success || !(solver.rcond() > 1e-6)) {
+    bias.reason = "the phases seen do not fix the harmonics";
+    return bias;
+  }
+  const Terms coefficients = solver.solve(b);  // steps
+  // The cluster sandwich: the scores of the residuals summed per block.
+  std::unordered_map<long, Terms> scores;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const auto f = regressors(p);
+    const double residual = departure[p * signals.size()] - f.dot(coefficients);
+    const long key = long(points[p].r / block) * 100000L + long(points[p].c / block);
+    auto [it, fresh] = scores.try_emplace(key, Terms::Zero());
+    it->second += f * residual;
+  }
+  if (int(scores.size()) < kMinBlocks) {
+    bias.reason = "too few blocks of level points";
+    return bias;
+  }
+  TermMatrix meat = TermMatrix::Zero();
+  for (const auto& [key, g] : scores) meat.noalias() += g * g.transpose();
+  const double blocks = double(scores.size());
+  const TermMatrix inverse = solver.solve(TermMatrix::Identity());
+  const TermMatrix covariance = blocks / (blocks - 1.0) * inverse * meat * inverse;  // steps^2
+  const double chi2 = coefficients.dot(covariance.ldlt().solve(coefficients));
+  bias.shrinkage = std::max(0.0, 1.0 - double(PhaseBias::kTerms - 2) / chi2);
+  if (!(bias.shrinkage > 0.0)) {
+    bias.reason = "no bias beyond its own noise";
+    return bias;
+  }
+  bias.applied = true;
+  scatter_about_planes(bias.shrinkage * coefficients);
+  for (int j = 0; j < PhaseBias::kTerms; ++j) {
+    bias.coefficients[std::size_t(j)] = bias.shrinkage * coefficients(j) * in.step_mm;
+    for (int k = 0; k < PhaseBias::kTerms; ++k) {
+      bias.covariance[std::size_t(j * PhaseBias::kTerms + k)] =
+          bias.shrinkage * bias.shrinkage * covariance(j, k) * in.step_mm * in.step_mm;
+    }
+  }
+  return bias;
+}
+
+void CorrectPhaseBias(const PhaseBias& bias, const PhaseBiasInput& in, std::vector<double>& z_mm,
+                      std::vector<float>& u_mm) {
+  u_mm.assign(z_mm.size(), 0.0f);
+  if (!bias.applied) return;
+  for (std::size_t i = 0; i < z_mm.size(); ++i) {
+    if (!std::isfinite(z_mm[i])) continue;
+    const double fade = bias.Fade(std::hypot(in.slope_x[i], in.slope_y[i]));
+    if (!(fade > 1e-3)) continue;
+    const double phase = PhaseOf(z_mm[i], in.origin_mm, in.step_mm);
+    u_mm[i] = float(fade * bias.Uncertainty(phase));
+    z_mm[i] -= fade * bias.At(phase);
+  }
+}
+
+}  // namespace fvm::imaging
