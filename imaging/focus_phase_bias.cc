@@ -10,6 +10,8 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "imaging/focus_stack_curves.h"
+
 namespace fvm::imaging {
 namespace {
 
@@ -256,14 +258,16 @@ void CorrectPhaseBias(const PhaseBias& bias, const PhaseBiasInput& in, std::vect
                       std::vector<float>& u_mm) {
   u_mm.assign(z_mm.size(), 0.0f);
   if (!bias.applied) return;
-  for (std::size_t i = 0; i < z_mm.size(); ++i) {
-    if (!std::isfinite(z_mm[i])) continue;
-    const double fade = bias.Fade(std::hypot(in.slope_x[i], in.slope_y[i]));
-    if (!(fade > 1e-3)) continue;
-    const double phase = PhaseOf(z_mm[i], in.origin_mm, in.step_mm);
-    u_mm[i] = float(fade * bias.Uncertainty(phase));
-    z_mm[i] -= fade * bias.At(phase);
-  }
+  ForStripes(in.height, in.parallel, [&](int r0, int r1) {
+    for (std::size_t i = std::size_t(r0) * std::size_t(in.width); i < std::size_t(r1) * std::size_t(in.width); ++i) {
+      if (!std::isfinite(z_mm[i])) continue;
+      const double fade = bias.Fade(std::hypot(in.slope_x[i], in.slope_y[i]));
+      if (!(fade > 1e-3)) continue;
+      const double phase = PhaseOf(z_mm[i], in.origin_mm, in.step_mm);
+      u_mm[i] = float(fade * bias.Uncertainty(phase));
+      z_mm[i] -= fade * bias.At(phase);
+    }
+  });
 }
 
 }  // namespace fvm::imaging

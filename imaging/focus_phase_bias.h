@@ -61,6 +61,7 @@ struct PhaseBiasInput {
   const float* slope_x = nullptr;
   const float* slope_y = nullptr;
   double origin_mm = 0.0, step_mm = 0.0;
+  bool parallel = true;  // the correction in stripes of rows on OpenCV's thread pool
 };
 
 // The stack's phase bias, fitted on the map's level points.

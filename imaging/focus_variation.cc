@@ -359,7 +359,7 @@ FocusResult FocusAccumulator::Finish() const {
     PhaseBiasInput in;
     in.width = s.width, in.height = s.height, in.z_mm = &map.z_mm;
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
-    in.origin_mm = origin, in.step_mm = step;
+    in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
     phase_bias = EstimatePhaseBias(in);
     CorrectPhaseBias(phase_bias, in, map.z_mm, u_phase);
   }
