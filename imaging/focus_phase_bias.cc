@@ -81,6 +81,13 @@ double PhaseBias::Uncertainty(double phase) const {
   return std::sqrt(std::max(f.dot(v * f), 0.0));
 }
 
+double PhaseBias::Rms() const {
+  if (!applied) return 0.0;
+  double sum = 0.0;  // each harmonic's cos and sin average to a half over a period
+  for (double c : coefficients) sum += 0.5 * c * c;
+  return std::sqrt(sum);
+}
+
 double PhaseBias::Fade(double slope_mm_per_px) const {
   if (!applied || !(step_mm > 0.0)) return 0.0;
   const double s = slope_mm_per_px / step_mm / kFadeSlope;
@@ -199,7 +206,7 @@ PhaseBias EstimatePhaseBias(const PhaseBiasInput& in) {
     bins[std::size_t(std::clamp(int(std::floor((phase + 0.5) * kPhaseBins)), 0, kPhaseBins - 1))]++;
   }
   if (*std::min_element(bins.begin(), bins.end()) * 4 * kPhaseBins < int(points.size())) {
-    bias.reason = "too few phases seen (a face level within a step)";
+    bias.reason = "too few phases among the level points (a face level within a step, or a small level area)";
     return bias;
   }
   TermMatrix a = TermMatrix::Zero();

@@ -41,6 +41,8 @@ struct PhaseBias {
   // level face, and its standard uncertainty. 0 when not applied.
   double At(double phase) const;
   double Uncertainty(double phase) const;
+  // The bias's rms over the phase (mm); 0 when not applied.
+  double Rms() const;
   // The share of the bias a height carries on a slope of `slope_mm_per_px`: 1 on a level face, falling to 0
   // (exp(-(slope / kFadeSlope)^2)); 0 when not applied.
   double Fade(double slope_mm_per_px) const;

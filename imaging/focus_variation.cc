@@ -362,6 +362,8 @@ FocusResult FocusAccumulator::Finish() const {
     in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
     phase_bias = EstimatePhaseBias(in);
     CorrectPhaseBias(phase_bias, in, map.z_mm, u_phase);
+    result.phase_bias_rms_mm = phase_bias.Rms();
+    result.phase_bias_declined = phase_bias.reason;
   }
 
   // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
