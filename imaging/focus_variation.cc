@@ -16,6 +16,7 @@
 #include "core/number_text.h"
 #include "imaging/focus_height_maps.h"
 #include "imaging/focus_peak.h"
+#include "imaging/focus_phase_bias.h"
 #include "imaging/focus_stack_curves.h"
 #include "imaging/focus_window_centroid.h"
 #include "imaging/focus_window_curvature.h"
@@ -86,6 +87,15 @@ constexpr double kScatterScale = 0.09;
 constexpr double kModelShare = 0.6;
 constexpr double kModelSpanPx = 8.0;
 constexpr double kSlopePx = 0.005;
+// Where the peak fit's phase bias is taken off (focus_phase_bias.h), the level points' scatter about their local
+// planes over 31 px is a direct measure of the errors left there, including those correlated over more than the
+// roughness's reach (a 2 px texture) and the bias the fit leaves; it stands in for the map terms (the noise, the
+// scatter, the roughness and the model term, which was the bias's proxy) in proportion to the bias taken off (the
+// James-Stein share times the fade with the slope), at this weight (the terms that remain, the floor and the
+// correction's own uncertainty, add to it), calibrated like the others on focusgen.py seeds 11 and 12: on their
+// flats the roughness read 0.83-1.76 times the errors depending on the texture and the optics, the level scatter
+// 0.75-0.93 times.
+constexpr double kLevelScatterScale = 0.85;
 
 }  // namespace
 
@@ -344,6 +354,19 @@ FocusResult FocusAccumulator::Finish() const {
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
+  // The peak fit's phase-locked bias, measured on this map's level points and taken off (focus_phase_bias.h).
+  std::vector<float> u_phase;
+  PhaseBias phase_bias;
+  {
+    PhaseBiasInput in;
+    in.width = s.width, in.height = s.height, in.z_mm = &map.z_mm;
+    in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
+    in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
+    phase_bias = EstimatePhaseBias(in);
+    CorrectPhaseBias(phase_bias, in, map.z_mm, u_phase);
+    result.phase_bias_rms_mm = phase_bias.Rms();
+    result.phase_bias_declined = phase_bias.reason;
+  }
 
   // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
   // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
@@ -379,11 +402,17 @@ FocusResult FocusAccumulator::Finish() const {
         const double g = corrected_slope.Magnitude(r, col), u_slope = kSlopePx * g;
         const double span_steps = g * kModelSpanPx / step;
         const double u_model = kModelShare * model[i] / (1.0 + span_steps * span_steps);
-        const double u_unremoved = unremoved[i];
-        result.u_z_mm[i] = static_cast<float>(std::sqrt(u_noise * u_noise + u_scatter * u_scatter +
-                                                        u_roughness * u_roughness + u_step * u_step +
-                                                        u_slope * u_slope + u_model * u_model +
-                                                        u_unremoved * u_unremoved));
+        double u_map = u_noise * u_noise + u_scatter * u_scatter + u_roughness * u_roughness + u_model * u_model;
+        // Where the phase bias was taken off, the level points' own scatter about their local planes (what the
+        // correction leaves) stands in for these terms, by the share of the bias taken off.
+        const double level = phase_bias.LevelScatter(r, col);
+        if (std::isfinite(level)) {
+          const double share = phase_bias.shrinkage * phase_bias.Fade(g), u_level = kLevelScatterScale * level;
+          u_map = (1.0 - share) * u_map + share * u_level * u_level;
+        }
+        result.u_z_mm[i] = static_cast<float>(
+            std::sqrt(u_map + u_step * u_step + u_slope * u_slope + double(u_phase[i]) * double(u_phase[i]) +
+                      double(unremoved[i]) * double(unremoved[i])));
       }
     }
   });

@@ -76,6 +76,10 @@ struct FocusResult {
   // window's peak), texture_channels values per pixel (1 grey or 3 colour, interleaved), in the images' scale.
   std::vector<float> texture;
   int texture_channels = 1;
+  // The peak fit's phase-locked bias taken off the heights (focus_phase_bias.h): its rms over the phase (mm, 0 when
+  // none was taken off) and, when none was, why.
+  double phase_bias_rms_mm = 0.0;
+  std::string phase_bias_declined;
 };
 
 // Takes the images of a stack in order. Not thread-safe itself; it copies them into a batch of a few images and

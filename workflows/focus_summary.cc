@@ -30,6 +30,9 @@ Json FocusJson(const FocusSummary& s) {
   out["measure"] = imaging::FocusMeasureName(s.variation.measure);
   out["window"] = s.variation.adaptive_window ? Json("adaptive") : Json(s.variation.window);
   out["min_quality"] = s.variation.min_quality;
+  const imaging::FocusResult& focus = s.read.focus;
+  out["phase_bias_rms"] = focus.phase_bias_rms_mm > 0.0 ? Json(focus.phase_bias_rms_mm) : Json();
+  out["phase_bias_declined"] = focus.phase_bias_declined.empty() ? Json() : Json(focus.phase_bias_declined);
   return out;
 }
 
@@ -63,6 +66,13 @@ std::string FocusText(const FocusSummary& s, const std::string& output) {
     t += "  no valid point: no pixel has a clear focus peak inside the stack\n";
   }
   t += fmt::format("  median quality {:.3g} (valid points {:.3g})\n", s.median_quality, s.median_valid_quality);
+  const imaging::FocusResult& focus = s.read.focus;
+  if (focus.phase_bias_rms_mm > 0.0) {
+    t += s.slice_units ? fmt::format("  phase bias     {:.4f} slices rms taken off\n", focus.phase_bias_rms_mm)
+                       : fmt::format("  phase bias     {:.4f} um rms taken off\n", focus.phase_bias_rms_mm * 1e3);
+  } else if (!focus.phase_bias_declined.empty()) {
+    t += fmt::format("  phase bias     none taken off: {}\n", focus.phase_bias_declined);
+  }
   return t;
 }
 

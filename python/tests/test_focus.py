@@ -40,6 +40,9 @@ def test_focus_stack_round_trip_recovers_two_known_heights():
         u_scatter = np.sqrt(np.maximum(u * u - (0.005 * step) ** 2, 0.0))
         assert 0.5 * spread < np.nanmedian(u_scatter) < 2 * spread
         assert np.nanmedian(u) >= 0.005 * step
+    # Two faces each level within a step show the peak fit's phase bias at two phases only: none is taken off, and
+    # the summary says why.
+    assert r["summary"]["phase_bias_rms"] is None and "phases" in r["summary"]["phase_bias_declined"]
     # The all-in-focus image is the sharp texture: correlation near 1 (the noise and the s0 blur keep it below).
     inner = np.s_[8:56, 8:120]
     assert np.corrcoef(r["image"][inner].ravel(), sharp[inner].ravel())[0, 1] > 0.95

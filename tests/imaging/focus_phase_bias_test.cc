@@ -1,0 +1,125 @@
+// The peak fit's phase bias (imaging/focus_phase_bias.h) on synthetic height maps: a tilted face whose heights
+// carry a known periodic function of their phase between the images plus noise (recovered within its noise and
+// taken off), the same face without the bias (nothing invented), and a face level within a step (declined).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "imaging/focus_phase_bias.h"
+
+namespace fvm {
+namespace {
+
+constexpr int kSide = 256;
+constexpr double kStep = 1e-3, kOrigin = 0.37e-3;  // mm
+constexpr double kNoiseSteps = 0.02;
+
+// A face tilted by `tilt_x`, `tilt_y` steps per px (3 and 1.8 steps over the map at 0.012 and -0.007), with
+// `bias(phase)` steps added and Gaussian noise; NaN in a band of holes.
+struct Face {
+  std::vector<double> truth, z;
+  std::vector<float> slope_x, slope_y;
+  imaging::PhaseBiasInput in;
+
+  template <class Bias>
+  Face(double tilt_x, double tilt_y, Bias bias, unsigned seed) {
+    std::mt19937 random(seed);
+    std::normal_distribution<double> noise(0.0, kNoiseSteps);
+    const std::size_t n = std::size_t(kSide) * kSide;
+    truth.resize(n), z.resize(n);
+    slope_x.assign(n, float(tilt_x * kStep)), slope_y.assign(n, float(tilt_y * kStep));
+    for (int r = 0; r < kSide; ++r) {
+      for (int c = 0; c < kSide; ++c) {
+        const std::size_t i = std::size_t(r) * kSide + std::size_t(c);
+        const double steps = 5.2 + tilt_x * c + tilt_y * r;  // from the first image
+        truth[i] = kOrigin + steps * kStep;
+        const double phase = steps - std::round(steps);
+        z[i] = (r > 100 && r < 104) ? std::nan("") : truth[i] + (bias(phase) + noise(random)) * kStep;
+      }
+    }
+    in.width = kSide, in.height = kSide, in.z_mm = &z;
+    in.slope_x = slope_x.data(), in.slope_y = slope_y.data();
+    in.origin_mm = kOrigin, in.step_mm = kStep;
+  }
+
+  double RmsError() const {
+    double sum = 0.0;
+    int count = 0;
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      if (std::isfinite(z[i])) sum += (z[i] - truth[i]) * (z[i] - truth[i]), ++count;
+    }
+    return std::sqrt(sum / count) / kStep;
+  }
+};
+
+double KnownBias(double phase) {
+  return 0.04 * std::sin(2.0 * std::numbers::pi * phase) + 0.012 * std::cos(4.0 * std::numbers::pi * phase);
+}
+
+TEST(FocusPhaseBias, RecoversAKnownPeriodicBiasWithinItsNoiseAndTakesItOff) {
+  Face face(0.012, -0.007, KnownBias, 3);
+  const imaging::PhaseBias bias = imaging::EstimatePhaseBias(face.in);
+  ASSERT_TRUE(bias.applied) << bias.reason;
+  EXPECT_GT(bias.shrinkage, 0.95);  // a bias 20 times its noise is hardly shrunk
+  for (double phase = -0.5; phase < 0.5; phase += 0.0625) {
+    // The fit is a function of the measured heights' phase, which the bias itself has moved.
+    const double measured = phase + KnownBias(phase);
+    const double found = bias.At(measured) / kStep, u = bias.Uncertainty(measured) / kStep;
+    EXPECT_GT(u, 0.0);
+    EXPECT_LT(u, 0.005);  // 60000 points of 0.02 step noise
+    // Within 4 u plus the blur of the noise (0.02 step of noise moves a phase by 0.02, where the bias changes by at
+    // most 0.25 times that).
+    EXPECT_NEAR(found, KnownBias(phase), 4.0 * u + 0.005) << "phase " << phase;
+  }
+  const double before = face.RmsError();
+  std::vector<float> u;
+  imaging::CorrectPhaseBias(bias, face.in, face.z, u);
+  const double after = face.RmsError();
+  EXPECT_GT(before, 0.03);
+  EXPECT_LT(after, 0.024);  // the noise (0.02 step) and what the fit leaves
+  // Where nothing is known the holes stay holes; elsewhere the correction has an uncertainty.
+  EXPECT_TRUE(std::isnan(face.z[std::size_t(102) * kSide + 5]));
+  EXPECT_GT(u[5], 0.0f);
+  // The level points' scatter about their planes is the noise, once the bias is off.
+  EXPECT_NEAR(bias.LevelScatter(50, 50) / kStep, after, 0.004) << after;
+}
+
+TEST(FocusPhaseBias, InventsNoBiasOnAFaceWithout) {
+  Face face(0.012, -0.007, [](double) { return 0.0; }, 4);
+  const imaging::PhaseBias bias = imaging::EstimatePhaseBias(face.in);
+  for (double phase = -0.5; phase < 0.5; phase += 0.0625) {
+    EXPECT_LT(std::abs(bias.At(phase)) / kStep, 0.004) << "phase " << phase;
+  }
+}
+
+TEST(FocusPhaseBias, DeclinesOnAFaceLevelWithinAStep) {
+  // 0.2 step over the whole map: the phases are the face's one phase plus noise.
+  Face face(0.0005, 0.0003, KnownBias, 5);
+  const imaging::PhaseBias bias = imaging::EstimatePhaseBias(face.in);
+  EXPECT_FALSE(bias.applied);
+  EXPECT_NE(bias.reason.find("phases"), std::string::npos) << bias.reason;
+  const std::vector<double> before = face.z;
+  std::vector<float> u;
+  imaging::CorrectPhaseBias(bias, face.in, face.z, u);
+  for (std::size_t i = 0; i < before.size(); i += 97) {
+    if (std::isfinite(before[i])) {
+      EXPECT_EQ(face.z[i], before[i]);
+      EXPECT_EQ(u[i], 0.0f);
+    }
+  }
+}
+
+TEST(FocusPhaseBias, DeclinesWithTooFewLevelPoints) {
+  // Slopes of 0.2 step per px everywhere: a wall, not a face.
+  Face face(0.2, 0.0, KnownBias, 6);
+  const imaging::PhaseBias bias = imaging::EstimatePhaseBias(face.in);
+  EXPECT_FALSE(bias.applied);
+  EXPECT_NE(bias.reason.find("level points"), std::string::npos) << bias.reason;
+}
+
+}  // namespace
+}  // namespace fvm
