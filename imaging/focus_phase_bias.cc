@@ -1,6 +1,7 @@
 #include "imaging/focus_phase_bias.h"
 
 #include <Eigen/Dense>
+#include <fmt/format.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -24,6 +25,9 @@ using TermMatrix = Eigen::Matrix<double, PhaseBias::kTerms, PhaseBias::kTerms>;
 constexpr double kLevelSlope = 0.03;
 // The correction's fade with the slope (steps per px): exp(-(slope / kFadeSlope)^2).
 constexpr double kFadeSlope = 0.05;
+// Departure from even steps (share of a step) beyond which the phase is not read: 0.05 step moves a bias of a
+// few hundredths of a step at the first harmonic by less than a hundredth of that.
+constexpr double kUnevenSteps = 0.05;
 // The local plane's box (px), wider than a stripe of equal phase on the gently tilted faces where the bias is
 // largest, so that the plane does not follow the bias (a Gaussian of sigma 20 px did as well on focusgen.py's
 // stacks; a box's sums cost the same whatever its side); the blocks of the cluster sandwich (px), about twice the
@@ -236,6 +240,11 @@ PhaseBias EstimatePhaseBias(const PhaseBiasInput& in) {
   const std::vector<PlanePoint> points = PlanePoints(grid);
   const int stride = grid.stride;
   bias.points = int(points.size());
+  if (in.uneven_steps > kUnevenSteps) {
+    bias.reason = fmt::format("the stack's z steps are uneven (an image lies {:.2f} step off an even grid), so a "
+                              "height's phase between two images is not known", in.uneven_steps);
+    return bias;
+  }
   if (double(points.size()) * stride * stride < kMinPoints) {
     bias.reason = "too few level points (" + std::to_string(points.size() * std::size_t(stride) * stride) + " px)";
     return bias;

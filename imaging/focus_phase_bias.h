@@ -63,6 +63,9 @@ struct PhaseBiasInput {
   const float* slope_x = nullptr;
   const float* slope_y = nullptr;
   double origin_mm = 0.0, step_mm = 0.0;
+  // The stack's largest departure from even steps (in steps): the phase is read against origin + k step, which
+  // only an evenly stepped stack keeps (an uneven one is declined, see kUnevenSteps).
+  double uneven_steps = 0.0;
   bool parallel = true;  // the correction in stripes of rows on OpenCV's thread pool
 };
 

@@ -362,6 +362,10 @@ FocusResult FocusAccumulator::Finish() const {
     in.width = s.width, in.height = s.height, in.z_mm = &map.z_mm;
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
+    for (int k = 0; k < n; ++k) {
+      const double even = origin + (s.z.back() > origin ? k : -k) * step;
+      in.uneven_steps = std::max(in.uneven_steps, std::abs(s.z[std::size_t(k)] - even) / step);
+    }
     phase_bias = EstimatePhaseBias(in);
     CorrectPhaseBias(phase_bias, in, map.z_mm, u_phase);
     result.phase_bias_rms_mm = phase_bias.Rms();

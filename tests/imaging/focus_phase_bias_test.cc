@@ -121,5 +121,15 @@ TEST(FocusPhaseBias, DeclinesWithTooFewLevelPoints) {
   EXPECT_NE(bias.reason.find("level points"), std::string::npos) << bias.reason;
 }
 
+TEST(FocusPhaseBias, DeclinesOnAnUnevenlySteppedStack) {
+  // The face that carries a bias the fit recovers, but from a stack whose images are not evenly stepped: the phase
+  // read against an even grid would be wrong by up to the unevenness.
+  Face face(0.012, -0.007, KnownBias, 3);
+  face.in.uneven_steps = 0.3;
+  const imaging::PhaseBias bias = imaging::EstimatePhaseBias(face.in);
+  EXPECT_FALSE(bias.applied);
+  EXPECT_NE(bias.reason.find("uneven"), std::string::npos) << bias.reason;
+}
+
 }  // namespace
 }  // namespace fvm
