@@ -51,8 +51,8 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& bu
 // The heights' roughness at the window's scale (buffer 3), from what SlopePerPixel leaves in the buffers and the
 // slope of the same heights (see focus_height_maps.cc). Leaves in buffer 11 the surface's own curvature: the
 // Laplacian (mm per px^2) of the heights smoothed over 2 px, its weighted local mean over 14 px with the sharp bends
-// (a calotte's rim) and their ridge left out; NaN within reach of them (focus_surface_curvature.h). And in buffer 15 the same filled where NaN by the
-// local mean of the known values over 12 px (NaN where none lies within reach).
+// (a calotte's rim) and their ridge left out; NaN within reach of them (focus_surface_curvature.h). And in buffer 15
+// the same filled where NaN by the local mean of the known values over 12 px (NaN where none lies within reach).
 cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers);
 
 }  // namespace fvm::imaging
