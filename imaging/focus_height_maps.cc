@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "imaging/focus_surface_curvature.h"
+
 namespace fvm::imaging {
 namespace {
 
@@ -22,11 +24,6 @@ constexpr float kBendCut = 3.0f;
 constexpr double kBendWidthPx = 2.0;
 constexpr double kBendReachPx = 4.0;
 constexpr float kBendShare = 0.4f;
-// The surface's curvature (for the heights' window correction, focus_window_curvature.h) is left unknown where the
-// bends make more than this share of the points around a pixel (over kCurvatureSmoothingPx): within about 14 px of
-// a calotte's rim, where the local mean of the Laplacian still holds the rim's ridge (+0.045 step of false correction
-// 0-10 px either side of the rim on focusgen.py's stacks).
-constexpr float kBendFreeShare = 0.02f;
 constexpr float kNoCurvature = std::numeric_limits<float>::quiet_NaN();
 // Where the curvature is unknown, its estimate for the uncertainty of what the heights' corrections could not take
 // off: the local mean of the known values over this sigma, where they make at least kCurvatureFillShare of the points.
@@ -80,21 +77,6 @@ struct HoleyMap {
   }
 };
 
-// The variance of a Gaussian variable whose squares' median is that of `square`'s points of positive `weight`
-// (a sample of them): the median of chi^2 with 1 degree of freedom is 0.4549 times the variance.
-float TypicalSquare(const cv::Mat& square, const cv::Mat& weight) {
-  constexpr std::size_t kEvery = 7;  // prime against the image's width
-  std::vector<float> sample;
-  const std::size_t n = std::size_t(square.rows) * std::size_t(square.cols);
-  const float *d = square.ptr<float>(), *w = weight.ptr<float>();
-  for (std::size_t i = 0; i < n; i += kEvery) {
-    if (w[i] > 0.0f) sample.push_back(d[i]);
-  }
-  if (sample.empty()) return 0.0f;
-  std::nth_element(sample.begin(), sample.begin() + std::ptrdiff_t(sample.size() / 2), sample.end());
-  return sample[sample.size() / 2] / 0.4549f;
-}
-
 // The local mean of `values` weighted by `weights` over a Gaussian of sigma_px, into `mean`: the blur of values x
 // weights over the blur of the weights. `product` and `total` are scratch; the product is complete before any band
 // blurs it, since a band's blur reads the rows beside it.
@@ -111,6 +93,19 @@ void WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sig
 }
 
 }  // namespace
+
+float TypicalSquare(const cv::Mat& square, const cv::Mat& weight) {
+  constexpr std::size_t kEvery = 7;  // prime against the image's width
+  std::vector<float> sample;
+  const std::size_t n = std::size_t(square.rows) * std::size_t(square.cols);
+  const float *d = square.ptr<float>(), *w = weight.ptr<float>();
+  for (std::size_t i = 0; i < n; i += kEvery) {
+    if (w[i] > 0.0f) sample.push_back(d[i]);
+  }
+  if (sample.empty()) return 0.0f;
+  std::nth_element(sample.begin(), sample.begin() + std::ptrdiff_t(sample.size() / 2), sample.end());
+  return sample[sample.size() / 2] / 0.4549f;
+}
 
 Slope SlopePerPixel(const std::vector<double>& z, double origin, MapBuffers& buffers) {
   HoleyMap map(z, origin, buffers);
@@ -282,20 +277,14 @@ cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
     }
   });
   departures(kept);
-  // The surface's own curvature (buffer 11), NaN where bends lie within reach of its local mean: there the
-  // smoothing has spread the bend's ridge into the Laplacian on either side.
-  cv::Mat curvature = buffers[11], near_bend = buffers[13];
-  buffers.Pass([&](int r0, int r1) {
-    cv::Mat n_rows = near_bend.rowRange(r0, r1);
-    cv::GaussianBlur(is_bend.rowRange(r0, r1), n_rows, cv::Size(), kCurvatureSmoothingPx, 0.0, cv::BORDER_REFLECT);
-  });
-  buffers.Pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* o = curvature.ptr<float>(r);
-      const float *m = a.ptr<float>(r), *n = near_bend.ptr<float>(r);
-      for (int col = 0; col < c.cols; ++col) o[col] = n[col] <= kBendFreeShare ? m[col] : kNoCurvature;
-    }
-  });
+  // The surface's own curvature (buffer 11) at a scale larger than the roughness's, NaN within reach of a bend or
+  // of the ridge a bend leaves (focus_surface_curvature.h).
+  cv::Mat curvature = buffers[11];
+  {
+    float* const scratch[4] = {buffers[13].ptr<float>(), buffers[14].ptr<float>(), b.ptr<float>(), c.ptr<float>()};
+    SurfaceCurvature(c.cols, c.rows, buffers.parallel, heights.ptr<float>(), kept.ptr<float>(), is_bend.ptr<float>(),
+                     scratch, curvature.ptr<float>());
+  }
   // The same, filled where unknown by the local mean of the known values over kCurvatureFillPx (buffer 15; NaN where
   // none lies within reach).
   cv::Mat known = buffers[12], known_values = buffers[13], filled = buffers[15];

@@ -32,6 +32,11 @@ struct MapBuffers {
   void Pass(const std::function<void(int, int)>& body) const { ForStripes(height, parallel, body); }
 };
 
+// The variance of a Gaussian variable whose squares' median is that of `square`'s points of positive `weight` (a
+// sample of them): the median of chi^2 with 1 degree of freedom is 0.4549 times the variance. A robust scale, as a
+// redescending M-estimator leaves out outliers (Huber 1981).
+float TypicalSquare(const cv::Mat& square, const cv::Mat& weight);
+
 // The local slope (height change per pixel along x and y, mm) of a map with holes, from its smooth local mean
 // (in buffers 4 and 6, which the scatter below leaves alone).
 struct Slope {
@@ -45,9 +50,9 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapBuffers& bu
 
 // The heights' roughness at the window's scale (buffer 3), from what SlopePerPixel leaves in the buffers and the
 // slope of the same heights (see focus_height_maps.cc). Leaves in buffer 11 the surface's own curvature: the
-// Laplacian (mm per px^2) of the heights smoothed over 2 px, its weighted local mean over 6 px with the sharp bends
-// (a calotte's rim) left out; NaN within reach of such a bend. And in buffer 15 the same filled where NaN by the
-// local mean of the known values over 12 px (NaN where none lies within reach).
+// Laplacian (mm per px^2) of the heights smoothed over 2 px, its weighted local mean over 14 px with the sharp bends
+// (a calotte's rim) and their ridge left out; NaN within reach of them (focus_surface_curvature.h). And in buffer 15
+// the same filled where NaN by the local mean of the known values over 12 px (NaN where none lies within reach).
 cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers);
 
 }  // namespace fvm::imaging

@@ -383,8 +383,7 @@ FocusResult FocusAccumulator::Finish() const {
   // walls, where the stack's focus curves are narrow with a sharp top, the bias that mixing the window's heights
   // leaves there (focus_steep_curvature_bias.h).
   const float* curvature = buffers[11].ptr<float>();
-  CorrectWindowCurvature(s.width, s.height, s.options.parallel, curves, result.window_px, curvature,
-                         roughness.ptr<float>(), map.z_mm);
+  CorrectWindowCurvature(s.width, s.height, s.options.parallel, curves, result.window_px, curvature, map.z_mm);
   std::vector<float> unremoved;  // the steep walls' bias near a bend, which u_z holds instead
   {
     const float *gx = corrected_slope.x.ptr<float>(), *gy = corrected_slope.y.ptr<float>();

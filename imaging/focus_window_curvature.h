@@ -6,8 +6,8 @@
 // (the second-order term of a Gaussian smoothing's bias, e.g. Lindeberg 1994). In a calotte's bottom
 // (../shared/bench/focusgen.py, sphere radius 0.4 mm, 9 px window: 3.6 px^2 x Laplacian) that is +0.017 of a 1 um
 // step, the bias its heights showed at NA 0.3-0.4 (+0.015-0.019 with a 0.7-1 px texture). Knowing the surface's
-// curvature (the local mean of the height map's Laplacian, which changes slowly; unknown near a sharp bend) and each
-// height's window, the shift is removed, shrunk where the curvature is not clear of its noise. Used by
+// curvature (focus_surface_curvature.h: the local mean of the height map's Laplacian over 14 px, clear of the
+// heights' noise; unknown near a sharp bend) and each height's window, the shift is removed. Used by
 // focus_variation.cc.
 
 #include <vector>
@@ -21,12 +21,9 @@ namespace fvm::imaging {
 double WindowWeightVariancePx2(const WindowCurves& window);
 
 // Moves each finite height z_mm[i] by -(sigma^2 / 2) x laplacian[i] (mm per px^2), sigma^2 that of the window it came
-// from (window_px[i], one of `windows`; heights from no such window, or with a NaN Laplacian, are left alone), shrunk
-// where the Laplacian is not clear of its noise: by L^2 / (L^2 + n^2), n the noise of its local mean, a share of
-// `roughness` (the rms of the Laplacian's departures from it, mm per px^2; Wiener 1949). Maps row-major, width x
-// height.
+// from (window_px[i], one of `windows`; heights from no such window, or with a NaN Laplacian, are left alone). Maps
+// row-major, width x height.
 void CorrectWindowCurvature(int width, int height, bool parallel, const std::vector<WindowCurves>& windows,
-                            const std::vector<float>& window_px, const float* laplacian, const float* roughness,
-                            std::vector<double>& z_mm);
+                            const std::vector<float>& window_px, const float* laplacian, std::vector<double>& z_mm);
 
 }  // namespace fvm::imaging
