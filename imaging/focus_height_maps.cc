@@ -34,20 +34,6 @@ constexpr float kCurvatureFillShare = 0.05f;
 // line or at a point to fix a plane's slope along both axes.
 constexpr double kPlaneFitConditioning = 0.05;
 
-// Rows r0..r1 of `mean`: the Gaussian blur of `numerator` over that of `weights` (`total` is scratch), the local
-// mean a weighted average takes where `numerator` holds the values times their weights.
-void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
-                  cv::Mat& mean) {
-  cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
-  cv::GaussianBlur(numerator.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  cv::GaussianBlur(weights.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-  for (int r = r0; r < r1; ++r) {
-    float* m = mean.ptr<float>(r);
-    const float* t = total.ptr<float>(r);
-    for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
-  }
-}
-
 // Heights (mm) with holes as float maps for the filters (buffers 0 to 2): relative to `origin` (so that float
 // keeps the nm of a stage tens of mm out), 0 in the holes, and the mask of the valid points.
 struct HoleyMap {
@@ -93,6 +79,18 @@ void WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sig
 }
 
 }  // namespace
+
+void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
+                  cv::Mat& mean) {
+  cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
+  cv::GaussianBlur(numerator.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(weights.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
+  for (int r = r0; r < r1; ++r) {
+    float* m = mean.ptr<float>(r);
+    const float* t = total.ptr<float>(r);
+    for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
+  }
+}
 
 float TypicalSquare(const cv::Mat& square, const cv::Mat& weight) {
   constexpr std::size_t kEvery = 7;  // prime against the image's width

@@ -37,6 +37,12 @@ struct MapBuffers {
 // redescending M-estimator leaves out outliers (Huber 1981).
 float TypicalSquare(const cv::Mat& square, const cv::Mat& weight);
 
+// Rows r0..r1 of `mean`: the Gaussian blur of `numerator` over that of `weights` (`total` is scratch), the local
+// mean a weighted average takes where `numerator` holds the values times their weights (rows of a stripe, blurred
+// with the rows beyond it as OpenCV's filters read a region of interest).
+void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
+                  cv::Mat& mean);
+
 // The local slope (height change per pixel along x and y, mm) of a map with holes, from its smooth local mean
 // (in buffers 4 and 6, which the scatter below leaves alone).
 struct Slope {

@@ -38,16 +38,7 @@ void SurfaceCurvature(int width, int height, bool parallel, const float* laplaci
         for (int col = 0; col < width; ++col) p[col] = k[col] * l[col];
       }
     });
-    pass([&](int r0, int r1) {
-      cv::Mat m_rows = mean.rowRange(r0, r1), t_rows = total.rowRange(r0, r1);
-      cv::GaussianBlur(product.rowRange(r0, r1), m_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-      cv::GaussianBlur(kept.rowRange(r0, r1), t_rows, cv::Size(), sigma_px, 0.0, cv::BORDER_REFLECT);
-      for (int r = r0; r < r1; ++r) {
-        float* m = mean.ptr<float>(r);
-        const float* t = total.ptr<float>(r);
-        for (int col = 0; col < width; ++col) m[col] /= std::max(t[col], 1e-6f);
-      }
-    });
+    pass([&](int r0, int r1) { BlurredRatio(product, kept, sigma_px, r0, r1, total, mean); });
   };
   // The points farther than `reach_px` from a bend keep their weight.
   const auto keep_beyond = [&](double reach_px) {
