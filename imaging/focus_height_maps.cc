@@ -75,7 +75,8 @@ void WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sig
       for (int col = 0; col < values.cols; ++col) p[col] = v[col] * w[col];
     }
   });
-  buffers.Pass([&](int r0, int r1) { BlurredRatio(product, weights, sigma_px, r0, r1, total, mean); });
+  buffers.Pass([&](int r0, int r1) { BlurredRatio(product, weights, sigma_px, r0, r1, total, mean); },
+               BlurStripeRows(sigma_px));
 }
 
 }  // namespace
@@ -297,14 +298,16 @@ cv::Mat WindowScaleRoughness(const Slope& slope, MapBuffers& buffers) {
     }
   });
   cv::Mat fill_total = buffers[14];
-  buffers.Pass([&](int r0, int r1) {
-    BlurredRatio(known_values, known, kCurvatureFillPx, r0, r1, fill_total, filled);
-    for (int r = r0; r < r1; ++r) {
-      float* f = filled.ptr<float>(r);
-      const float* t = fill_total.ptr<float>(r);
-      for (int col = 0; col < c.cols; ++col) f[col] = t[col] >= kCurvatureFillShare ? f[col] : kNoCurvature;
-    }
-  });
+  buffers.Pass(
+      [&](int r0, int r1) {
+        BlurredRatio(known_values, known, kCurvatureFillPx, r0, r1, fill_total, filled);
+        for (int r = r0; r < r1; ++r) {
+          float* f = filled.ptr<float>(r);
+          const float* t = fill_total.ptr<float>(r);
+          for (int col = 0; col < c.cols; ++col) f[col] = t[col] >= kCurvatureFillShare ? f[col] : kNoCurvature;
+        }
+      },
+      BlurStripeRows(kCurvatureFillPx));
   buffers.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       float* o = c.ptr<float>(r);

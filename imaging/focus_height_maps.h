@@ -29,7 +29,9 @@ struct MapBuffers {
     return cv::Mat(height, width, CV_32F, v.data());
   }
   // body(r0, r1) for each stripe of rows; every stripe of a pass ends before the next pass starts.
-  void Pass(const std::function<void(int, int)>& body) const { ForStripes(height, parallel, body); }
+  void Pass(const std::function<void(int, int)>& body, int stripe_rows = kStripeRows) const {
+    ForStripes(height, parallel, body, stripe_rows);
+  }
 };
 
 // The variance of a Gaussian variable whose squares' median is that of `square`'s points of positive `weight` (a

@@ -255,16 +255,21 @@ void AdviseHugePages(void* data, std::size_t bytes) {
 template struct HugePageAllocator<float>;
 template struct HugePageAllocator<std::int32_t>;
 
-void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body) {
-  const int stripes = (rows + kStripeRows - 1) / kStripeRows;
+void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body, int stripe_rows) {
+  const int stripes = (rows + stripe_rows - 1) / stripe_rows;
   const auto run = [&](const cv::Range& range) {
-    for (int s = range.start; s < range.end; ++s) body(s * kStripeRows, std::min(rows, (s + 1) * kStripeRows));
+    for (int s = range.start; s < range.end; ++s) body(s * stripe_rows, std::min(rows, (s + 1) * stripe_rows));
   };
   if (parallel) {
     cv::parallel_for_(cv::Range(0, stripes), run);
   } else {
     run(cv::Range(0, stripes));
   }
+}
+
+int BlurStripeRows(double sigma_px) {
+  const int reach = int(std::ceil(8.0 * sigma_px));
+  return std::max(kStripeRows, (reach + kStripeRows - 1) / kStripeRows * kStripeRows);
 }
 
 std::vector<float> WindowTaps(int window, bool gaussian) {

@@ -107,7 +107,13 @@ std::vector<float> WindowTaps(int window, bool gaussian);
 // filter exactly the same bands and give the same bits.
 inline constexpr int kStripeRows = 32;
 
-// Calls body(first_row, end_row) for each stripe of kStripeRows rows, on OpenCV's thread pool when `parallel`.
-void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body);
+// Calls body(first_row, end_row) for each stripe of `stripe_rows` rows, on OpenCV's thread pool when `parallel`.
+void ForStripes(int rows, bool parallel, const std::function<void(int, int)>& body, int stripe_rows = kStripeRows);
+
+// Rows per stripe for a Gaussian blur of `sigma_px` done stripe by stripe (each stripe a region of interest, whose
+// filter reads the rows 4 sigma beyond it): at least 8 sigma, in whole kStripeRows, so that a stripe filters at most
+// twice its own rows (stripes of 32 rows under a 14 px blur filtered 4.5 times theirs: a third of `fvm focus` on a
+// 768 px, 60-image stack). The stripes do not change the result.
+int BlurStripeRows(double sigma_px);
 
 }  // namespace fvm::imaging

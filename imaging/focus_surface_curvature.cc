@@ -22,7 +22,9 @@ void SurfaceCurvature(int width, int height, bool parallel, const float* laplaci
   const cv::Mat laplacian = map(laplacian_px), weight = map(weight_px), bends = map(bends_px);
   cv::Mat distance = map(scratch[0]), kept = map(scratch[1]), product = map(scratch[2]), total = map(scratch[3]);
   cv::Mat curvature = map(curvature_px);
-  const auto pass = [&](const auto& body) { ForStripes(height, parallel, body); };
+  const auto pass = [&](const auto& body, int stripe_rows = kStripeRows) {
+    ForStripes(height, parallel, body, stripe_rows);
+  };
   cv::Mat bend_free(height, width, CV_8U);  // 0 at a bend
   // The distance (px) of each point from the nearest point of `bend_free` 0 (into `distance`).
   const auto distances = [&] {
@@ -38,7 +40,8 @@ void SurfaceCurvature(int width, int height, bool parallel, const float* laplaci
         for (int col = 0; col < width; ++col) p[col] = k[col] * l[col];
       }
     });
-    pass([&](int r0, int r1) { BlurredRatio(product, kept, sigma_px, r0, r1, total, mean); });
+    pass([&](int r0, int r1) { BlurredRatio(product, kept, sigma_px, r0, r1, total, mean); },
+         BlurStripeRows(sigma_px));
   };
   // The points farther than `reach_px` from a bend keep their weight.
   const auto keep_beyond = [&](double reach_px) {
@@ -94,10 +97,12 @@ void SurfaceCurvature(int width, int height, bool parallel, const float* laplaci
   distances();
   keep_beyond(kRidgeReachPx);
   local_mean(kSurfaceCurvaturePx, curvature);
-  pass([&](int r0, int r1) {
-    cv::Mat p_rows = product.rowRange(r0, r1);
-    cv::GaussianBlur(weight.rowRange(r0, r1), p_rows, cv::Size(), kSurfaceCurvaturePx, 0.0, cv::BORDER_REFLECT);
-  });
+  pass(
+      [&](int r0, int r1) {
+        cv::Mat p_rows = product.rowRange(r0, r1);
+        cv::GaussianBlur(weight.rowRange(r0, r1), p_rows, cv::Size(), kSurfaceCurvaturePx, 0.0, cv::BORDER_REFLECT);
+      },
+      BlurStripeRows(kSurfaceCurvaturePx));
   constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
   pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
