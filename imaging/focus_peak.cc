@@ -238,15 +238,20 @@ Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z,
 // Judged on the median over a sample of the valid pixels of the neighbours' share of the peak above the floor
 // (on the stacks of focus_accuracy_test.cc: 0.36 at 2 um steps and NA 0.9, where the log fit gives 0.14 step rms
 // and the power fit 0.21; 0.86 at 1 um and NA 0.9, 1.4-1.8 at finer sampling, where the power fit is the better).
+float PeakShoulder(const WindowCurves& c, std::size_t i, std::size_t images, double min_quality) {
+  const int k = c.index[i];
+  const float peak = c.best[i] - c.floor[i];
+  const bool valid = c.best[i] * float(images) >= float(min_quality) * c.sum[i];  // peak over mean
+  if (k == 0 || k + 1 >= int(images) || !(peak > 0.0f) || !valid) return std::numeric_limits<float>::quiet_NaN();
+  return (c.left[i] + c.right[i] - 2.0f * c.floor[i]) / peak;
+}
+
 bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quality) {
   constexpr std::size_t kEvery = 61;  // a sample of the pixels, prime against the image's width
   std::vector<float> shoulder;
   for (std::size_t i = 0; i < c.best.size(); i += kEvery) {
-    const int k = c.index[i];
-    const float peak = c.best[i] - c.floor[i];
-    const bool valid = c.best[i] * float(images) >= float(min_quality) * c.sum[i];  // peak over mean
-    if (k == 0 || k + 1 >= int(images) || !(peak > 0.0f) || !valid) continue;
-    shoulder.push_back((c.left[i] + c.right[i] - 2.0f * c.floor[i]) / peak);
+    const float s = PeakShoulder(c, i, images, min_quality);
+    if (std::isfinite(s)) shoulder.push_back(s);
   }
   if (shoulder.empty()) return false;
   std::nth_element(shoulder.begin(), shoulder.begin() + std::ptrdiff_t(shoulder.size() / 2), shoulder.end());

@@ -45,6 +45,11 @@ struct Peak {
 Peak FitPeak(const WindowCurves& c, std::size_t i, const std::vector<double>& z, const FocusVariationOptions& options,
              bool coarse);
 
+// The shoulder of pixel i's focus curve: its best image's two neighbours over the peak, each above the floor (about
+// 2 where the steps are far finer than the depth of field, towards 0 where coarser). NaN where the pixel has no
+// valid peak (its peak over mean below `min_quality`, or none above the floor) with an image on either side.
+float PeakShoulder(const WindowCurves& c, std::size_t i, std::size_t images, double min_quality);
+
 // Whether the stack samples its focus curves more coarsely than their width (see focus_peak.cc).
 bool CoarselySampled(const WindowCurves& c, std::size_t images, double min_quality);
 

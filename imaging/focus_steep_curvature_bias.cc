@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "imaging/focus_peak.h"
 #include "imaging/focus_window_curvature.h"
 
 namespace fvm::imaging {
@@ -27,13 +28,13 @@ FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, dou
   std::vector<float> shoulder, cusp;
   for (std::size_t i = 0; i < c.best.size(); i += kShapeEvery) {
     const int k = c.index[i];
-    const bool valid = c.best[i] * float(images) >= float(min_quality) * c.sum[i];  // peak over mean
-    if (k < 2 || k + 2 >= int(images) || !valid) continue;
+    if (k < 2 || k + 2 >= int(images)) continue;  // two images on either side, for the shape ratio
     if (std::hypot(slope_x[i], slope_y[i]) > kGentleSlopeSteps * step_mm) continue;
+    const float s = PeakShoulder(c, i, images, min_quality);
+    if (!std::isfinite(s)) continue;
+    shoulder.push_back(s);
     const float floor = c.floor[i], peak = c.best[i] - floor;
-    if (!(peak > 0.0f)) continue;
     const float l1 = c.left[i] - floor, r1 = c.right[i] - floor, l2 = c.left2[i] - floor, r2 = c.right2[i] - floor;
-    shoulder.push_back((l1 + r1) / peak);
     if (!(l1 > 0.0f && r1 > 0.0f && l2 > 0.0f && r2 > 0.0f)) continue;
     const auto rise = [&](float f) { return 1.0 / std::cbrt((double(f) / peak) * (double(f) / peak)); };
     const double p1 = 0.5 * (rise(l1) + rise(r1)) - 1.0, p2 = 0.5 * (rise(l2) + rise(r2)) - 1.0;
