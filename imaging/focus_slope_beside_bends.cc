@@ -1,8 +1,7 @@
 #include "imaging/focus_slope_beside_bends.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "imaging/focus_height_maps.h"

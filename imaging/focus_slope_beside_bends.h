@@ -31,7 +31,7 @@ inline constexpr double kOwnSideSteps = 0.3;
 // `step_mm` the stack's z-step; `scratch` three maps the function overwrites. All maps row-major, width x height,
 // filtered in stripes of rows (ForStripes, focus_stack_curves.h).
 void SlopeBesideBends(int width, int height, bool parallel, const float* smooth, const float* slope_x,
-                      const float* slope_y, const float* valid, double step_mm, double share,
-                      float* const scratch[3], float* beside_x, float* beside_y);
+                      const float* slope_y, const float* valid, double step_mm, double share, float* const scratch[3],
+                      float* beside_x, float* beside_y);
 
 }  // namespace fvm::imaging
