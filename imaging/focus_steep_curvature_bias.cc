@@ -47,9 +47,13 @@ FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, dou
   return out;
 }
 
-double SteepCurvatureBiasShare(const FocusCurveShape& shape) {
+double NarrowCurveShare(const FocusCurveShape& shape) {
   if (shape.samples < kMinShapeSamples) return 0.0;
-  return Ramp(shape.shoulder, kNarrowShoulderNone, kNarrowShoulderFull) * Ramp(shape.cusp, kCuspNone, kCuspFull);
+  return Ramp(shape.shoulder, kNarrowShoulderNone, kNarrowShoulderFull);
+}
+
+double SteepCurvatureBiasShare(const FocusCurveShape& shape) {
+  return NarrowCurveShare(shape) * Ramp(shape.cusp, kCuspNone, kCuspFull);
 }
 
 void CorrectSteepCurvatureBias(int width, int height, bool parallel, double share, double step_mm,

@@ -49,7 +49,11 @@ struct FocusCurveShape {
 FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, double min_quality, const float* slope_x,
                                   const float* slope_y, double step_mm);
 
-// The share (0 to 1) of the bias the stack's curves show; 0 from fewer than 50 sampled peaks.
+// How narrow the stack's focus curves are: 1 for a shoulder below kNarrowShoulderFull, 0 above kNarrowShoulderNone,
+// linear between; 0 from fewer than 50 sampled peaks.
+double NarrowCurveShare(const FocusCurveShape& shape);
+
+// The share (0 to 1) of the bias the stack's curves show (narrow and V-topped); 0 from fewer than 50 sampled peaks.
 double SteepCurvatureBiasShare(const FocusCurveShape& shape);
 
 // Moves each finite height whose window is one of `windows` by -share x kSteepBiasPx x sigma x ramp(slope) x

@@ -18,6 +18,7 @@
 #include "imaging/focus_peak.h"
 #include "imaging/focus_phase_bias.h"
 #include "imaging/focus_stack_curves.h"
+#include "imaging/focus_slope_beside_bends.h"
 #include "imaging/focus_window_centroid.h"
 #include "imaging/focus_window_curvature.h"
 #include "imaging/focus_steep_curvature_bias.h"
@@ -344,14 +345,21 @@ FocusResult FocusAccumulator::Finish() const {
     }
   });
   // Each window's height is that under the centroid of its pixels' sharpness: moved to its centre along the
-  // slope of the map as now chosen (focus_window_centroid.h).
+  // slope of the map as now chosen (focus_window_centroid.h); beside a sharp bend, where the stack's focus curves are
+  // narrow, along the slope of the pixel's own side of it (focus_slope_beside_bends.h).
   const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
   {
+    cv::Mat beside_x = buffers[7], beside_y = buffers[8];
+    float* const scratch[3] = {buffers[9].ptr<float>(), buffers[10].ptr<float>(), buffers[12].ptr<float>()};
+    const float *gx = final_slope.x.ptr<float>(), *gy = final_slope.y.ptr<float>();
+    const double share = NarrowCurveShare(MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step));
+    SlopeBesideBends(s.width, s.height, s.options.parallel, buffers[3].ptr<float>(), gx, gy, buffers[1].ptr<float>(),
+                     step, share, scratch, beside_x.ptr<float>(), beside_y.ptr<float>());
     CentroidCorrectionInput in;
     in.width = s.width, in.height = s.height, in.parallel = s.options.parallel;
     in.texture = &result.texture, in.channels = result.texture_channels;
     in.windows = &curves, in.window_px = &result.window_px;
-    in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
+    in.slope_x = beside_x.ptr<float>(), in.slope_y = beside_y.ptr<float>();
     CorrectWindowCentroids(in, map.z_mm);
   }
   // The peak fit's phase-locked bias, measured on this map's level points and taken off (focus_phase_bias.h).
