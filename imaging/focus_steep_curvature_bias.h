@@ -35,9 +35,12 @@ inline constexpr double kNarrowShoulderFull = 1.3, kNarrowShoulderNone = 1.5;
 inline constexpr double kCuspFull = 3.0, kCuspNone = 3.5;
 // The bias: kSteepBiasPx times the window's weights' sigma (px) times the surface's Laplacian (mm per px^2), at
 // full share from a slope of kSteepRampEndSteps steps per px, rising linearly from kSteepRampStartSteps (6.75 px x
-// 2.67 px = 18 px^2 for the 9 px window).
+// 2.67 px = 18 px^2 for the 9 px window). The ramp starts where the bias does: with this term off, NA 0.9 walls with
+// a 0.6-0.8 um floor read -0.01 to -0.02 step at 0.20-0.25 step/px and cross zero at 0.25-0.28 (focusgen.py seeds 11,
+// 12; none at all below 0.4 when each pixel is blurred by its own defocus only, --model gather); a ramp from 0.22
+// took 0.01-0.03 step off there (walls at 0.2-0.3 step/px -0.023 step on average, -0.015 from 0.28).
 inline constexpr double kSteepBiasPx = 6.75;
-inline constexpr double kSteepRampStartSteps = 0.22, kSteepRampEndSteps = 0.36;
+inline constexpr double kSteepRampStartSteps = 0.28, kSteepRampEndSteps = 0.36;
 
 // The typical focus curve of a stack: medians over a sample of the valid peaks of `c` (with two images on either
 // side) where the slope (mm per px, maps row-major) is below a tenth of a step per pixel.

@@ -77,7 +77,8 @@ TEST(FocusSteepCurvatureBias, TakesTheBiasOffSteepCurvedWallsOnly) {
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const std::vector<imaging::WindowCurves> windows = AdaptiveWindowSizes();
   const std::vector<float> window_px(5, 9.0f), gy(5, 0.0f);
-  const std::vector<float> gx = {0.0f, float(0.29 * kStep), float(0.4 * kStep), float(0.4 * kStep), float(0.4 * kStep)};
+  const double middle = 0.5 * (imaging::kSteepRampStartSteps + imaging::kSteepRampEndSteps);  // of the ramp
+  const std::vector<float> gx = {0.0f, float(middle * kStep), float(0.4 * kStep), float(0.4 * kStep), float(0.4 * kStep)};
   const std::vector<float> laplacian = {float(kLaplacian), float(kLaplacian), float(kLaplacian), kNaN, kNaN};
   const std::vector<float> filled = {float(kLaplacian), float(kLaplacian), float(kLaplacian), float(-kLaplacian), kNaN};
   std::vector<double> z(5, 0.02);
