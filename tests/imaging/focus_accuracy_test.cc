@@ -149,7 +149,8 @@ RegionErrors Measure(const Scene& scene, double step_um, double na, imaging::Foc
 // 9 px window's half-width): 0.105 while the window centroids weighed by the all-in-focus image's sharpness, 0.112
 // since at NA 0.9 they weigh by the pixels' peak measures (focus_window_centroid.h: they follow the trend of the
 // measure with the slope that scattered light gives on focusgen.py's walls, halving them there, but this renderer
-// scatters no light and the peak measure keeps less of the texture's pixel-level detail), held at 0.12. At 2 um steps with NA 0.9 the focus curve (0.7 um depth of field)
+// scatters no light and the peak measure keeps less of the texture's pixel-level detail), held at 0.12.
+// At 2 um steps with NA 0.9 the focus curve (0.7 um depth of field)
 // is undersampled: its top is flat over +-0.3 um and its neighbours lie on the tails, so the 3-point log fit pulls
 // heights within a third of a step of an image towards it: 0.110 step (flat 0.154, the wall 0.051), held at what
 // is measured plus ~15 %, not at the goal. There the gradient energy (`--measure tenengrad`, whose Sobel filter

@@ -124,7 +124,8 @@ TEST(FocusWindowCentroid, WeighsByThePeakMeasureWhereOneIsGiven) {
     for (int v = -7; v <= 7; ++v) {
       for (int u = -7; u <= 7; ++u) {
         const bool hole = x + u == hole_x && y + v == hole_y;
-        const double a = hole ? 0.0 : std::exp(-(u * u + v * v) / (2.0 * 2.7 * 2.7)) * std::exp(1.5 * kGrowth * (x + u));
+        const double taps = std::exp(-(u * u + v * v) / (2.0 * 2.7 * 2.7));
+        const double a = hole ? 0.0 : taps * std::exp(1.5 * kGrowth * (x + u));
         sum += a, sx += a * u, sy += a * v;
       }
     }
