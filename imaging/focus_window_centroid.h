@@ -19,7 +19,7 @@
 // its own sharpest image, shows that trend distorted (4 times at 0.25 step/px, 5.4-5.8 times from 0.3 on): its
 // centroids took 0.007-0.019 step too much off at 0.2-0.3 step/px and, with a 0.8 um floor, 0.04 too little at
 // 0.35-0.4 (focusgen.py seeds 11, 12, without the steep-wall term). With the peak measures (and half the steep-wall
-// term, focus_steep_curvature_bias.h) NA 0.9 walls read 0.036-0.060 step rms instead of 0.066-0.144 (seeds 11-14).
+// term, focus_steep_curvature_bias.h) NA 0.9 walls read 0.036-0.060 step rms instead of 0.049-0.144 (seeds 11-14).
 // Where the curves are wide the peak measure is no better and the all-in-focus image's pixel-level sharpness is
 // finer: NA 0.4 walls of ../shared/bench/check focus 0.081 -> 0.084 step with the peak measures, so they are left
 // out there. On this project's renderer (no scattered light; focus_accuracy_test.cc) the peak measures lose that
