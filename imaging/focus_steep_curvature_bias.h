@@ -40,10 +40,6 @@ inline constexpr double kCuspFull = 3.0, kCuspNone = 3.5;
 // 12; none at all below 0.4 when each pixel is blurred by its own defocus only, --model gather); a ramp from 0.22
 // took 0.01-0.03 step off there (walls at 0.2-0.3 step/px -0.023 step on average, -0.015 from 0.28).
 inline constexpr double kSteepBiasPx = 6.75;
-// Half of it where the window centroid correction weighs the pixels by their own peak focus measures
-// (focus_window_centroid.h), which take up the trend of the measure with the slope that the all-in-focus image's
-// sharpness showed distorted: NA 0.9 / 0.8 / 0.7 walls at 0.3-0.4 step/px 0.093 -> 0.042 step rms (seeds 11, 12).
-inline constexpr double kSteepBiasPeakWeightedPx = 3.375;
 inline constexpr double kSteepRampStartSteps = 0.28, kSteepRampEndSteps = 0.36;
 
 // The typical focus curve of a stack: medians over a sample of the valid peaks of `c` (with two images on either

@@ -97,15 +97,6 @@ constexpr double kSlopePx = 0.005;
 // flats the roughness read 0.83-1.76 times the errors depending on the texture and the optics, the level scatter
 // 0.75-0.93 times.
 constexpr double kLevelScatterScale = 0.85;
-// Where the window centroid correction weighs the pixels by their peak measures (at NA 0.9 on focusgen.py), it no
-// longer adds the all-in-focus image's sharpness noise times the slope to the heights: the walls' errors halve, and
-// so does the roughness that saw that noise, but not in proportion. Refitted there on seeds 11 and 12 (the other
-// weights unchanged; checked on 13 and 14): the roughness at 0.9 of its weight (walls of NA 0.9 with a 0.3 um floor
-// and of 0.6 / 1 px covered 97-97.5 %), the model term at 1.4 times (flats next to the rim, whose u_z the wall's old
-// noise had filled through the roughness's 15 px reach, covered 84-93 % at NA 0.9 with a 0.8 um floor; the flats of
-// NA 0.9 / 0.8 um / 0.7 px 92.5-93.9 -> 94.7-97.0 %, those with a 2 px texture 89.8-93.6 %).
-constexpr double kRoughnessPeakWeighted = 0.9;
-constexpr double kModelPeakWeighted = 1.4;
 
 }  // namespace
 
@@ -353,11 +344,10 @@ FocusResult FocusAccumulator::Finish() const {
       }
     }
   });
-  // Each window's height is that under the centroid of its pixels' weights: moved to its centre along the
+  // Each window's height is that under the centroid of its pixels' sharpness: moved to its centre along the
   // slope of the map as now chosen (focus_window_centroid.h); beside a sharp bend, where the stack's focus curves are
   // narrow, along the slope of the pixel's own side of it (focus_slope_beside_bends.h).
   const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
-  double peak_weight_share = 0.0;  // how much of the centroids' shift the peak measures' weights gave
   {
     cv::Mat beside_x = buffers[7], beside_y = buffers[8];
     float* const scratch[3] = {buffers[9].ptr<float>(), buffers[10].ptr<float>(), buffers[12].ptr<float>()};
@@ -370,11 +360,6 @@ FocusResult FocusAccumulator::Finish() const {
     in.texture = &result.texture, in.channels = result.texture_channels;
     in.windows = &curves, in.window_px = &result.window_px;
     in.slope_x = beside_x.ptr<float>(), in.slope_y = beside_y.ptr<float>();
-    // The weights: each pixel's peak measure in the smallest (3 px) window, where the windows are adaptive, by the
-    // share of narrow focus curves (focus_window_centroid.h).
-    if (curves.size() > 1 && curves.front().window == 3) in.peak_measure = curves.front().best.data();
-    in.peak_share = share;
-    peak_weight_share = in.peak_measure ? share : 0.0;
     CorrectWindowCentroids(in, map.z_mm);
   }
   // The peak fit's phase-locked bias, measured on this map's level points and taken off (focus_phase_bias.h).
@@ -411,17 +396,11 @@ FocusResult FocusAccumulator::Finish() const {
   {
     const float *gx = corrected_slope.x.ptr<float>(), *gy = corrected_slope.y.ptr<float>();
     const FocusCurveShape shape = MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step);
-    // Smaller by the share of the centroids' shift the peak measures' weights gave (focus_steep_curvature_bias.h).
-    const double share = SteepCurvatureBiasShare(shape) *
-                         (1.0 - peak_weight_share * (1.0 - kSteepBiasPeakWeightedPx / kSteepBiasPx));
+    const double share = SteepCurvatureBiasShare(shape);
     CorrectSteepCurvatureBias(s.width, s.height, s.options.parallel, share, step, curves, result.window_px, gx, gy,
                               curvature, buffers[15].ptr<float>(), map.z_mm, unremoved);
   }
   const double u_step = kStepFraction * step;
-  // Where the centroids weigh by the peak measures, the roughness and the model term at their own weights
-  // (kRoughnessPeakWeighted, kModelPeakWeighted), in proportion.
-  const double roughness_px2 = kRoughnessPx2 * (1.0 - peak_weight_share * (1.0 - kRoughnessPeakWeighted));
-  const double model_share = kModelShare * (1.0 - peak_weight_share * (1.0 - kModelPeakWeighted));
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       const float* roughness_row = roughness.ptr<float>(r);
@@ -430,10 +409,10 @@ FocusResult FocusAccumulator::Finish() const {
         const std::size_t i = std::size_t(r) * std::size_t(s.width) + std::size_t(col);
         if (!std::isfinite(map.z_mm[i])) continue;
         const double u_noise = result.u_z_mm[i], u_scatter = kScatterScale * scatter_row[col];
-        const double u_roughness = roughness_px2 * roughness_row[col];
+        const double u_roughness = kRoughnessPx2 * roughness_row[col];
         const double g = corrected_slope.Magnitude(r, col), u_slope = kSlopePx * g;
         const double span_steps = g * kModelSpanPx / step;
-        const double u_model = model_share * model[i] / (1.0 + span_steps * span_steps);
+        const double u_model = kModelShare * model[i] / (1.0 + span_steps * span_steps);
         double u_map = u_noise * u_noise + u_scatter * u_scatter + u_roughness * u_roughness + u_model * u_model;
         // Where the phase bias was taken off, the level points' own scatter about their local planes (what the
         // correction leaves) stands in for these terms, by the share of the bias taken off.

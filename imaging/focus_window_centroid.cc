@@ -3,27 +3,26 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <algorithm>
 #include <cmath>
 
 namespace fvm::imaging {
 namespace {
 
-// A pixel's weight in its window's focus curve: its own peak focus measure (the 3 px window's, see
-// CentroidCorrectionInput::peak_measure), or the modified Laplacian of the all-in-focus image there (its sharpness
-// in focus), raised to this power. With the power 1 the shifts predicted on the rendered stacks of
+// A pixel's weight in its window's focus curve: the modified Laplacian of the all-in-focus image there (its
+// sharpness in focus), raised to this power. With the power 1 the shifts predicted on the rendered stacks of
 // focus_accuracy_test.cc correlate as well with the errors (0.69 at 1 um steps, 0.85 at 0.5 um) but fall short
 // of them by a factor 1.4-1.7; with 1.5 the factor is 1.0-1.1 (the measure's sum of absolute values favours the
 // sharpest pixels more than in proportion).
 constexpr double kWeightPower = 1.5;
 
-// The weights from the all-in-focus image: its sharpness, the modified Laplacian to the power 1.5.
-void AllInFocusSharpnessWeights(const CentroidCorrectionInput& in, HugeVector<float>& weight_storage) {
+}  // namespace
+
+void CorrectWindowCentroids(const CentroidCorrectionInput& in, std::vector<double>& z_mm) {
   const std::size_t size = std::size_t(in.width) * std::size_t(in.height);
   // The all-in-focus image in grey (the mean of its channels), smoothed by the focus measure's pre-filter
   // (focus_stack_curves.h), then each pixel's sharpness: the modified Laplacian |2I - I_left - I_right| +
   // |2I - I_up - I_down| (reflected at the edges), to the power 1.5.
-  HugeVector<float> grey_storage, smooth_storage(size);
+  HugeVector<float> grey_storage, smooth_storage(size), weight_storage(size);
   cv::Mat grey(in.height, in.width, CV_32F, const_cast<float*>(in.texture->data()));
   if (in.channels != 1) {
     grey_storage.resize(size);
@@ -54,11 +53,6 @@ void AllInFocusSharpnessWeights(const CentroidCorrectionInput& in, HugeVector<fl
     cv::sqrt(dx, dy);
     cv::multiply(dx, dy, w);
   });
-}
-
-// Moves each finite height by `factor` times -(slope . centroid offset) of the windows it came from, under `weight`.
-void ShiftHeightsToWeightCentroids(const CentroidCorrectionInput& in, const cv::Mat& weight, double factor,
-                                   std::vector<double>& z_mm) {
   const std::vector<WindowCurves>& windows = *in.windows;
   const std::vector<float>& window_px = *in.window_px;
   const float mean_of_two = windows.size() > 1 ? 0.5f * float(windows[0].window + windows[1].window) : -1.0f;
@@ -87,35 +81,10 @@ void ShiftHeightsToWeightCentroids(const CentroidCorrectionInput& in, const cv::
           const float from = window_px[i];
           const double share = from == own ? 1.0 : (averaged && from == mean_of_two ? 0.5 : 0.0);
           if (share == 0.0 || !(s[col] > 0.0f) || !std::isfinite(z_mm[i])) continue;
-          z_mm[i] -= factor * share * (double(in.slope_x[i]) * x[col] + double(in.slope_y[i]) * y[col]) / s[col];
+          z_mm[i] -= share * (double(in.slope_x[i]) * x[col] + double(in.slope_y[i]) * y[col]) / s[col];
         }
       }
     });
-  }
-}
-
-}  // namespace
-
-void CorrectWindowCentroids(const CentroidCorrectionInput& in, std::vector<double>& z_mm) {
-  const std::size_t size = std::size_t(in.width) * std::size_t(in.height);
-  HugeVector<float> weight_storage(size);
-  cv::Mat weight(in.height, in.width, CV_32F, weight_storage.data());
-  // The shift is linear in the heights' moves, so the two weights' shifts mix by adding each in its share.
-  const double peak_share = in.peak_measure ? std::clamp(in.peak_share, 0.0, 1.0) : 0.0;
-  if (peak_share < 1.0) {
-    AllInFocusSharpnessWeights(in, weight_storage);
-    ShiftHeightsToWeightCentroids(in, weight, 1.0 - peak_share, z_mm);
-  }
-  if (peak_share > 0.0) {
-    // What each pixel adds to the window's focus curve at its peak, to the same power as the sharpness.
-    const float* peak = in.peak_measure;
-    ForStripes(in.height, in.parallel, [&](int r0, int r1) {
-      for (std::size_t i = std::size_t(r0) * std::size_t(in.width); i < std::size_t(r1) * std::size_t(in.width); ++i) {
-        const float p = peak[i] > 0.0f ? peak[i] : 0.0f;  // no value (NaN) or none: no weight
-        weight_storage[i] = p * std::sqrt(p);
-      }
-    });
-    ShiftHeightsToWeightCentroids(in, weight, peak_share, z_mm);
   }
 }
 
