@@ -2,22 +2,23 @@
 // The slope a window's centroid correction multiplies (focus_window_centroid.h), read on the pixel's own side of a
 // sharp bend. The map's slope is that of its 2 px local mean, which beside a calotte's rim reads the rim's dip (the
 // heights of windows straddling the rim, pulled down by the wall's pixels) and the wall beyond it: on
-// ../shared/bench/focusgen.py's stacks at NA 0.9, 0.10-0.13 step per px 3-4 px outside the rim where the face is
-// level (0.005). Times sharpness centroids pulled towards the rim (the wall's texture is 7-20 times sharper than the
-// level face's), that raised a ring 3-8 px outside the rim by +0.08 to +0.20 step (coverage 68-85 % with a 2 px
-// texture). Yet the wall's pixels in such a window hardly move its peak there: without the correction the ring
-// reads -0.02 step. Their heights lie 0.5-1.5 step below the level face's, beyond the half-width of a focus curve
-// at NA 0.9, so their curves form a bump of their own instead of shifting the face's (the sum of narrow peaks peaks
-// at the tallest, not at their weighted mean: the mean-shift view of a mixture, Fukunaga and Hostetler 1975). So
-// within kRidgeReachPx of the bend's ridge (found as SurfaceCurvature finds it, focus_surface_curvature.h) a point
-// takes the slope of the nearest point beyond that reach: the stencil taken from the smooth side of a discontinuity,
-// as in essentially non-oscillatory schemes (Harten et al. 1987). That point is on the pixel's own side when its
-// plane (its height and slope), extended to the pixel, meets the pixel's own height within kOwnSideSteps z-steps;
-// where it does not (the nearest point lies across the bend, as where the image's edge cuts off the pixel's own
-// side, or the pixel lies on the bend's top, whose heights are neither side's) the map's own slope is kept. Where
-// the focus curves are wide (NA 0.6 and below: the wall's pixels lie within a curve's half-width and do pull the
-// peak, as the first-order correction has it: the ring there reads -0.01 to +0.02 step with the map's slope) the
-// map's slope is kept: the caller passes the share of the own side's slope by the stack's narrow curves
+// ../shared/bench/focusgen.py's stacks at NA 0.9, 0.10-0.13 step per px 3-4 px outside the rim where the face is level
+// (0.005). Times sharpness centroids pulled towards the rim (the wall's texture is 7-20 times sharper than the level
+// face's there: focusgen.py's rendering brightens a tilted face's in-focus contour, which real optics do not,
+// docs/commands/focus.md; the slope read across the bend is wrong in either case), that raised a ring 3-8 px outside
+// the rim by +0.08 to +0.20 step (coverage 68-85 % with a 2 px texture). Yet the wall's pixels in such a window hardly
+// move its peak there: without the correction the ring reads -0.02 step. Their heights lie 0.5-1.5 step below the level
+// face's, beyond the half-width of a focus curve at NA 0.9, so their curves form a bump of their own instead of
+// shifting the face's (the sum of narrow peaks peaks at the tallest, not at their weighted mean: the mean-shift view of
+// a mixture, Fukunaga and Hostetler 1975). So within kRidgeReachPx of the bend's ridge (found as SurfaceCurvature finds
+// it, focus_surface_curvature.h) a point takes the slope of the nearest point beyond that reach: the stencil taken from
+// the smooth side of a discontinuity, as in essentially non-oscillatory schemes (Harten et al. 1987). That point is on
+// the pixel's own side when its plane (its height and slope), extended to the pixel, meets the pixel's own height
+// within kOwnSideSteps z-steps; where it does not (the nearest point lies across the bend, as where the image's edge
+// cuts off the pixel's own side, or the pixel lies on the bend's top, whose heights are neither side's) the map's own
+// slope is kept. Where the focus curves are wide (NA 0.6 and below: the wall's pixels lie within a curve's half-width
+// and do pull the peak, as the first-order correction has it: the ring there reads -0.01 to +0.02 step with the map's
+// slope) the map's slope is kept: the caller passes the share of the own side's slope by the stack's narrow curves
 // (NarrowCurveShare, focus_steep_curvature_bias.h). Used by focus_variation.cc.
 
 namespace fvm::imaging {
