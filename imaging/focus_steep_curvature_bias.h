@@ -17,7 +17,10 @@
 // to remove: all of it where the curves are narrow (shoulder below kNarrowShoulderFull) and V-topped (ratio below
 // kCuspFull), none where either is wide or round. Within reach of a sharp bend (a calotte's rim), where the map's
 // curvature is unknown, the heights are left alone and the bias's size, from the curvature around, goes to u_z.
-// Used by focus_variation.cc.
+// Caution: the light scattered in is focusgen.py's rendering (each point spread by a Gaussian of sigma0 + k |dz|),
+// which brightens a tilted face's in-focus contour; real optics image a uniform tilted face uniformly (backward ray
+// tracing and scalar wave optics, docs/commands/focus.md), so this bias may be the generator's, to be re-judged on
+// real stacks of curved walls. Used by focus_variation.cc.
 
 #include <cstddef>
 #include <vector>
