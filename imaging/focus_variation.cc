@@ -36,17 +36,6 @@ std::size_t PixelCount(const StackImageView& image) {
   return std::visit([](auto span) { return span.size(); }, image.pixels);
 }
 
-// The windows of the adaptive mode (Gaussian-weighted, sigma 1.5 and 2.7 px): the large one wherever the heights
-// it spans allow, the small one on steep walls. Once each window's height is moved to the centroid of its
-// pixels' sharpness (focus_window_centroid.h), the large window's errors on a 24 deg wall are smaller than the
-// small one's (0.08 against 0.11 step on the stacks of ../shared/bench/focusgen.py, 0.04 on either on this
-// project's renderer): its noise is lower and the centroid takes up what its span of heights would bias. Windows
-// smaller than 5 px leave the noise of a texture no sharper than the optics' diffraction floor (0.4-0.8 um in
-// focus, about a pixel) several times the step's tenth.
-// The 3 px window (sigma 0.9 px) gives no height: its best image per pixel makes the all-in-focus image, whose
-// sharpness the larger windows would blur (focus-stack's own image on the real stack of focus_realdata_test.cc:
-// 1.15 times as sharp from the 3 px window, 1.06 from the 5 px one).
-constexpr int kAdaptiveWindows[] = {3, 5, 9};
 // Brightness in any scale a camera or a converter writes (0..1, 0..65535, photon counts) stays far below this; the
 // focus measures square differences of neighbours in float, and beyond it they overflow to inf and NaN (an image
 // all -3.4e38, a float format's "no data", left fvm focus with no valid point and a NaN median quality, issue 44).

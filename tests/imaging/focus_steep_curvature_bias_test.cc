@@ -10,16 +10,10 @@
 #include <vector>
 
 #include "imaging/focus_window_curvature.h"
+#include "tests/support/focus_windows.h"
 
 namespace fvm {
 namespace {
-
-std::vector<imaging::WindowCurves> AdaptiveWindowSizes() {
-  std::vector<imaging::WindowCurves> windows(3);
-  for (int k = 0; k < 3; ++k)
-    windows[std::size_t(k)].window = 3 + 2 * k + 2 * (k == 2), windows[std::size_t(k)].gaussian = true;
-  return windows;  // 3, 5 and 9 px
-}
 
 // Window curves of n pixels, each with its peak at image k of a stack and the measures f(k + j) = curve(j - offset).
 template <typename Curve>
@@ -75,7 +69,7 @@ TEST(FocusSteepCurvatureBias, TellsASharpToppedNarrowCurveFromASmoothWaist) {
 TEST(FocusSteepCurvatureBias, TakesTheBiasOffSteepCurvedWallsOnly) {
   constexpr double kStep = 0.001, kLaplacian = 5e-6;  // mm per px^2
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  const std::vector<imaging::WindowCurves> windows = AdaptiveWindowSizes();
+  const std::vector<imaging::WindowCurves> windows = imaging::testing::AdaptiveWindows();
   const std::vector<float> window_px(5, 9.0f), gy(5, 0.0f);
   const double middle = 0.5 * (imaging::kSteepRampStartSteps + imaging::kSteepRampEndSteps);  // of the ramp
   const std::vector<float> gx = {0.0f, float(middle * kStep), float(0.4 * kStep), float(0.4 * kStep), float(0.4 * kStep)};

@@ -13,16 +13,10 @@
 #include <vector>
 
 #include "imaging/focus_peak.h"
+#include "tests/support/focus_windows.h"
 
 namespace fvm {
 namespace {
-
-std::vector<imaging::WindowCurves> AdaptiveWindows() {
-  std::vector<imaging::WindowCurves> windows(3);
-  for (int k = 0; k < 3; ++k)
-    windows[std::size_t(k)].window = 3 + 2 * k + 2 * (k == 2), windows[std::size_t(k)].gaussian = true;
-  return windows;  // 3, 5 and 9 px
-}
 
 // Normalised 1-D Gaussian taps of sigma `sigma` over 2 half + 1 points.
 std::vector<double> Gaussian(double sigma, int half) {
@@ -48,7 +42,7 @@ TEST(FocusWindowCurvature, MovesEachHeightByTheWindowsMeanOfAParaboloid) {
   for (int y = -half; y <= half; ++y)
     for (int x = -half; x <= half; ++x)
       mean += weights[std::size_t(x + half)] * weights[std::size_t(y + half)] * kC * (x * x + y * y) / 2.0;
-  const std::vector<imaging::WindowCurves> windows = AdaptiveWindows();
+  const std::vector<imaging::WindowCurves> windows = imaging::testing::AdaptiveWindows();
   EXPECT_NEAR(imaging::WindowWeightVariancePx2(windows[2]) * kC, mean, 1e-4 * mean);
 
   constexpr int kWidth = 4, kHeight = 1;
@@ -80,7 +74,7 @@ TEST(FocusWindowCurvature, ThePeakOfAWallsSummedFocusCurvesMovesByTheWindowsMean
   for (std::size_t a = 0; a < window.size(); ++a)
     for (std::size_t b = 0; b < prefilter.size(); ++b) weights[a + b] += window[a] * prefilter[b];
   const int half = int(weights.size() / 2);
-  const double variance = imaging::WindowWeightVariancePx2(AdaptiveWindows()[2]);
+  const double variance = imaging::WindowWeightVariancePx2(imaging::testing::AdaptiveWindows()[2]);
   constexpr double kRadius = 400.0;  // steps (and px)
   constexpr int kImages = 17, kPhases = 32;
   std::vector<double> images(kImages);
