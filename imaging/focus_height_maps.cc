@@ -296,21 +296,15 @@ WindowScaleMaps WindowScaleRoughness(SmoothedHeights smoothed, MapPool& pool) {
   depart(kept);
   // The surface's own curvature at a scale larger than the roughness's, NaN within reach of a bend or of the ridge
   // a bend leaves (focus_surface_curvature.h).
-  WindowScaleMaps out{pool.Map(), pool.Map(), pool.Map()};
-  cv::Mat& curvature = out.curvature;
-  {
-    cv::Mat scratch[4] = {pool.Map(), pool.Map(), pool.Map(), pool.Map()};
-    float* const scratch_px[4] = {scratch[0].ptr<float>(), scratch[1].ptr<float>(), scratch[2].ptr<float>(),
-                                  scratch[3].ptr<float>()};
-    SurfaceCurvature(laplacian.cols, laplacian.rows, pool.parallel(), laplacian.ptr<float>(), kept.ptr<float>(),
-                     is_bend.ptr<float>(), scratch_px, curvature.ptr<float>());
-  }
+  WindowScaleMaps out;
+  cv::Mat& curvature = out.curvature = pool.Map();
+  SurfaceCurvature(pool, laplacian.ptr<float>(), kept.ptr<float>(), is_bend.ptr<float>(), curvature.ptr<float>());
   laplacian.release(), is_bend.release();
   // The same, filled where unknown by the local mean of the known values over kCurvatureFillPx (NaN where none lies
   // within reach).
   {
     cv::Mat known = pool.Map(), known_values = pool.Map(), fill_total = pool.Map();
-    cv::Mat& filled = out.filled_curvature;
+    cv::Mat& filled = out.filled_curvature = pool.Map();
     pool.Pass([&](int r0, int r1) {
       for (int r = r0; r < r1; ++r) {
         float *k = known.ptr<float>(r), *v = known_values.ptr<float>(r);
@@ -355,7 +349,7 @@ WindowScaleMaps WindowScaleRoughness(SmoothedHeights smoothed, MapPool& pool) {
     cv::Mat near_rows = near.rowRange(r0, r1);
     cv::GaussianBlur(bend.rowRange(r0, r1), near_rows, cv::Size(), kBendReachPx, 0.0, cv::BORDER_REFLECT);
   });
-  cv::Mat& roughness = out.roughness;
+  cv::Mat& roughness = out.roughness = pool.Map();
   pool.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       const float *s = sum.ptr<float>(r), *n = count.ptr<float>(r), *b = near.ptr<float>(r);

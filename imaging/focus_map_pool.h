@@ -36,6 +36,8 @@ class MapPool final : public cv::MatAllocator {
   void Pass(const std::function<void(int, int)>& body, int stripe_rows = kStripeRows) const {
     ForStripes(height_, parallel_, body, stripe_rows);
   }
+  int width() const { return width_; }
+  int height() const { return height_; }
   bool parallel() const { return parallel_; }
 
   // cv::MatAllocator: a map's memory from the pool's free memory (or fresh) and back to it.

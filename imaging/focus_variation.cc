@@ -341,13 +341,10 @@ FocusResult FocusAccumulator::Finish() const {
   const Slope& final_slope = chosen.slope;
   {
     cv::Mat beside_x = pool.Map(), beside_y = pool.Map();
-    cv::Mat scratch_maps[3] = {pool.Map(), pool.Map(), pool.Map()};
-    float* const scratch[3] = {scratch_maps[0].ptr<float>(), scratch_maps[1].ptr<float>(),
-                               scratch_maps[2].ptr<float>()};
     const float *gx = final_slope.x.ptr<float>(), *gy = final_slope.y.ptr<float>();
     const double share = NarrowCurveShare(MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step));
-    SlopeBesideBends(s.width, s.height, s.options.parallel, chosen.smooth.ptr<float>(), gx, gy,
-                     chosen.valid.ptr<float>(), step, share, scratch, beside_x.ptr<float>(), beside_y.ptr<float>());
+    SlopeBesideBends(pool, chosen.smooth.ptr<float>(), gx, gy, chosen.valid.ptr<float>(), step, share,
+                     beside_x.ptr<float>(), beside_y.ptr<float>());
     CentroidCorrectionInput in;
     in.width = s.width, in.height = s.height, in.parallel = s.options.parallel;
     in.texture = &result.texture, in.channels = result.texture_channels;
