@@ -170,8 +170,9 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapPool& pool)
 // straddling the bend errs is real, though (at NA 0.9 up to 0.3 step within 6 px of the rim on focusgen.py, within
 // 2 px at NA 0.3): the bend's squared departures, spread over kBendReachPx (a 9 px window's reach), count at
 // kBendShare.
-// The maps a step no longer needs are let go of (release) where it ends, so that the next step's maps take their
-// memory: at most 15 maps are alive at once, with the caller's slope and scatter.
+// The maps a step no longer needs are let go of (release, or the end of a block) where it ends, so that the next
+// step's maps take their memory instead of fresh pages: with the caller's slope and scatter, at most 15 maps are
+// alive at once (during the plane fit, whose normal equations take seven).
 WindowScaleMaps WindowScaleRoughness(SmoothedHeights smoothed, MapPool& pool) {
   cv::Mat valid = std::move(smoothed.valid);
   // Each point's weight, written over the share of valid points around it that it is made of (a point reads only
@@ -194,10 +195,10 @@ WindowScaleMaps WindowScaleRoughness(SmoothedHeights smoothed, MapPool& pool) {
     cv::Mat ox = pool.Map(), oy = pool.Map(), sxx = pool.Map(), syy = pool.Map(), sxy = pool.Map();
     cv::Mat tx = pool.Map(), ty = pool.Map();
     pool.Pass([&](int r0, int r1) {
-      cv::Mat a_rows = ox.rowRange(r0, r1), b_rows = oy.rowRange(r0, r1), xx = sxx.rowRange(r0, r1),
+      cv::Mat x = ox.rowRange(r0, r1), y = oy.rowRange(r0, r1), xx = sxx.rowRange(r0, r1),
               yy = syy.rowRange(r0, r1), xy = sxy.rowRange(r0, r1), hx = tx.rowRange(r0, r1), hy = ty.rowRange(r0, r1);
-      filter(valid.rowRange(r0, r1), a_rows, moment, gauss);
-      filter(valid.rowRange(r0, r1), b_rows, gauss, moment);
+      filter(valid.rowRange(r0, r1), x, moment, gauss);
+      filter(valid.rowRange(r0, r1), y, gauss, moment);
       filter(valid.rowRange(r0, r1), xx, second, gauss);
       filter(valid.rowRange(r0, r1), yy, gauss, second);
       filter(valid.rowRange(r0, r1), xy, moment, moment);
