@@ -64,23 +64,6 @@ struct HoleyMap {
   }
 };
 
-// The local mean of `values` weighted by `weights` over a Gaussian of sigma_px: the blur of values x weights over
-// the blur of the weights. The product is complete before any band blurs it, since a band's blur reads the rows
-// beside it.
-cv::Mat WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sigma_px, MapPool& pool) {
-  cv::Mat product = pool.Map(), total = pool.Map(), mean = pool.Map();
-  pool.Pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* p = product.ptr<float>(r);
-      const float *v = values.ptr<float>(r), *w = weights.ptr<float>(r);
-      for (int col = 0; col < values.cols; ++col) p[col] = v[col] * w[col];
-    }
-  });
-  pool.Pass([&](int r0, int r1) { BlurredRatio(product, weights, sigma_px, r0, r1, total, mean); },
-            BlurStripeRows(sigma_px));
-  return mean;
-}
-
 }  // namespace
 
 void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
@@ -93,6 +76,20 @@ void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma
     const float* t = total.ptr<float>(r);
     for (int col = 0; col < mean.cols; ++col) m[col] /= std::max(t[col], 1e-6f);
   }
+}
+
+cv::Mat WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sigma_px, MapPool& pool) {
+  cv::Mat product = pool.Map(), total = pool.Map(), mean = pool.Map();
+  pool.Pass([&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      float* p = product.ptr<float>(r);
+      const float *v = values.ptr<float>(r), *w = weights.ptr<float>(r);
+      for (int col = 0; col < values.cols; ++col) p[col] = v[col] * w[col];
+    }
+  });
+  pool.Pass([&](int r0, int r1) { BlurredRatio(product, weights, sigma_px, r0, r1, total, mean); },
+            BlurStripeRows(sigma_px));
+  return mean;
 }
 
 float TypicalSquare(const cv::Mat& square, const cv::Mat& weight) {

@@ -24,6 +24,11 @@ float TypicalSquare(const cv::Mat& square, const cv::Mat& weight);
 void BlurredRatio(const cv::Mat& numerator, const cv::Mat& weights, double sigma_px, int r0, int r1, cv::Mat& total,
                   cv::Mat& mean);
 
+// The local mean of `values` weighted by `weights` over a Gaussian of sigma_px: the blur of values x weights over
+// the blur of the weights. The product is complete before any band blurs it, since a band's blur reads the rows
+// beside it.
+cv::Mat WeightedLocalMean(const cv::Mat& values, const cv::Mat& weights, double sigma_px, MapPool& pool);
+
 // The local slope (height change per pixel along x and y, mm) of a map with holes, from its smooth local mean.
 struct Slope {
   cv::Mat x, y;

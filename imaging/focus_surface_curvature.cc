@@ -87,18 +87,8 @@ void SurfaceCurvature(MapPool& pool, const float* laplacian_px, const float* wei
 }
 
 Ridge FindRidge(const cv::Mat& laplacian, const cv::Mat& weight, const cv::Mat& baseline, MapPool& pool) {
-  cv::Mat product = pool.Map(), total = pool.Map();
-  Ridge ridge{pool.Map()};
+  Ridge ridge{WeightedLocalMean(laplacian, weight, kRidgeScalePx, pool)};
   cv::Mat& square = ridge.square;
-  pool.Pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* p = product.ptr<float>(r);
-      const float *w = weight.ptr<float>(r), *l = laplacian.ptr<float>(r);
-      for (int col = 0; col < product.cols; ++col) p[col] = w[col] * l[col];
-    }
-  });
-  pool.Pass([&](int r0, int r1) { BlurredRatio(product, weight, kRidgeScalePx, r0, r1, total, square); },
-            BlurStripeRows(kRidgeScalePx));
   pool.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       float* m = square.ptr<float>(r);
