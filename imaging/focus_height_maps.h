@@ -59,6 +59,6 @@ struct WindowScaleMaps {
 };
 // From the smoothed heights, whose maps it lets go of as it is done with them (the caller passes them on with
 // std::move, so that their memory serves the roughness's own maps).
-WindowScaleMaps WindowScaleRoughness(SmoothedHeights heights, MapPool& pool);
+WindowScaleMaps WindowScaleRoughness(SmoothedHeights smoothed, MapPool& pool);
 
 }  // namespace fvm::imaging

@@ -49,8 +49,8 @@ class MapPool final : public cv::MatAllocator {
  private:
   int width_, height_;
   bool parallel_;
-  // Memory no map holds, the last freed last (taken first: its pages are in, and likely in cache). Guarded by
-  // `mutex_`: a stripe's header may be the last to let go of a map.
+  // Memory no map holds, in the order it was freed; the last freed is taken first (its pages are in, and likely in
+  // cache). Guarded by `mutex_`: a stripe's header may be the last to let go of a map.
   mutable std::mutex mutex_;
   mutable std::vector<std::unique_ptr<HugeVector<float>>> free_;
 };
