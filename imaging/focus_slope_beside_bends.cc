@@ -4,52 +4,43 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "imaging/focus_height_maps.h"
 #include "imaging/focus_stack_curves.h"
 #include "imaging/focus_surface_curvature.h"
 
 namespace fvm::imaging {
 
-void SlopeBesideBends(int width, int height, bool parallel, const float* smooth_px, const float* slope_x_px,
-                      const float* slope_y_px, const float* valid_px, double step_mm, double share,
-                      float* const scratch[3], float* beside_x_px, float* beside_y_px) {
+void SlopeBesideBends(MapPool& pool, const float* smooth_px, const float* slope_x_px, const float* slope_y_px,
+                      const float* valid_px, double step_mm, double share, float* beside_x_px, float* beside_y_px) {
+  const int width = pool.width(), height = pool.height();
   const auto map = [&](const float* p) { return cv::Mat(height, width, CV_32F, const_cast<float*>(p)); };
   const cv::Mat smooth = map(smooth_px), slope_x = map(slope_x_px), slope_y = map(slope_y_px), valid = map(valid_px);
-  cv::Mat laplacian = map(scratch[0]), mean = map(scratch[1]), total = map(scratch[2]);
   cv::Mat beside_x = map(beside_x_px), beside_y = map(beside_y_px);
-  const auto pass = [&](const auto& body, int stripe_rows = kStripeRows) {
-    ForStripes(height, parallel, body, stripe_rows);
-  };
   slope_x.copyTo(beside_x);
   slope_y.copyTo(beside_y);
   if (share <= 0.0) return;
-  // The Laplacian (the slope's divergence) at the valid points, 0 in the holes; its local mean over the ridge's
-  // scale, squared (into `mean`); the ridge where that exceeds kRidgeCut^2 times its typical size.
-  pass([&](int r0, int r1) {
+  // The Laplacian (the slope's divergence) at the valid points, 0 in the holes; the ridge where its local mean over
+  // the ridge's scale departs from 0 by more than kRidgeCut times its typical size (FindRidge).
+  cv::Mat laplacian = pool.Map();
+  pool.Pass([&](int r0, int r1) {
     cv::Mat dx, dy, l = laplacian.rowRange(r0, r1);  // the filters read the rows beyond the stripe from the map
     cv::Sobel(slope_x.rowRange(r0, r1), dx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
     cv::Sobel(slope_y.rowRange(r0, r1), dy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0.0, cv::BORDER_REFLECT);
     cv::add(dx, dy, l);
     cv::multiply(l, valid.rowRange(r0, r1), l);
   });
-  pass([&](int r0, int r1) { BlurredRatio(laplacian, valid, kRidgeScalePx, r0, r1, total, mean); },
-       BlurStripeRows(kRidgeScalePx));
-  pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      float* m = mean.ptr<float>(r);
-      for (int col = 0; col < width; ++col) m[col] *= m[col];
-    }
-  });
-  const float cut = kRidgeCut * kRidgeCut * TypicalSquare(mean, valid);
   cv::Mat ridge_free(height, width, CV_8U);  // 0 on the ridge
-  pass([&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r) {
-      unsigned char* f = ridge_free.ptr<unsigned char>(r);
-      const float *m = mean.ptr<float>(r), *v = valid.ptr<float>(r);
-      for (int col = 0; col < width; ++col) f[col] = v[col] > 0.0f && m[col] > cut ? 0 : 1;
-    }
-  });
-  cv::Mat distance = total;  // from the ridge (px)
+  {
+    const Ridge ridge = FindRidge(laplacian, valid, cv::Mat(), pool);
+    pool.Pass([&](int r0, int r1) {
+      for (int r = r0; r < r1; ++r) {
+        unsigned char* f = ridge_free.ptr<unsigned char>(r);
+        const float *m = ridge.square.ptr<float>(r), *v = valid.ptr<float>(r);
+        for (int col = 0; col < width; ++col) f[col] = v[col] > 0.0f && m[col] > ridge.cut ? 0 : 1;
+      }
+    });
+  }
+  laplacian.release();
+  cv::Mat distance = pool.Map();  // from the ridge (px)
   cv::distanceTransform(ridge_free, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
   // The valid points beyond the ridge's reach (0 in `beyond`), in the order distanceTransform labels them (row by
   // row), and for every point the label of the nearest one.
@@ -67,7 +58,7 @@ void SlopeBesideBends(int width, int height, bool parallel, const float* smooth_
   cv::Mat nearest_distance, labels;
   cv::distanceTransform(beyond, nearest_distance, labels, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
   const float tolerance = float(kOwnSideSteps * step_mm);
-  pass([&](int r0, int r1) {
+  pool.Pass([&](int r0, int r1) {
     for (int r = r0; r < r1; ++r) {
       const float *d = distance.ptr<float>(r), *s = smooth.ptr<float>(r);
       const int* label = labels.ptr<int>(r);

@@ -21,6 +21,8 @@
 // slope) the map's slope is kept: the caller passes the share of the own side's slope by the stack's narrow curves
 // (NarrowCurveShare, focus_steep_curvature_bias.h). Used by focus_variation.cc.
 
+#include "imaging/focus_map_pool.h"
+
 namespace fvm::imaging {
 
 // How far (z-steps) the nearest point's plane may miss a point's own height for its slope to be taken.
@@ -29,10 +31,9 @@ inline constexpr double kOwnSideSteps = 0.3;
 // Into `beside_x`, `beside_y`: the slope (`slope_x`, `slope_y`, height change per px along x and y, of the heights'
 // 2 px local mean `smooth`), moved beside the bends by `share` (0 to 1) of the way to the own side's slope as above;
 // elsewhere, and everywhere for share 0, the slope itself. `valid` is 1 at the map's points, 0 in its holes;
-// `step_mm` the stack's z-step; `scratch` three maps the function overwrites. All maps row-major, width x height,
-// filtered in stripes of rows (ForStripes, focus_stack_curves.h).
-void SlopeBesideBends(int width, int height, bool parallel, const float* smooth, const float* slope_x,
-                      const float* slope_y, const float* valid, double step_mm, double share, float* const scratch[3],
-                      float* beside_x, float* beside_y);
+// `step_mm` the stack's z-step. All maps row-major, of the size of `pool`'s maps (which the function takes its
+// scratch maps from), filtered in stripes of rows (MapPool::Pass).
+void SlopeBesideBends(MapPool& pool, const float* smooth, const float* slope_x, const float* slope_y,
+                      const float* valid, double step_mm, double share, float* beside_x, float* beside_y);
 
 }  // namespace fvm::imaging

@@ -17,7 +17,11 @@
 // no curvature (NaN): the band along a rim, where a mean would mix both sides, but not a lone ridge of the noise in
 // a wide bottom. On focusgen.py (NA 0.3-0.9, 0.7-2 px texture) the known curvature then reads 0.97-1.03 of the
 // truth in bottoms and walls up to 25 px from the rim, and the band left unknown reaches 8-15 px either side of it.
-// Used by focus_height_maps.cc.
+// Used by focus_height_maps.cc; the ridge test by focus_slope_beside_bends.cc too.
+
+#include <opencv2/core.hpp>
+
+#include "imaging/focus_map_pool.h"
 
 namespace fvm::imaging {
 
@@ -32,9 +36,19 @@ inline constexpr double kRidgeReachPx = 8.0;
 
 // Into `curvature`: the local mean of `laplacian` (mm per px^2) over kSurfaceCurvaturePx, weighted by `weight` (a
 // point's trust, 0 in holes and at the bends), with the bends (`bends`: 1 at a bend's points, else 0) and the ridge
-// left out as above; NaN where unknown. `scratch` are four maps the function overwrites; all maps row-major, width x
-// height, filtered in stripes of rows (ForStripes, focus_stack_curves.h).
-void SurfaceCurvature(int width, int height, bool parallel, const float* laplacian, const float* weight,
-                      const float* bends, float* const scratch[4], float* curvature);
+// left out as above; NaN where unknown. All maps row-major, of the size of `pool`'s maps (which the function takes
+// its scratch maps from), filtered in stripes of rows (MapPool::Pass).
+void SurfaceCurvature(MapPool& pool, const float* laplacian, const float* weight, const float* bends,
+                      float* curvature);
+
+// A sharp bend's ridge in a Laplacian (`laplacian`, weighted by `weight`): the square of its local mean over
+// kRidgeScalePx less `baseline` (the surface's own curvature there; nothing when empty), and the cut beyond which a
+// point lies on the ridge, kRidgeCut^2 times that square's typical size over the weighted points (a robust scale,
+// TypicalSquare). SurfaceCurvature's ridge test, shared by the slope beside a bend (focus_slope_beside_bends.h).
+struct Ridge {
+  cv::Mat square;
+  float cut = 0.0f;
+};
+Ridge FindRidge(const cv::Mat& laplacian, const cv::Mat& weight, const cv::Mat& baseline, MapPool& pool);
 
 }  // namespace fvm::imaging

@@ -304,8 +304,8 @@ FocusResult FocusAccumulator::Finish() const {
       result.quality[i] = p.quality;
     }
   });
-  MapBuffers buffers{s.width, s.height, s.options.parallel, {}};
-  const Slope slope = SlopePerPixel(map.z_mm, origin, buffers);
+  MapPool pool(s.width, s.height, s.options.parallel);  // before the maps it hands out, which it outlives
+  Slope slope = SmoothHeights(map.z_mm, origin, pool).slope;
   const double spread_limit = kSpreadLimitSteps * step;
 
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {
@@ -333,17 +333,18 @@ FocusResult FocusAccumulator::Finish() const {
       }
     }
   });
+  slope = {};  // its maps go back to the pool
   // Each window's height is that under the centroid of its pixels' sharpness: moved to its centre along the
   // slope of the map as now chosen (focus_window_centroid.h); beside a sharp bend, where the stack's focus curves are
   // narrow, along the slope of the pixel's own side of it (focus_slope_beside_bends.h).
-  const Slope final_slope = SlopePerPixel(map.z_mm, origin, buffers);
+  SmoothedHeights chosen = SmoothHeights(map.z_mm, origin, pool);
+  const Slope& final_slope = chosen.slope;
   {
-    cv::Mat beside_x = buffers[7], beside_y = buffers[8];
-    float* const scratch[3] = {buffers[9].ptr<float>(), buffers[10].ptr<float>(), buffers[12].ptr<float>()};
+    cv::Mat beside_x = pool.Map(), beside_y = pool.Map();
     const float *gx = final_slope.x.ptr<float>(), *gy = final_slope.y.ptr<float>();
     const double share = NarrowCurveShare(MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step));
-    SlopeBesideBends(s.width, s.height, s.options.parallel, buffers[3].ptr<float>(), gx, gy, buffers[1].ptr<float>(),
-                     step, share, scratch, beside_x.ptr<float>(), beside_y.ptr<float>());
+    SlopeBesideBends(pool, chosen.smooth.ptr<float>(), gx, gy, chosen.valid.ptr<float>(), step, share,
+                     beside_x.ptr<float>(), beside_y.ptr<float>());
     CentroidCorrectionInput in;
     in.width = s.width, in.height = s.height, in.parallel = s.options.parallel;
     in.texture = &result.texture, in.channels = result.texture_channels;
@@ -368,18 +369,21 @@ FocusResult FocusAccumulator::Finish() const {
     result.phase_bias_rms_mm = phase_bias.Rms();
     result.phase_bias_declined = phase_bias.reason;
   }
+  chosen = {};  // its maps go back to the pool
 
   // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
   // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
   // correction leaves. Both from the corrected heights.
-  const cv::Mat scatter = LocalScatter(map.z_mm, origin, buffers);
-  const Slope corrected_slope = SlopePerPixel(map.z_mm, origin, buffers);
-  const cv::Mat roughness = WindowScaleRoughness(corrected_slope, buffers);
+  const cv::Mat scatter = LocalScatter(map.z_mm, origin, pool);
+  SmoothedHeights corrected = SmoothHeights(map.z_mm, origin, pool);
+  const Slope corrected_slope = corrected.slope;
+  const WindowScaleMaps window_scale = WindowScaleRoughness(std::move(corrected), pool);
+  const cv::Mat& roughness = window_scale.roughness;
   // Each window's height is that under its centre on a curved surface too (focus_window_curvature.h), from the
   // surface's curvature the roughness leaves (a move this smooth does not change the roughness); and on steep curved
   // walls, where the stack's focus curves are narrow with a sharp top, the bias that mixing the window's heights
   // leaves there (focus_steep_curvature_bias.h).
-  const float* curvature = buffers[11].ptr<float>();
+  const float* curvature = window_scale.curvature.ptr<float>();
   CorrectWindowCurvature(s.width, s.height, s.options.parallel, curves, result.window_px, curvature, map.z_mm);
   std::vector<float> unremoved;  // the steep walls' bias near a bend, which u_z holds instead
   {
@@ -387,7 +391,7 @@ FocusResult FocusAccumulator::Finish() const {
     const FocusCurveShape shape = MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step);
     const double share = SteepCurvatureBiasShare(shape);
     CorrectSteepCurvatureBias(s.width, s.height, s.options.parallel, share, step, curves, result.window_px, gx, gy,
-                              curvature, buffers[15].ptr<float>(), map.z_mm, unremoved);
+                              curvature, window_scale.filled_curvature.ptr<float>(), map.z_mm, unremoved);
   }
   const double u_step = kStepFraction * step;
   ForStripes(s.height, s.options.parallel, [&](int r0, int r1) {

@@ -69,10 +69,9 @@ BendScene BentFace(bool bend, double bend_at = kBendAt) {
                            2.0);
     }
   }
-  std::vector<float> s0(n), s1(n), s2(n);
-  float* const scratch[3] = {s0.data(), s1.data(), s2.data()};
-  imaging::SlopeBesideBends(kBendMapPx, kBendMapPx, true, s.smooth.data(), s.slope_x.data(), s.slope_y.data(),
-                            s.valid.data(), kBendStepMm, 1.0, scratch, s.beside_x.data(), s.beside_y.data());
+  imaging::MapPool pool(kBendMapPx, kBendMapPx, true);
+  imaging::SlopeBesideBends(pool, s.smooth.data(), s.slope_x.data(), s.slope_y.data(), s.valid.data(), kBendStepMm,
+                            1.0, s.beside_x.data(), s.beside_y.data());
   return s;
 }
 

@@ -44,10 +44,8 @@ CurvatureScene CurvedDisk(bool flag_every_sector) {
       s.laplacian[i] = hole ? 1.0f : float((d < 0.0 ? kDiskCurvature : 0.0) + ridge + noise(rng));
     }
   }
-  std::vector<float> s0(n), s1(n), s2(n), s3(n);
-  float* const scratch[4] = {s0.data(), s1.data(), s2.data(), s3.data()};
-  imaging::SurfaceCurvature(kCurvatureMapPx, kCurvatureMapPx, true, s.laplacian.data(), s.weight.data(), s.bends.data(),
-                            scratch, s.curvature.data());
+  imaging::MapPool pool(kCurvatureMapPx, kCurvatureMapPx, true);
+  imaging::SurfaceCurvature(pool, s.laplacian.data(), s.weight.data(), s.bends.data(), s.curvature.data());
   return s;
 }
 
@@ -104,10 +102,8 @@ TEST(FocusSurfaceCurvature, UnknownWhereNoPointHasWeight) {
   const std::size_t n = std::size_t(kCurvatureRows) * kCurvatureMapPx;
   std::vector<float> laplacian(n, 1e-6f), weight(n, 0.0f), bends(n, 0.0f), curvature(n, 0.0f);
   for (std::size_t i = 0; i < n / 4; ++i) weight[i] = 1.0f;  // the first 50 rows only
-  std::vector<float> s0(n), s1(n), s2(n), s3(n);
-  float* const scratch[4] = {s0.data(), s1.data(), s2.data(), s3.data()};
-  imaging::SurfaceCurvature(kCurvatureMapPx, kCurvatureRows, false, laplacian.data(), weight.data(), bends.data(),
-                            scratch, curvature.data());
+  imaging::MapPool pool(kCurvatureMapPx, kCurvatureRows, false);
+  imaging::SurfaceCurvature(pool, laplacian.data(), weight.data(), bends.data(), curvature.data());
   EXPECT_NEAR(curvature[std::size_t(25) * kCurvatureMapPx + 100], 1e-6f, 1e-9f);
   EXPECT_TRUE(std::isnan(curvature[std::size_t(190) * kCurvatureMapPx + 100]));  // 140 px from any weight
 }
