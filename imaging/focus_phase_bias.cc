@@ -56,6 +56,12 @@ double PhaseOf(double z, double origin, double step) {
   return t - std::round(t);
 }
 
+// The phase of pixel i, from the smoothed heights where given.
+double PhaseOfPixel(const PhaseBiasInput& in, std::size_t i) {
+  if (in.phase_heights) return PhaseOf(in.origin_mm + double(in.phase_heights[i]), in.origin_mm, in.step_mm);
+  return PhaseOf((*in.z_mm)[i], in.origin_mm, in.step_mm);
+}
+
 Terms Harmonics(double phase) {
   static_assert(PhaseBias::kHarmonics == 3);
   const double c1 = std::cos(2.0 * std::numbers::pi * phase), s1 = std::sin(2.0 * std::numbers::pi * phase);
@@ -96,7 +102,7 @@ LevelGrid SampleLevelPoints(const PhaseBiasInput& in) {
       if (!std::isfinite(z[i]) || !(g < kLevelSlope)) continue;
       grid.w.at<double>(r, c) = 1.0;
       grid.signals[0].at<double>(r, c) = (z[i] - in.origin_mm) / in.step_mm;
-      const Terms f = Harmonics(PhaseOf(z[i], in.origin_mm, in.step_mm));
+      const Terms f = Harmonics(PhaseOfPixel(in, i));
       for (int j = 0; j < PhaseBias::kTerms; ++j) grid.signals[std::size_t(j) + 1].at<double>(r, c) = f(j);
     }
   }
@@ -334,7 +340,7 @@ void CorrectPhaseBias(const PhaseBias& bias, const PhaseBiasInput& in, std::vect
       const double slope2 = double(in.slope_x[i]) * in.slope_x[i] + double(in.slope_y[i]) * in.slope_y[i];
       const double fade = std::exp(-slope2 * fade_scale);  // bias.Fade
       if (!(fade > 1e-3)) continue;
-      const double t = (PhaseOf(z_mm[i], in.origin_mm, in.step_mm) + 0.5) * kTable;
+      const double t = (PhaseOfPixel(in, i) + 0.5) * kTable;
       const int k = std::clamp(int(t), 0, kTable);
       const double share = t - k;
       const std::size_t j = std::size_t(k);

@@ -63,11 +63,22 @@ struct PhaseBiasInput {
   const float* slope_x = nullptr;
   const float* slope_y = nullptr;
   double origin_mm = 0.0, step_mm = 0.0;
+  // The heights (mm from origin_mm, row-major) a pixel's phase is read from: the map smoothed over its level
+  // points (kPhaseSmoothingPx), so that a height's own error (0.1 step at NA 0.9 with a 0.8 um floor) does not
+  // scatter its phase; a phase read from the noisy height itself dilutes the harmonics' regression towards zero
+  // (errors in the regressor [Fuller 1987]). Null: the heights themselves.
+  const float* phase_heights = nullptr;
   // The stack's largest departure from even steps (in steps): the phase is read against origin + k step, which
   // only an evenly stepped stack keeps (an uneven one is declined, see kUnevenSteps).
   double uneven_steps = 0.0;
   bool parallel = true;  // the correction in stripes of rows on OpenCV's thread pool
 };
+
+// The sigma (px) of the Gaussian that smooths the heights a phase is read from (PhaseBiasInput::phase_heights,
+// filled by FocusAccumulator::Finish) and the slope (steps per px) over which its weights fade as the correction
+// does (exp(-(slope / kPhaseSmoothingSlope)^2)), so that a calotte's rim beside a flat does not pull it.
+inline constexpr double kPhaseSmoothingPx = 6.0;
+inline constexpr double kPhaseSmoothingSlope = 0.1;
 
 // The stack's phase bias, fitted on the map's level points.
 PhaseBias EstimatePhaseBias(const PhaseBiasInput& in);

@@ -359,6 +359,25 @@ FocusResult FocusAccumulator::Finish() const {
     in.width = s.width, in.height = s.height, in.z_mm = &map.z_mm;
     in.slope_x = final_slope.x.ptr<float>(), in.slope_y = final_slope.y.ptr<float>();
     in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
+    // The heights the phase is read from: their local mean over the points the correction applies to (weights
+    // fading with the slope as it does). Buffers 0 and 1 hold the heights and their mask from final_slope; 7 to 10
+    // are free until WindowScaleRoughness fills them.
+    cv::Mat weight = buffers[9], product = buffers[10], total = buffers[7], smooth = buffers[8];
+    const cv::Mat heights = buffers[0], valid = buffers[1];
+    const double fade_scale = 1.0 / (kPhaseSmoothingSlope * step);
+    buffers.Pass([&](int r0, int r1) {
+      for (int r = r0; r < r1; ++r) {
+        float *w = weight.ptr<float>(r), *p = product.ptr<float>(r);
+        const float *h = heights.ptr<float>(r), *v = valid.ptr<float>(r);
+        for (int col = 0; col < s.width; ++col) {
+          const double g = final_slope.Magnitude(r, col) * fade_scale;
+          w[col] = v[col] * float(std::exp(-g * g)), p[col] = w[col] * h[col];
+        }
+      }
+    });
+    buffers.Pass([&](int r0, int r1) { BlurredRatio(product, weight, kPhaseSmoothingPx, r0, r1, total, smooth); },
+                 BlurStripeRows(kPhaseSmoothingPx));
+    in.phase_heights = smooth.ptr<float>();
     for (int k = 0; k < n; ++k) {
       const double even = origin + (s.z.back() > origin ? k : -k) * step;
       in.uneven_steps = std::max(in.uneven_steps, std::abs(s.z[std::size_t(k)] - even) / step);
