@@ -417,7 +417,8 @@ FocusResult FocusAccumulator::Finish() const {
     const float *gx = corrected_slope.x.ptr<float>(), *gy = corrected_slope.y.ptr<float>();
     const FocusCurveShape shape = MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step);
     if (!phase_bias.applied && s.options.peak_fit == PeakFit::kPower) {
-      u_predicted_phase = PredictedPhaseBiasRms(shape.rise1, shape.rise2, -2.0 / 3.0) * step;
+      const double power = -2.0 / BlurExponent(s.options.measure);  // the power fit's transform (FitPeak)
+      u_predicted_phase = PredictedPhaseBiasRms(shape.rise1, shape.rise2, power) * step;
     }
     const double share = SteepCurvatureBiasShare(shape);
     CorrectSteepCurvatureBias(s.width, s.height, s.options.parallel, share, step, curves, result.window_px, gx, gy,
