@@ -25,6 +25,8 @@ constexpr double kFloorShare = 1.0;
 // A narrow curve's 3-point log fit errs between images by a share of the step which no noise shows.
 constexpr double kNarrowStepFraction = 0.11;
 
+}  // namespace
+
 // The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the
 // modified Laplacian is a sum of absolute second derivatives (s^-3 in 2-D), the gradient energy a squared first
 // derivative (s^-4), the variance of a texture smoothed by s falls as s^-2.
@@ -39,6 +41,8 @@ double BlurExponent(FocusMeasure measure) {
   }
   return 2.0;
 }
+
+namespace {
 
 // x^power for x > 0, by the cheaper root for the focus measures' transforms (-2/3 for the modified Laplacian,
 // -1/2 for the gradient energy, -1 for the variance): std::pow took most of the peak fit's time.

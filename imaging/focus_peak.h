@@ -27,6 +27,10 @@ double Vertex(double z0, double z1, double z2, double f0, double f1, double f2);
 double PowerVertex(const std::vector<double>& z, int k, std::array<double, 5> f, double floor, double power,
                    double sigma = 0.0, double* u_noise = nullptr);
 
+// The exponent p of the measure's fall with the blur sigma s (measure ~ s^-p) for a random texture: the power fit
+// transforms the measure by -2 / p, so that the transformed curve grows as s^2.
+double BlurExponent(FocusMeasure measure);
+
 // One window's peak at one pixel: the height (mm; NaN where invalid), the noise part of its uncertainty (the
 // change of the vertex when each measure moves by its noise: the floor of the curve, the measure far out of
 // focus, over the window's side, the sum of window^2 pixels of independent noise), and the quality.

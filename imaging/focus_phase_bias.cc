@@ -6,12 +6,16 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "core/dense_decomposition.h"
+#include "imaging/focus_peak.h"
 #include "imaging/focus_stack_curves.h"
 
 namespace fvm::imaging {
@@ -56,6 +60,12 @@ double PhaseOf(double z, double origin, double step) {
   return t - std::round(t);
 }
 
+// The phase of pixel i, from the smoothed heights where given.
+double PhaseOfPixel(const PhaseBiasInput& in, std::size_t i) {
+  if (in.phase_heights) return PhaseOf(in.origin_mm + double(in.phase_heights[i]), in.origin_mm, in.step_mm);
+  return PhaseOf((*in.z_mm)[i], in.origin_mm, in.step_mm);
+}
+
 Terms Harmonics(double phase) {
   static_assert(PhaseBias::kHarmonics == 3);
   const double c1 = std::cos(2.0 * std::numbers::pi * phase), s1 = std::sin(2.0 * std::numbers::pi * phase);
@@ -96,7 +106,7 @@ LevelGrid SampleLevelPoints(const PhaseBiasInput& in) {
       if (!std::isfinite(z[i]) || !(g < kLevelSlope)) continue;
       grid.w.at<double>(r, c) = 1.0;
       grid.signals[0].at<double>(r, c) = (z[i] - in.origin_mm) / in.step_mm;
-      const Terms f = Harmonics(PhaseOf(z[i], in.origin_mm, in.step_mm));
+      const Terms f = Harmonics(PhaseOfPixel(in, i));
       for (int j = 0; j < PhaseBias::kTerms; ++j) grid.signals[std::size_t(j) + 1].at<double>(r, c) = f(j);
     }
   }
@@ -223,7 +233,12 @@ double PhaseBias::Rms() const {
 }
 
 double PhaseBias::Fade(double slope_mm_per_px) const {
-  if (!applied || !(step_mm > 0.0)) return 0.0;
+  if (!applied) return 0.0;
+  return PhaseBiasFade(slope_mm_per_px, step_mm);
+}
+
+double PhaseBiasFade(double slope_mm_per_px, double step_mm) {
+  if (!(step_mm > 0.0)) return 0.0;
   const double s = slope_mm_per_px / step_mm / kFadeSlope;
   return std::exp(-s * s);
 }
@@ -231,6 +246,53 @@ double PhaseBias::Fade(double slope_mm_per_px) const {
 double PhaseBias::LevelScatter(int row, int col) const {
   if (level_scatter.empty()) return std::numeric_limits<double>::quiet_NaN();
   return level_scatter[std::size_t(row / grid_stride) * std::size_t(grid_cols) + std::size_t(col / grid_stride)];
+}
+
+double PredictedPhaseBiasRms(double rise1, double rise2, double power) {
+  if (!(rise1 > 0.0) || !(rise2 > rise1)) return 0.0;
+  const auto phase = [](int k) { return (k + 0.5) / kPredictionPhases - 0.5; };
+  const auto curve = [](double b, double c, double u) { return 1.0 + b * std::abs(u) + c * u * u; };
+  const auto median = [](std::array<double, kPredictionPhases>& v) {
+    std::sort(v.begin(), v.end());
+    return 0.5 * (v[kPredictionPhases / 2 - 1] + v[kPredictionPhases / 2]);
+  };
+  // The curve's rises over its best image, one and two images out, medians over the phase.
+  const auto rises = [&](double b, double c) {
+    std::array<double, kPredictionPhases> one, two;
+    for (int k = 0; k < kPredictionPhases; ++k) {
+      const double t = phase(k), top = curve(b, c, t);
+      one[std::size_t(k)] = 0.5 * (curve(b, c, -1.0 - t) + curve(b, c, 1.0 - t)) / top - 1.0;
+      two[std::size_t(k)] = 0.5 * (curve(b, c, -2.0 - t) + curve(b, c, 2.0 - t)) / top - 1.0;
+    }
+    return std::pair{median(one), median(two)};
+  };
+  // Over the V's share of the curve (41 values), the size that gives rise1 (bisection: the rises grow with it);
+  // kept, the share whose rise two images out is nearest rise2.
+  double best_b = 0.0, best_c = 0.0, best_miss = std::numeric_limits<double>::infinity();
+  for (int j = 0; j <= 40; ++j) {
+    const double share = j / 40.0;
+    double lo = 1e-3, hi = 100.0, size = 1.0;
+    for (int it = 0; it < 40; ++it) {
+      size = std::sqrt(lo * hi);
+      (rises(size * share, size * (1.0 - share)).first < rise1 ? lo : hi) = size;
+    }
+    const double miss = std::abs(rises(size * share, size * (1.0 - share)).second - rise2);
+    if (miss < best_miss) best_miss = miss, best_b = size * share, best_c = size * (1.0 - share);
+  }
+  // The fit's vertex through the curve's measures (P^(-3/2)) at five images 0..4, the surface t past image 2.
+  const std::vector<double> z = {0.0, 1.0, 2.0, 3.0, 4.0};
+  std::array<double, kPredictionPhases> bias;
+  double mean = 0.0;
+  for (int k = 0; k < kPredictionPhases; ++k) {
+    const double t = phase(k);
+    std::array<double, 5> f;
+    for (int i = 0; i < 5; ++i) f[std::size_t(i)] = std::pow(curve(best_b, best_c, (i - 2) - t), -1.5);
+    bias[std::size_t(k)] = PowerVertex(z, 2, f, 0.0, power) - (2.0 + t);
+    mean += bias[std::size_t(k)] / kPredictionPhases;
+  }
+  double sum = 0.0;
+  for (double v : bias) sum += (v - mean) * (v - mean);
+  return std::sqrt(sum / kPredictionPhases);
 }
 
 PhaseBias EstimatePhaseBias(const PhaseBiasInput& in) {
@@ -334,7 +396,7 @@ void CorrectPhaseBias(const PhaseBias& bias, const PhaseBiasInput& in, std::vect
       const double slope2 = double(in.slope_x[i]) * in.slope_x[i] + double(in.slope_y[i]) * in.slope_y[i];
       const double fade = std::exp(-slope2 * fade_scale);  // bias.Fade
       if (!(fade > 1e-3)) continue;
-      const double t = (PhaseOf(z_mm[i], in.origin_mm, in.step_mm) + 0.5) * kTable;
+      const double t = (PhaseOfPixel(in, i) + 0.5) * kTable;
       const int k = std::clamp(int(t), 0, kTable);
       const double share = t - k;
       const std::size_t j = std::size_t(k);

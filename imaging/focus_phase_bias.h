@@ -63,14 +63,41 @@ struct PhaseBiasInput {
   const float* slope_x = nullptr;
   const float* slope_y = nullptr;
   double origin_mm = 0.0, step_mm = 0.0;
+  // The heights (mm from origin_mm, row-major) a pixel's phase is read from: the map smoothed over its level
+  // points (kPhaseSmoothingPx), so that a height's own error (0.1 step at NA 0.9 with a 0.8 um floor) does not
+  // scatter its phase; a phase read from the noisy height itself dilutes the harmonics' regression towards zero
+  // (errors in the regressor [Fuller 1987]). Null: the heights themselves.
+  const float* phase_heights = nullptr;
   // The stack's largest departure from even steps (in steps): the phase is read against origin + k step, which
   // only an evenly stepped stack keeps (an uneven one is declined, see kUnevenSteps).
   double uneven_steps = 0.0;
   bool parallel = true;  // the correction in stripes of rows on OpenCV's thread pool
 };
 
+// The sigma (px) of the Gaussian that smooths the heights a phase is read from (PhaseBiasInput::phase_heights,
+// filled by FocusAccumulator::Finish) and the slope (steps per px) over which its weights fade as the correction
+// does (exp(-(slope / kPhaseSmoothingSlope)^2)), so that a calotte's rim beside a flat does not pull it.
+inline constexpr double kPhaseSmoothingPx = 6.0;
+inline constexpr double kPhaseSmoothingSlope = 0.1;
+
 // The stack's phase bias, fitted on the map's level points.
 PhaseBias EstimatePhaseBias(const PhaseBiasInput& in);
+
+// The rms (steps) of the phase-locked bias the 5-point power fit leaves on a level face, predicted from the
+// stack's own focus curve instead of measured: the curve P(u) = 1 + b |u| + c u^2 in the transformed measure P =
+// (f / f_peak)^(-2/3) (u in steps from the surface; b the V-shaped top of a blur that grows linearly from its
+// floor, c the round one), b and c such that its rises one and two images from the peak, median over the phase,
+// are `rise1` and `rise2` (FocusCurveShape's medians over the stack's gentle peaks), run through PowerVertex
+// (transform `power`) at kPredictionPhases phases between two images. Where EstimatePhaseBias declines (a flat
+// about one period of the phase across, half its pixels invalid) this is the only measure of that bias: on
+// focusgen.py it agrees with the measured bias where the correction applies (0.028-0.041 against 0.029-0.040
+// step at NA 0.3-0.4 with 0.7-1 px textures). 0 when the rises do not describe a peak (rise2 <= rise1 or rise1 <= 0).
+inline constexpr int kPredictionPhases = 64;
+double PredictedPhaseBiasRms(double rise1, double rise2, double power);
+
+// exp(-(slope / kFadeSlope)^2), the slope in steps per px: the share of the phase bias a height carries on a
+// slope (its window's heights span phases and average it away).
+double PhaseBiasFade(double slope_mm_per_px, double step_mm);
 
 // Takes the bias, faded by the slope, off each finite height of in.z_mm (the same vector as `z_mm`, which is
 // written); `u_mm` gets the correction's standard uncertainty per pixel (0 where nothing was taken off).

@@ -25,7 +25,7 @@ double Ramp(double x, double none, double full) { return std::clamp((x - none) /
 
 FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, double min_quality, const float* slope_x,
                                   const float* slope_y, double step_mm) {
-  std::vector<float> shoulder, cusp;
+  std::vector<float> shoulder, cusp, rise1, rise2;
   for (std::size_t i = 0; i < c.best.size(); i += kShapeEvery) {
     const int k = c.index[i];
     if (k < 2 || k + 2 >= int(images)) continue;  // two images on either side, for the shape ratio
@@ -38,12 +38,12 @@ FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, dou
     if (!(l1 > 0.0f && r1 > 0.0f && l2 > 0.0f && r2 > 0.0f)) continue;
     const auto rise = [&](float f) { return 1.0 / std::cbrt((double(f) / peak) * (double(f) / peak)); };
     const double p1 = 0.5 * (rise(l1) + rise(r1)) - 1.0, p2 = 0.5 * (rise(l2) + rise(r2)) - 1.0;
-    if (p1 > 0.0) cusp.push_back(float(p2 / p1));
+    if (p1 > 0.0) cusp.push_back(float(p2 / p1)), rise1.push_back(float(p1)), rise2.push_back(float(p2));
   }
   FocusCurveShape out;
   out.samples = int(cusp.size());
   if (!shoulder.empty()) out.shoulder = Median(shoulder);
-  if (!cusp.empty()) out.cusp = Median(cusp);
+  if (!cusp.empty()) out.cusp = Median(cusp), out.rise1 = Median(rise1), out.rise2 = Median(rise2);
   return out;
 }
 

@@ -50,6 +50,7 @@ inline constexpr double kSteepRampStartSteps = 0.28, kSteepRampEndSteps = 0.36;
 struct FocusCurveShape {
   double shoulder = 0.0;  // (f(k-1) + f(k+1) - 2 floor) / (f(k) - floor)
   double cusp = 0.0;      // (P(k+-2) - 1) / (P(k+-1) - 1), P = ((f - floor) / (f(k) - floor))^(-2/3) averaged over +-
+  double rise1 = 0.0, rise2 = 0.0;  // P(k+-1) - 1 and P(k+-2) - 1 (their medians apart; PredictedPhaseBiasRms)
   int samples = 0;        // peaks that gave the shape ratio
 };
 FocusCurveShape MeasureCurveShape(const WindowCurves& c, std::size_t images, double min_quality, const float* slope_x,
