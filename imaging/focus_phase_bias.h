@@ -12,10 +12,12 @@
 // are regressed on harmonics of the phase, the regressors passing through the same local plane (Frisch and Waugh
 // 1933: the coefficients are those of the joint fit of the planes and the harmonics), and their covariance from
 // the residuals summed over blocks of pixels, whose errors are shared by neighbours (a cluster sandwich, Liang and
-// Zeger 1986). The coefficients are shrunk towards zero by the positive-part James-Stein factor (James and Stein
-// 1961): a bias no larger than its own noise is hardly taken off. Fitted only on level points (kLevelSlope): on
-// slopes a window spans several phases, and at NA 0.9 the bias found on the calotte's bottom had the opposite sign
-// of the flat's. The correction fades with the slope as exp(-(slope / kFadeSlope)^2).
+// Zeger 1986; the correction's uncertainty takes the larger of those over blocks of two sizes, since errors
+// shared across a block's border escape it). The coefficients are shrunk towards zero by the positive-part
+// James-Stein factor (James and Stein 1961): a bias no larger than its own noise is hardly taken off. Fitted only on
+// level points (kLevelSlope): on slopes a window spans several phases, and at NA 0.9 the bias found on the
+// calotte's bottom had the opposite sign of the flat's. The correction fades with the slope as
+// exp(-(slope / kFadeSlope)^2).
 // Declined (nothing changed) where too few level points or too few phases are seen (a face level within a step:
 // its phases are the surface's one phase plus noise, whose regression on the phase would only flatten the noise).
 // Used by focus_variation.cc.
@@ -36,9 +38,15 @@ struct PhaseBias {
   double shrinkage = 0.0;  // the James-Stein factor applied to the coefficients (0..1)
   std::array<double, kTerms> coefficients{};  // mm, after shrinkage
   std::array<double, kTerms * kTerms> covariance{};  // mm^2, row-major, after shrinkage
+  // The same over blocks twice as wide (errors that correlate across the narrow blocks' borders); the narrow one's
+  // where too few wide blocks hold points. Uncertainty takes the larger of the two at each phase.
+  std::array<double, kTerms * kTerms> wide_covariance{};
 
   // The bias (mm) of a height at `phase` (its position between two images, a share of the step, -0.5..0.5) on a
-  // level face, and its standard uncertainty. 0 when not applied.
+  // level face, and its standard uncertainty (the larger of the two sandwiches'). 0 when not applied. The
+  // uncertainty is that of the shrunk estimate about its mean; the share of the bias the shrinkage leaves in the
+  // heights ((1 - shrinkage) times the bias, Stein's risk) is not added: u_z's blend (focus_variation.cc) keeps
+  // (1 - shrinkage) of the model term, the bias's proxy, which on focusgen.py's level flats is 2.4-8 times that share.
   double At(double phase) const;
   double Uncertainty(double phase) const;
   // The bias's rms over the phase (mm); 0 when not applied.
