@@ -354,6 +354,7 @@ FocusResult FocusAccumulator::Finish() const {
     cv::Mat beside_x = pool.Map(), beside_y = pool.Map();
     const float *gx = final_slope.x.ptr<float>(), *gy = final_slope.y.ptr<float>();
     const double share = NarrowCurveShare(MeasureCurveShape(large, s.z.size(), s.options.min_quality, gx, gy, step));
+    result.slope_beside_bends_share = share;
     SlopeBesideBends(pool, chosen.smooth.ptr<float>(), gx, gy, chosen.valid.ptr<float>(), step, share,
                      beside_x.ptr<float>(), beside_y.ptr<float>());
     CentroidCorrectionInput in;
@@ -424,6 +425,8 @@ FocusResult FocusAccumulator::Finish() const {
       u_predicted_phase = PredictedPhaseBiasRms(shape.rise1, shape.rise2, power) * step;
     }
     const double share = SteepCurvatureBiasShare(shape);
+    result.curve_shoulder = shape.shoulder, result.curve_shape_ratio = shape.cusp;
+    result.steep_wall_bias_share = share;
     CorrectSteepCurvatureBias(s.width, s.height, s.options.parallel, share, step, curves, result.window_px, gx, gy,
                               curvature, window_scale.filled_curvature.ptr<float>(), map.z_mm, unremoved);
   }

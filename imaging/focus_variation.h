@@ -92,6 +92,13 @@ struct FocusResult {
   // none was taken off) and, when none was, why.
   double phase_bias_rms_mm = 0.0;
   std::string phase_bias_declined;
+  // The stack's typical focus curve on its gentle parts (MeasureCurveShape, focus_steep_curvature_bias.h): its
+  // shoulder (the best image's neighbours over the peak) and shape ratio (about 4 for a round top, 2 for a V), 0
+  // from too few peaks; and the shares (0 to 1) of the two corrections it gates: the slope taken from a sharp bend's
+  // own side (narrow curves, focus_slope_beside_bends.h) and the steep walls' bias (narrow and V-topped curves).
+  double curve_shoulder = 0.0, curve_shape_ratio = 0.0;
+  double slope_beside_bends_share = 0.0;
+  double steep_wall_bias_share = 0.0;
 };
 
 // Takes the images of a stack in order. Not thread-safe itself; it copies them into a batch of a few images and

@@ -43,6 +43,9 @@ def test_focus_stack_round_trip_recovers_two_known_heights():
     # Two faces each level within a step show the peak fit's phase bias at two phases only: none is taken off, and
     # the summary says why.
     assert r["summary"]["phase_bias_rms"] is None and "phases" in r["summary"]["phase_bias_declined"]
+    # The blur grows in quadrature from its floor: the focus curve has a round top (shape ratio 4.39, 4 for a
+    # parabola), so the steep walls' bias, which only V-topped curves show, is not taken off.
+    assert r["summary"]["focus_curve"]["shape_ratio"] > 3.5 and r["summary"]["steep_wall_bias_share"] == 0.0
     # The all-in-focus image is the sharp texture: correlation near 1 (the noise and the s0 blur keep it below).
     inner = np.s_[8:56, 8:120]
     assert np.corrcoef(r["image"][inner].ravel(), sharp[inner].ravel())[0, 1] > 0.95

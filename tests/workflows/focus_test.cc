@@ -52,5 +52,32 @@ TEST(ReconstructFocus, ImagesGivenAsFilesGiveSliceUnitsOrMillimetres) {
   EXPECT_GT(mm.median_valid_quality, options.min_quality);
 }
 
+// The --json summary says how the stack's typical focus curve looks and how much of the two corrections it gates
+// was applied. This stack's blur grows in quadrature from the texture's grain (a round top: shape ratio 4.88, 4 for
+// a parabola) under a narrow curve (1 px of blur per um at 1 um steps: shoulder 0.76), so the slope beside bends
+// applies in full and the steep walls' bias not at all.
+TEST(ReconstructFocus, SummaryReportsTheFocusCurveAndTheSharesOfTheCorrectionsItGates) {
+  const imaging::HeightMap plane = artefacts::TiltedPlane(96, 96, 0.001, 0.0105, 1e-3 / 0.096, 0.0);
+  artefacts::FocusStackRenderOptions render;
+  render.z_mm = artefacts::EvenZSteps(0.001, 0.001, 20);
+  const artefacts::RenderedFocusStack stack = artefacts::RenderFocusStack(plane, render);
+  FocusSummary s;
+  for (std::size_t k = 0; k < stack.images.size(); ++k) s.entries.push_back({fmt::format("s{}.png", k), stack.z_mm[k]});
+  s.variation.dx_mm = 0.001;
+  s.read.focus = imaging::ReconstructFocusStack(stack.Views(), stack.z_mm, s.variation);
+  ComputeFocusFigures(s);
+  const imaging::FocusResult& focus = s.read.focus;
+  const nlohmann::ordered_json json = Summarize(s, "h.x3p").json;
+  EXPECT_EQ(json["focus_curve"]["shoulder"].get<double>(), focus.curve_shoulder);
+  EXPECT_EQ(json["focus_curve"]["shape_ratio"].get<double>(), focus.curve_shape_ratio);
+  EXPECT_EQ(json["slope_beside_bends_share"].get<double>(), focus.slope_beside_bends_share);
+  EXPECT_EQ(json["steep_wall_bias_share"].get<double>(), focus.steep_wall_bias_share);
+  EXPECT_GT(focus.curve_shape_ratio, 3.5);
+  EXPECT_LT(focus.curve_shoulder, 1.3);
+  EXPECT_EQ(focus.slope_beside_bends_share, 1.0);
+  EXPECT_EQ(focus.steep_wall_bias_share, 0.0);
+  EXPECT_NE(Summarize(s, "h.x3p").text.find("steep-wall bias 0.00"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace fvm::workflows
