@@ -33,7 +33,9 @@ Json FocusJson(const FocusSummary& s) {
   const imaging::FocusResult& focus = s.read.focus;
   out["phase_bias_rms"] = focus.phase_bias_rms_mm > 0.0 ? Json(focus.phase_bias_rms_mm) : Json();
   out["phase_bias_declined"] = focus.phase_bias_declined.empty() ? Json() : Json(focus.phase_bias_declined);
-  out["focus_curve"] = {{"shoulder", focus.curve_shoulder}, {"shape_ratio", focus.curve_shape_ratio}};
+  out["focus_curve"] = focus.curve_shape_ratio > 0.0  // 0: too few peaks to tell the curve's shape
+                           ? Json{{"shoulder", focus.curve_shoulder}, {"shape_ratio", focus.curve_shape_ratio}}
+                           : Json();
   out["slope_beside_bends_share"] = focus.slope_beside_bends_share;
   out["steep_wall_bias_share"] = focus.steep_wall_bias_share;
   return out;
@@ -77,8 +79,8 @@ std::string FocusText(const FocusSummary& s, const std::string& output) {
     t += fmt::format("  phase bias     none taken off: {}\n", focus.phase_bias_declined);
   }
   if (focus.curve_shape_ratio > 0.0) {
-    t += fmt::format("  focus curve    shoulder {:.2f}, shape ratio {:.2f} (4 round top, 2 V); shares applied: slope beside "
-                     "bends {:.2f}, steep-wall bias {:.2f}\n",
+    t += fmt::format("  focus curve    shoulder {:.2f}, shape ratio {:.2f} (4 round top, 2 V); shares applied: "
+                     "slope beside bends {:.2f}, steep-wall bias {:.2f}\n",
                      focus.curve_shoulder, focus.curve_shape_ratio, focus.slope_beside_bends_share,
                      focus.steep_wall_bias_share);
   }
