@@ -77,6 +77,11 @@ TEST(ReconstructFocus, SummaryReportsTheFocusCurveAndTheSharesOfTheCorrectionsIt
   EXPECT_EQ(focus.slope_beside_bends_share, 1.0);
   EXPECT_EQ(focus.steep_wall_bias_share, 0.0);
   EXPECT_NE(Summarize(s, "h.x3p").text.find("steep-wall bias 0.00"), std::string::npos);
+  // Too few peaks to tell the curve's shape (its ratio 0): no curve, rather than a shape of 0.
+  s.read.focus.curve_shoulder = 0.0, s.read.focus.curve_shape_ratio = 0.0;
+  const Summary unknown = Summarize(s, "h.x3p");
+  EXPECT_TRUE(unknown.json["focus_curve"].is_null());
+  EXPECT_EQ(unknown.text.find("focus curve"), std::string::npos);
 }
 
 }  // namespace
