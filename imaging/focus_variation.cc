@@ -374,21 +374,19 @@ FocusResult FocusAccumulator::Finish() const {
     in.origin_mm = origin, in.step_mm = step, in.parallel = s.options.parallel;
     // The heights the phase is read from: their local mean over the points the correction applies to (weights
     // fading with the slope as it does), from the heights `chosen` was smoothed from.
-    cv::Mat weight = pool.Map(), product = pool.Map(), total = pool.Map(), phase_heights = pool.Map();
-    const cv::Mat &heights = chosen.heights, &valid = chosen.valid;
+    cv::Mat weight = pool.Map();
     const double fade_scale = 1.0 / (kPhaseSmoothingSlope * step);
     pool.Pass([&](int r0, int r1) {
       for (int r = r0; r < r1; ++r) {
-        float *w = weight.ptr<float>(r), *p = product.ptr<float>(r);
-        const float *h = heights.ptr<float>(r), *v = valid.ptr<float>(r);
+        float* w = weight.ptr<float>(r);
+        const float* v = chosen.valid.ptr<float>(r);
         for (int col = 0; col < s.width; ++col) {
           const double g = final_slope.Magnitude(r, col) * fade_scale;
-          w[col] = v[col] * float(std::exp(-g * g)), p[col] = w[col] * h[col];
+          w[col] = v[col] * float(std::exp(-g * g));
         }
       }
     });
-    pool.Pass([&](int r0, int r1) { BlurredRatio(product, weight, kPhaseSmoothingPx, r0, r1, total, phase_heights); },
-              BlurStripeRows(kPhaseSmoothingPx));
+    const cv::Mat phase_heights = WeightedLocalMean(chosen.heights, weight, kPhaseSmoothingPx, pool);
     in.phase_heights = phase_heights.ptr<float>();
     for (int k = 0; k < n; ++k) {
       const double even = origin + (s.z.back() > origin ? k : -k) * step;
