@@ -117,16 +117,14 @@ SmoothedHeights SmoothHeights(const std::vector<double>& z, double origin, MapPo
   return out;
 }
 
-cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapPool& pool) {
-  HoleyMap map(z, origin, pool);
+cv::Mat LocalScatter(const SmoothedHeights& smoothed, MapPool& pool) {
   cv::Mat residual = pool.Map(), scatter = pool.Map();
   pool.Pass([&](int r0, int r1) {
-    map.Smooth(kSlopeSmoothingPx, r0, r1, residual);
     for (int r = r0; r < r1; ++r) {
       float* o = residual.ptr<float>(r);
-      const float* h = map.heights.ptr<float>(r);
-      const float* v = map.valid.ptr<float>(r);
-      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - o[col]) * (h[col] - o[col]) * v[col];
+      const float *h = smoothed.heights.ptr<float>(r), *m = smoothed.smooth.ptr<float>(r);
+      const float* v = smoothed.valid.ptr<float>(r);
+      for (int col = 0; col < residual.cols; ++col) o[col] = (h[col] - m[col]) * (h[col] - m[col]) * v[col];
     }
   });
   const cv::Size box(kScatterWindowPx, kScatterWindowPx);
@@ -134,7 +132,7 @@ cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapPool& pool)
   pool.Pass([&](int r0, int r1) {
     cv::Mat s_rows = scatter.rowRange(r0, r1), count_rows = count.rowRange(r0, r1);
     cv::boxFilter(residual.rowRange(r0, r1), s_rows, CV_32F, box, cv::Point(-1, -1), false, cv::BORDER_REFLECT);
-    cv::boxFilter(map.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
+    cv::boxFilter(smoothed.valid.rowRange(r0, r1), count_rows, CV_32F, box, cv::Point(-1, -1), false,
                   cv::BORDER_REFLECT);
     for (int r = r0; r < r1; ++r) {
       float* o = scatter.ptr<float>(r);

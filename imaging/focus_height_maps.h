@@ -47,7 +47,7 @@ struct SmoothedHeights {
 SmoothedHeights SmoothHeights(const std::vector<double>& z, double origin, MapPool& pool);
 
 // The rms of the heights about their smooth local mean, over a window around each valid point.
-cv::Mat LocalScatter(const std::vector<double>& z, double origin, MapPool& pool);
+cv::Mat LocalScatter(const SmoothedHeights& smoothed, MapPool& pool);
 
 // The heights' roughness at the window's scale (see focus_height_maps.cc), and what it finds on the way: the
 // surface's own curvature, the Laplacian (mm per px^2) of the heights smoothed over 2 px, its weighted local mean over

@@ -402,8 +402,8 @@ FocusResult FocusAccumulator::Finish() const {
   // The errors no single focus curve shows: the heights' scatter from pixel to pixel, their roughness at the
   // window's scale (errors shared by a window's pixels, see kRoughnessScale), and on a slope what the centroid
   // correction leaves. Both from the corrected heights.
-  const cv::Mat scatter = LocalScatter(map.z_mm, origin, pool);
   SmoothedHeights corrected = SmoothHeights(map.z_mm, origin, pool);
+  const cv::Mat scatter = LocalScatter(corrected, pool);
   const Slope corrected_slope = corrected.slope;
   const WindowScaleMaps window_scale = WindowScaleRoughness(std::move(corrected), pool);
   const cv::Mat& roughness = window_scale.roughness;
